@@ -1,0 +1,82 @@
+"""The pinhole camera of ``shared/docs/conventions.md``.
+
+World: right-handed, y up, ground y = 0. The camera's horizontal forward
+vector is f = (0, 0, -1) and its right vector r = (1, 0, 0); it looks at
+T = (0, c, 0) from distance 2, pitched down by ``pitch`` degrees. Image
+coordinates are continuous (col, row) with pixel (i, j) covering
+[j, j + 1) x [i, i + 1); a vertical lens shift moves the object's top to row
+round(0.03 N).
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass, field
+
+import numpy as np
+
+DISTANCE = 2.0
+TOP_MARGIN = 0.03
+DEFAULT_FOV = 45.0
+DEFAULT_PITCH = 15.0
+
+RIGHT = np.array([1.0, 0.0, 0.0])
+UP = np.array([0.0, 1.0, 0.0])
+FORWARD = np.array([0.0, 0.0, -1.0])
+
+
+def top_row(n: int) -> int:
+    """The frame row that holds the object's topmost pixel."""
+    return int(round(TOP_MARGIN * n))
+
+
+@dataclass
+class Camera:
+    """Pinhole camera looking at (0, target_height, 0); ``shift`` is the lens shift in rows."""
+
+    n: int
+    target_height: float
+    fov: float = DEFAULT_FOV
+    pitch: float = DEFAULT_PITCH
+    shift: float = 0.0
+    view: np.ndarray = field(init=False)
+    up: np.ndarray = field(init=False)
+    centre: np.ndarray = field(init=False)
+    focal: float = field(init=False)
+
+    def __post_init__(self) -> None:
+        p = np.radians(self.pitch)
+        self.view = np.cos(p) * FORWARD - np.sin(p) * UP
+        self.up = np.cross(RIGHT, self.view)
+        self.centre = np.array([0.0, self.target_height, 0.0]) - DISTANCE * self.view
+        self.focal = 0.5 * self.n / np.tan(np.radians(self.fov) / 2)
+
+    def project(self, points: np.ndarray) -> np.ndarray:
+        """World points (..., 3) to continuous image coordinates (..., 2) as (col, row)."""
+        rel = np.asarray(points, np.float64) - self.centre
+        z = rel @ self.view
+        col = 0.5 * self.n + self.focal * (rel @ RIGHT) / z
+        row = 0.5 * self.n - self.focal * (rel @ self.up) / z + self.shift
+        return np.stack([col, row], axis=-1)
+
+    def frame_top(self, points: np.ndarray) -> "Camera":
+        """Set the lens shift so that the highest projected point lies on row round(0.03 N)."""
+        self.shift = 0.0
+        self.shift = top_row(self.n) - float(self.project(points)[..., 1].min())
+        return self
+
+    def pixel_rays(self) -> np.ndarray:
+        """Unnormalised world directions (N, N, 3) through every pixel centre."""
+        c = (np.arange(self.n) + 0.5 - 0.5 * self.n) / self.focal
+        r = -(np.arange(self.n) + 0.5 - self.shift - 0.5 * self.n) / self.focal
+        return self.view + c[None, :, None] * RIGHT + r[:, None, None] * self.up
+
+    def ground_points(self) -> tuple[np.ndarray, np.ndarray]:
+        """Ground points (N, N, 3) seen through each pixel, and where the ray reaches the ground."""
+        rays = self.pixel_rays()
+        down = rays[..., 1] < -1e-9
+        t = np.where(down, -self.centre[1] / np.where(down, rays[..., 1], -1.0), 0.0)
+        return self.centre + t[..., None] * rays, down
+
+    def to_world(self, camera_basis: np.ndarray) -> np.ndarray:
+        """Directions from the ELM's camera basis (right, up, forward) to world coordinates."""
+        return camera_basis[..., :1] * RIGHT + camera_basis[..., 1:2] * UP + camera_basis[..., 2:] * FORWARD

@@ -1,0 +1,153 @@
+"""From a canvas-sized alpha to the network's N x N frame, and back.
+
+The frame follows ``shared/docs/conventions.md``: the object's top lies on
+row round(0.03 N) and the object is centred horizontally. Its size in the
+frame is fixed: the larger side of the alpha's bounding box becomes
+``OBJECT_EXTENT * N`` pixels, the typical size of a training object seen
+from the conventions' camera (an object with an AABB diagonal of 1, seen
+from distance 2 with a 45 degree field of view, covers 0.35 to 0.6 of the
+frame). The frame's ground below and beside the object holds the shadow.
+
+Coordinates are continuous: pixel (i, j) covers [j, j + 1) x [i, i + 1), and
+frame = canvas * scale + offset on both axes.
+"""
+
+from __future__ import annotations
+
+import math
+from dataclasses import dataclass
+
+import numpy as np
+from PIL import Image
+
+from .camera import top_row
+
+OBJECT_EXTENT = 0.5
+ALPHA_THRESHOLD = 0.01  # alpha at or below this is background for the bounding box
+SHADOW_FLOOR = 0.5 / 255  # shadow below this is invisible in 8 bits: the layer is cropped to the rest
+
+
+class EmptyAlphaError(ValueError):
+    """The alpha has no visible pixel, so there is nothing to cast a shadow."""
+
+
+@dataclass(frozen=True)
+class Framing:
+    """How a canvas maps onto the frame: frame = canvas * scale + (offset_x, offset_y)."""
+
+    n: int
+    canvas_width: int
+    canvas_height: int
+    scale: float
+    offset_x: float
+    offset_y: float
+    bbox: tuple[int, int, int, int]  # x0, y0, x1, y1 of the alpha on the canvas (x1, y1 exclusive)
+
+    def to_frame(self, x: float, y: float) -> tuple[float, float]:
+        """Canvas point to frame point."""
+        return x * self.scale + self.offset_x, y * self.scale + self.offset_y
+
+    def to_canvas(self, x: float, y: float) -> tuple[float, float]:
+        """Frame point to canvas point."""
+        return (x - self.offset_x) / self.scale, (y - self.offset_y) / self.scale
+
+
+@dataclass(frozen=True)
+class CanvasShadow:
+    """A shadow at canvas resolution: ``values`` (h, w) in [0, 1] placed at (x, y) on the canvas."""
+
+    values: np.ndarray
+    x: int
+    y: int
+
+    @property
+    def is_empty(self) -> bool:
+        return self.values.size == 0
+
+    def full_canvas(self, width: int, height: int) -> np.ndarray:
+        """The shadow pasted into a zero canvas of the given size."""
+        out = np.zeros((height, width), np.float32)
+        h, w = self.values.shape
+        out[self.y : self.y + h, self.x : self.x + w] = self.values
+        return out
+
+
+def _as_unit_float(alpha: np.ndarray) -> np.ndarray:
+    if alpha.dtype == np.uint8:
+        return alpha.astype(np.float32) / 255.0
+    if alpha.dtype == np.uint16:
+        return alpha.astype(np.float32) / 65535.0
+    values = np.nan_to_num(alpha.astype(np.float32), nan=0.0)
+    return np.clip(values, 0.0, 1.0)
+
+
+def _threshold(dtype: np.dtype) -> float:
+    if dtype == np.uint8:
+        return ALPHA_THRESHOLD * 255
+    if dtype == np.uint16:
+        return ALPHA_THRESHOLD * 65535
+    return ALPHA_THRESHOLD
+
+
+def alpha_bbox(alpha: np.ndarray) -> tuple[int, int, int, int]:
+    """Bounding box (x0, y0, x1, y1) of the visible alpha; EmptyAlphaError when there is none."""
+    if alpha.ndim != 2 or alpha.size == 0:
+        raise ValueError(f"alpha must be a non-empty 2D array, got shape {alpha.shape}")
+    visible = alpha > _threshold(alpha.dtype)
+    rows = np.flatnonzero(visible.any(axis=1))
+    if rows.size == 0:
+        raise EmptyAlphaError("the selection or layer alpha is empty: nothing to cast a shadow")
+    cols = np.flatnonzero(visible[rows[0] : rows[-1] + 1].any(axis=0))
+    return int(cols[0]), int(rows[0]), int(cols[-1]) + 1, int(rows[-1]) + 1
+
+
+def frame_alpha(alpha: np.ndarray, n: int = 256) -> tuple[np.ndarray, Framing]:
+    """Frame a canvas alpha (H, W) of uint8, uint16 or float for the network.
+
+    Returns the mask (n, n) float32 in [0, 1] and the :class:`Framing`. Only
+    the bounding box is converted, so huge canvases stay cheap.
+    """
+    x0, y0, x1, y1 = alpha_bbox(alpha)
+    bw, bh = x1 - x0, y1 - y0
+    scale = OBJECT_EXTENT * n / max(bw, bh)
+    col0 = int(round(0.5 * n - 0.5 * bw * scale))
+    row0 = top_row(n)
+    framing = Framing(
+        n, alpha.shape[1], alpha.shape[0], scale, col0 - x0 * scale, row0 - y0 * scale, (x0, y0, x1, y1)
+    )
+    fw, fh = min(math.ceil(bw * scale), n - col0), min(math.ceil(bh * scale), n - row0)
+    pad = math.ceil(1.0 / scale) + 1  # zero margin: the box may reach past the bbox by a frame pixel
+    crop = np.zeros((bh + 1 + pad, bw + 1 + pad), np.float32)
+    crop[1 : bh + 1, 1 : bw + 1] = _as_unit_float(alpha[y0:y1, x0:x1])
+    box = (1.0, 1.0, 1.0 + fw / scale, 1.0 + fh / scale)
+    resized = Image.fromarray(crop, "F").resize((fw, fh), Image.Resampling.BILINEAR, box=box)
+    mask = np.zeros((n, n), np.float32)
+    mask[row0 : row0 + fh, col0 : col0 + fw] = np.clip(np.asarray(resized), 0.0, 1.0)
+    return mask, framing
+
+
+def shadow_to_canvas(shadow: np.ndarray, framing: Framing) -> CanvasShadow:
+    """Resample a frame shadow (n, n) to the canvas, cropped to its visible part.
+
+    The result covers the canvas pixels whose shadow can be visible (the
+    frame's shadow above ``SHADOW_FLOOR``), clipped to the canvas; it may
+    reach well beyond the alpha's bounding box.
+    """
+    visible = shadow > SHADOW_FLOOR
+    rows, cols = np.flatnonzero(visible.any(axis=1)), np.flatnonzero(visible.any(axis=0))
+    if rows.size == 0:
+        return CanvasShadow(np.zeros((0, 0), np.float32), 0, 0)
+    cx0, cy0 = framing.to_canvas(cols[0], rows[0])
+    cx1, cy1 = framing.to_canvas(cols[-1] + 1, rows[-1] + 1)
+    x0, y0 = max(0, math.floor(cx0)), max(0, math.floor(cy0))
+    x1 = min(framing.canvas_width, math.ceil(cx1))
+    y1 = min(framing.canvas_height, math.ceil(cy1))
+    if x1 <= x0 or y1 <= y0:
+        return CanvasShadow(np.zeros((0, 0), np.float32), 0, 0)
+    s = framing.scale
+    # PIL's affine maps output pixel centres to input points; we sample the
+    # frame at canvas pixel centres, canvas = (x0 + ox + 0.5, y0 + oy + 0.5).
+    data = (s, 0.0, x0 * s + framing.offset_x, 0.0, s, y0 * s + framing.offset_y)
+    image = Image.fromarray(np.ascontiguousarray(shadow, np.float32), "F")
+    out = image.transform((x1 - x0, y1 - y0), Image.Transform.AFFINE, data, Image.Resampling.BILINEAR)
+    return CanvasShadow(np.clip(np.asarray(out), 0.0, 1.0), x0, y0)

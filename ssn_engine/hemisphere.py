@@ -1,0 +1,120 @@
+"""The upper-hemisphere texel grid of an ELM, and light maps rendered onto it.
+
+Geometry follows ``shared/docs/conventions.md``: an ELM has shape (H, 2H);
+row i spans elevations 90 (1 - i/H) .. 90 (1 - (i+1)/H) degrees, column j
+azimuths -180 + 360 j/W .. -180 + 360 (j+1)/W degrees from the camera's
+horizontal forward direction, positive to its right.
+
+Directions are returned in the *camera basis*: components along the camera's
+right vector r, the world up y, and its horizontal forward vector f, so
+``w = cos(e) sin(a) r + sin(e) y + cos(e) cos(a) f``.
+"""
+
+from __future__ import annotations
+
+import numpy as np
+from scipy.special import erf
+
+from .light_map import ASPECT, LightMap
+
+NETWORK_SHAPE = (16, 32)
+
+
+def texel_edges(h: int) -> tuple[np.ndarray, np.ndarray]:
+    """Elevation edges (h + 1, descending from pi/2) and azimuth edges (2h + 1), radians."""
+    elevation = np.pi / 2 * (1.0 - np.arange(h + 1) / h)
+    azimuth = -np.pi + 2 * np.pi * np.arange(2 * h + 1) / (2 * h)
+    return elevation, azimuth
+
+
+def texel_weights(h: int) -> np.ndarray:
+    """Cosine-weighted solid angle W_t of every texel, shape (h, 2h); they sum to pi."""
+    elevation, azimuth = texel_edges(h)
+    band = 0.5 * (np.sin(elevation[:-1]) ** 2 - np.sin(elevation[1:]) ** 2)
+    return (band[:, None] * np.diff(azimuth)[None, :]).astype(np.float64)
+
+
+def direction(elevation: np.ndarray, azimuth: np.ndarray) -> np.ndarray:
+    """Unit vectors (..., 3) in the camera basis (right, up, forward)."""
+    elevation, azimuth = np.broadcast_arrays(elevation, azimuth)
+    ce = np.cos(elevation)
+    return np.stack([ce * np.sin(azimuth), np.sin(elevation), ce * np.cos(azimuth)], axis=-1)
+
+
+def texel_centres(h: int) -> np.ndarray:
+    """Direction of each texel's centre, shape (h, 2h, 3), camera basis."""
+    elevation, azimuth = texel_edges(h)
+    e = 0.5 * (elevation[:-1] + elevation[1:])
+    a = 0.5 * (azimuth[:-1] + azimuth[1:])
+    return direction(e[:, None], a[None, :])
+
+
+def stratified_directions(h: int, samples: int, rng: np.random.Generator) -> np.ndarray:
+    """Cosine-distributed, stratified, jittered directions in every texel.
+
+    Returns (h, 2h, samples, 3) in the camera basis. ``samples`` must be a
+    square (k x k strata in azimuth and sin^2(elevation)); each direction then
+    carries the same share of the texel's cosine-weighted solid angle, so the
+    texel's occlusion is the plain mean of the samples' hits.
+    """
+    k = int(round(np.sqrt(samples)))
+    if k * k != samples:
+        raise ValueError(f"samples must be a square number, got {samples}")
+    elevation, azimuth = texel_edges(h)
+    q_hi, q_lo = np.sin(elevation[:-1]) ** 2, np.sin(elevation[1:]) ** 2
+    strata = np.arange(k)
+    sq = (strata[:, None] + rng.random((h, 2 * h, k, k))) / k  # axis 2: sin^2(e) stratum
+    sa = (strata[None, :] + rng.random((h, 2 * h, k, k))) / k  # axis 3: azimuth stratum
+    q = q_lo[:, None, None, None] + sq * (q_hi - q_lo)[:, None, None, None]
+    a = azimuth[None, :-1, None, None] + sa * np.diff(azimuth)[None, :, None, None]
+    e = np.arcsin(np.sqrt(np.clip(q, 0.0, 1.0)))
+    return direction(e, a).reshape(h, 2 * h, samples, 3)
+
+
+def render_light_map(light_map: LightMap, h: int = NETWORK_SHAPE[0]) -> np.ndarray:
+    """Each texel's mean radiance under the Gaussian mixture, shape (h, 2h), float32.
+
+    Texel means are exact (separable erf integrals, azimuth wrapping), so even
+    a light much smaller than a texel keeps its energy at any resolution.
+    """
+    out = np.zeros((h, 2 * h), np.float64)
+    edges = np.arange(2 * h + 1) / h  # x and y in map heights; x spans [0, 2)
+    for light in light_map:
+        s = np.sqrt(2.0 * light.softness)
+        norm = np.sqrt(np.pi / 2.0) * np.sqrt(light.softness) * h  # divided by texel size 1/h
+        ex = np.zeros(2 * h)
+        for shift in (-ASPECT, 0.0, ASPECT):
+            c = ASPECT * light.u + shift
+            ex += np.diff(erf((edges - c) / s))
+        ey = np.diff(erf((edges[: h + 1] - light.v) / s))
+        out += light.intensity * norm**2 * np.outer(ey, ex)
+    return out.astype(np.float32)
+
+
+def network_elm(elm: np.ndarray) -> np.ndarray:
+    """Normalise ELMs (..., H, W) to the network's input scale: peak 1 per map.
+
+    The shadow does not depend on the ELM's overall intensity, so the network
+    sees every ELM scaled to a peak of 1 (all-zero maps stay zero).
+    """
+    elm = np.asarray(elm, np.float32)
+    peak = elm.max(axis=(-2, -1), keepdims=True)
+    return np.where(peak > 0, elm / np.where(peak > 0, peak, 1.0), 0.0).astype(np.float32)
+
+
+def soft_shadow(occlusion: np.ndarray, elm: np.ndarray) -> np.ndarray:
+    """The shadow s from per-texel occlusion maps and an ELM on the same grid.
+
+    ``occlusion`` has shape (H, W, ...) (occ_t per texel, values in [0, 1]),
+    ``elm`` shape (H, W). Returns s = sum_t L_t W_t occ_t / sum_t L_t W_t,
+    all zeros for an all-zero ELM.
+    """
+    h, w = elm.shape
+    if occlusion.shape[:2] != (h, w):
+        raise ValueError(f"occlusion grid {occlusion.shape[:2]} does not match ELM {elm.shape}")
+    weights = np.asarray(elm, np.float64) * texel_weights(h)
+    total = weights.sum()
+    if total <= 0:
+        return np.zeros(occlusion.shape[2:], np.float32)
+    s = np.tensordot(weights / total, occlusion, axes=([0, 1], [0, 1]))
+    return np.clip(s, 0.0, 1.0).astype(np.float32)
