@@ -1,0 +1,18 @@
+"""ssn-shadow engine: soft shadows for 2D cutouts (SSN, Sheng et al., CVPR 2021).
+
+Heavy modules load lazily so that the toolkit-free parts (light_map,
+protocol, client) import without numpy.
+"""
+
+from __future__ import annotations
+
+__version__ = "0.1.0"
+__all__ = ["predict_frames", "__version__"]
+
+
+def __getattr__(name: str):
+    if name == "predict_frames":
+        from .api import predict_frames
+
+        return predict_frames
+    raise AttributeError(f"module 'ssn_engine' has no attribute {name!r}")

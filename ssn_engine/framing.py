@@ -25,6 +25,7 @@ from .camera import top_row
 OBJECT_EXTENT = 0.5
 ALPHA_THRESHOLD = 0.01  # alpha at or below this is background for the bounding box
 SHADOW_FLOOR = 0.5 / 255  # shadow below this is invisible in 8 bits: the layer is cropped to the rest
+EDGE_FADE = 0.04  # share of the frame over which a shadow fades out at its sides and bottom
 
 
 class EmptyAlphaError(ValueError):
@@ -126,13 +127,22 @@ def frame_alpha(alpha: np.ndarray, n: int = 256) -> tuple[np.ndarray, Framing]:
     return mask, framing
 
 
+def edge_fade(n: int) -> np.ndarray:
+    """(n, n) weights that fall linearly to 0 at the frame's left, right and bottom edges."""
+    ramp = np.clip((np.arange(n) + 0.5) / max(EDGE_FADE * n, 1.0), 0.0, 1.0)
+    across = np.minimum(ramp, ramp[::-1])
+    return (np.minimum.outer(ramp[::-1], across)).astype(np.float32)
+
+
 def shadow_to_canvas(shadow: np.ndarray, framing: Framing) -> CanvasShadow:
     """Resample a frame shadow (n, n) to the canvas, cropped to its visible part.
 
     The result covers the canvas pixels whose shadow can be visible (the
     frame's shadow above ``SHADOW_FLOOR``), clipped to the canvas; it may
-    reach well beyond the alpha's bounding box.
+    reach well beyond the alpha's bounding box. A shadow that runs out of
+    the frame fades out (:func:`edge_fade`) instead of ending in a hard edge.
     """
+    shadow = shadow * edge_fade(shadow.shape[0])
     visible = shadow > SHADOW_FLOOR
     rows, cols = np.flatnonzero(visible.any(axis=1)), np.flatnonzero(visible.any(axis=0))
     if rows.size == 0:

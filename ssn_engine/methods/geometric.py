@@ -25,7 +25,8 @@ from .base import check_batch
 
 INTERNAL = 128  # the card is traced at this resolution, then upsampled
 AO_GRID = 6  # texel rows of the uniform sky used for the card's AO
-MIN_SHARE = 1e-4  # texels carrying less of the ELM's weight are skipped
+MIN_SHARE = 1e-4
+TURN = 0.5  # share of the way the card turns towards each light  # texels carrying less of the ELM's weight are skipped
 
 
 def _resize(image: np.ndarray, size: int) -> np.ndarray:
@@ -61,15 +62,18 @@ class _Card:
     def occlusion(self, directions: np.ndarray) -> np.ndarray:
         """Hard-shadow occlusion (T, P) of the card turned towards each world direction (T, 3).
 
-        For each light the card turns about its vertical axis to face the
-        light's horizontal direction (within +-90 degrees of facing the
-        camera, so the silhouette is never mirrored); its point (x, h) casts
-        onto the ground at x * axis - h * w_h / w_y.
+        For each light the card turns about its vertical axis part of the way
+        (``TURN``) towards facing the light's horizontal direction, never
+        more than 45 degrees from facing the camera: a card edge-on to the
+        light would cast a line, while a fully turned one would lift half of
+        its base off its contact shadow. Its point (x, h) casts onto the
+        ground at x * axis - h * w_h / w_y.
         """
         g = self.ground
         w = directions.astype(np.float64)
         azimuth = np.arctan2(w[:, 0], -w[:, 2])  # from the horizontal forward (0, 0, -1)
-        turn = np.where(azimuth > np.pi / 2, azimuth - np.pi, np.where(azimuth < -np.pi / 2, azimuth + np.pi, azimuth))
+        facing = np.where(azimuth > np.pi / 2, azimuth - np.pi, np.where(azimuth < -np.pi / 2, azimuth + np.pi, azimuth))
+        turn = TURN * facing
         ax, az = np.cos(turn), np.sin(turn)  # the card's horizontal axis: right (1, 0, 0) turned
         wy = np.maximum(w[:, 1], 1e-6)
         dx, dz = -w[:, 0] / wy, -w[:, 2] / wy
@@ -140,11 +144,12 @@ class GeometricCard:
         out = []
         for mask, edited, elm in zip(masks, ao, elms):
             card, card_ao = self._card(mask)
-            s = card.shadow(*self._blocks(np.maximum(elm, 0) * self._w16))
-            card_visibility = np.maximum(card_ao, 1e-3) ** 3
-            edited_visibility = _resize(np.clip(edited, 0, 1), INTERNAL) ** 3
-            light = np.clip((1.0 - s) * edited_visibility / card_visibility, 0.0, 1.0)
             if elm.max() <= 0:
-                light[:] = 1.0
-            out.append(_resize(1.0 - light, self.resolution))
+                out.append(np.zeros(mask.shape, np.float32))
+                continue
+            s = _resize(card.shadow(*self._blocks(np.maximum(elm, 0) * self._w16)), self.resolution)
+            # Both visibilities at frame resolution, so an unedited AO map changes nothing.
+            card_visibility = np.maximum(_resize(card_ao, self.resolution), 1e-3) ** 3
+            edited_visibility = np.clip(edited, 0, 1) ** 3
+            out.append(1.0 - np.clip((1.0 - s) * edited_visibility / card_visibility, 0.0, 1.0))
         return np.clip(np.stack(out), 0.0, 1.0).astype(np.float32)

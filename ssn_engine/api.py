@@ -1,0 +1,53 @@
+"""The stable entry point for benchmarks: :func:`predict_frames` (see conventions.md)."""
+
+from __future__ import annotations
+
+import functools
+
+import numpy as np
+
+from .methods import LoadedMethod, load_method
+
+BATCH = 16
+
+
+@functools.lru_cache(maxsize=1)
+def default_method() -> LoadedMethod:
+    """The default method, loaded once per process."""
+    return load_method("auto")
+
+
+def _frames(name: str, array: np.ndarray, n: int | None = None) -> np.ndarray:
+    a = np.asarray(array)
+    if a.ndim != 3 or (n is not None and a.shape[1:] != (n, n)) or a.shape[1] != a.shape[2]:
+        raise ValueError(f"{name}: expected shape (n, N, N), got {a.shape}")
+    if not np.all(np.isfinite(a)):
+        raise ValueError(f"{name}: contains NaN or infinite values")
+    return np.ascontiguousarray(a, np.float32)
+
+
+def predict_frames(masks: np.ndarray, elms: np.ndarray, ao: np.ndarray | None = None) -> np.ndarray:
+    """Shadow maps s (n, N, N), float32 in [0, 1], from masks (n, N, N) and ELMs (n, 16, 32).
+
+    Optional ``ao`` (n, N, N) replaces the predicted AO maps (e.g. ground
+    truth or user-edited). Uses the default shipped model, or the geometric
+    card method while no trained model is installed.
+    """
+    method = default_method().method
+    masks = _frames("masks", masks, method.resolution)
+    elms = np.asarray(elms)
+    if elms.shape != (len(masks), 16, 32):
+        raise ValueError(f"elms: expected shape ({len(masks)}, 16, 32), got {elms.shape}")
+    if not np.all(np.isfinite(elms)) or elms.min(initial=0.0) < 0:
+        raise ValueError("elms: light values must be finite and non-negative")
+    elms = elms.astype(np.float32)
+    if ao is not None:
+        ao = _frames("ao", ao, method.resolution)
+        if ao.shape != masks.shape:
+            raise ValueError(f"ao: expected shape {masks.shape}, got {ao.shape}")
+    out = np.empty(masks.shape, np.float32)
+    for i in range(0, len(masks), BATCH):
+        m = np.clip(masks[i : i + BATCH], 0.0, 1.0)
+        a = method.predict_ao(m) if ao is None else np.clip(ao[i : i + BATCH], 0.0, 1.0)
+        out[i : i + BATCH] = method.render(m, a, elms[i : i + BATCH])
+    return np.clip(out, 0.0, 1.0)

@@ -1,0 +1,94 @@
+"""``ssn-shadow benchmark``: medians and p95 of the engine's stages on this machine."""
+
+from __future__ import annotations
+
+import os
+import platform
+import resource
+import time
+from typing import Callable
+
+import numpy as np
+from PIL import Image
+
+from .compositing import shadow_layer
+from .framing import frame_alpha
+from .hemisphere import render_light_map
+from .light_map import preset
+from .methods import GeometricCard, load_method
+from .samples import pawn_cutout
+from .session import ShadowSession
+
+
+def _time(fn: Callable[[], object], repeats: int, warmup: int = 2) -> np.ndarray:
+    for _ in range(warmup):
+        fn()
+    times = []
+    for _ in range(repeats):
+        t = time.perf_counter()
+        fn()
+        times.append(time.perf_counter() - t)
+    return np.array(times) * 1e3
+
+
+def _alternating(items: list) -> Callable[[], object]:
+    state = {"i": 0}
+
+    def next_item() -> object:
+        state["i"] += 1
+        return items[state["i"] % len(items)]
+
+    return next_item
+
+
+def _row(name: str, ms: np.ndarray) -> str:
+    return f"{name:44s} {np.median(ms):9.1f} {np.percentile(ms, 95):9.1f}"
+
+
+def big_cutout(width: int = 4000, height: int = 3000) -> np.ndarray:
+    """The sample pawn scaled onto a 4000 x 3000 RGBA canvas."""
+    small = Image.fromarray(pawn_cutout())
+    canvas = Image.new("RGBA", (width, height))
+    scaled = small.resize((small.width * 2, small.height * 2), Image.Resampling.BILINEAR)
+    canvas.paste(scaled, ((width - scaled.width) // 2, height - scaled.height - 200))
+    return np.asarray(canvas)
+
+
+def run_benchmark(repeats: int = 20, method: str = "auto") -> dict[str, np.ndarray]:
+    """Time the stages and print a table (milliseconds); returns the raw timings."""
+    loaded = load_method(method)
+    m = loaded.method
+    print(f"machine: {platform.processor() or platform.machine()}, {os.cpu_count()} cores; method: {m.name} ({loaded.note})")
+    mask, _ = frame_alpha(pawn_cutout()[..., 3], m.resolution)
+    masks = mask[None]
+    # AO is cached per mask where a method caches it: alternate with the mirror image to time real work.
+    pair = _alternating([masks, masks[..., ::-1].copy()])
+    elm = render_light_map(preset("two-lights"))[None]
+    ao = m.predict_ao(masks)
+    geometric = GeometricCard(m.resolution)
+    geo_ao = geometric.predict_ao(masks)
+    results = {
+        f"AOP ({m.name}, N={m.resolution})": _time(lambda: m.predict_ao(pair()), repeats),
+        f"SR ({m.name}, N={m.resolution})": _time(lambda: m.render(masks, ao, elm), repeats),
+        "geometric card (render, 2 lights)": _time(lambda: geometric.render(masks, geo_ao, elm), repeats),
+    }
+    cutout = big_cutout()
+    light = preset("two-lights")
+    alphas = _alternating([cutout[..., 3], cutout[:, ::-1, 3].copy()])
+
+    def end_to_end() -> None:
+        session = ShadowSession(alphas(), m)
+        shadow_layer(session.render(light).values)
+
+    session = ShadowSession(cutout[..., 3], m)
+    e2e_repeats = max(3, repeats // 4)
+    results["end to end 4000x3000 (frame+AO+SR+layer)"] = _time(end_to_end, e2e_repeats, warmup=1)
+    results["light moved 4000x3000 (SR+to canvas+layer)"] = _time(
+        lambda: shadow_layer(session.render(light).values), e2e_repeats, warmup=1
+    )
+    print(f"{'stage':44s} {'median ms':>9s} {'p95 ms':>9s}")
+    for name, ms in results.items():
+        print(_row(name, ms))
+    peak = resource.getrusage(resource.RUSAGE_SELF).ru_maxrss / 1024
+    print(f"peak resident memory: {peak:.0f} MiB")
+    return results

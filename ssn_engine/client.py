@@ -1,0 +1,143 @@
+"""A blocking client for the engine worker (stdlib only, used by the plug-ins).
+
+It spawns ``ssn-shadow serve`` (or connects to one on a loopback port),
+sends requests and returns replies. A worker that is missing, crashes or
+hangs raises :class:`WorkerUnavailable` with a message for the user; the next
+request starts a fresh worker.
+"""
+
+from __future__ import annotations
+
+import collections
+import itertools
+import socket
+import subprocess
+import threading
+from typing import Sequence
+
+try:
+    from .protocol import Buffer, ProtocolError, read_message, write_message
+except ImportError:  # loaded as a top-level module beside the plug-in
+    from protocol import Buffer, ProtocolError, read_message, write_message  # type: ignore
+
+
+class EngineError(RuntimeError):
+    """The worker answered with an error; ``kind`` is the protocol's error type."""
+
+    def __init__(self, kind: str, message: str) -> None:
+        super().__init__(message)
+        self.kind = kind
+
+
+class WorkerUnavailable(EngineError):
+    """The worker could not be started, died or did not answer in time."""
+
+    def __init__(self, message: str) -> None:
+        super().__init__("WorkerUnavailable", message)
+
+
+class EngineClient:
+    """Talk to one worker: a spawned process (``command``) or a loopback ``address``."""
+
+    def __init__(
+        self,
+        command: Sequence[str] | None = None,
+        address: tuple[str, int] | None = None,
+        timeout: float = 120.0,
+    ) -> None:
+        if (command is None) == (address is None):
+            raise ValueError("give exactly one of command or address")
+        self.command, self.address, self.timeout = command, address, timeout
+        self._proc: subprocess.Popen | None = None
+        self._sock: socket.socket | None = None
+        self._reader = self._writer = None
+        self._stderr: collections.deque[str] = collections.deque(maxlen=40)
+        self._ids = itertools.count(1)
+        self._lock = threading.Lock()
+
+    # -- connection --------------------------------------------------------
+    @property
+    def running(self) -> bool:
+        if self._proc is not None:
+            return self._proc.poll() is None
+        return self._sock is not None
+
+    def _start(self) -> None:
+        if self.command is not None:
+            try:
+                self._proc = subprocess.Popen(
+                    list(self.command), stdin=subprocess.PIPE, stdout=subprocess.PIPE, stderr=subprocess.PIPE
+                )
+            except OSError as exc:
+                raise WorkerUnavailable(
+                    f"could not start the shadow engine ({' '.join(self.command)}): {exc}. "
+                    "Check the engine's Python in the plug-in's engine.json "
+                    "(re-run 'ssn-shadow install-plugin')."
+                ) from None
+            self._reader, self._writer = self._proc.stdout, self._proc.stdin
+            threading.Thread(target=self._drain, args=(self._proc.stderr,), daemon=True).start()
+        else:
+            try:
+                self._sock = socket.create_connection(self.address, timeout=self.timeout)
+            except OSError as exc:
+                host, port = self.address
+                raise WorkerUnavailable(f"no shadow engine is listening on {host}:{port}: {exc}") from None
+            self._sock.settimeout(None)
+            self._reader, self._writer = self._sock.makefile("rb"), self._sock.makefile("wb")
+
+    def _drain(self, stream) -> None:
+        for line in iter(stream.readline, b""):
+            self._stderr.append(line.decode("utf-8", "replace").rstrip())
+
+    def close(self) -> None:
+        """Stop the worker (or disconnect) without waiting for it."""
+        if self._proc is not None:
+            try:
+                self._proc.kill()
+                self._proc.wait(timeout=5)
+            except (OSError, subprocess.TimeoutExpired):
+                pass
+        if self._sock is not None:
+            try:
+                self._sock.close()
+            except OSError:
+                pass
+        self._proc = self._sock = self._reader = self._writer = None
+
+    def _died(self, what: str) -> WorkerUnavailable:
+        tail = "\n".join(list(self._stderr)[-8:])
+        self.close()
+        detail = f"\nLast engine output:\n{tail}" if tail else ""
+        return WorkerUnavailable(f"the shadow engine {what}; it will restart on the next request.{detail}")
+
+    # -- requests ------------------------------------------------------------
+    def request(
+        self, cmd: str, buffers: dict[str, Buffer] | None = None, timeout: float | None = None, **params
+    ) -> tuple[dict, dict[str, Buffer]]:
+        """Send one command; return the reply header and buffers, or raise EngineError."""
+        with self._lock:
+            if not self.running:
+                self.close()
+                self._start()
+            header = {"id": next(self._ids), "cmd": cmd, **params}
+            result: list = []
+
+            def exchange() -> None:
+                try:
+                    write_message(self._writer, header, buffers)
+                    result.append(read_message(self._reader))
+                except (OSError, EOFError, ProtocolError, ValueError) as exc:
+                    result.append(exc)
+
+            worker = threading.Thread(target=exchange, daemon=True)
+            worker.start()
+            worker.join(self.timeout if timeout is None else timeout)
+            if worker.is_alive():
+                raise self._died(f"did not answer '{cmd}' within {self.timeout if timeout is None else timeout:g} s")
+            if isinstance(result[0], BaseException):
+                raise self._died(f"stopped unexpectedly during '{cmd}' ({result[0]})")
+            reply, reply_buffers = result[0]
+        if not reply.get("ok"):
+            error = reply.get("error") or {}
+            raise EngineError(error.get("type", "Internal"), error.get("message", "unknown engine error"))
+        return reply, reply_buffers

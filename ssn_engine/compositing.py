@@ -1,0 +1,93 @@
+"""Shadow layers and composites.
+
+The shadow layer holds the shadow colour in RGB and ``opacity * s`` as
+straight alpha. In Multiply blend mode it gives exactly the conventions'
+composite ``background * (1 - opacity * s * (1 - colour))``, which for a
+black shadow is ``background * (1 - opacity * s)``.
+"""
+
+from __future__ import annotations
+
+from typing import Sequence
+
+import numpy as np
+
+LAYER_DTYPES = ("uint8", "uint16", "float16", "float32")
+_INT_MAX = {"uint8": 255, "uint16": 65535}
+
+
+def _colour(color: Sequence[float]) -> np.ndarray:
+    c = np.asarray(color, np.float32)
+    if c.shape != (3,) or not np.all(np.isfinite(c)) or c.min() < 0 or c.max() > 1:
+        raise ValueError(f"color: expected three numbers in [0, 1], got {list(color)!r}")
+    return c
+
+
+def _opacity(opacity: float) -> float:
+    if not np.isfinite(opacity) or not 0.0 <= opacity <= 1.0:
+        raise ValueError(f"opacity: expected a number in [0, 1], got {opacity!r}")
+    return float(opacity)
+
+
+def to_unit_float(image: np.ndarray) -> np.ndarray:
+    """uint8/uint16/float image to float32 in [0, 1]."""
+    if image.dtype.kind == "u":
+        return image.astype(np.float32) / np.iinfo(image.dtype).max
+    return np.clip(np.nan_to_num(image.astype(np.float32)), 0.0, 1.0)
+
+
+def from_unit_float(image: np.ndarray, dtype: str | np.dtype) -> np.ndarray:
+    """Float image in [0, 1] to the given dtype (rounding for integers)."""
+    name = np.dtype(dtype).name
+    if name in _INT_MAX:
+        return np.rint(np.clip(image, 0.0, 1.0) * _INT_MAX[name]).astype(name)
+    if name in ("float16", "float32", "float64"):
+        return image.astype(name)
+    raise ValueError(f"dtype: expected one of {LAYER_DTYPES}, got {name!r}")
+
+
+def shadow_layer(
+    shadow: np.ndarray,
+    color: Sequence[float] = (0.0, 0.0, 0.0),
+    opacity: float = 1.0,
+    dtype: str = "uint8",
+    channels: str = "rgba",
+) -> np.ndarray:
+    """The shadow (h, w) as an RGBA or BGRA layer (h, w, 4) of the given dtype."""
+    if channels not in ("rgba", "bgra"):
+        raise ValueError(f"channels: expected 'rgba' or 'bgra', got {channels!r}")
+    if dtype not in LAYER_DTYPES:
+        raise ValueError(f"dtype: expected one of {LAYER_DTYPES}, got {dtype!r}")
+    c = _colour(color)
+    if channels == "bgra":
+        c = c[::-1]
+    out = np.empty(shadow.shape + (4,), np.float32)
+    out[..., :3] = c
+    out[..., 3] = _opacity(opacity) * np.clip(shadow, 0.0, 1.0)
+    return from_unit_float(out, dtype)
+
+
+def composite_shadow(
+    background: np.ndarray, shadow: np.ndarray, color: Sequence[float] = (0.0, 0.0, 0.0), opacity: float = 1.0
+) -> np.ndarray:
+    """Multiply a full-size shadow (H, W) into a background (H, W, 3|4); same dtype out."""
+    if background.shape[:2] != shadow.shape:
+        raise ValueError(f"background {background.shape[:2]} and shadow {shadow.shape} differ in size")
+    bg = to_unit_float(background)
+    factor = 1.0 - _opacity(opacity) * np.clip(shadow, 0, 1)[..., None] * (1.0 - _colour(color))
+    out = bg.copy()
+    out[..., :3] = bg[..., :3] * factor
+    return from_unit_float(out, background.dtype)
+
+
+def over(background: np.ndarray, cutout: np.ndarray) -> np.ndarray:
+    """Alpha-composite an RGBA cutout (H, W, 4) over a background (H, W, 3|4); background dtype out."""
+    if background.shape[:2] != cutout.shape[:2] or cutout.shape[2] != 4:
+        raise ValueError("cutout must be RGBA and the same size as the background")
+    bg, fg = to_unit_float(background), to_unit_float(cutout)
+    a = fg[..., 3:4]
+    out = bg.copy()
+    out[..., :3] = fg[..., :3] * a + bg[..., :3] * (1.0 - a)
+    if out.shape[2] == 4:
+        out[..., 3:4] = a + bg[..., 3:4] * (1.0 - a)
+    return from_unit_float(out, background.dtype)

@@ -1,0 +1,120 @@
+"""The SSN network as two ONNX graphs: AOP (mask -> AO) and SR (mask, AO, ELM -> shadow).
+
+A model folder holds ``model.json`` and the two graphs (see docs/models.md):
+- aop.onnx: "mask" [b, 1, R, R] -> "ao" [b, 1, R, R]
+- sr.onnx: "mask" [b, 1, R, R], "ao" [b, 1, R, R], "elm" [b, 16, 32] -> "shadow" [b, 1, R, R]
+The ELM goes in normalised by :func:`ssn_engine.hemisphere.network_elm`.
+Frames are N x N (N = 256); a model trained at another R is fed resampled frames.
+"""
+
+from __future__ import annotations
+
+import json
+from pathlib import Path
+
+import numpy as np
+from PIL import Image
+
+from ..hemisphere import NETWORK_SHAPE, network_elm
+from .base import check_batch
+
+MODEL_FORMAT = "ssn-shadow-model"
+MODEL_VERSION = 1
+FRAME = 256
+
+
+class ModelError(RuntimeError):
+    """A model file is missing, corrupt or does not match the contract; the message names it."""
+
+
+_EXPECTED = {
+    "aop": ({"mask": 4}, {"ao": 4}),
+    "sr": ({"mask": 4, "ao": 4, "elm": 3}, {"shadow": 4}),
+}
+
+
+def _resample(frames: np.ndarray, size: int) -> np.ndarray:
+    if frames.shape[-1] == size:
+        return np.ascontiguousarray(frames, np.float32)
+    return np.stack(
+        [np.asarray(Image.fromarray(f.astype(np.float32), "F").resize((size, size), Image.Resampling.BILINEAR)) for f in frames]
+    )
+
+
+def _session(path: Path, role: str):
+    import onnxruntime as ort
+
+    if not path.is_file():
+        raise ModelError(f"model file missing: {path}")
+    options = ort.SessionOptions()
+    options.graph_optimization_level = ort.GraphOptimizationLevel.ORT_ENABLE_ALL
+    try:
+        session = ort.InferenceSession(str(path), options, providers=["CPUExecutionProvider"])
+    except Exception as exc:  # onnxruntime raises several types for bad files
+        raise ModelError(f"cannot load {path}: {exc}") from None
+    inputs, outputs = _EXPECTED[role]
+    got_in = {i.name: len(i.shape) for i in session.get_inputs()}
+    got_out = {o.name: len(o.shape) for o in session.get_outputs()}
+    if got_in != inputs or got_out != outputs:
+        raise ModelError(
+            f"{path} does not match the {role} contract: expected inputs {inputs} and outputs {outputs} "
+            f"(name: rank), got {got_in} and {got_out}"
+        )
+    return session
+
+
+class OnnxSSN:
+    """SSN inference with onnxruntime on the CPU."""
+
+    name = "ssn"
+    resolution = FRAME
+
+    def __init__(self, model_dir: str | Path) -> None:
+        model_dir = Path(model_dir)
+        card = model_dir / "model.json"
+        try:
+            meta = json.loads(card.read_text())
+        except FileNotFoundError:
+            raise ModelError(f"model card missing: {card}") from None
+        except (OSError, json.JSONDecodeError) as exc:
+            raise ModelError(f"cannot read {card}: {exc}") from None
+        if meta.get("format") != MODEL_FORMAT or meta.get("version") != MODEL_VERSION:
+            raise ModelError(f"{card}: expected format {MODEL_FORMAT!r} version {MODEL_VERSION}")
+        if list(meta.get("elm_shape", [])) != list(NETWORK_SHAPE):
+            raise ModelError(f"{card}: elm_shape must be {list(NETWORK_SHAPE)}")
+        r = meta.get("resolution")
+        if not isinstance(r, int) or r < 16 or r % 16:
+            raise ModelError(f"{card}: resolution must be a multiple of 16, got {r!r}")
+        self.meta, self.model_resolution = meta, r
+        self._aop = _session(model_dir / meta.get("aop", "aop.onnx"), "aop")
+        self._sr = _session(model_dir / meta.get("sr", "sr.onnx"), "sr")
+        self._check_run()
+
+    def _check_run(self) -> None:
+        """Run both graphs once so that a graph that loads but cannot run fails now."""
+        mask = np.zeros((1, 1, self.model_resolution, self.model_resolution), np.float32)
+        try:
+            ao = self._aop.run(["ao"], {"mask": mask})[0]
+            s = self._sr.run(["shadow"], {"mask": mask, "ao": ao, "elm": np.zeros((1, 16, 32), np.float32)})[0]
+        except Exception as exc:
+            raise ModelError(f"model in {self.meta.get('aop')} / {self.meta.get('sr')} failed a test run: {exc}") from None
+        if s.shape != mask.shape:
+            raise ModelError(f"sr output has shape {s.shape}, expected {mask.shape}")
+
+    def predict_ao(self, masks: np.ndarray) -> np.ndarray:
+        check_batch(masks, None, self.resolution)
+        m = _resample(masks, self.model_resolution)[:, None]
+        ao = self._aop.run(["ao"], {"mask": m})[0][:, 0]
+        return np.clip(_resample(ao, self.resolution), 0.0, 1.0)
+
+    def render(self, masks: np.ndarray, ao: np.ndarray, elms: np.ndarray) -> np.ndarray:
+        check_batch(masks, elms, self.resolution, ao)
+        feeds = {
+            "mask": _resample(masks, self.model_resolution)[:, None],
+            "ao": _resample(ao, self.model_resolution)[:, None],
+            "elm": network_elm(elms),
+        }
+        s = self._sr.run(["shadow"], feeds)[0][:, 0]
+        s = np.clip(_resample(s, self.resolution), 0.0, 1.0)
+        s[np.asarray(elms).max(axis=(1, 2)) <= 0] = 0.0  # no light, no shadow (conventions)
+        return s

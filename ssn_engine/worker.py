@@ -1,0 +1,230 @@
+"""The engine worker behind ``ssn-shadow serve`` (protocol: docs/protocol.md).
+
+It keeps one method (model) loaded and one :class:`ShadowSession` per cutout,
+and answers requests over stdin/stdout or a loopback TCP socket.
+"""
+
+from __future__ import annotations
+
+import collections
+import itertools
+import socket
+import sys
+import time
+import traceback
+from typing import Any, BinaryIO
+
+import numpy as np
+
+from . import __version__
+from .ao_edit import AOEditError
+from .compositing import shadow_layer
+from .framing import EmptyAlphaError, shadow_to_canvas
+from .hemisphere import render_light_map
+from .light_map import PRESETS, LightMap, LightMapError, preset
+from .methods import LoadedMethod, ModelError
+from .protocol import PROTOCOL_VERSION, Buffer, ProtocolError, read_message, write_message
+from .session import ShadowSession
+
+MAX_SESSIONS = 8
+MAX_ELM_IMAGE_WIDTH = 2048
+
+
+class RequestError(Exception):
+    """A request the worker refuses; ``kind`` is the protocol's error type."""
+
+    def __init__(self, kind: str, message: str) -> None:
+        super().__init__(message)
+        self.kind = kind
+
+
+def to_array(buffer: Buffer) -> np.ndarray:
+    """A protocol buffer as a read-only numpy array."""
+    return np.frombuffer(buffer.data, np.dtype(buffer.dtype).newbyteorder("<")).reshape(buffer.shape)
+
+
+def to_buffer(array: np.ndarray) -> Buffer:
+    array = np.ascontiguousarray(array)
+    return Buffer(array.dtype.name, array.shape, array.astype(array.dtype.newbyteorder("<"), copy=False).tobytes())
+
+
+def _u8(image: np.ndarray) -> Buffer:
+    return to_buffer(np.rint(np.clip(image, 0, 1) * 255).astype(np.uint8))
+
+
+def elm_display_image(light_map: LightMap, width: int) -> np.ndarray:
+    """The light map tone-mapped for display, (width / 2, width, 3) uint8."""
+    elm = render_light_map(light_map, max(1, width // 2))
+    v = (elm / (1.0 + elm))[..., None]
+    night, light = np.array([0.10, 0.13, 0.20]), np.array([1.0, 0.96, 0.85])
+    return np.rint((night + (light - night) * v) * 255).astype(np.uint8)
+
+
+class Worker:
+    """Request handling, independent of the transport."""
+
+    def __init__(self, loaded: LoadedMethod) -> None:
+        self.loaded = loaded
+        self.sessions: collections.OrderedDict[str, ShadowSession] = collections.OrderedDict()
+        self._ids = itertools.count(1)
+
+    # -- helpers -------------------------------------------------------------
+    def _session(self, header: dict) -> ShadowSession:
+        key = header.get("cutout")
+        if key not in self.sessions:
+            raise RequestError("UnknownCutout", f"unknown cutout {key!r}: send set_cutout first")
+        self.sessions.move_to_end(key)
+        return self.sessions[key]
+
+    @staticmethod
+    def _light_map(header: dict) -> LightMap:
+        if header.get("light_map") is not None:
+            return LightMap.from_dict(header["light_map"])
+        if header.get("preset") is not None:
+            return preset(header["preset"])
+        raise RequestError("BadRequest", "light_map or preset: one is required")
+
+    # -- commands ------------------------------------------------------------
+    def hello(self, header: dict, buffers: dict) -> tuple[dict, dict]:
+        m = self.loaded.method
+        return {
+            "protocol": PROTOCOL_VERSION,
+            "version": __version__,
+            "method": m.name,
+            "method_note": self.loaded.note,
+            "resolution": m.resolution,
+            "presets": list(PRESETS),
+        }, {}
+
+    def set_cutout(self, header: dict, buffers: dict) -> tuple[dict, dict]:
+        if "alpha" not in buffers:
+            raise RequestError("BadRequest", "alpha: buffer missing")
+        alpha = to_array(buffers["alpha"])
+        if alpha.ndim != 2:
+            raise RequestError("BadRequest", f"alpha: expected a 2D buffer, got shape {list(alpha.shape)}")
+        session = ShadowSession(alpha, self.loaded.method)
+        key = f"c{next(self._ids)}"
+        self.sessions[key] = session
+        while len(self.sessions) > MAX_SESSIONS:
+            self.sessions.popitem(last=False)
+        return {"cutout": key, "bbox": list(session.framing.bbox)}, {}
+
+    def get_ao(self, header: dict, buffers: dict) -> tuple[dict, dict]:
+        s = self._session(header)
+        return {}, {"ao": _u8(s.ao), "mask": _u8(s.mask)}
+
+    def edit_ao(self, header: dict, buffers: dict) -> tuple[dict, dict]:
+        s = self._session(header)
+        edits = header.get("edits")
+        if not isinstance(edits, list):
+            raise RequestError("BadRequest", "edits: expected a list")
+        return {}, {"ao": _u8(s.set_ao_edits(edits))}
+
+    def render(self, header: dict, buffers: dict) -> tuple[dict, dict]:
+        s = self._session(header)
+        light_map = self._light_map(header)
+        fmt = header.get("format") or {}
+        if not isinstance(fmt, dict):
+            raise RequestError("BadRequest", "format: expected an object")
+        t0 = time.perf_counter()
+        frame = s.render_frame(light_map)
+        t1 = time.perf_counter()
+        shadow = shadow_to_canvas(frame, s.framing)
+        t2 = time.perf_counter()
+        reply = {"x": shadow.x, "y": shadow.y, "width": 0, "height": 0, "method": s.method.name}
+        out: dict[str, Buffer] = {}
+        if not shadow.is_empty:
+            layer = shadow_layer(
+                shadow.values,
+                header.get("color", (0.0, 0.0, 0.0)),
+                float(header.get("opacity", 1.0)),
+                fmt.get("dtype", "uint8"),
+                fmt.get("channels", "rgba"),
+            )
+            reply.update(width=layer.shape[1], height=layer.shape[0])
+            out["layer"] = to_buffer(layer)
+        t3 = time.perf_counter()
+        reply["timing_ms"] = {
+            "shadow": round(1e3 * (t1 - t0), 2),
+            "to_canvas": round(1e3 * (t2 - t1), 2),
+            "layer": round(1e3 * (t3 - t2), 2),
+        }
+        return reply, out
+
+    def elm_image(self, header: dict, buffers: dict) -> tuple[dict, dict]:
+        width = header.get("width", 256)
+        if not isinstance(width, int) or not 2 <= width <= MAX_ELM_IMAGE_WIDTH:
+            raise RequestError("BadRequest", f"width: expected an integer in [2, {MAX_ELM_IMAGE_WIDTH}]")
+        return {}, {"image": to_buffer(elm_display_image(self._light_map(header), width))}
+
+    def release(self, header: dict, buffers: dict) -> tuple[dict, dict]:
+        self.sessions.pop(header.get("cutout"), None)
+        return {}, {}
+
+    COMMANDS = ("hello", "set_cutout", "get_ao", "edit_ao", "render", "elm_image", "release")
+
+    def handle(self, header: dict, buffers: dict[str, Buffer]) -> tuple[dict, dict[str, Buffer]]:
+        """Answer one request; never raises."""
+        base = {"id": header.get("id")}
+        cmd = header.get("cmd")
+        try:
+            if cmd not in self.COMMANDS:
+                raise RequestError("BadRequest", f"cmd: unknown command {cmd!r}")
+            reply, out = getattr(self, cmd)(header, buffers)
+            return {**base, "ok": True, **reply}, out
+        except RequestError as exc:
+            kind, message = exc.kind, str(exc)
+        except EmptyAlphaError as exc:
+            kind, message = "EmptyAlpha", str(exc)
+        except LightMapError as exc:
+            kind, message = "LightMapError", f"light map: {exc}"
+        except ModelError as exc:
+            kind, message = "ModelError", str(exc)
+        except (AOEditError, ValueError, TypeError, ProtocolError) as exc:
+            kind, message = "BadRequest", str(exc)
+        except MemoryError:
+            kind, message = "Internal", "the engine ran out of memory for this request"
+        except Exception as exc:  # a bug: report it, keep serving
+            traceback.print_exc(file=sys.stderr)
+            kind, message = "Internal", f"internal engine error ({type(exc).__name__}: {exc}); please report it"
+        return {**base, "ok": False, "error": {"type": kind, "message": message}}, {}
+
+    def serve(self, reader: BinaryIO, writer: BinaryIO) -> bool:
+        """Answer requests until the stream ends (False) or a shutdown (True)."""
+        while True:
+            try:
+                header, buffers = read_message(reader)
+            except EOFError:
+                return False
+            except ProtocolError as exc:
+                write_message(writer, {"id": None, "ok": False, "error": {"type": "BadRequest", "message": str(exc)}})
+                return False
+            if header.get("cmd") == "shutdown":
+                write_message(writer, {"id": header.get("id"), "ok": True})
+                return True
+            reply, out = self.handle(header, buffers)
+            write_message(writer, reply, out)
+
+
+def serve_stdio(loaded: LoadedMethod) -> None:
+    """Serve over stdin/stdout; anything printed goes to stderr instead."""
+    reader, writer = sys.stdin.buffer, sys.stdout.buffer
+    sys.stdout = sys.stderr
+    print(f"ssn-shadow worker ready: {loaded.note}", file=sys.stderr, flush=True)
+    Worker(loaded).serve(reader, writer)
+
+
+def serve_tcp(loaded: LoadedMethod, port: int = 0, host: str = "127.0.0.1", announce: Any = None) -> None:
+    """Serve one connection at a time on a loopback port; the first stdout line names it."""
+    worker = Worker(loaded)
+    with socket.create_server((host, port)) as server:
+        bound = server.getsockname()
+        print(f"listening {bound[0]}:{bound[1]}", file=announce or sys.stdout, flush=True)
+        while True:
+            conn, _ = server.accept()
+            with conn, conn.makefile("rb") as reader, conn.makefile("wb") as writer:
+                try:
+                    if worker.serve(reader, writer):
+                        return
+                except (ConnectionError, OSError) as exc:
+                    print(f"connection dropped: {exc}", file=sys.stderr, flush=True)
