@@ -25,7 +25,7 @@ from .camera import top_row
 OBJECT_EXTENT = 0.5
 ALPHA_THRESHOLD = 0.01  # alpha at or below this is background for the bounding box
 SHADOW_FLOOR = 0.5 / 255  # shadow below this is invisible in 8 bits: the layer is cropped to the rest
-EDGE_FADE = 0.04  # share of the frame over which a shadow fades out at its sides and bottom
+EDGE_FADE = 0.04  # share of the frame over which a shadow fades out at the frame's edges
 
 
 class EmptyAlphaError(ValueError):
@@ -128,10 +128,10 @@ def frame_alpha(alpha: np.ndarray, n: int = 256) -> tuple[np.ndarray, Framing]:
 
 
 def edge_fade(n: int) -> np.ndarray:
-    """(n, n) weights that fall linearly to 0 at the frame's left, right and bottom edges."""
+    """(n, n) weights that fall linearly to 0 at the frame's four edges."""
     ramp = np.clip((np.arange(n) + 0.5) / max(EDGE_FADE * n, 1.0), 0.0, 1.0)
     across = np.minimum(ramp, ramp[::-1])
-    return (np.minimum.outer(ramp[::-1], across)).astype(np.float32)
+    return np.minimum.outer(across, across).astype(np.float32)
 
 
 def shadow_to_canvas(shadow: np.ndarray, framing: Framing) -> CanvasShadow:
