@@ -1,0 +1,55 @@
+"""Make the README's pictures: the demo composite and one strip per light preset.
+
+Run: python tools/readme_figures.py [--out docs/img]
+"""
+
+from __future__ import annotations
+
+import argparse
+from pathlib import Path
+
+import numpy as np
+from PIL import Image, ImageDraw
+
+from ssn_engine.compositing import composite_shadow, over
+from ssn_engine.methods import load_method
+from ssn_engine.samples import pawn_cutout, studio_background
+from ssn_engine.session import ShadowSession
+from ssn_engine.light_map import PRESETS, preset
+from ssn_engine.worker import elm_display_image
+
+TILE = 360
+
+
+def main() -> None:
+    parser = argparse.ArgumentParser(description=__doc__)
+    parser.add_argument("--out", default="docs/img")
+    out = Path(parser.parse_args().out)
+    out.mkdir(parents=True, exist_ok=True)
+    cutout, background = pawn_cutout(), studio_background()
+    loaded = load_method("auto")
+    session = ShadowSession(cutout[..., 3], loaded.method)
+    h, w = cutout.shape[:2]
+    tiles = []
+    for name in PRESETS:
+        light = preset(name)
+        shadow = session.render(light).full_canvas(w, h)
+        image = over(composite_shadow(background, shadow, opacity=0.85), cutout)
+        if name == "softbox":
+            Image.fromarray(image).save(out / "demo.png", optimize=True)
+        tile = Image.fromarray(image).crop((150, 150, 1050, 900)).resize((TILE, TILE * 750 // 900))
+        sky = Image.fromarray(elm_display_image(light, 128))
+        tile.paste(sky, (TILE - 128 - 6, 6))
+        ImageDraw.Draw(tile).text((8, 6), name, fill=(20, 20, 20))
+        tiles.append(tile)
+    cols = 4
+    rows = -(-len(tiles) // cols)
+    sheet = Image.new("RGB", (cols * TILE, rows * tiles[0].height), (255, 255, 255))
+    for i, tile in enumerate(tiles):
+        sheet.paste(tile, ((i % cols) * TILE, (i // cols) * tile.height))
+    sheet.save(out / "presets.png", optimize=True)
+    print(f"wrote {out / 'demo.png'} and {out / 'presets.png'} with the {loaded.method.name} method")
+
+
+if __name__ == "__main__":
+    main()
