@@ -7,7 +7,7 @@ protocol, client) import without numpy.
 from __future__ import annotations
 
 __version__ = "0.1.0"
-__all__ = ["predict_frames", "__version__"]
+__all__ = ["__version__", "predict_frames"]
 
 
 def __getattr__(name: str):

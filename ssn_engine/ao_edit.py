@@ -8,7 +8,8 @@ fractions of the N x N frame (x right, y down); AO follows the conventions
 
 from __future__ import annotations
 
-from typing import Any, Iterable
+from collections.abc import Iterable
+from typing import Any
 
 import numpy as np
 from skimage.morphology import dilation, disk, erosion

@@ -6,7 +6,7 @@ import os
 import platform
 import resource
 import time
-from typing import Callable
+from collections.abc import Callable
 
 import numpy as np
 from PIL import Image

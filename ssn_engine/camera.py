@@ -58,7 +58,7 @@ class Camera:
         row = 0.5 * self.n - self.focal * (rel @ self.up) / z + self.shift
         return np.stack([col, row], axis=-1)
 
-    def frame_top(self, points: np.ndarray) -> "Camera":
+    def frame_top(self, points: np.ndarray) -> Camera:
         """Set the lens shift so that the highest projected point lies on row round(0.03 N)."""
         self.shift = 0.0
         self.shift = top_row(self.n) - float(self.project(points)[..., 1].min())

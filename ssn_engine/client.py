@@ -13,7 +13,7 @@ import itertools
 import socket
 import subprocess
 import threading
-from typing import Sequence
+from collections.abc import Sequence
 
 try:
     from .protocol import Buffer, ProtocolError, read_message, write_message

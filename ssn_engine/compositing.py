@@ -8,7 +8,7 @@ black shadow is ``background * (1 - opacity * s)``.
 
 from __future__ import annotations
 
-from typing import Sequence
+from collections.abc import Sequence
 
 import numpy as np
 

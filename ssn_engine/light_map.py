@@ -19,8 +19,9 @@ from __future__ import annotations
 import json
 import math
 import random
+from collections.abc import Callable, Iterator
 from dataclasses import dataclass, field, replace
-from typing import Any, Callable, Iterator
+from typing import Any
 
 FORMAT = "ssn-shadow-elm"
 VERSION = 1
@@ -139,7 +140,7 @@ class LightMap:
     def __len__(self) -> int:
         return len(self.lights)
 
-    def copy(self) -> "LightMap":
+    def copy(self) -> LightMap:
         return LightMap(list(self.lights))
 
     # -- JSON --------------------------------------------------------------
@@ -150,7 +151,7 @@ class LightMap:
         return json.dumps(self.to_dict(), indent=2)
 
     @classmethod
-    def from_dict(cls, data: Any) -> "LightMap":
+    def from_dict(cls, data: Any) -> LightMap:
         """Parse the versioned JSON structure; errors name the field."""
         if not isinstance(data, dict):
             raise LightMapError(f"light map: expected a JSON object, got {type(data).__name__}")
@@ -181,7 +182,7 @@ class LightMap:
         return cls(parsed)
 
     @classmethod
-    def from_json(cls, text: str) -> "LightMap":
+    def from_json(cls, text: str) -> LightMap:
         try:
             data = json.loads(text)
         except json.JSONDecodeError as exc:
@@ -190,7 +191,7 @@ class LightMap:
 
     # -- sampling ----------------------------------------------------------
     @classmethod
-    def random(cls, rng: random.Random, max_lights: int = MAX_LIGHTS) -> "LightMap":
+    def random(cls, rng: random.Random, max_lights: int = MAX_LIGHTS) -> LightMap:
         """A random light map from the paper's Table 1 ranges."""
         k = rng.randint(1, max_lights)
         return cls(

@@ -24,7 +24,7 @@ class ProtocolError(RuntimeError):
 class Buffer:
     """Raw array bytes with their dtype name and shape."""
 
-    __slots__ = ("dtype", "shape", "data")
+    __slots__ = ("data", "dtype", "shape")
 
     def __init__(self, dtype: str, shape: tuple[int, ...] | list[int], data: bytes | bytearray | memoryview):
         if dtype not in DTYPES:
@@ -46,8 +46,7 @@ def write_message(stream: BinaryIO, header: dict, buffers: dict[str, Buffer] | N
         for name, b in buffers.items()
     ]
     stream.write(json.dumps(header, separators=(",", ":")).encode("utf-8") + b"\n")
-    for b in buffers.values():
-        stream.write(memoryview(b.data).cast("B"))
+    stream.writelines(memoryview(b.data).cast("B") for b in buffers.values())
     stream.flush()
 
 

@@ -8,14 +8,13 @@ from __future__ import annotations
 import argparse
 from pathlib import Path
 
-import numpy as np
 from PIL import Image, ImageDraw
 
 from ssn_engine.compositing import composite_shadow, over
+from ssn_engine.light_map import PRESETS, preset
 from ssn_engine.methods import load_method
 from ssn_engine.samples import pawn_cutout, studio_background
 from ssn_engine.session import ShadowSession
-from ssn_engine.light_map import PRESETS, preset
 from ssn_engine.worker import elm_display_image
 
 TILE = 360
