@@ -1,0 +1,77 @@
+"""Helpers shared by the engine tests (plain functions, no fixtures)."""
+
+from __future__ import annotations
+
+import functools
+import os
+import sys
+from pathlib import Path
+
+import numpy as np
+
+REPO = Path(__file__).resolve().parents[2]
+if str(REPO) not in sys.path:
+    sys.path.insert(0, str(REPO))
+
+from ssn_engine.hemisphere import render_light_map  # noqa: E402
+from ssn_engine.light_map import LightMap  # noqa: E402
+
+
+@functools.lru_cache(maxsize=1)
+def pawn() -> np.ndarray:
+    """The bundled sample pawn (computed once per process; takes a few seconds)."""
+    from ssn_engine.samples import pawn_cutout
+
+    a = pawn_cutout()
+    a.setflags(write=False)
+    return a
+
+
+def drawn_alpha(width: int = 160, height: int = 120, dtype=np.uint8) -> np.ndarray:
+    """A small canvas with an upright rounded post standing near the bottom."""
+    yy, xx = np.mgrid[0:height, 0:width]
+    cx = width * 0.55
+    body = (np.abs(xx - cx) < width * 0.08) & (yy > height * 0.25) & (yy < height * 0.85)
+    head = (xx - cx) ** 2 + (yy - height * 0.25) ** 2 < (width * 0.1) ** 2
+    inside = (body | head).astype(np.float64)
+    if dtype == np.uint8:
+        return (inside * 255).astype(np.uint8)
+    if dtype == np.uint16:
+        return (inside * 65535).astype(np.uint16)
+    return inside.astype(dtype)
+
+
+def one_light(u: float, v: float, softness: float = 0.002, intensity: float = 2.0) -> LightMap:
+    lm = LightMap()
+    lm.add(u, v, softness, intensity)
+    return lm
+
+
+def elm_for(u: float, v: float, softness: float = 0.002, intensity: float = 2.0) -> np.ndarray:
+    """A (16, 32) ELM with one Gaussian light."""
+    return render_light_map(one_light(u, v, softness, intensity))
+
+
+def object_geometry(mask: np.ndarray, threshold: float = 0.5) -> tuple[int, int, float]:
+    """(top row, base row, centre column) of a frame mask."""
+    rows = np.flatnonzero(mask.max(axis=1) > threshold)
+    cols = np.flatnonzero(mask.max(axis=0) > threshold)
+    return int(rows[0]), int(rows[-1]), 0.5 * (cols[0] + cols[-1] + 1)
+
+
+def shadow_centroid(shadow: np.ndarray, mask: np.ndarray) -> tuple[float, float, float]:
+    """(mass, centre column, centre row) of the shadow on ground the object does not cover."""
+    w = shadow * (1.0 - np.clip(mask, 0, 1))
+    mass = float(w.sum())
+    yy, xx = np.mgrid[0 : w.shape[0], 0 : w.shape[1]]
+    if mass == 0:
+        return 0.0, float("nan"), float("nan")
+    return mass, float((w * (xx + 0.5)).sum() / mass), float((w * (yy + 0.5)).sum() / mass)
+
+
+def engine_env(**extra: str) -> dict[str, str]:
+    """Environment for engine subprocesses: the repo importable, no model override."""
+    env = {k: v for k, v in os.environ.items() if k != "SSN_SHADOW_MODEL_DIR"}
+    env["PYTHONPATH"] = str(REPO) + (os.pathsep + env["PYTHONPATH"] if env.get("PYTHONPATH") else "")
+    env.update(extra)
+    return env

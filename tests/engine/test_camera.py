@@ -1,0 +1,78 @@
+"""The conventions' pinhole camera (ssn_engine.camera)."""
+
+from __future__ import annotations
+
+import numpy as np
+import pytest
+
+from ssn_engine.camera import Camera, top_row
+
+
+@pytest.mark.parametrize("n", [256, 128, 100, 33])
+def test_top_row_is_three_percent(n):
+    assert top_row(n) == round(0.03 * n)
+    assert top_row(256) == 8
+
+
+@pytest.mark.parametrize("n, pitch, fov", [(256, 15.0, 45.0), (128, 0.0, 35.0), (100, 30.0, 55.0)])
+def test_frame_top_puts_the_top_point_on_row_three_percent(n, pitch, fov):
+    rng = np.random.default_rng(n)
+    points = rng.uniform([-0.3, 0.0, -0.3], [0.3, 0.7, 0.3], (200, 3))
+    cam = Camera(n, 0.35, fov=fov, pitch=pitch).frame_top(points)
+    rows = cam.project(points)[:, 1]
+    assert rows.min() == pytest.approx(top_row(n), abs=1e-9)
+    # framing is a pure vertical shift: columns do not move
+    plain = Camera(n, 0.35, fov=fov, pitch=pitch)
+    assert np.allclose(cam.project(points)[:, 0], plain.project(points)[:, 0])
+    assert np.allclose(rows - plain.project(points)[:, 1], cam.shift)
+
+
+def test_frame_top_is_idempotent():
+    points = np.array([[0.0, 0.0, 0.0], [0.0, 0.9, 0.1]])
+    cam = Camera(256, 0.45).frame_top(points)
+    shift = cam.shift
+    assert cam.frame_top(points).shift == pytest.approx(shift)
+
+
+def test_object_centre_projects_to_the_centre_column():
+    cam = Camera(256, 0.5)
+    col, _ = cam.project(np.array([0.0, 0.3, 0.0]))
+    assert col == pytest.approx(128.0)
+    right, _ = cam.project(np.array([0.2, 0.3, 0.0]))
+    assert right > 128.0  # +x is the camera's right
+
+
+@pytest.mark.parametrize("pitch", [0.0, 15.0, 30.0])
+def test_ground_points_lie_on_the_ground_and_pixels_above_the_horizon_are_invalid(pitch):
+    n = 64
+    cam = Camera(n, 0.5, pitch=pitch)
+    cam.frame_top(np.array([[0.0, 1.0, 0.0]]))
+    points, valid = cam.ground_points()
+    assert points.shape == (n, n, 3) and valid.shape == (n, n)
+    assert np.allclose(points[valid][:, 1], 0.0, atol=1e-9)
+    # ground points project back into their own pixel centres
+    image = cam.project(points[valid])
+    rows, cols = np.nonzero(valid)
+    assert np.allclose(image[:, 0], cols + 0.5, atol=1e-6)
+    assert np.allclose(image[:, 1], rows + 0.5, atol=1e-6)
+    # validity is per row: everything below the horizon row, nothing above it
+    horizon = 0.5 * n - cam.focal * np.tan(np.radians(pitch)) + cam.shift  # where a level ray lands
+    centres = np.arange(n) + 0.5
+    assert np.array_equal(valid.all(axis=1), centres > horizon + 1e-6)
+    assert not valid[centres < horizon - 1e-6].any()
+    # rays through valid pixels point down, rays through invalid ones do not
+    rays = cam.pixel_rays()
+    assert np.all(rays[valid][:, 1] < 0) and np.all(rays[~valid][:, 1] >= -1e-9)
+
+
+def test_pitch_zero_has_the_horizon_at_the_camera_height():
+    cam = Camera(64, 0.5, pitch=0.0)
+    _, valid = cam.ground_points()
+    assert not valid[:32].any() and valid[32:].all()
+
+
+def test_to_world_maps_the_elm_basis():
+    cam = Camera(32, 0.5)
+    basis = np.eye(3)  # right, up, forward
+    world = cam.to_world(basis)
+    assert np.allclose(world, [[1, 0, 0], [0, 1, 0], [0, 0, -1]])
