@@ -1,0 +1,128 @@
+#!/usr/bin/env python3
+"""GIMP 3 plug-in "Soft Shadow (SSN)": a soft shadow layer cast by the selection or the layer's alpha.
+
+Filters > Light and Shadow > Soft Shadow (SSN)... The plug-in is thin: the
+shadow is predicted by the ssn-shadow engine worker (``ssn-shadow serve``),
+reached through ``engine.json`` beside this file. Procedure: ``plug-in-ssn-shadow``.
+"""
+
+from __future__ import annotations
+
+import os
+import sys
+import traceback
+
+sys.path.insert(0, os.path.dirname(os.path.abspath(__file__)))
+
+import gi  # noqa: E402
+
+gi.require_version("Gimp", "3.0")
+gi.require_version("Gegl", "0.4")
+gi.require_version("Babl", "0.1")
+from gi.repository import Babl, Gegl, Gimp, GLib, GObject  # noqa: E402
+
+from ssn_core import ShadowError, make_shadow  # noqa: E402
+from ssn_engine_link import EngineConfigError, connect, load_engine_config  # noqa: E402
+from ssn_settings import (  # noqa: E402
+    ARGUMENTS,
+    IMAGE_TYPES,
+    MENU_LABEL,
+    MENU_PATH,
+    PROCEDURE_NAME,
+)
+
+RW = GObject.ParamFlags.READWRITE
+
+
+def add_arguments(procedure: Gimp.Procedure) -> None:
+    """Register every setting of ssn_settings.ARGUMENTS as a procedure argument."""
+    for spec in ARGUMENTS:
+        if spec.kind == "string":
+            procedure.add_string_argument(spec.name, spec.label, spec.blurb, spec.default, RW)
+        elif spec.kind == "double":
+            procedure.add_double_argument(spec.name, spec.label, spec.blurb, spec.lo, spec.hi, spec.default, RW)
+        elif spec.kind == "color":
+            default = Gegl.Color.new("black")
+            default.set_rgba_with_space(*spec.default, 1.0, Babl.space("sRGB"))
+            procedure.add_color_argument(spec.name, spec.label, spec.blurb, False, default, RW)
+        else:  # pragma: no cover - a programming error in ARGUMENTS
+            raise ValueError(f"unknown argument kind {spec.kind!r}")
+    procedure.add_layer_return_value("shadow-layer", "Shadow layer", "The new shadow layer", True, RW)
+
+
+def config_values(config: Gimp.ProcedureConfig) -> dict:
+    """Argument values by name; the colour as sRGB (perceptual) components in 0..1."""
+    values = {}
+    for spec in ARGUMENTS:
+        value = config.get_property(spec.name)
+        if spec.kind == "color":
+            rgba = value.get_rgba_with_space(Babl.space("sRGB"))
+            value = tuple(min(max(c, 0.0), 1.0) for c in (rgba.red, rgba.green, rgba.blue))
+        values[spec.name] = value
+    return values
+
+
+def failure(procedure: Gimp.Procedure, message: str) -> Gimp.ValueArray:
+    return procedure.new_return_values(Gimp.PDBStatusType.EXECUTION_ERROR, GLib.Error(message))
+
+
+class SoftShadow(Gimp.PlugIn):
+    """The plug-in: one image procedure."""
+
+    def do_query_procedures(self):
+        return [PROCEDURE_NAME]
+
+    def do_set_i18n(self, name):
+        return False
+
+    def do_create_procedure(self, name):
+        Gegl.init(None)
+        procedure = Gimp.ImageProcedure.new(self, name, Gimp.PDBProcType.PLUGIN, self.run, None)
+        procedure.set_image_types(IMAGE_TYPES)
+        procedure.set_sensitivity_mask(Gimp.ProcedureSensitivityMask.DRAWABLE)
+        procedure.set_menu_label(MENU_LABEL)
+        procedure.add_menu_path(MENU_PATH)
+        procedure.set_documentation(
+            "Soft shadow of a cutout (SSN)",
+            "Adds a layer 'Shadow: <layer>' right below the layer: the soft shadow that the selection "
+            "(or, with no selection, the layer's alpha) casts on the ground under the given light map, "
+            "predicted by the ssn-shadow engine (SSN, CVPR 2021). The layer is in Multiply mode; the "
+            "layer and the selection are left as they are. One undo step removes it.",
+            name,
+        )
+        procedure.set_attribution("ssn-shadow contributors", "ssn-shadow contributors", "2025")
+        add_arguments(procedure)
+        return procedure
+
+    def run(self, procedure, run_mode, image, drawables, config, data):
+        try:
+            return self._run(procedure, run_mode, image, drawables, config)
+        except (ShadowError, EngineConfigError) as exc:
+            return failure(procedure, str(exc))
+        except Exception:  # noqa: BLE001 - never crash GIMP; report the bug instead
+            return failure(procedure, "Soft Shadow failed unexpectedly (a bug):\n" + traceback.format_exc(limit=6))
+
+    def _run(self, procedure, run_mode, image, drawables, config):
+        from ssn_gimp_host import GimpHost
+
+        if len(drawables) != 1:
+            raise ShadowError("Soft Shadow works on one layer: select exactly one layer.")
+        host = GimpHost(image, drawables[0])
+        engine = connect(load_engine_config())
+        try:
+            if run_mode == Gimp.RunMode.INTERACTIVE:
+                import ssn_dialog
+
+                if not ssn_dialog.run_dialog(procedure, config, host, engine):
+                    return procedure.new_return_values(Gimp.PDBStatusType.CANCEL, GLib.Error())
+            layer = make_shadow(host, engine, config_values(config))
+        finally:
+            engine.close()
+        Gimp.displays_flush()
+        return Gimp.ValueArray.new_from_values(
+            [GObject.Value(Gimp.PDBStatusType, Gimp.PDBStatusType.SUCCESS), GObject.Value(Gimp.Layer, layer)]
+        )
+
+
+if __name__ == "__main__":
+    Gimp.main(SoftShadow.__gtype__, sys.argv)

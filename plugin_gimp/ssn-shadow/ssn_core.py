@@ -1,0 +1,167 @@
+"""The filter's run logic, separated from GIMP so it is testable without it.
+
+:func:`make_shadow` asks a :class:`Host` (the GIMP adapter, or a fake in
+tests) for the cutout alpha, has the engine worker predict and composite the
+shadow, then asks the host to add it as one layer inside one undo group. All
+the engine work happens before the undo group opens, so a failure leaves the
+image untouched. Every failure becomes :class:`ShadowError` with a message
+for the user.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+from typing import Any, Protocol
+
+from ssn_engine_link import client as engine_client
+from ssn_engine_link import protocol
+from ssn_pixels import BYTES_PER_SAMPLE, PixelPlan, is_blank
+from ssn_settings import LAYER_PREFIX, SettingsError, ShadowSettings
+
+
+class ShadowError(RuntimeError):
+    """A failure the user can act on; ``str(error)`` is the message to show."""
+
+
+@dataclass(frozen=True)
+class Cutout:
+    """The canvas-sized alpha the shadow is cast from."""
+
+    width: int
+    height: int
+    dtype: str
+    data: bytes
+    source: str  # for messages, e.g. "the selection" or 'layer "Pawn"'
+
+
+@dataclass(frozen=True)
+class ShadowLayerData:
+    """A shadow layer from the worker: place on the canvas and straight-alpha RGBA pixels."""
+
+    x: int
+    y: int
+    width: int
+    height: int
+    dtype: str
+    data: bytes
+
+
+class Host(Protocol):
+    """What the run logic needs from the image editor."""
+
+    def pixel_plan(self) -> PixelPlan: ...
+
+    def source_name(self) -> str: ...
+
+    def read_cutout(self, plan: PixelPlan) -> Cutout: ...
+
+    def undo_group_start(self) -> None: ...
+
+    def undo_group_end(self) -> None: ...
+
+    def add_shadow_layer(self, name: str, shadow: ShadowLayerData, plan: PixelPlan) -> Any: ...
+
+
+class Engine(Protocol):
+    def request(self, cmd: str, buffers: dict | None = None, timeout: float | None = None, **params: Any) -> Any: ...
+
+
+def shadow_layer_name(source_name: str) -> str:
+    return f"{LAYER_PREFIX}{source_name}"
+
+
+def _engine_call(engine: Engine, cmd: str, buffers: dict | None = None, **params: Any) -> tuple[dict, dict]:
+    try:
+        return engine.request(cmd, buffers, **params)
+    except engine_client.EngineError as exc:
+        raise ShadowError(str(exc)) from None
+    except (OSError, protocol.ProtocolError) as exc:
+        raise ShadowError(f"Lost contact with the shadow engine: {exc}") from None
+
+
+def upload_cutout(engine: Engine, cutout: Cutout) -> str:
+    """Send the alpha to the worker (which predicts AO now); return the cutout id."""
+    if cutout.width <= 0 or cutout.height <= 0:
+        raise ShadowError("The image is empty.")
+    if is_blank(cutout.data):
+        raise ShadowError(
+            f"Nothing to cast a shadow from: {cutout.source} is fully transparent. "
+            "Select the object or paint it on a layer with a transparent background."
+        )
+    alpha = protocol.Buffer(cutout.dtype, (cutout.height, cutout.width), cutout.data)
+    reply, _ = _engine_call(engine, "set_cutout", {"alpha": alpha})
+    return str(reply["cutout"])
+
+
+def render_shadow(engine: Engine, cutout_id: str, settings: ShadowSettings, dtype: str) -> ShadowLayerData:
+    """Apply the AO edits and render the shadow layer in ``dtype``."""
+    edits = settings.ao_edits()
+    if edits:
+        _engine_call(engine, "edit_ao", cutout=cutout_id, edits=edits)
+    reply, buffers = _engine_call(engine, "render", cutout=cutout_id, **settings.render_params(dtype))
+    x, y, w, h = (int(reply[k]) for k in ("x", "y", "width", "height"))
+    if w == 0 or h == 0:
+        return ShadowLayerData(x, y, 0, 0, dtype, b"")
+    layer = buffers.get("layer")
+    if layer is None or layer.dtype != dtype or tuple(layer.shape) != (h, w, 4):
+        got = "nothing" if layer is None else f"{layer.dtype} {tuple(layer.shape)}"
+        raise ShadowError(f"The shadow engine sent a malformed layer: expected {dtype} {(h, w, 4)}, got {got}.")
+    data = bytes(memoryview(layer.data).cast("B"))
+    if len(data) != w * h * 4 * BYTES_PER_SAMPLE[dtype]:
+        raise ShadowError("The shadow engine sent a truncated layer.")
+    return ShadowLayerData(x, y, w, h, dtype, data)
+
+
+def release(engine: Engine, cutout_id: str) -> None:
+    """Free the worker's cutout; best effort (the worker may be gone)."""
+    try:
+        engine.request("release", cutout=cutout_id)
+    except Exception:  # noqa: BLE001 - cleanup must never hide the real outcome
+        pass
+
+
+def compute_shadow(host: Host, engine: Engine, settings: ShadowSettings) -> tuple[ShadowLayerData, PixelPlan]:
+    """Read the cutout and render its shadow; touches nothing in the image."""
+    plan = host.pixel_plan()
+    cutout = host.read_cutout(plan)
+    cutout_id = upload_cutout(engine, cutout)
+    try:
+        shadow = render_shadow(engine, cutout_id, settings, plan.layer_dtype)
+    finally:
+        release(engine, cutout_id)
+    if shadow.width == 0:
+        raise ShadowError(
+            "These lights cast no visible shadow inside the canvas. "
+            "Try a light lower in the sky or a higher opacity."
+        )
+    return shadow, plan
+
+
+def make_shadow(host: Host, engine: Engine, settings: ShadowSettings | dict[str, Any]) -> Any:
+    """The whole filter: compute the shadow, then add it below the drawable in one undo group.
+
+    ``settings`` may be a :class:`ShadowSettings` or a dict of argument values
+    keyed like the procedure's arguments ("light-map", "shadow-color", ...).
+    Returns whatever ``host.add_shadow_layer`` returns (the new layer).
+    """
+    if isinstance(settings, dict):
+        settings = settings_from_arguments(settings)
+    shadow, plan = compute_shadow(host, engine, settings)
+    host.undo_group_start()
+    try:
+        return host.add_shadow_layer(shadow_layer_name(host.source_name()), shadow, plan)
+    finally:
+        host.undo_group_end()
+
+
+def settings_from_arguments(values: dict[str, Any]) -> ShadowSettings:
+    """Build settings from procedure argument values; errors become ShadowError."""
+    try:
+        return ShadowSettings(
+            light_map=values.get("light-map", ""),
+            color=tuple(values.get("shadow-color", (0.0, 0.0, 0.0)))[:3],
+            opacity=values.get("opacity", 0.8),
+            ao_strength=values.get("ao-strength", 1.0),
+        )
+    except SettingsError as exc:
+        raise ShadowError(str(exc)) from None

@@ -1,0 +1,83 @@
+"""Where the plug-in finds the engine: its shared modules and its worker.
+
+The installed plug-in carries copies of ``light_map``, ``protocol`` and
+``client`` in ``engine_shared/`` and an ``engine.json`` that either names the
+Python that runs ``python -m ssn_engine serve`` (``{"python", "args"}``) or the
+loopback address of a running worker (``{"address": ["127.0.0.1", port]}``).
+In a source checkout (tests) the modules come from ``ssn_engine`` itself.
+GIMP-free and stdlib-only.
+"""
+
+from __future__ import annotations
+
+import json
+import os
+from pathlib import Path
+from typing import Any
+
+try:  # installed plug-in
+    from engine_shared import client, light_map, protocol  # type: ignore[import-not-found]
+except ImportError:  # source checkout
+    from ssn_engine import client, light_map, protocol  # type: ignore[no-redef]
+
+__all__ = ["client", "light_map", "protocol", "EngineConfigError", "load_engine_config", "connect"]
+
+PLUGIN_DIR = Path(__file__).resolve().parent
+CONFIG_NAME = "engine.json"
+ADDRESS_ENV = "SSN_SHADOW_ENGINE_ADDRESS"
+
+
+class EngineConfigError(RuntimeError):
+    """engine.json is missing or malformed; the message tells the user what to do."""
+
+
+def parse_address(text: str) -> tuple[str, int]:
+    """Parse ``host:port`` (IPv4 or a name) into a socket address."""
+    host, sep, port = text.strip().rpartition(":")
+    if not sep or not host or not port.isdigit() or not 0 < int(port) < 65536:
+        raise EngineConfigError(f"expected an engine address as host:port, got {text!r}")
+    return host, int(port)
+
+
+def load_engine_config(plugin_dir: Path | None = None) -> dict[str, Any]:
+    """Read ``engine.json``; the environment variable SSN_SHADOW_ENGINE_ADDRESS overrides it."""
+    override = os.environ.get(ADDRESS_ENV)
+    if override:
+        host, port = parse_address(override)
+        return {"address": [host, port]}
+    path = Path(plugin_dir or PLUGIN_DIR) / CONFIG_NAME
+    try:
+        config = json.loads(path.read_text(encoding="utf-8"))
+    except FileNotFoundError:
+        raise EngineConfigError(
+            f"The shadow engine is not configured ({path} is missing). "
+            "Install the plug-in with 'ssn-shadow install-plugin gimp'."
+        ) from None
+    except (OSError, ValueError) as exc:
+        raise EngineConfigError(f"Cannot read {path}: {exc}. Re-run 'ssn-shadow install-plugin gimp'.") from None
+    if not isinstance(config, dict):
+        raise EngineConfigError(f"{path}: expected a JSON object")
+    if "address" in config:
+        address = config["address"]
+        if (
+            not isinstance(address, list)
+            or len(address) != 2
+            or not isinstance(address[0], str)
+            or not isinstance(address[1], int)
+        ):
+            raise EngineConfigError(f'{path}: "address" must be ["host", port], got {address!r}')
+        return {"address": [address[0], address[1]]}
+    python, args = config.get("python"), config.get("args", ["-m", "ssn_engine", "serve"])
+    if not isinstance(python, str) or not python:
+        raise EngineConfigError(f'{path}: "python" must name the Python that has ssn-shadow installed')
+    if not isinstance(args, list) or not all(isinstance(a, str) for a in args):
+        raise EngineConfigError(f'{path}: "args" must be a list of strings')
+    return {"command": [python, *args]}
+
+
+def connect(config: dict[str, Any], timeout: float = 120.0) -> client.EngineClient:
+    """An engine client for a config from :func:`load_engine_config` (connects lazily)."""
+    if "address" in config:
+        host, port = config["address"]
+        return client.EngineClient(address=(host, int(port)), timeout=timeout)
+    return client.EngineClient(command=list(config["command"]), timeout=timeout)

@@ -1,0 +1,84 @@
+"""The GIMP side of the run logic: reads the cutout and writes the shadow layer via Gegl buffers.
+
+Implements :class:`ssn_core.Host` for one image and drawable. Pixels cross
+only through ``Gegl.Buffer.get``/``set`` with the explicit babl formats of
+:mod:`ssn_pixels`.
+"""
+
+from __future__ import annotations
+
+from typing import Any
+
+import gi
+
+gi.require_version("Gimp", "3.0")
+gi.require_version("Gegl", "0.4")
+from gi.repository import Gegl, Gimp  # noqa: E402
+
+from ssn_core import Cutout, ShadowError, ShadowLayerData  # noqa: E402
+from ssn_pixels import PixelPlan, layer_image_type, plan_for_precision  # noqa: E402
+
+
+def no_cutout_message(layer_name: str) -> str:
+    return (
+        f'Nothing to cast a shadow from: the selection is empty and the layer "{layer_name}" has no '
+        "alpha channel. Select the object (for example with Select > By Color or the Foreground "
+        "Select tool), or add an alpha channel (Layer > Transparency > Add Alpha Channel) and erase "
+        "the background."
+    )
+
+
+class GimpHost:
+    """One image and its active drawable, as the run logic sees them."""
+
+    def __init__(self, image: Gimp.Image, drawable: Gimp.Drawable) -> None:
+        if not isinstance(drawable, Gimp.Layer) or isinstance(drawable, Gimp.LayerMask):
+            raise ShadowError("Soft Shadow works on a layer: select a layer, not a channel or a mask.")
+        self.image, self.drawable = image, drawable
+
+    def pixel_plan(self) -> PixelPlan:
+        layer_image_type(self.image.get_base_type().value_nick)  # rejects indexed images with a message
+        return plan_for_precision(self.image.get_precision().value_nick)
+
+    def source_name(self) -> str:
+        return self.drawable.get_name()
+
+    def read_cutout(self, plan: PixelPlan) -> Cutout:
+        """The selection if there is one, else the layer's alpha, as a canvas-sized buffer."""
+        width, height = self.image.get_width(), self.image.get_height()
+        _, non_empty, *_ = Gimp.Selection.bounds(self.image)
+        if non_empty:
+            buffer = self.image.get_selection().get_buffer()
+            rect = Gegl.Rectangle.new(0, 0, width, height)
+            data = buffer.get(rect, 1.0, plan.selection_format, Gegl.AbyssPolicy.NONE)
+            return Cutout(width, height, plan.alpha_dtype, bytes(data), "the selection")
+        if not self.drawable.has_alpha():
+            raise ShadowError(no_cutout_message(self.drawable.get_name()))
+        _, off_x, off_y = self.drawable.get_offsets()
+        buffer = self.drawable.get_buffer()
+        # The canvas rectangle in the layer's coordinates; outside the layer the abyss is transparent.
+        rect = Gegl.Rectangle.new(-off_x, -off_y, width, height)
+        data = buffer.get(rect, 1.0, plan.layer_alpha_format, Gegl.AbyssPolicy.NONE)
+        return Cutout(width, height, plan.alpha_dtype, bytes(data), f'the layer "{self.drawable.get_name()}"')
+
+    def undo_group_start(self) -> None:
+        self.image.undo_group_start()
+
+    def undo_group_end(self) -> None:
+        self.image.undo_group_end()
+
+    def add_shadow_layer(self, name: str, shadow: ShadowLayerData, plan: PixelPlan) -> Any:
+        """A Multiply layer right below the drawable, at the shadow's place on the canvas."""
+        image_type = getattr(Gimp.ImageType, layer_image_type(self.image.get_base_type().value_nick))
+        layer = Gimp.Layer.new(
+            self.image, name, shadow.width, shadow.height, image_type, 100.0, Gimp.LayerMode.MULTIPLY
+        )
+        parent = self.drawable.get_parent()
+        position = self.image.get_item_position(self.drawable) + 1
+        self.image.insert_layer(layer, parent, position)
+        layer.set_offsets(shadow.x, shadow.y)
+        buffer = layer.get_buffer()
+        buffer.set(Gegl.Rectangle.new(0, 0, shadow.width, shadow.height), plan.shadow_format, shadow.data)
+        buffer.flush()
+        layer.update(0, 0, shadow.width, shadow.height)
+        return layer

@@ -1,0 +1,135 @@
+"""The procedure's arguments and their validation (GIMP-free).
+
+Every dialog setting is a procedure argument so that scripts and batch mode
+can call the filter non-interactively. ``ARGUMENTS`` is the single list the
+plug-in registers from; :class:`ShadowSettings` turns argument values into
+engine requests.
+"""
+
+from __future__ import annotations
+
+import math
+from dataclasses import dataclass
+from typing import Any
+
+from ssn_engine_link import light_map
+
+PROCEDURE_NAME = "plug-in-ssn-shadow"
+MENU_LABEL = "Soft _Shadow (SSN)..."
+MENU_PATH = "<Image>/Filters/Light and Shadow"
+IMAGE_TYPES = "RGB*, GRAY*"
+LAYER_PREFIX = "Shadow: "
+
+
+@dataclass(frozen=True)
+class ArgSpec:
+    """One procedure argument: ``kind`` is "string", "double" or "color"."""
+
+    name: str
+    kind: str
+    label: str
+    blurb: str
+    default: Any
+    lo: float | None = None
+    hi: float | None = None
+
+
+ARGUMENTS: tuple[ArgSpec, ...] = (
+    ArgSpec(
+        "light-map",
+        "string",
+        "_Light map",
+        "A preset name (" + ", ".join(light_map.PRESETS) + ") or light-map JSON "
+        '({"format": "ssn-shadow-elm", "version": 1, "lights": [...]})',
+        light_map.DEFAULT_PRESET,
+    ),
+    ArgSpec("shadow-color", "color", "Shadow _colour", "Colour of the shadow (sRGB)", (0.0, 0.0, 0.0)),
+    ArgSpec("opacity", "double", "_Opacity", "Shadow opacity, 0 (none) to 1 (full)", 0.8, 0.0, 1.0),
+    ArgSpec(
+        "ao-strength",
+        "double",
+        "_Contact shadow",
+        "Ambient-occlusion (contact shadow) strength: 0 removes it, 1 keeps the predicted one, up to 4",
+        1.0,
+        0.0,
+        4.0,
+    ),
+)
+ARG_BY_NAME = {a.name: a for a in ARGUMENTS}
+
+
+class SettingsError(ValueError):
+    """A setting is out of range or malformed; the message names the argument."""
+
+
+def resolve_light_map(text: str) -> dict[str, Any]:
+    """Engine parameters for a light-map argument: ``{"preset": name}`` or ``{"light_map": {...}}``.
+
+    Empty text means the default preset; text starting with ``{`` is parsed
+    (and validated here, so errors name the field) as light-map JSON.
+    """
+    text = (text or "").strip()
+    if not text:
+        return {"preset": light_map.DEFAULT_PRESET}
+    if text.startswith("{"):
+        try:
+            parsed = light_map.LightMap.from_json(text)
+        except light_map.LightMapError as exc:
+            raise SettingsError(f"light-map: {exc}") from None
+        return {"light_map": parsed.to_dict()}
+    if text in light_map.PRESETS:
+        return {"preset": text}
+    raise SettingsError(
+        f"light-map: unknown preset {text!r}; give one of {', '.join(light_map.PRESETS)} or light-map JSON"
+    )
+
+
+def editor_light_map(text: str) -> light_map.LightMap:
+    """The editable light map a light-map argument describes (for the dialog)."""
+    params = resolve_light_map(text)
+    if "preset" in params:
+        return light_map.preset(params["preset"])
+    return light_map.LightMap.from_dict(params["light_map"])
+
+
+def _unit(value: Any, name: str, lo: float, hi: float) -> float:
+    if isinstance(value, bool) or not isinstance(value, (int, float)) or not math.isfinite(value):
+        raise SettingsError(f"{name}: expected a number, got {value!r}")
+    if not lo <= value <= hi:
+        raise SettingsError(f"{name}: expected a number in [{lo:g}, {hi:g}], got {value:g}")
+    return float(value)
+
+
+@dataclass(frozen=True)
+class ShadowSettings:
+    """Validated settings of one shadow."""
+
+    light_map: str = light_map.DEFAULT_PRESET
+    color: tuple[float, float, float] = (0.0, 0.0, 0.0)
+    opacity: float = 0.8
+    ao_strength: float = 1.0
+
+    def __post_init__(self) -> None:
+        if not isinstance(self.light_map, str):
+            raise SettingsError(f"light-map: expected text, got {type(self.light_map).__name__}")
+        if len(self.color) != 3:
+            raise SettingsError(f"shadow-color: expected 3 components, got {len(self.color)}")
+        color = tuple(_unit(c, "shadow-color", 0.0, 1.0) for c in self.color)
+        object.__setattr__(self, "color", color)
+        object.__setattr__(self, "opacity", _unit(self.opacity, "opacity", 0.0, 1.0))
+        spec = ARG_BY_NAME["ao-strength"]
+        object.__setattr__(self, "ao_strength", _unit(self.ao_strength, "ao-strength", spec.lo, spec.hi))
+        resolve_light_map(self.light_map)  # validate now, before any pixel is read
+
+    def render_params(self, dtype: str) -> dict[str, Any]:
+        """Parameters of the worker's ``render`` command (without the cutout id)."""
+        return {
+            **resolve_light_map(self.light_map),
+            "color": list(self.color),
+            "opacity": self.opacity,
+            "format": {"dtype": dtype, "channels": "rgba"},
+        }
+
+    def ao_edits(self) -> list[dict[str, Any]]:
+        """The AO edit list for ``edit_ao``; empty when the predicted AO is kept."""
+        return [] if self.ao_strength == 1.0 else [{"op": "strength", "value": self.ao_strength}]
