@@ -47,6 +47,10 @@ class _Card:
             return
         self.empty = False
         top, base = float(rows[0]), float(rows[-1] + 1)
+        solid = np.flatnonzero((mask > 0.5).any(axis=1))
+        # The card reaches the ground: below its lowest solid row it continues that row,
+        # so the antialiased bottom edge does not leave a lit seam at the contact line.
+        self.lowest_centre = float(solid[-1] if solid.size else rows[-1]) + 0.5
         # Find the card height whose projection spans the mask's rows.
         height = 0.5
         for _ in range(12):
@@ -85,8 +89,9 @@ class _Card:
         hit = (h >= 0) & (h <= self.height * 1.001)
         points = np.stack([x, np.where(hit, h, 0.0), np.zeros_like(x)], axis=-1)
         image = self.camera.project(points)
+        row = np.minimum(image[..., 1], self.lowest_centre)
         values = map_coordinates(
-            self.mask, [image[..., 1].ravel() - 0.5, image[..., 0].ravel() - 0.5], order=1, cval=0.0
+            self.mask, [row.ravel() - 0.5, image[..., 0].ravel() - 0.5], order=1, cval=0.0
         ).reshape(hit.shape)
         return np.where(hit, values, 0.0)
 

@@ -1,0 +1,178 @@
+"""The geometric card method (ssn_engine.methods.geometric) against the conventions' orientation."""
+
+from __future__ import annotations
+
+import numpy as np
+import pytest
+from engine_helpers import drawn_alpha, elm_for, object_geometry, shadow_centroid
+
+from ssn_engine.ao_edit import apply_edits
+from ssn_engine.framing import frame_alpha
+from ssn_engine.methods import GeometricCard
+
+
+@pytest.fixture(scope="module")
+def post_frame():
+    mask, _ = frame_alpha(drawn_alpha(160, 120), 256)
+    return mask
+
+
+@pytest.fixture(params=["pawn", "post"])
+def frame(request, pawn_frame, post_frame):
+    return pawn_frame if request.param == "pawn" else post_frame
+
+
+def _render(method, mask, elm, ao=None):
+    if ao is None:
+        ao = method.predict_ao(mask[None])
+    return method.render(mask[None], ao if ao.ndim == 3 else ao[None], elm[None])[0]
+
+
+@pytest.mark.parametrize("u", [0.6, 0.75, 0.9])
+def test_light_right_of_centre_casts_the_shadow_left(geometric, frame, u):
+    _, _, centre = object_geometry(frame)
+    mass, cx, _ = shadow_centroid(_render(geometric, frame, elm_for(u, 0.6)), frame)
+    assert mass > 10
+    assert cx < centre - 5
+
+
+@pytest.mark.parametrize("u", [0.1, 0.25, 0.4])
+def test_light_left_of_centre_casts_the_shadow_right(geometric, frame, u):
+    _, _, centre = object_geometry(frame)
+    mass, cx, _ = shadow_centroid(_render(geometric, frame, elm_for(u, 0.6)), frame)
+    assert mass > 10
+    assert cx > centre + 5
+
+
+def test_mirrored_lights_give_mirrored_shadow_masses(geometric, pawn_frame):
+    _, _, centre = object_geometry(pawn_frame)
+    _, left, _ = shadow_centroid(_render(geometric, pawn_frame, elm_for(0.7, 0.6)), pawn_frame)
+    _, right, _ = shadow_centroid(_render(geometric, pawn_frame, elm_for(0.3, 0.6)), pawn_frame)
+    assert (centre - left) == pytest.approx(right - centre, rel=0.1)
+
+
+@pytest.mark.parametrize("v", [0.6, 0.8, 0.95])
+def test_light_straight_ahead_casts_the_shadow_towards_the_viewer(geometric, frame, v):
+    _, base, centre = object_geometry(frame)
+    s = _render(geometric, frame, elm_for(0.5, v))
+    mass, cx, cy = shadow_centroid(s, frame)
+    assert mass > 10
+    assert cy > base + 3  # below the object's base in the frame: in front of it
+    assert abs(cx - centre) < 3
+    assert s[base + 3 :].sum() > 0.9 * mass
+
+
+@pytest.mark.parametrize("v", [0.3, 0.6, 0.9])
+def test_shadow_touches_the_base(geometric, frame, v):
+    """No lit seam between the object's base and the shadow it casts towards the viewer."""
+    _, base, centre = object_geometry(frame)
+    s = _render(geometric, frame, elm_for(0.5, v))
+    c = int(centre)
+    assert s[base + 4 : base + 9, c - 3 : c + 4].min() > 0.75
+
+
+def test_lower_light_casts_a_longer_shadow(geometric, pawn_frame):
+    reach = [shadow_centroid(_render(geometric, pawn_frame, elm_for(0.5, v)), pawn_frame)[2] for v in (0.2, 0.4, 0.6)]
+    assert reach[0] + 3 < reach[1] < reach[2] - 3
+
+
+@pytest.mark.parametrize("u", [0.0, 1.0, 0.02, 0.98])
+def test_light_behind_the_camera_casts_the_shadow_behind_the_object(geometric, frame, u):
+    _, base, _ = object_geometry(frame)
+    s = _render(geometric, frame, elm_for(u, 0.6))
+    mass, _, cy = shadow_centroid(s, frame)
+    assert mass > 5
+    assert cy < base  # above the base in the frame: behind the object
+    assert s[base + 10 :].max() < 0.05  # nothing in front beyond the contact line
+
+
+def test_u_0_and_u_1_are_the_same_light(geometric, pawn_frame):
+    a = _render(geometric, pawn_frame, elm_for(0.0, 0.6))
+    b = _render(geometric, pawn_frame, elm_for(1.0, 0.6))
+    assert np.allclose(a, b, atol=1e-6)
+
+
+def test_all_zero_elm_gives_no_shadow(geometric, frame):
+    s = _render(geometric, frame, np.zeros((16, 32), np.float32))
+    assert s.shape == (256, 256) and not s.any()
+
+
+@pytest.mark.parametrize("k", [1e-3, 0.5, 40.0])
+def test_scaling_the_elm_does_not_change_the_shadow(geometric, frame, k):
+    elm = elm_for(0.4, 0.5) + 0.3 * elm_for(0.8, 0.3, 0.02)
+    assert np.allclose(_render(geometric, frame, k * elm), _render(geometric, frame, elm), atol=1e-5)
+
+
+def test_outputs_are_float32_in_unit_range_with_the_batch_shape(geometric, pawn_frame, post_frame):
+    masks = np.stack([pawn_frame, post_frame, np.zeros_like(pawn_frame)])
+    ao = geometric.predict_ao(masks)
+    assert ao.shape == (3, 256, 256) and ao.dtype == np.float32
+    assert 0.0 <= ao.min() and ao.max() <= 1.0
+    elms = np.stack([elm_for(0.3, 0.7), 3.0 * elm_for(0.6, 0.2, 0.05), elm_for(0.5, 0.5)])
+    s = geometric.render(masks, ao, elms)
+    assert s.shape == (3, 256, 256) and s.dtype == np.float32
+    assert 0.0 <= s.min() and s.max() <= 1.0
+    assert s[0].max() > 0.3 and s[1].max() > 0.1
+    assert not s[2].any()  # an empty mask casts nothing
+    assert np.allclose(ao[2], 1.0)  # and occludes nothing
+
+
+def test_ao_is_dark_at_contact_and_open_far_away(geometric, pawn_frame):
+    ao = geometric.predict_ao(pawn_frame[None])[0]
+    _, base, centre = object_geometry(pawn_frame)
+    c = int(centre)
+    # just in front of the base the ground is occluded like the foot of a wall (A ~ 0.5, AO ~ 0.8),
+    # with no lit seam between the object and its contact shadow
+    assert ao[base + 1 : base + 12, c].max() < 0.86
+    assert ao[250, 5] > 0.97  # far corner of the ground
+    assert ao[0, 0] == pytest.approx(1.0)  # above the horizon: AO 1
+
+
+def test_darkening_the_ao_near_the_base_increases_the_shadow_there(geometric, pawn_frame):
+    _, base, centre = object_geometry(pawn_frame)
+    ao = geometric.predict_ao(pawn_frame[None])[0]
+    elm = elm_for(0.3, 0.6)
+    x, y, r = centre / 256, (base + 6) / 256, 0.06
+    darker = apply_edits(ao, [{"op": "brush", "x": x, "y": y, "radius": r, "strength": -0.8}])
+    plain = _render(geometric, pawn_frame, elm, ao)
+    edited = _render(geometric, pawn_frame, elm, darker)
+    region = np.zeros((256, 256), bool)
+    yy, xx = np.mgrid[0:256, 0:256]
+    region[((xx + 0.5 - x * 256) ** 2 + (yy + 0.5 - y * 256) ** 2) < (0.5 * r * 256) ** 2] = True
+    assert np.all(edited >= plain - 1e-6)
+    assert (edited - plain)[region].mean() > 0.2
+    far = ((xx - x * 256) ** 2 + (yy - y * 256) ** 2) > (r * 256 + 2) ** 2
+    assert np.allclose(edited[far], plain[far], atol=1e-6)  # nothing changes away from the brush
+
+
+def test_an_open_ao_map_only_lightens_the_shadow(geometric, pawn_frame):
+    """Removing all contact occlusion (AO = 1) lightens the shadow where the AO was dark."""
+    elm = elm_for(0.62, 0.75)
+    ao = geometric.predict_ao(pawn_frame[None])
+    s = geometric.render(pawn_frame[None], ao, elm[None])[0]
+    lit = 1.0 - np.clip(ao[0], 0, 1) ** 3  # the AO alone would make this much occlusion
+    assert s.max() > 0.5
+    assert np.all(s <= 1.0)
+    # a fully open AO removes the contact darkening, so the shadow can only get lighter
+    open_ao = np.ones_like(ao)
+    lighter = geometric.render(pawn_frame[None], open_ao, elm[None])[0]
+    assert np.all(lighter <= s + 1e-6)
+    assert (s - lighter)[lit > 0.3].mean() > 0.05
+
+
+def test_bad_shapes_name_the_argument(geometric, pawn_frame):
+    with pytest.raises(ValueError, match="masks"):
+        geometric.predict_ao(pawn_frame)
+    with pytest.raises(ValueError, match="elms"):
+        geometric.render(pawn_frame[None], pawn_frame[None], np.zeros((1, 8, 16), np.float32))
+    with pytest.raises(ValueError, match="ao"):
+        geometric.render(pawn_frame[None], pawn_frame[None, :128], np.zeros((1, 16, 32), np.float32))
+
+
+def test_other_resolution(post_frame):
+    method = GeometricCard(resolution=128)
+    mask, _ = frame_alpha(drawn_alpha(160, 120), 128)
+    s = _render(method, mask, elm_for(0.5, 0.8))
+    _, base, _ = object_geometry(mask)
+    assert s.shape == (128, 128)
+    assert shadow_centroid(s, mask)[2] > base
