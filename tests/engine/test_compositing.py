@@ -1,0 +1,146 @@
+"""Shadow layers and composites (ssn_engine.compositing)."""
+
+from __future__ import annotations
+
+import numpy as np
+import pytest
+
+from ssn_engine.compositing import composite_shadow, from_unit_float, over, shadow_layer, to_unit_float
+
+
+def _shadow():
+    s = np.linspace(0, 1, 12, dtype=np.float32).reshape(3, 4)
+    s[0, 0] = -0.5  # out-of-range values are clipped
+    s[2, 3] = 1.5
+    return s
+
+
+@pytest.mark.parametrize("dtype, top", [("uint8", 255), ("uint16", 65535), ("float16", 1.0), ("float32", 1.0)])
+def test_layer_dtypes_and_alpha(dtype, top):
+    s = _shadow()
+    layer = shadow_layer(s, (0.2, 0.4, 0.6), 0.5, dtype)
+    assert layer.shape == (3, 4, 4) and layer.dtype == np.dtype(dtype)
+    alpha = layer[..., 3].astype(np.float64) / top
+    tol = 0.5 / top if top > 1 else 1e-3
+    assert np.allclose(alpha, 0.5 * np.clip(s, 0, 1), atol=tol)
+    assert np.allclose(layer[..., :3].astype(np.float64) / top, [0.2, 0.4, 0.6], atol=tol)
+
+
+def test_rgba_and_bgra_order():
+    s = np.full((2, 2), 0.5, np.float32)
+    rgba = shadow_layer(s, (1.0, 0.5, 0.0), 1.0, "uint8", "rgba")
+    bgra = shadow_layer(s, (1.0, 0.5, 0.0), 1.0, "uint8", "bgra")
+    assert tuple(rgba[0, 0]) == (255, 128, 0, 128)
+    assert tuple(bgra[0, 0]) == (0, 128, 255, 128)
+
+
+def test_default_layer_is_black_uint8_rgba():
+    layer = shadow_layer(np.array([[0.0, 1.0]], np.float32))
+    assert layer.dtype == np.uint8
+    assert layer.tolist() == [[[0, 0, 0, 0], [0, 0, 0, 255]]]
+
+
+@pytest.mark.parametrize(
+    "kwargs, pattern",
+    [
+        (dict(color=(1.2, 0, 0)), "color"),
+        (dict(color=(0, 0)), "color"),
+        (dict(color=(0, float("nan"), 0)), "color"),
+        (dict(opacity=1.5), "opacity"),
+        (dict(opacity=-0.1), "opacity"),
+        (dict(opacity=float("nan")), "opacity"),
+        (dict(dtype="int32"), "dtype"),
+        (dict(channels="argb"), "channels"),
+    ],
+)
+def test_bad_layer_arguments(kwargs, pattern):
+    with pytest.raises(ValueError, match=pattern):
+        shadow_layer(np.zeros((2, 2), np.float32), **kwargs)
+
+
+@pytest.mark.parametrize("opacity", [1.0, 0.6])
+def test_black_multiply_equals_background_times_one_minus_opacity_s(opacity):
+    rng = np.random.default_rng(0)
+    bg = rng.random((5, 6, 3)).astype(np.float32)
+    s = rng.random((5, 6)).astype(np.float32)
+    out = composite_shadow(bg, s, (0, 0, 0), opacity)
+    assert out.dtype == np.float32
+    assert np.allclose(out, bg * (1 - opacity * s)[..., None], atol=1e-6)
+    # the layer in Multiply mode over the background gives the same composite
+    layer = shadow_layer(s, (0, 0, 0), opacity, "float32")
+    a = layer[..., 3:4]
+    multiply = bg * (1 - a) + bg * layer[..., :3] * a
+    assert np.allclose(multiply, out, atol=1e-6)
+
+
+def test_coloured_composite_and_alpha_channel_kept():
+    bg = np.full((2, 2, 4), 200, np.uint8)
+    bg[..., 3] = 77
+    s = np.array([[0.0, 0.5], [1.0, 1.0]], np.float32)
+    out = composite_shadow(bg, s, (0.5, 1.0, 0.0), 1.0)
+    assert out.dtype == np.uint8
+    assert np.all(out[..., 3] == 77)
+    assert tuple(out[0, 0, :3]) == (200, 200, 200)
+    assert tuple(out[1, 0, :3]) == (100, 200, 0)  # full shadow tinted: background * colour
+    assert tuple(out[0, 1, :3]) == (150, 200, 100)
+
+
+def test_uint16_composite():
+    bg = np.full((1, 2, 3), 40000, np.uint16)
+    out = composite_shadow(bg, np.array([[0.0, 0.25]], np.float32))
+    assert out.dtype == np.uint16
+    assert out[0, 0].tolist() == [40000] * 3 and out[0, 1].tolist() == [30000] * 3
+
+
+def test_composite_size_mismatch():
+    with pytest.raises(ValueError, match="size"):
+        composite_shadow(np.zeros((4, 4, 3), np.uint8), np.zeros((4, 5), np.float32))
+
+
+def test_over_leaves_opaque_cutout_pixels_exact():
+    rng = np.random.default_rng(1)
+    bg = rng.integers(0, 256, (6, 7, 3), dtype=np.uint8)
+    cut = rng.integers(0, 256, (6, 7, 4), dtype=np.uint8)
+    cut[..., 3] = 0
+    cut[2:4, 2:5, 3] = 255
+    cut[5, 5, 3] = 128
+    out = over(bg, cut)
+    assert out.dtype == np.uint8
+    assert np.array_equal(out[2:4, 2:5], cut[2:4, 2:5, :3])  # the cutout's own pixels never change
+    transparent = cut[..., 3] == 0
+    assert np.array_equal(out[transparent], bg[transparent])
+    expected = np.rint(cut[5, 5, :3] * (128 / 255) + bg[5, 5] * (127 / 255))
+    assert np.allclose(out[5, 5], expected, atol=1)
+
+
+def test_shadow_under_the_cutout_never_shows_through_it():
+    bg = np.full((4, 4, 3), 220, np.uint8)
+    cut = np.zeros((4, 4, 4), np.uint8)
+    cut[1:3, 1:3] = (10, 20, 30, 255)
+    shaded = composite_shadow(bg, np.ones((4, 4), np.float32), (0, 0, 0), 1.0)
+    out = over(shaded, cut)
+    assert np.all(out[1:3, 1:3] == (10, 20, 30))
+    assert np.all(out[0] == 0)
+
+
+def test_over_rgba_background_and_errors():
+    bg = np.zeros((2, 2, 4), np.uint8)
+    cut = np.zeros((2, 2, 4), np.uint8)
+    cut[0, 0] = (255, 0, 0, 255)
+    out = over(bg, cut)
+    assert out[0, 0].tolist() == [255, 0, 0, 255] and out[1, 1].tolist() == [0, 0, 0, 0]
+    with pytest.raises(ValueError):
+        over(bg, cut[..., :3])
+    with pytest.raises(ValueError):
+        over(bg, np.zeros((3, 2, 4), np.uint8))
+
+
+def test_unit_float_round_trips():
+    for dtype in (np.uint8, np.uint16):
+        top = np.iinfo(dtype).max
+        values = np.array([0, 1, top // 2, top], dtype)
+        assert np.array_equal(from_unit_float(to_unit_float(values), dtype), values)
+    f = to_unit_float(np.array([np.nan, -1.0, 0.25, 2.0], np.float32))
+    assert f.tolist() == [0.0, 0.0, 0.25, 1.0]
+    with pytest.raises(ValueError, match="dtype"):
+        from_unit_float(np.zeros(2, np.float32), np.int16)

@@ -1,0 +1,226 @@
+"""The ONNX SSN method (ssn_engine.methods.onnx_ssn) with tiny contract-conforming models."""
+
+from __future__ import annotations
+
+import json
+import os
+
+import numpy as np
+import pytest
+from engine_helpers import drawn_alpha, elm_for
+
+onnx = pytest.importorskip("onnx")
+from onnx import TensorProto, helper  # noqa: E402
+
+from ssn_engine import api  # noqa: E402
+from ssn_engine.framing import frame_alpha  # noqa: E402
+from ssn_engine.methods import GeometricCard, ModelError, OnnxSSN, load_method  # noqa: E402
+
+OPSET = 13
+
+
+def _save(graph, path):
+    model = helper.make_model(graph, opset_imports=[helper.make_opsetid("", OPSET)])
+    model.ir_version = 8
+    onnx.checker.check_model(model)
+    onnx.save(model, str(path))
+
+
+def _aop_graph(r: int, input_name: str = "mask"):
+    """ao = 1 - 0.5 * mask."""
+    half = helper.make_tensor("half", TensorProto.FLOAT, [], [0.5])
+    one = helper.make_tensor("one", TensorProto.FLOAT, [], [1.0])
+    nodes = [
+        helper.make_node("Mul", [input_name, "half"], ["scaled"]),
+        helper.make_node("Sub", ["one", "scaled"], ["ao"]),
+    ]
+    return helper.make_graph(
+        nodes,
+        "aop",
+        [helper.make_tensor_value_info(input_name, TensorProto.FLOAT, ["b", 1, r, r])],
+        [helper.make_tensor_value_info("ao", TensorProto.FLOAT, ["b", 1, r, r])],
+        [half, one],
+    )
+
+
+def _sr_graph(r: int):
+    """shadow = max(mask * peak(elm), 1 - ao): the mask wherever the ELM has light (peak 1 once normalised)."""
+    one = helper.make_tensor("one", TensorProto.FLOAT, [], [1.0])
+    shape = helper.make_tensor("shape", TensorProto.INT64, [4], [-1, 1, 1, 1])
+    nodes = [
+        helper.make_node("ReduceMax", ["elm"], ["peak3"], axes=[1, 2], keepdims=1),
+        helper.make_node("Reshape", ["peak3", "shape"], ["peak"]),
+        helper.make_node("Mul", ["mask", "peak"], ["lit"]),
+        helper.make_node("Sub", ["one", "ao"], ["occ"]),
+        helper.make_node("Max", ["lit", "occ"], ["shadow"]),
+    ]
+    return helper.make_graph(
+        nodes,
+        "sr",
+        [
+            helper.make_tensor_value_info("mask", TensorProto.FLOAT, ["b", 1, r, r]),
+            helper.make_tensor_value_info("ao", TensorProto.FLOAT, ["b", 1, r, r]),
+            helper.make_tensor_value_info("elm", TensorProto.FLOAT, ["b", 16, 32]),
+        ],
+        [helper.make_tensor_value_info("shadow", TensorProto.FLOAT, ["b", 1, r, r])],
+        [one, shape],
+    )
+
+
+def _card(r: int, **extra) -> dict:
+    card = {"format": "ssn-shadow-model", "version": 1, "resolution": r, "elm_shape": [16, 32],
+            "aop": "aop.onnx", "sr": "sr.onnx"}
+    card.update(extra)
+    return card
+
+
+def make_model_dir(folder, r: int = 256, card: dict | None = None, aop_input: str = "mask"):
+    folder.mkdir(parents=True, exist_ok=True)
+    _save(_aop_graph(r, aop_input), folder / "aop.onnx")
+    _save(_sr_graph(r), folder / "sr.onnx")
+    (folder / "model.json").write_text(json.dumps(card if card is not None else _card(r)))
+    return folder
+
+
+@pytest.fixture(scope="module")
+def mask():
+    m, _ = frame_alpha(drawn_alpha(160, 120), 256)
+    return m
+
+
+@pytest.mark.parametrize("r", [256, 128])
+def test_ssn_loads_and_runs_at_any_model_resolution(tmp_path, monkeypatch, mask, r):
+    folder = make_model_dir(tmp_path / f"model{r}", r)
+    monkeypatch.setenv("SSN_SHADOW_MODEL_DIR", str(folder))
+    for name in ("ssn", "auto"):
+        loaded = load_method(name)
+        assert isinstance(loaded.method, OnnxSSN) and loaded.method.name == "ssn"
+        assert str(folder) in loaded.note
+    method = loaded.method
+    assert method.resolution == 256 and method.model_resolution == r
+    masks = np.stack([mask, mask[:, ::-1]])
+    ao = method.predict_ao(masks)
+    assert ao.shape == (2, 256, 256) and ao.dtype == np.float32
+    tol = 1e-5 if r == 256 else 0.02  # resampled through R x R when R != 256
+    assert np.abs(ao - (1 - 0.5 * masks)).mean() < tol
+    elms = np.stack([elm_for(0.3, 0.5), 0.001 * elm_for(0.7, 0.2)])  # any positive scale: normalised to peak 1
+    s = method.render(masks, ao, elms)
+    assert s.shape == (2, 256, 256) and s.dtype == np.float32
+    assert 0.0 <= s.min() and s.max() <= 1.0
+    assert np.abs(s - masks).mean() < tol
+    if r != 256:
+        assert np.abs(s - masks).max() > 1e-3  # really went through the smaller frame
+    # an ELM without light gives no shadow, even where the graph would say otherwise
+    dark = method.render(masks, np.zeros_like(ao), np.zeros((2, 16, 32), np.float32))
+    assert not dark.any()
+    # the AO input is used: no contact occlusion at all, full darkness from 1 - ao
+    assert np.allclose(method.render(masks, np.zeros_like(ao), elms), 1.0)
+
+
+def test_predict_frames_uses_the_installed_model(tmp_path, monkeypatch, mask):
+    folder = make_model_dir(tmp_path / "m", 128)
+    monkeypatch.setenv("SSN_SHADOW_MODEL_DIR", str(folder))
+    api.default_method.cache_clear()
+    try:
+        s = api.predict_frames(mask[None], elm_for(0.5, 0.5)[None])
+        assert api.default_method().method.name == "ssn"
+    finally:
+        api.default_method.cache_clear()
+    assert s.shape == (1, 256, 256) and np.abs(s[0] - mask).mean() < 0.02
+
+
+def _expect_model_error(folder, monkeypatch, *fragments):
+    monkeypatch.setenv("SSN_SHADOW_MODEL_DIR", str(folder))
+    with pytest.raises(ModelError) as info:
+        load_method("ssn")
+    for fragment in fragments:
+        assert fragment in str(info.value), str(info.value)
+    with pytest.raises(ModelError):
+        OnnxSSN(folder)
+    loaded = load_method("auto")
+    assert isinstance(loaded.method, GeometricCard)
+    assert "geometric" in loaded.note
+    for fragment in fragments:
+        assert fragment in loaded.note, loaded.note
+    return str(info.value)
+
+
+def test_missing_graph_file(tmp_path, monkeypatch):
+    folder = make_model_dir(tmp_path / "m")
+    (folder / "sr.onnx").unlink()
+    _expect_model_error(folder, monkeypatch, "missing", str(folder / "sr.onnx"))
+
+
+def test_corrupt_graph_file(tmp_path, monkeypatch):
+    folder = make_model_dir(tmp_path / "m")
+    (folder / "aop.onnx").write_bytes(np.random.default_rng(0).bytes(4096))
+    _expect_model_error(folder, monkeypatch, "cannot load", str(folder / "aop.onnx"))
+
+
+def test_graph_with_wrong_input_names(tmp_path, monkeypatch):
+    folder = make_model_dir(tmp_path / "m", aop_input="image")
+    message = _expect_model_error(folder, monkeypatch, str(folder / "aop.onnx"), "contract")
+    assert "image" in message and "mask" in message
+
+
+def test_graphs_named_in_the_card(tmp_path, monkeypatch, mask):
+    folder = make_model_dir(tmp_path / "m", 128, card=_card(128, aop="a.onnx", sr="s.onnx"))
+    monkeypatch.setenv("SSN_SHADOW_MODEL_DIR", str(folder))
+    with pytest.raises(ModelError, match="a.onnx"):
+        load_method("ssn")
+    os.replace(folder / "aop.onnx", folder / "a.onnx")
+    os.replace(folder / "sr.onnx", folder / "s.onnx")
+    assert load_method("ssn").method.model_resolution == 128
+
+
+@pytest.mark.parametrize(
+    "card_text, fragment",
+    [
+        ("{not json", "cannot read"),
+        (json.dumps(_card(256, format="other")), "format"),
+        (json.dumps(_card(256, version=2)), "version"),
+        (json.dumps(_card(256, elm_shape=[8, 16])), "elm_shape"),
+        (json.dumps(_card(100)), "resolution"),
+        (json.dumps(_card("256")), "resolution"),
+    ],
+)
+def test_wrong_model_card(tmp_path, monkeypatch, card_text, fragment):
+    folder = make_model_dir(tmp_path / "m")
+    (folder / "model.json").write_text(card_text)
+    _expect_model_error(folder, monkeypatch, fragment, str(folder / "model.json"))
+
+
+def test_no_model_card(tmp_path, monkeypatch):
+    folder = make_model_dir(tmp_path / "m")
+    (folder / "model.json").unlink()
+    monkeypatch.setenv("SSN_SHADOW_MODEL_DIR", str(folder))
+    with pytest.raises(ModelError, match="model card missing"):
+        load_method("ssn")
+    loaded = load_method("auto")
+    assert isinstance(loaded.method, GeometricCard)
+    assert str(folder / "model.json") in loaded.note and "missing" in loaded.note
+
+
+def test_empty_folder_falls_back_and_geometric_on_request(tmp_path, monkeypatch):
+    monkeypatch.setenv("SSN_SHADOW_MODEL_DIR", str(tmp_path))
+    assert isinstance(load_method("auto").method, GeometricCard)
+    assert isinstance(load_method("geometric").method, GeometricCard)
+    with pytest.raises(ValueError, match="method"):
+        load_method("magic")
+
+
+def test_model_that_loads_but_gives_the_wrong_shape(tmp_path, monkeypatch):
+    folder = make_model_dir(tmp_path / "m", 128)
+    # an SR graph that answers at another size than its input
+    pool = helper.make_graph(
+        [helper.make_node("MaxPool", ["mask"], ["shadow"], kernel_shape=[2, 2], strides=[2, 2])],
+        "sr",
+        [
+            helper.make_tensor_value_info("mask", TensorProto.FLOAT, ["b", 1, 128, 128]),
+            helper.make_tensor_value_info("ao", TensorProto.FLOAT, ["b", 1, 128, 128]),
+            helper.make_tensor_value_info("elm", TensorProto.FLOAT, ["b", 16, 32]),
+        ],
+        [helper.make_tensor_value_info("shadow", TensorProto.FLOAT, ["b", 1, 64, 64])],
+    )
+    _save(pool, folder / "sr.onnx")
+    _expect_model_error(folder, monkeypatch, "shape")

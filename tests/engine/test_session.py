@@ -1,0 +1,99 @@
+"""One cutout's shadow session (ssn_engine.session)."""
+
+from __future__ import annotations
+
+import numpy as np
+import pytest
+from engine_helpers import drawn_alpha, one_light
+
+from ssn_engine.framing import EmptyAlphaError
+from ssn_engine.light_map import preset
+from ssn_engine.methods import GeometricCard
+from ssn_engine.session import ShadowSession
+
+
+class CountingMethod:
+    """Wraps a method and counts its calls."""
+
+    def __init__(self, inner):
+        self.inner, self.name, self.resolution = inner, inner.name, inner.resolution
+        self.ao_calls = self.render_calls = 0
+
+    def predict_ao(self, masks):
+        self.ao_calls += 1
+        return self.inner.predict_ao(masks)
+
+    def render(self, masks, ao, elms):
+        self.render_calls += 1
+        return self.inner.render(masks, ao, elms)
+
+
+@pytest.fixture
+def counting():
+    return CountingMethod(GeometricCard(resolution=128))
+
+
+def test_moving_a_light_reruns_only_render(counting):
+    alpha = drawn_alpha(200, 150)
+    session = ShadowSession(alpha, counting)
+    assert counting.ao_calls == 1
+    light = one_light(0.3, 0.6)
+    shadows = []
+    for u in (0.3, 0.4, 0.6, 0.7):
+        light.move(0, u, 0.6)
+        shadows.append(session.render(light))
+    session.set_ao_edits([{"op": "strength", "value": 0.5}])
+    session.render(light)
+    assert counting.ao_calls == 1
+    assert counting.render_calls == 5
+    # and the renders really follow the light: right of centre -> shadow left, and vice versa
+    left = shadows[0].x + shadows[0].values.shape[1] / 2
+    right = shadows[-1].x + shadows[-1].values.shape[1] / 2
+    assert left > right
+
+
+def test_source_alpha_is_unchanged(counting):
+    for alpha in (drawn_alpha(200, 150), drawn_alpha(200, 150, np.uint16), drawn_alpha(200, 150, np.float32)):
+        before = alpha.copy()
+        session = ShadowSession(alpha, counting)
+        session.set_ao_edits([{"op": "brush", "x": 0.5, "y": 0.7, "radius": 0.1, "strength": -1}])
+        session.render(preset("softbox"))
+        assert np.array_equal(alpha, before)
+
+
+def test_ao_edits_replace_the_list_and_keep_the_prediction(counting):
+    session = ShadowSession(drawn_alpha(), counting)
+    predicted = session.predicted_ao.copy()
+    edited = session.set_ao_edits([{"op": "strength", "value": 0}])
+    assert np.all(edited == 1.0) and np.all(session.ao == 1.0)
+    assert np.array_equal(session.predicted_ao, predicted)
+    restored = session.set_ao_edits([])  # undo: a shorter list
+    assert np.array_equal(restored, predicted)
+    assert session.edits == []
+
+
+def test_bad_edit_keeps_the_previous_state(counting):
+    session = ShadowSession(drawn_alpha(), counting)
+    session.set_ao_edits([{"op": "strength", "value": 0.5}])
+    ao = session.ao.copy()
+    with pytest.raises(ValueError, match=r"edits\[0\]\.op"):
+        session.set_ao_edits([{"op": "nope"}])
+    assert np.array_equal(session.ao, ao) and session.edits == [{"op": "strength", "value": 0.5}]
+
+
+def test_render_frame_and_canvas_shadow(counting):
+    alpha = drawn_alpha(200, 150)
+    session = ShadowSession(alpha, counting)
+    frame = session.render_frame(one_light(0.5, 0.7))
+    assert frame.shape == (128, 128) and frame.dtype == np.float32
+    shadow = session.render(one_light(0.5, 0.7))
+    full = shadow.full_canvas(200, 150)
+    ys, xs = np.nonzero(alpha > 127)
+    assert full[ys.max() + 3 :].sum() > 0.8 * full[alpha < 128].sum()  # below the object: towards the viewer
+    assert session.frame is session.framing and session.framing.bbox[2] <= 200
+
+
+def test_empty_alpha(counting):
+    with pytest.raises(EmptyAlphaError):
+        ShadowSession(np.zeros((20, 20), np.uint8), counting)
+    assert counting.ao_calls == 0
