@@ -22,6 +22,7 @@ gi.require_version("Babl", "0.1")
 from gi.repository import Babl, Gegl, Gimp, GLib, GObject  # noqa: E402
 
 from ssn_core import ShadowError, make_shadow  # noqa: E402
+from ssn_gimp_host import GimpHost, config_values  # noqa: E402
 from ssn_engine_link import EngineConfigError, connect, load_engine_config  # noqa: E402
 from ssn_settings import (  # noqa: E402
     ARGUMENTS,
@@ -48,18 +49,6 @@ def add_arguments(procedure: Gimp.Procedure) -> None:
         else:  # pragma: no cover - a programming error in ARGUMENTS
             raise ValueError(f"unknown argument kind {spec.kind!r}")
     procedure.add_layer_return_value("shadow-layer", "Shadow layer", "The new shadow layer", True, RW)
-
-
-def config_values(config: Gimp.ProcedureConfig) -> dict:
-    """Argument values by name; the colour as sRGB (perceptual) components in 0..1."""
-    values = {}
-    for spec in ARGUMENTS:
-        value = config.get_property(spec.name)
-        if spec.kind == "color":
-            rgba = value.get_rgba_with_space(Babl.space("sRGB"))
-            value = tuple(min(max(c, 0.0), 1.0) for c in (rgba.red, rgba.green, rgba.blue))
-        values[spec.name] = value
-    return values
 
 
 def failure(procedure: Gimp.Procedure, message: str) -> Gimp.ValueArray:
@@ -103,8 +92,6 @@ class SoftShadow(Gimp.PlugIn):
             return failure(procedure, "Soft Shadow failed unexpectedly (a bug):\n" + traceback.format_exc(limit=6))
 
     def _run(self, procedure, run_mode, image, drawables, config):
-        from ssn_gimp_host import GimpHost
-
         if len(drawables) != 1:
             raise ShadowError("Soft Shadow works on one layer: select exactly one layer.")
         host = GimpHost(image, drawables[0])

@@ -13,10 +13,24 @@ import gi
 
 gi.require_version("Gimp", "3.0")
 gi.require_version("Gegl", "0.4")
-from gi.repository import Gegl, Gimp  # noqa: E402
+gi.require_version("Babl", "0.1")
+from gi.repository import Babl, Gegl, Gimp  # noqa: E402
 
 from ssn_core import Cutout, ShadowError, ShadowLayerData  # noqa: E402
 from ssn_pixels import PixelPlan, layer_image_type, plan_for_precision  # noqa: E402
+from ssn_settings import ARGUMENTS  # noqa: E402
+
+
+def config_values(config: Gimp.ProcedureConfig) -> dict:
+    """Procedure argument values by name; the colour as sRGB (perceptual) components in 0..1."""
+    values = {}
+    for spec in ARGUMENTS:
+        value = config.get_property(spec.name)
+        if spec.kind == "color":
+            rgba = value.get_rgba_with_space(Babl.space("sRGB"))
+            value = tuple(min(max(c, 0.0), 1.0) for c in (rgba.red, rgba.green, rgba.blue))
+        values[spec.name] = value
+    return values
 
 
 def no_cutout_message(layer_name: str) -> str:
@@ -43,23 +57,41 @@ class GimpHost:
     def source_name(self) -> str:
         return self.drawable.get_name()
 
-    def read_cutout(self, plan: PixelPlan) -> Cutout:
-        """The selection if there is one, else the layer's alpha, as a canvas-sized buffer."""
+    def read_cutout(self, plan: PixelPlan, size: tuple[int, int] | None = None) -> Cutout:
+        """The selection if there is one, else the layer's alpha, as a canvas-sized buffer.
+
+        ``size`` (width, height) reads a scaled-down canvas, for the dialog's preview.
+        """
         width, height = self.image.get_width(), self.image.get_height()
+        scale = 1.0
+        if size is not None:
+            scale = size[0] / width
+            width, height = size
         _, non_empty, *_ = Gimp.Selection.bounds(self.image)
         if non_empty:
             buffer = self.image.get_selection().get_buffer()
             rect = Gegl.Rectangle.new(0, 0, width, height)
-            data = buffer.get(rect, 1.0, plan.selection_format, Gegl.AbyssPolicy.NONE)
+            data = buffer.get(rect, scale, plan.selection_format, Gegl.AbyssPolicy.NONE)
             return Cutout(width, height, plan.alpha_dtype, bytes(data), "the selection")
         if not self.drawable.has_alpha():
             raise ShadowError(no_cutout_message(self.drawable.get_name()))
         _, off_x, off_y = self.drawable.get_offsets()
         buffer = self.drawable.get_buffer()
         # The canvas rectangle in the layer's coordinates; outside the layer the abyss is transparent.
-        rect = Gegl.Rectangle.new(-off_x, -off_y, width, height)
-        data = buffer.get(rect, 1.0, plan.layer_alpha_format, Gegl.AbyssPolicy.NONE)
+        rect = Gegl.Rectangle.new(round(-off_x * scale), round(-off_y * scale), width, height)
+        data = buffer.get(rect, scale, plan.layer_alpha_format, Gegl.AbyssPolicy.NONE)
         return Cutout(width, height, plan.alpha_dtype, bytes(data), f'the layer "{self.drawable.get_name()}"')
+
+    def thumbnail(self, width: int, height: int) -> tuple[bytes, int, int, int, int]:
+        """The image's composite as (pixels, width, height, rowstride, channels), 8-bit sRGB."""
+        pixbuf = self.image.get_thumbnail(width, height, Gimp.PixbufTransparency.SMALL_CHECKS)
+        return (
+            bytes(pixbuf.get_pixels()),
+            pixbuf.get_width(),
+            pixbuf.get_height(),
+            pixbuf.get_rowstride(),
+            pixbuf.get_n_channels(),
+        )
 
     def undo_group_start(self) -> None:
         self.image.undo_group_start()

@@ -63,9 +63,18 @@ def run_case(case, out_dir):
     image, layer = build(case)
     w, h = image.get_width(), image.get_height()
     res = {"name": case["id"]}
+    # the alpha the plug-in should cast from: the selection if any, else the layer alpha on the canvas
+    ox, oy = layer.get_offsets()[1:]
+    if Gimp.Selection.bounds(image)[1]:
+        cutout = read(image.get_selection(), 0, 0, w, h, "Y float")
+    else:
+        cutout = read(layer, -ox, -oy, w, h, "A float")
+    with open(f"{out_dir}/{case['id']}.cutout.f32", "wb") as f:
+        f.write(cutout)
+    res["cutout_pixels"] = f"{out_dir}/{case['id']}.cutout.f32"
     src_before = read(layer, 0, 0, layer.get_width(), layer.get_height(), "R'G'B'A float")
     sel_before = read(image.get_selection(), 0, 0, w, h, "Y float")
-    layers_before = [l.get_name() for l in image.get_layers()]
+    layers_before = [lay.get_name() for lay in image.get_layers()]
     pdb = Gimp.get_pdb()
     proc = pdb.lookup_procedure("plug-in-ssn-shadow")
     res["registered"] = proc is not None
@@ -93,7 +102,7 @@ def run_case(case, out_dir):
             res["error"] = f"(no error text: {exc})"
     layers = image.get_layers()
     res["layers_before"] = layers_before
-    res["layers_after"] = [l.get_name() for l in layers]
+    res["layers_after"] = [lay.get_name() for lay in layers]
     res["source_unchanged"] = read(layer, 0, 0, layer.get_width(), layer.get_height(), "R'G'B'A float") == src_before
     res["source_offsets"] = list(layer.get_offsets()[1:])
     res["selection_unchanged"] = read(image.get_selection(), 0, 0, w, h, "Y float") == sel_before

@@ -1,0 +1,175 @@
+"""The filter's dialog (GimpUi): preset, light-map editor, colour, opacity, AO strength and a live preview.
+
+The colour, opacity and AO strength are the procedure's own arguments
+(GimpUi.ProcedureDialog builds their widgets and remembers the last values);
+the light map is edited in :class:`ssn_light_area.LightMapArea` and written
+to the ``light-map`` argument as JSON when the user confirms.
+"""
+
+from __future__ import annotations
+
+import gi
+
+gi.require_version("Gimp", "3.0")
+gi.require_version("GimpUi", "3.0")
+gi.require_version("Gtk", "3.0")
+gi.require_version("GdkPixbuf", "2.0")
+from gi.repository import GdkPixbuf, Gimp, GimpUi, GLib, Gtk  # noqa: E402
+
+from ssn_core import Cutout, ShadowError, release, render_shadow, settings_from_arguments, upload_cutout  # noqa: E402
+from ssn_editor import LightMapEditor  # noqa: E402
+from ssn_engine_link import client as engine_client  # noqa: E402
+from ssn_engine_link import light_map  # noqa: E402
+from ssn_gimp_host import config_values  # noqa: E402
+from ssn_light_area import LightMapArea  # noqa: E402
+from ssn_preview import multiply_composite, preview_size  # noqa: E402
+from ssn_settings import PROCEDURE_NAME, SettingsError, editor_light_map  # noqa: E402
+
+CUSTOM = "(custom)"
+PREVIEW_DELAY_MS = 150
+
+
+class ShadowPreview:
+    """A thumbnail of the image with the shadow multiplied on, re-rendered on every complete edit."""
+
+    def __init__(self, host, engine) -> None:
+        self.host, self.engine = host, engine
+        self.widget = Gtk.Image()
+        self.status = Gtk.Label(xalign=0.0)
+        self.status.set_line_wrap(True)
+        self.cutout_id: str | None = None
+        self._pending = 0
+        width, height = host.image.get_width(), host.image.get_height()
+        self.tw, self.th, _ = preview_size(width, height)
+        try:
+            self.background = host.thumbnail(self.tw, self.th)
+            self.tw, self.th = self.background[1], self.background[2]
+            plan = host.pixel_plan()
+            small = host.read_cutout(plan, size=(self.tw, self.th))
+            # the preview always works in 8 bits
+            if small.dtype == "uint16":
+                raw = memoryview(small.data).cast("H")
+                small = Cutout(small.width, small.height, "uint8", bytes(v >> 8 for v in raw), small.source)
+            self.cutout_id = upload_cutout(engine, small)
+        except (ShadowError, engine_client.EngineError) as exc:
+            self.status.set_text(str(exc))
+
+    def schedule(self, values_getter) -> None:
+        """Re-render soon (edits in quick succession render once)."""
+        if self.cutout_id is None:
+            return
+        self._pending += 1
+        token = self._pending
+
+        def fire() -> bool:
+            if token == self._pending:
+                self.render(values_getter())
+            return False
+
+        GLib.timeout_add(PREVIEW_DELAY_MS, fire)
+
+    def render(self, values: dict) -> None:
+        try:
+            settings = settings_from_arguments(values)
+            shadow = render_shadow(self.engine, self.cutout_id, settings, "uint8")
+        except (ShadowError, SettingsError) as exc:
+            self.status.set_text(str(exc))
+            return
+        pixels, w, h, stride, channels = self.background
+        rgb = multiply_composite(pixels, w, h, stride, channels, shadow.data, shadow.x, shadow.y,
+                                 shadow.width, shadow.height)
+        self.widget.set_from_pixbuf(
+            GdkPixbuf.Pixbuf.new_from_bytes(GLib.Bytes.new(rgb), GdkPixbuf.Colorspace.RGB, False, 8, w, h, 3 * w)
+        )
+        self.status.set_text("" if shadow.width else "No visible shadow with these lights.")
+
+    def close(self) -> None:
+        if self.cutout_id is not None:
+            release(self.engine, self.cutout_id)
+
+
+def _map_image(engine):
+    def fetch(light_map_json: str, width: int) -> bytes | None:
+        try:
+            import json
+
+            _, buffers = engine.request("elm_image", light_map=json.loads(light_map_json), width=width)
+            return bytes(memoryview(buffers["image"].data).cast("B"))
+        except Exception:  # noqa: BLE001 - the editor still works on a plain background
+            return None
+
+    return fetch
+
+
+def run_dialog(procedure: Gimp.Procedure, config: Gimp.ProcedureConfig, host, engine) -> bool:
+    """Show the dialog; on OK store the edited light map in ``config`` and return True."""
+    GimpUi.init(PROCEDURE_NAME)
+    dialog = GimpUi.ProcedureDialog(procedure=procedure, config=config, title="Soft Shadow (SSN)")
+    dialog.fill(["shadow-color", "opacity", "ao-strength"])
+
+    def values() -> dict:
+        out = config_values(config)
+        out["light-map"] = editor.to_json()
+        return out
+
+    try:
+        lights = editor_light_map(config.get_property("light-map"))
+    except SettingsError:
+        lights = light_map.preset(light_map.DEFAULT_PRESET)
+    preview = ShadowPreview(host, engine)
+    area: LightMapArea | None = None
+
+    def on_change(final: bool) -> None:
+        if area is not None:
+            area.refresh()
+        if final:
+            if presets.get_active_text() != CUSTOM and not loading[0]:
+                presets.set_active(len(light_map.PRESETS))
+            preview.schedule(values)
+
+    editor = LightMapEditor(lights, on_change)
+    loading = [False]
+
+    presets = Gtk.ComboBoxText()
+    for name in light_map.PRESETS:
+        presets.append_text(name)
+    presets.append_text(CUSTOM)
+    current = config.get_property("light-map").strip()
+    names = list(light_map.PRESETS)
+    presets.set_active(names.index(current) if current in names else len(names))
+
+    def on_preset(combo) -> None:
+        name = combo.get_active_text()
+        if name in light_map.PRESETS:
+            loading[0] = True
+            editor.load(light_map.preset(name))
+            loading[0] = False
+
+    presets.connect("changed", on_preset)
+    area = LightMapArea(editor, _map_image(engine))
+
+    box = Gtk.Box(orientation=Gtk.Orientation.VERTICAL, spacing=6)
+    row = Gtk.Box(spacing=6)
+    row.pack_start(Gtk.Label(label="Preset:"), False, False, 0)
+    row.pack_start(presets, True, True, 0)
+    box.pack_start(row, False, False, 0)
+    box.pack_start(Gtk.Label(label="Light map (click: add, drag: move, wheel: size, Shift+wheel: "
+                                   "intensity, right-click: remove)", xalign=0.0), False, False, 0)
+    box.pack_start(area, False, False, 0)
+    box.pack_start(Gtk.Label(label="Preview", xalign=0.0), False, False, 0)
+    box.pack_start(preview.widget, False, False, 0)
+    box.pack_start(preview.status, False, False, 0)
+    dialog.get_content_area().pack_start(box, True, True, 6)
+    config.connect("notify", lambda *_: preview.schedule(values))
+    box.show_all()
+    preview.schedule(values)
+
+    try:
+        ok = dialog.run()
+        if ok:
+            name = presets.get_active_text()
+            config.set_property("light-map", name if name in light_map.PRESETS else editor.to_json())
+        return ok
+    finally:
+        preview.close()
+        dialog.destroy()

@@ -1,0 +1,109 @@
+"""The light-map editor widget (GTK 3): shows the map and forwards pointer gestures to LightMapEditor.
+
+The map picture comes from the engine worker (``elm_image``), the light rings
+are drawn by :func:`ssn_editor.overlay_markers`; the widget is a Gtk.Image in
+a Gtk.EventBox, so it needs no pycairo (GIMP's Python does not ship it).
+"""
+
+from __future__ import annotations
+
+from collections.abc import Callable
+
+import gi
+
+gi.require_version("Gtk", "3.0")
+gi.require_version("Gdk", "3.0")
+gi.require_version("GdkPixbuf", "2.0")
+from gi.repository import Gdk, GdkPixbuf, GLib, Gtk  # noqa: E402
+
+from ssn_editor import LightMapEditor, overlay_markers  # noqa: E402
+
+MAP_WIDTH = 384  # the map is 2:1
+
+
+class LightMapArea(Gtk.EventBox):
+    """Click to add a light, drag to move, wheel to resize (Shift: intensity), right-click/Delete to remove."""
+
+    def __init__(self, editor: LightMapEditor, map_image: Callable[[str, int], bytes | None]) -> None:
+        super().__init__()
+        self.editor = editor
+        self.map_image = map_image  # (light-map JSON, width) -> RGB bytes of width x width/2, or None
+        self.width, self.height = MAP_WIDTH, MAP_WIDTH // 2
+        self.image = Gtk.Image()
+        self.add(self.image)
+        self.set_can_focus(True)
+        self.add_events(
+            Gdk.EventMask.BUTTON_PRESS_MASK
+            | Gdk.EventMask.BUTTON_RELEASE_MASK
+            | Gdk.EventMask.POINTER_MOTION_MASK
+            | Gdk.EventMask.SCROLL_MASK
+            | Gdk.EventMask.SMOOTH_SCROLL_MASK
+            | Gdk.EventMask.KEY_PRESS_MASK
+        )
+        self.connect("button-press-event", self._on_press)
+        self.connect("button-release-event", self._on_release)
+        self.connect("motion-notify-event", self._on_motion)
+        self.connect("scroll-event", self._on_scroll)
+        self.connect("key-press-event", self._on_key)
+        self.set_tooltip_text(
+            "Sky seen from the object: centre = behind the object (shadow towards you), "
+            "edges = behind the camera; top = zenith, bottom = horizon.\n"
+            "Click: add a light · drag: move · wheel: size · Shift+wheel: intensity · "
+            "right-click or Delete: remove"
+        )
+        self.refresh()
+
+    def _uv(self, event) -> tuple[float, float]:
+        alloc = self.image.get_allocation()
+        ox = (alloc.width - self.width) / 2  # the picture is centred in the image widget
+        oy = (alloc.height - self.height) / 2
+        return (event.x - ox) / self.width, min(max((event.y - oy) / self.height, 0.0), 1.0)
+
+    def refresh(self) -> None:
+        """Redraw the map and the markers."""
+        data = self.map_image(self.editor.to_json(), self.width)
+        rgb = bytearray(data) if data is not None else bytearray(b"\x20\x20\x30" * (self.width * self.height))
+        overlay_markers(rgb, self.width, self.height, self.editor.lights, self.editor.selected)
+        pixbuf = GdkPixbuf.Pixbuf.new_from_bytes(
+            GLib.Bytes.new(bytes(rgb)), GdkPixbuf.Colorspace.RGB, False, 8, self.width, self.height, 3 * self.width
+        )
+        self.image.set_from_pixbuf(pixbuf)
+
+    def _on_press(self, _widget, event) -> bool:
+        self.grab_focus()
+        if event.type != Gdk.EventType.BUTTON_PRESS:
+            return True  # ignore the extra double/triple-click events
+        u, v = self._uv(event)
+        if event.button == 1:
+            self.editor.press(u, v)
+        elif event.button == 3:
+            self.editor.remove_at(u, v)
+        return True
+
+    def _on_motion(self, _widget, event) -> bool:
+        if event.state & Gdk.ModifierType.BUTTON1_MASK:
+            self.editor.drag(*self._uv(event))
+        return True
+
+    def _on_release(self, _widget, event) -> bool:
+        if event.button == 1:
+            self.editor.release()
+        return True
+
+    def _on_scroll(self, _widget, event) -> bool:
+        if event.direction == Gdk.ScrollDirection.UP:
+            notches = 1
+        elif event.direction == Gdk.ScrollDirection.DOWN:
+            notches = -1
+        elif event.direction == Gdk.ScrollDirection.SMOOTH:
+            notches = -round(event.delta_y) if abs(event.delta_y) >= 0.5 else 0
+        else:
+            return False
+        self.editor.scroll(notches, intensity=bool(event.state & Gdk.ModifierType.SHIFT_MASK))
+        return True
+
+    def _on_key(self, _widget, event) -> bool:
+        if event.keyval in (Gdk.KEY_Delete, Gdk.KEY_BackSpace):
+            self.editor.remove_selected()
+            return True
+        return False

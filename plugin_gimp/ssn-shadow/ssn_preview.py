@@ -1,0 +1,56 @@
+"""Dialog preview maths, toolkit-free: the shadow multiplied onto a small RGB(A) thumbnail.
+
+The preview casts the shadow of a thumbnail-sized cutout (the same framing
+scales with the cutout, so its geometry matches the full-size result) and
+composites it like GIMP's Multiply layer would, in the thumbnail's 8-bit
+values: ``out = bg * (1 - a * (1 - colour))``.
+"""
+
+from __future__ import annotations
+
+import math
+
+PREVIEW_SIZE = 256
+
+
+def preview_size(width: int, height: int, limit: int = PREVIEW_SIZE) -> tuple[int, int, float]:
+    """Thumbnail width, height and scale for a canvas, the longer side at most ``limit``."""
+    scale = min(1.0, limit / max(width, height, 1))
+    return max(1, round(width * scale)), max(1, round(height * scale)), scale
+
+
+def multiply_composite(
+    background: bytes,
+    width: int,
+    height: int,
+    rowstride: int,
+    channels: int,
+    layer: bytes,
+    x: int,
+    y: int,
+    layer_width: int,
+    layer_height: int,
+) -> bytes:
+    """Multiply a straight-alpha RGBA u8 layer placed at (x, y) onto an 8-bit RGB/RGBA image.
+
+    Returns packed RGB bytes (rowstride ``3 * width``).
+    """
+    out = bytearray(3 * width * height)
+    for row in range(height):
+        src = row * rowstride
+        for col in range(width):
+            i = src + col * channels
+            j = 3 * (row * width + col)
+            out[j : j + 3] = background[i : i + 3]
+    for ly in range(max(0, -y), min(layer_height, height - y)):
+        base = 4 * ly * layer_width
+        for lx in range(max(0, -x), min(layer_width, width - x)):
+            k = base + 4 * lx
+            a = layer[k + 3]
+            if not a:
+                continue
+            j = 3 * ((y + ly) * width + x + lx)
+            for c in range(3):
+                factor = 1.0 - a * (255 - layer[k + c]) / 65025.0
+                out[j + c] = min(255, max(0, math.floor(out[j + c] * factor + 0.5)))
+    return bytes(out)

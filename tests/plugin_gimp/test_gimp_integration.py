@@ -1,0 +1,233 @@
+"""Real GIMP 3 integration test: the plug-in inside gimp-console-3.0 in a Debian 13 chroot.
+
+The chroot (plugin_gimp/tools/gimp_chroot.sh, cached outside the checkout in
+$SSN_GIMP_CHROOT, default /var/cache/ssn-shadow/gimp-trixie) is built once per
+machine. The engine worker runs on the host (``ssn-shadow serve --port 0``);
+the plug-in reaches it through the loopback socket, the chroot sharing the
+host's network namespace. One GIMP session runs every case of
+gimp_batch_check.py; this test checks what it reports against the engine run
+directly on the same cutout.
+
+Skips when the chroot is missing and cannot be built, unless CI=true (then it
+fails instead).
+"""
+
+from __future__ import annotations
+
+import json
+import os
+import shutil
+import subprocess
+import sys
+import tempfile
+import time
+from pathlib import Path
+
+import numpy as np
+import pytest
+
+from plugin_gimp.install import install
+from ssn_engine.client import EngineClient
+from ssn_engine.protocol import Buffer
+
+pytestmark = pytest.mark.gimp
+
+ROOT = Path(__file__).resolve().parents[2]
+TOOL = ROOT / "plugin_gimp" / "tools" / "gimp_chroot.sh"
+BATCH_SCRIPT = Path(__file__).with_name("gimp_batch_check.py")
+IN_CI = os.environ.get("CI") == "true"
+
+W, H = 320, 240
+PAWN = {"name": "Pawn", "x": 100, "y": 20, "w": 120, "h": 200, "rect": [40, 20, 80, 190]}
+LEFT_LIGHT = json.dumps(
+    {"format": "ssn-shadow-elm", "version": 1, "lights": [{"u": 0.3, "v": 0.75, "softness": 0.004, "intensity": 2.5}]}
+)
+CASES = [
+    # u8 perceptual RGB, cutout from the layer's alpha (layer offset on the canvas); light right -> shadow left
+    {"id": "rgb-u8-nonlinear", "base": "RGB", "precision": "U8_NON_LINEAR", "cutout": PAWN,
+     "args": {"light-map": "low-sun-right", "opacity": 1.0, "ao-strength": 1.0, "shadow-color": [0, 0, 0]},
+     "side": "left"},
+    # u16 linear RGB, ELM JSON with a light left of centre -> shadow right; colour, opacity, AO strength
+    {"id": "rgb-u16-linear", "base": "RGB", "precision": "U16_LINEAR", "cutout": PAWN,
+     "args": {"light-map": LEFT_LIGHT, "opacity": 0.7, "ao-strength": 0.5, "shadow-color": [0.2, 0.1, 0.4]},
+     "side": "right"},
+    # float linear grey
+    {"id": "gray-float-linear", "base": "GRAY", "precision": "FLOAT_LINEAR", "cutout": PAWN,
+     "args": {"light-map": "low-sun-right", "opacity": 0.9, "ao-strength": 2.0, "shadow-color": [0, 0, 0]},
+     "side": "left"},
+    # half perceptual RGB; the layer has no alpha, the cutout is an ellipse selection
+    {"id": "rgb-half-perceptual-selection", "base": "RGB", "precision": "HALF_PERCEPTUAL",
+     "cutout": {**PAWN, "alpha": False}, "select": [140, 40, 40, 170],
+     "args": {"light-map": "low-sun-left", "opacity": 1.0, "ao-strength": 1.0, "shadow-color": [0, 0, 0]},
+     "side": "right"},
+    # u16 perceptual grey from the layer alpha, the default preset
+    {"id": "gray-u16-perceptual", "base": "GRAY", "precision": "U16_PERCEPTUAL", "cutout": PAWN,
+     "args": {"light-map": "softbox", "opacity": 0.8, "ao-strength": 1.0, "shadow-color": [0, 0, 0]},
+     "side": None},
+    # errors: no selection and no alpha; a malformed light map
+    {"id": "error-no-alpha", "base": "RGB", "precision": "U8_NON_LINEAR", "cutout": {**PAWN, "alpha": False},
+     "args": {"light-map": "softbox"}, "error": "selection is empty"},
+    {"id": "error-bad-light-map", "base": "RGB", "precision": "U8_NON_LINEAR", "cutout": PAWN,
+     "args": {"light-map": '{"format": "ssn-shadow-elm", "version": 1, "lights": [{"u": 1.5, "v": 0.2, '
+              '"softness": 0.01, "intensity": 1}]}'}, "error": "lights[0].u"},
+]
+for _case in CASES:
+    _case.update(width=W, height=H)
+
+
+def _chroot_dir() -> Path | None:
+    """The ready chroot, building it if possible; None if it cannot be had."""
+    status = subprocess.run([str(TOOL), "status"], capture_output=True, text=True)
+    if status.returncode == 0:
+        return Path(status.stdout.split(None, 1)[1].strip())
+    if os.geteuid() != 0 or shutil.which("debootstrap") is None:
+        return None
+    build = subprocess.run([str(TOOL), "build"], capture_output=True, text=True, timeout=1800)
+    if build.returncode != 0:
+        sys.stderr.write(build.stderr[-4000:])
+        return None
+    return Path(build.stdout.strip().splitlines()[-1])
+
+
+@pytest.fixture(scope="module")
+def chroot() -> Path:
+    path = _chroot_dir()
+    if path is None:
+        if IN_CI:
+            pytest.fail("CI=true: the GIMP 3 chroot could not be built (needs root, debootstrap and the network)")
+        pytest.skip("no GIMP 3 chroot and it cannot be built here (needs root and debootstrap)")
+    return path
+
+
+@pytest.fixture(scope="module")
+def worker():
+    """A host engine worker on a loopback port: yields (port, client)."""
+    proc = subprocess.Popen(
+        [sys.executable, "-m", "ssn_engine", "serve", "--port", "0"],
+        cwd=ROOT, stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True,
+    )
+    try:
+        line = proc.stdout.readline()
+        assert line.startswith("listening 127.0.0.1:"), f"worker said {line!r}; stderr: {proc.stderr.read()[-2000:]}"
+        port = int(line.rsplit(":", 1)[1])
+        yield port, proc
+    finally:
+        proc.kill()
+        proc.wait(timeout=10)
+
+
+@pytest.fixture(scope="module")
+def gimp_results(chroot, worker):
+    port, _ = worker
+    work = Path(tempfile.mkdtemp(prefix="ssn-gimp-test-", dir=chroot / "tmp"))
+    inner = "/tmp/" + work.name  # the same folder seen from inside the chroot
+    try:
+        install(work / "profile" / "plug-ins" / "ssn-shadow", address=("127.0.0.1", port))
+        (work / "out").mkdir()
+        shutil.copy(BATCH_SCRIPT, work / "check.py")
+        (work / "job.json").write_text(json.dumps({"out_dir": inner + "/out", "cases": CASES}))
+        code = f'JOB_PATH = "{inner}/job.json"; exec(open("{inner}/check.py").read())'
+        env = {**os.environ, "SSN_GIMP3_DIRECTORY": inner + "/profile"}
+        start = time.monotonic()
+        run = subprocess.run([str(TOOL), "gimp-eval", code], env=env, capture_output=True, text=True, timeout=240)
+        seconds = time.monotonic() - start
+        log = run.stdout + run.stderr
+        results_path = work / "out" / "results.json"
+        assert results_path.exists(), f"GIMP wrote no results (rc {run.returncode}):\n{log[-6000:]}"
+        results = {r["name"]: r for r in json.loads(results_path.read_text())}
+        arrays = {}
+        for name, r in results.items():
+            for key in ("cutout_pixels", "shadow_pixels"):
+                if key in r:
+                    arrays[(name, key)] = np.fromfile(work / "out" / Path(r[key]).name, dtype="<f4")
+        print(f"gimp-console session: {seconds:.1f} s for {len(CASES)} cases")
+        yield results, arrays, log
+    finally:
+        shutil.rmtree(work, ignore_errors=True)
+
+
+def _expected(worker_port: int, case: dict, cutout: np.ndarray) -> tuple[dict, np.ndarray]:
+    """What the engine renders for this cutout and these settings (as the plug-in would ask)."""
+    u8 = case["precision"].startswith("U8")
+    alpha = np.round(cutout * (255 if u8 else 65535)).astype("uint8" if u8 else "uint16").reshape(H, W)
+    args = case["args"]
+    client = EngineClient(address=("127.0.0.1", worker_port))
+    try:
+        reply, _ = client.request("set_cutout", {"alpha": Buffer(str(alpha.dtype), alpha.shape, alpha.tobytes())})
+        cid = reply["cutout"]
+        if args["ao-strength"] != 1.0:
+            client.request("edit_ao", cutout=cid, edits=[{"op": "strength", "value": args["ao-strength"]}])
+        lm = args["light-map"]
+        params = {"light_map": json.loads(lm)} if lm.startswith("{") else {"preset": lm}
+        reply, buffers = client.request(
+            "render", cutout=cid, color=list(args["shadow-color"]), opacity=args["opacity"],
+            format={"dtype": "float32", "channels": "rgba"}, **params,
+        )
+        layer = np.frombuffer(buffers["layer"].data, "<f4").reshape(reply["height"], reply["width"], 4)
+        return reply, layer
+    finally:
+        client.close()
+
+
+def test_procedure_registered_and_cases_ran(gimp_results):
+    results, _, log = gimp_results
+    for case in CASES:
+        r = results[case["id"]]
+        assert "exception" not in r, r["exception"]
+        assert r["registered"], log[-4000:]
+
+
+@pytest.mark.parametrize("case", [c for c in CASES if "error" not in c], ids=lambda c: c["id"])
+def test_shadow_layer(gimp_results, worker, case):
+    results, arrays, log = gimp_results
+    r = results[case["id"]]
+    assert r["status"] == "success", r.get("error")
+    # a new layer "Shadow: Pawn" directly below the drawable, returned by the procedure, in Multiply mode
+    assert r["layers_after"] == ["Pawn", "Shadow: Pawn", "Background"]
+    assert r["shadow_position"] == r["source_position"] + 1
+    assert r["returned_layer"] == "Shadow: Pawn" and r["shadow_mode"] == "multiply"
+    # the drawable and the selection untouched
+    assert r["source_unchanged"] and r["source_offsets"] == [PAWN["x"], PAWN["y"]]
+    assert r["selection_unchanged"]
+    assert r["undo_enabled"]
+    # the layer sits where the engine places the shadow of this cutout, with its pixels
+    cutout = arrays[(case["id"], "cutout_pixels")]
+    reply, want = _expected(worker[0], case, cutout)
+    assert r["shadow_offsets"] == [reply["x"], reply["y"]]
+    assert r["shadow_size"] == [reply["width"], reply["height"]]
+    got = arrays[(case["id"], "shadow_pixels")].reshape(reply["height"], reply["width"], 4)
+    step = 1 / 255 if case["precision"].startswith("U8") else 2e-3
+    assert np.abs(got[..., 3] - want[..., 3]).max() <= step + 1e-4
+    assert got[..., 3].max() > 0.3 * case["args"]["opacity"]
+    # the colour (sRGB) where the shadow is visible; a grey image keeps the luminance only
+    visible = got[..., 3] > 0.05
+    colour = np.array(case["args"]["shadow-color"], "f4")
+    if case["base"] == "RGB":
+        assert np.abs(got[visible][:, :3] - colour).max() <= 2 * step
+    # the geometry: a light right of centre casts the shadow left of the object, and vice versa
+    if case["side"]:
+        ys, xs = np.nonzero(got[..., 3] > 0.2)
+        shadow_cx = reply["x"] + xs.mean()
+        mask = cutout.reshape(H, W) > 0.5
+        object_cx = np.nonzero(mask)[1].mean()
+        assert (shadow_cx < object_cx - 10) if case["side"] == "left" else (shadow_cx > object_cx + 10)
+    # the shadow lies on the ground: it reaches below the object's top and the layer stays on the canvas
+    assert 0 <= reply["x"] and reply["x"] + reply["width"] <= W and reply["y"] + reply["height"] <= H
+
+
+@pytest.mark.parametrize("case", [c for c in CASES if "error" in c], ids=lambda c: c["id"])
+def test_errors_are_clear_and_change_nothing(gimp_results, case):
+    results, _, _ = gimp_results
+    r = results[case["id"]]
+    assert r["status"] == "execution-error"
+    assert case["error"] in r["error"]
+    assert r["layers_after"] == r["layers_before"]
+    assert r["source_unchanged"] and r["selection_unchanged"]
+
+
+def test_undo_group_closed(gimp_results):
+    """GIMP 3's PDB has no undo command, so the test cannot press Ctrl+Z; it checks instead that the
+    plug-in left no undo group open (GIMP core warns when a plug-in does) and no plug-in crashed."""
+    _, _, log = gimp_results
+    assert "inconsistent" not in log.lower(), log[-4000:]
+    assert "plug-in crashed" not in log.lower() and "traceback" not in log.lower(), log[-4000:]
