@@ -1,0 +1,87 @@
+"""Install the Krita plug-in into a pykrita folder, or build the zip Krita imports.
+
+``ssn-shadow install-plugin krita [--dest DIR] [--python PY] [--link] [--zip OUT]``
+calls :func:`install` or :func:`build_zip`.
+"""
+
+from __future__ import annotations
+
+import os
+import shutil
+import sys
+import tempfile
+import zipfile
+from collections.abc import Mapping
+from pathlib import Path
+
+from ssn_engine.plugin_files import copy_shared_modules, write_engine_config
+
+PLUGIN_NAME = "ssn_shadow"
+HERE = Path(__file__).resolve().parent
+PACKAGE = HERE / PLUGIN_NAME
+DESKTOP = HERE / f"{PLUGIN_NAME}.desktop"
+_GENERATED = ("__pycache__", "*.pyc", "engine_shared", "engine.json", ".gitignore")
+
+
+def default_pykrita_dir(
+    platform: str = sys.platform, env: Mapping[str, str] = os.environ, home: Path | None = None
+) -> Path:
+    """The user's pykrita folder: Krita's resource folder for this OS, plus ``pykrita``."""
+    home = home or Path.home()
+    if platform.startswith("win"):
+        base = Path(env["APPDATA"]) if env.get("APPDATA") else home / "AppData" / "Roaming"
+        return base / "krita" / "pykrita"
+    if platform == "darwin":
+        return home / "Library" / "Application Support" / "krita" / "pykrita"
+    data = Path(env["XDG_DATA_HOME"]) if env.get("XDG_DATA_HOME") else home / ".local" / "share"
+    return data / "krita" / "pykrita"
+
+
+def _remove(path: Path) -> None:
+    if path.is_symlink() or path.is_file():
+        path.unlink()
+    elif path.is_dir():
+        shutil.rmtree(path)
+
+
+def install(dest: Path | None = None, python: str | None = None, link: bool = False) -> Path:
+    """Copy (or symlink, for development) the plug-in into ``dest`` (default: the user's pykrita
+    folder), add the engine's shared modules and ``engine.json``; returns the plug-in package folder.
+
+    Enable it afterwards in Krita: Settings > Configure Krita > Python Plugin Manager > Soft Shadow (SSN),
+    then restart Krita; the docker is under Settings > Dockers > Soft Shadow.
+    """
+    dest = Path(dest) if dest is not None else default_pykrita_dir()
+    dest.mkdir(parents=True, exist_ok=True)
+    target, desktop = dest / PLUGIN_NAME, dest / DESKTOP.name
+    for path in (target, desktop):
+        _remove(path)
+    if link:
+        try:
+            target.symlink_to(PACKAGE, target_is_directory=True)
+            desktop.symlink_to(DESKTOP)
+        except OSError as exc:
+            raise OSError(f"cannot create symlinks in {dest} ({exc}); install without --link") from None
+    else:
+        shutil.copytree(PACKAGE, target, ignore=shutil.ignore_patterns(*_GENERATED))
+        shutil.copy2(DESKTOP, desktop)
+    copy_shared_modules(target)
+    write_engine_config(target, str(Path(python).absolute()) if python else None)
+    return target
+
+
+def build_zip(out: Path) -> Path:
+    """A zip for Krita's Tools > Scripts > Import Python Plugin from File: the .desktop file and
+    the ``ssn_shadow`` folder with the shared modules and an engine.json naming this Python."""
+    out = Path(out)
+    out.parent.mkdir(parents=True, exist_ok=True)
+    with tempfile.TemporaryDirectory() as tmp:
+        package = install(Path(tmp))
+        with zipfile.ZipFile(out, "w", zipfile.ZIP_DEFLATED) as zf:
+            zf.write(DESKTOP, DESKTOP.name)
+            zf.write(package, PLUGIN_NAME + "/")  # Krita's importer looks for this folder entry
+            for path in sorted(package.rglob("*")):
+                if "__pycache__" in path.parts or path.suffix == ".pyc":
+                    continue
+                zf.write(path, Path(PLUGIN_NAME) / path.relative_to(package))
+    return out

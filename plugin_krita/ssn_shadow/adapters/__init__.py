@@ -1,0 +1,1 @@
+"""Krita adapters: pixel formats, reading alpha, writing the shadow layer."""

@@ -1,0 +1,206 @@
+"""Krita documents and layers: read the source alpha, write the shadow layer below it.
+
+Only Krita's Python API (libkis) is used; the objects come in as arguments,
+so this module imports nothing from Krita and its logic is testable with
+stand-ins.
+
+Undo, as measured in Krita 5.1.5: ``Node.addChildNode`` and ``Node.remove``
+are undoable commands, ``Node.setPixelData`` is not. So a new shadow layer is
+built while it is still detached (pixels, Multiply blend mode) and then added
+in one command: one Ctrl+Z removes it. Generating again replaces the old
+shadow layer by a new one in the same place (remove + add: two undo steps,
+the first of which leaves no shadow, the second brings the previous one back).
+Live updates during one drag write in place into the layer that drag added,
+so they do not flood the undo stack. ``Node.setBlendingMode`` is an undo
+command of its own, even on a detached node: a first shadow therefore costs
+two undo steps (the layer, then an invisible blend-mode step); a replacement
+is a copy of the old layer, which keeps Multiply without that command.
+"""
+
+from __future__ import annotations
+
+import hashlib
+from dataclasses import dataclass
+from typing import Any
+
+from .pixel_format import PixelFormat, clip_rect, extract_alpha, pixel_format, place_rows
+
+SHADOW_PREFIX = "Shadow: "
+
+
+class SourceError(RuntimeError):
+    """No usable source (no document, no layer, a shadow layer...); the message is for people."""
+
+
+@dataclass
+class Source:
+    """The cutout to cast a shadow from: a canvas-sized alpha plane and the layer it belongs to."""
+
+    document: Any
+    node: Any
+    node_id: str
+    name: str
+    alpha: bytes
+    dtype: str
+    width: int
+    height: int
+    from_selection: bool
+    layer_format: PixelFormat  # the document's: the shadow layer is written in it
+    profile: str
+
+    @property
+    def key(self) -> str:
+        """Identifies the alpha content (to reuse the engine's cutout and AO)."""
+        digest = hashlib.blake2b(self.alpha, digest_size=16).hexdigest()
+        return f"{self.node_id}:{self.width}x{self.height}:{self.dtype}:{digest}"
+
+
+def node_id(node: Any) -> str:
+    return node.uniqueId().toString()
+
+
+def shadow_name(source_name: str) -> str:
+    return SHADOW_PREFIX + source_name
+
+
+def read_source(document: Any) -> Source:
+    """The active selection's alpha if there is one, else the active layer's alpha."""
+    if document is None:
+        raise SourceError("Open an image first.")
+    layer_format = pixel_format(document.colorModel(), document.colorDepth())
+    node = document.activeNode()
+    if node is None or node.parentNode() is None:
+        raise SourceError("Select the layer that holds the cutout.")
+    if node.name().startswith(SHADOW_PREFIX):
+        node = _source_of_shadow(node)
+    w, h = document.width(), document.height()
+    selection = document.selection()
+    if selection is not None and selection.width() > 0 and selection.height() > 0:
+        alpha = bytes(selection.pixelData(0, 0, w, h))
+        return Source(document, node, node_id(node), node.name(), alpha, "uint8", w, h, True,
+                      layer_format, document.colorProfile())
+    node_format = pixel_format(node.colorModel(), node.colorDepth())
+    b = node.bounds()
+    x, y, bw, bh = clip_rect(b.x(), b.y(), b.width(), b.height(), w, h)
+    if bw == 0 or bh == 0:
+        raise SourceError(f"The layer '{node.name()}' is empty on the canvas: nothing to cast a shadow from.")
+    region = extract_alpha(bytes(node.projectionPixelData(x, y, bw, bh)), node_format)
+    alpha = bytes(place_rows(region, x, y, bw, bh, w, h, node_format.itemsize))
+    return Source(document, node, node_id(node), node.name(), alpha, node_format.dtype, w, h, False,
+                  layer_format, document.colorProfile())
+
+
+def _source_of_shadow(shadow: Any) -> Any:
+    """The layer directly above a shadow layer, when it is the layer the shadow was made from."""
+    siblings = shadow.parentNode().childNodes()
+    i = _index_of(siblings, shadow)
+    if i + 1 < len(siblings) and shadow_name(siblings[i + 1].name()) == shadow.name():
+        return siblings[i + 1]
+    raise SourceError("The active layer is a shadow layer; select the cutout's layer instead.")
+
+
+def _index_of(nodes: list, node: Any) -> int:
+    target = node_id(node)
+    for i, n in enumerate(nodes):
+        if node_id(n) == target:
+            return i
+    raise SourceError(f"The layer '{node.name()}' is no longer in the image.")
+
+
+def shadow_below(source_node: Any) -> Any | None:
+    """The shadow layer directly below the source (by name), or None."""
+    parent = source_node.parentNode()
+    if parent is None:
+        return None
+    siblings = parent.childNodes()
+    i = _index_of(siblings, source_node)
+    if i > 0 and siblings[i - 1].name() == shadow_name(source_node.name()):
+        return siblings[i - 1]
+    return None
+
+
+@dataclass
+class WriteResult:
+    node: Any
+    created: bool
+    notice: str = ""
+
+
+class LayerWriter:
+    """Writes shadow layers into Krita documents, undoably where Krita allows it."""
+
+    def __init__(self) -> None:
+        self._rects: dict[str, tuple[int, int, int, int]] = {}
+
+    def write(
+        self,
+        document: Any,
+        source_node: Any,
+        pixels: bytes,
+        rect: tuple[int, int, int, int],
+        new_step: bool,
+    ) -> WriteResult:
+        """Show ``pixels`` (rect x, y, w, h, in the document's pixel format) as the source's shadow.
+
+        ``new_step``: make this an undo step (a new layer replacing the old one); otherwise
+        write in place into the existing shadow layer (live updates within one drag).
+        """
+        existing = shadow_below(source_node)
+        if existing is not None and not new_step:
+            self._write_in_place(document, existing, pixels, rect)
+            return WriteResult(existing, False)
+        if existing is not None:
+            # A copy keeps Multiply without the extra undo command setBlendingMode would add.
+            node = existing.duplicate()
+            node.setName(shadow_name(source_node.name()))
+            self._clear(node, self._rect_of(existing))
+        else:
+            node = document.createNode(shadow_name(source_node.name()), "paintlayer")
+            node.setBlendingMode("multiply")
+        x, y, w, h = rect
+        if w > 0 and h > 0:
+            node.setPixelData(pixels, x, y, w, h)
+        self._rects[node_id(node)] = rect
+        if existing is not None:
+            existing.remove()
+        notice = self._insert_below(document, source_node, node)
+        document.waitForDone()
+        document.setActiveNode(source_node)  # Krita makes an added layer active; keep the source active
+        return WriteResult(node, True, notice)
+
+    def _rect_of(self, node: Any) -> tuple[int, int, int, int]:
+        rect = self._rects.get(node_id(node))
+        if rect is None:
+            b = node.bounds()
+            rect = (b.x(), b.y(), b.width(), b.height())
+        return rect
+
+    @staticmethod
+    def _clear(node: Any, rect: tuple[int, int, int, int]) -> None:
+        x, y, w, h = rect
+        if w > 0 and h > 0:
+            ps = len(bytes(node.pixelData(0, 0, 1, 1)))
+            node.setPixelData(bytes(w * h * ps), x, y, w, h)
+
+    def _write_in_place(self, document: Any, node: Any, pixels: bytes, rect: tuple[int, int, int, int]) -> None:
+        self._clear(node, self._rect_of(node))
+        x, y, w, h = rect
+        if w > 0 and h > 0:
+            node.setPixelData(pixels, x, y, w, h)
+        self._rects[node_id(node)] = rect
+        document.refreshProjection()
+
+    def _insert_below(self, document: Any, source_node: Any, node: Any) -> str:
+        parent = source_node.parentNode()
+        siblings = parent.childNodes()
+        i = _index_of(siblings, source_node)
+        if i > 0:
+            parent.addChildNode(node, siblings[i - 1])
+            return ""
+        # The source is the lowest layer of its group: Krita 5.1's scripting API adds a layer
+        # above a given node or at the top, never at the bottom; put it above and say so.
+        parent.addChildNode(node, source_node)
+        return (
+            f"'{source_node.name()}' is the lowest layer, and Krita's scripting API cannot add a layer "
+            "below it: the shadow was put above it. Move the shadow layer below the cutout (or add a layer under the cutout first)."
+        )

@@ -1,0 +1,232 @@
+"""The docker's logic: source -> engine cutout -> AO -> render -> shadow layer, asynchronously.
+
+Renders are coalesced (latest wins): while one is in flight, further requests
+merge into one pending request, which is sent as soon as the reply arrives and
+before that reply's layer is written, so the worker computes the next frame
+while Krita writes the current one. Only SR re-runs while a light moves; the
+cutout's AO (and its edits) stay in the worker.
+"""
+
+from __future__ import annotations
+
+import time
+from dataclasses import dataclass
+from typing import Any
+
+from PyQt5.QtCore import QObject, pyqtSignal
+
+from .adapters.krita_document import SourceError
+from .adapters.pixel_format import UnsupportedFormat, shadow_color
+from .engine import EngineError
+from .shared import light_map as lm
+from .shared import protocol
+
+
+@dataclass
+class RenderJob:
+    """One wanted render; ``new_step`` makes its layer write an undo step, ``reread`` re-reads the source."""
+
+    new_step: bool
+    reread: bool
+    started: float = 0.0
+
+    def merge(self, other: RenderJob) -> RenderJob:
+        return RenderJob(self.new_step or other.new_step, self.reread or other.reread, self.started or other.started)
+
+
+class ShadowController(QObject):
+    """State of one docker and the requests that realise it."""
+
+    busyChanged = pyqtSignal(bool)
+    status = pyqtSignal(str, str)  # level ("info" | "warning" | "error"), text for people
+    aoChanged = pyqtSignal(bytes, bytes, int)  # AO map, framed mask (N x N uint8 each), N
+    rendered = pyqtSignal(dict)  # {"elapsed_ms", "timing_ms", "width", "height", "created", "method"}
+    engineReady = pyqtSignal(dict)
+
+    def __init__(self, engine: Any, host: Any, parent: QObject | None = None) -> None:
+        super().__init__(parent)
+        self.engine, self.host = engine, host
+        self.light_map = lm.preset(lm.DEFAULT_PRESET)
+        self.ao_edits: list[dict] = []
+        self.color: tuple[float, float, float] = (0.0, 0.0, 0.0)
+        self.opacity = 1.0
+        self.live = True
+        self.source = None
+        self.cutout: str | None = None
+        self._cutout_key: str | None = None
+        self._mask = b""
+        self._in_flight = False
+        self._pending: RenderJob | None = None
+        self._edit_in_flight = False
+        self._edit_dirty = False
+        self._busy = False
+        self.renders = 0
+        if hasattr(engine, "ready"):
+            engine.ready.connect(self._on_engine_ready)
+
+    # -- public API (called by the UI) ------------------------------------------
+    @property
+    def busy(self) -> bool:
+        return self._busy
+
+    def generate(self) -> None:
+        """Read the source again and render; the layer write is one new undo step."""
+        self._schedule(RenderJob(new_step=True, reread=True, started=time.perf_counter()))
+
+    def lights_edited(self, dragging: bool, stroke_started: bool = False) -> None:
+        """The light map changed; re-render at once when Live is on and a shadow exists."""
+        if self.live and self.source is not None:
+            self._schedule(RenderJob(new_step=stroke_started, reread=False, started=time.perf_counter()))
+
+    def set_light_map(self, light_map: Any) -> None:
+        self.light_map = light_map
+        self.lights_edited(dragging=False, stroke_started=True)
+
+    def set_ao_edits(self, edits: list[dict], stroke_started: bool = False) -> None:
+        """Replace the AO edits (the whole list); the worker re-applies them to its AO map."""
+        self.ao_edits = list(edits)
+        if self.cutout is None:
+            return
+        self._send_edits()
+        self.lights_edited(dragging=True, stroke_started=stroke_started)
+
+    def forget_cutout(self) -> None:
+        self.cutout, self._cutout_key, self.source = None, None, None
+
+    # -- scheduling ---------------------------------------------------------------
+    def _schedule(self, job: RenderJob) -> None:
+        if self._in_flight:
+            self._pending = job if self._pending is None else self._pending.merge(job)
+            return
+        self._run(job)
+
+    def _set_busy(self, busy: bool) -> None:
+        if busy != self._busy:
+            self._busy = busy
+            self.busyChanged.emit(busy)
+
+    def _fail(self, message: str, level: str = "error") -> None:
+        self._in_flight, self._pending = False, None
+        self._set_busy(False)
+        self.status.emit(level, message)
+
+    def _run(self, job: RenderJob) -> None:
+        self._in_flight = True
+        self._set_busy(True)
+        try:
+            if job.reread or self.source is None:
+                source = self.host.read_source(self.host.active_document())
+                if self.source is not None and source.node_id != self.source.node_id:
+                    self.ao_edits = []
+                self.source = source
+            self._ensure_cutout(lambda: self._render(job), job)
+        except (SourceError, UnsupportedFormat) as exc:
+            self._fail(str(exc), "warning")
+        except Exception as exc:  # the UI boundary: never let an error reach Krita
+            self._fail(f"Soft Shadow could not read the image: {type(exc).__name__}: {exc}")
+
+    def _ensure_cutout(self, then: Any, job: RenderJob) -> None:
+        source = self.source
+        key = source.key
+        if self.cutout is not None and key == self._cutout_key:
+            then()
+            return
+        self.status.emit("info", "Analysing the cutout (ambient occlusion)...")
+        alpha = protocol.Buffer(source.dtype, (source.height, source.width), source.alpha)
+
+        def on_cutout(reply: dict, buffers: dict) -> None:
+            self.cutout, self._cutout_key = reply["cutout"], key
+            if self.ao_edits:
+                self.engine.request("edit_ao", {"cutout": self.cutout, "edits": self.ao_edits}, None,
+                                    self._on_ao_edited, self._on_edit_error)
+            self.engine.request("get_ao", {"cutout": self.cutout}, None, self._on_ao, None)
+            then()
+
+        self.engine.request("set_cutout", {}, {"alpha": alpha}, on_cutout, lambda e: self._on_error(e, job))
+
+    def _render(self, job: RenderJob) -> None:
+        source = self.source
+        params = {
+            "cutout": self.cutout,
+            "light_map": self.light_map.to_dict(),
+            "color": shadow_color(self.color, source.profile),
+            "opacity": self.opacity,
+            "format": source.layer_format.render_format(),
+        }
+        self.engine.request(
+            "render", params, None,
+            lambda reply, buffers: self._on_rendered(job, source, reply, buffers),
+            lambda e: self._on_error(e, job),
+        )
+
+    # -- replies --------------------------------------------------------------------
+    def _on_rendered(self, job: RenderJob, source: Any, reply: dict, buffers: dict) -> None:
+        nxt, self._pending = self._pending, None
+        self._in_flight = False
+        if nxt is not None:
+            self._run(nxt)  # the worker renders the next frame while this one is written
+        rect = (int(reply["x"]), int(reply["y"]), int(reply["width"]), int(reply["height"]))
+        layer = buffers.get("layer")
+        try:
+            result = self.host.write(source, bytes(layer.data) if layer is not None else b"", rect, job.new_step)
+        except Exception as exc:  # the UI boundary
+            self._fail(f"Soft Shadow could not write the shadow layer: {type(exc).__name__}: {exc}")
+            return
+        self.renders += 1
+        elapsed = 1e3 * (time.perf_counter() - job.started) if job.started else 0.0
+        info = {
+            "elapsed_ms": round(elapsed, 1),
+            "timing_ms": reply.get("timing_ms", {}),
+            "width": rect[2],
+            "height": rect[3],
+            "created": result.created,
+            "method": reply.get("method", ""),
+        }
+        if result.notice:
+            self.status.emit("warning", result.notice)
+        elif rect[2] == 0:
+            self.status.emit("warning", "No visible shadow with these lights (is every light at zero intensity?).")
+        elif job.new_step:
+            self.status.emit("info", f"Shadow {rect[2]} x {rect[3]} px in {elapsed:.0f} ms ({info['method']}).")
+        if not self._in_flight:
+            self._set_busy(False)
+        self.rendered.emit(info)
+
+    def _on_error(self, error: EngineError, job: RenderJob) -> None:
+        if error.kind in ("UnknownCutout", "WorkerUnavailable"):
+            self.cutout, self._cutout_key = None, None  # the next request sends the cutout again
+        if error.kind == "UnknownCutout" and not job.reread:
+            self._in_flight = False
+            self._run(RenderJob(job.new_step, True, job.started))
+            return
+        level = "warning" if error.kind == "EmptyAlpha" else "error"
+        self._fail(str(error), level)
+
+    def _on_ao(self, reply: dict, buffers: dict) -> None:
+        ao, mask = buffers.get("ao"), buffers.get("mask")
+        if ao is not None and mask is not None:
+            self._mask = bytes(mask.data)
+            self.aoChanged.emit(bytes(ao.data), self._mask, int(ao.shape[0]))
+
+    def _send_edits(self) -> None:
+        if self._edit_in_flight:
+            self._edit_dirty = True
+            return
+        self._edit_in_flight, self._edit_dirty = True, False
+        self.engine.request("edit_ao", {"cutout": self.cutout, "edits": self.ao_edits}, None,
+                            self._on_ao_edited, self._on_edit_error)
+
+    def _on_ao_edited(self, reply: dict, buffers: dict) -> None:
+        self._edit_in_flight = False
+        ao = buffers.get("ao")
+        if ao is not None and self._mask:
+            self.aoChanged.emit(bytes(ao.data), self._mask, int(ao.shape[0]))
+        if self._edit_dirty and self.cutout is not None:
+            self._send_edits()
+
+    def _on_edit_error(self, error: EngineError) -> None:
+        self._edit_in_flight = self._edit_dirty = False
+        self.status.emit("error", str(error))
+
+    def _on_engine_ready(self, info: dict) -> None:
+        self.engineReady.emit(info)

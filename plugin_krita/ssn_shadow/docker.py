@@ -1,0 +1,36 @@
+"""The "Soft Shadow" docker inside Krita (thin: builds the engine client, host adapter and panel)."""
+
+from __future__ import annotations
+
+from krita import DockWidget, Krita
+from PyQt5.QtWidgets import QApplication
+
+from .adapters.host import KritaHost
+from .controller import ShadowController
+from .engine import EngineProcess
+from .ui.panel import ShadowPanel
+
+DOCKER_ID = "ssn_shadow_docker"
+TITLE = "Soft Shadow"
+
+
+class SoftShadowDocker(DockWidget):
+    """Krita's dock widget around the ShadowPanel."""
+
+    def __init__(self) -> None:
+        super().__init__()
+        self.setWindowTitle(TITLE)
+        self.engine = EngineProcess(parent=self)
+        self.controller = ShadowController(self.engine, KritaHost(Krita.instance()), self)
+        self.panel = ShadowPanel(self.controller)
+        self.setWidget(self.panel)
+        app = QApplication.instance()
+        if app is not None:
+            app.aboutToQuit.connect(self.engine.shutdown)
+
+    def canvasChanged(self, canvas) -> None:  # noqa: N802 (Krita's API)
+        """Another document or view: the next Generate reads its source afresh."""
+        try:
+            self.controller.forget_cutout()
+        except Exception as exc:  # never crash the host
+            self.panel.show_message("error", f"Soft Shadow: {exc}")

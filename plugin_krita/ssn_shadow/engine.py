@@ -1,0 +1,262 @@
+"""An asynchronous client for the engine worker, run as a QProcess (docs/protocol.md).
+
+Requests are written at once and answered in order; each reply calls its
+callback from the Qt event loop, so the UI never waits. A worker that cannot
+start, exits, or misses a deadline fails every pending request with a
+message for people, and the next request starts a fresh worker.
+"""
+
+from __future__ import annotations
+
+import collections
+import json
+import time
+from collections.abc import Callable
+from dataclasses import dataclass
+from typing import Any
+
+from PyQt5.QtCore import QObject, QProcess, QProcessEnvironment, QTimer, pyqtSignal
+
+from .settings import EngineCommand, EngineConfigError, engine_command, worker_environment
+from .shared import protocol
+
+Reply = tuple[dict, dict[str, "protocol.Buffer"]]
+OnReply = Callable[[dict, dict], None]
+OnError = Callable[["EngineError"], None]
+
+
+class EngineError(RuntimeError):
+    """The worker answered with an error (``kind`` from the protocol) or is unavailable."""
+
+    def __init__(self, kind: str, message: str) -> None:
+        super().__init__(message)
+        self.kind = kind
+
+
+@dataclass
+class _Pending:
+    id: int
+    cmd: str
+    deadline: float
+    timeout_s: float
+    on_reply: OnReply | None
+    on_error: OnError | None
+
+
+class EngineProcess(QObject):
+    """One worker process and its queue of pending requests."""
+
+    ready = pyqtSignal(dict)  # the 'hello' reply after each start
+    stateChanged = pyqtSignal(str)  # "starting", "ready", "stopped"
+
+    def __init__(
+        self,
+        command: Callable[[], EngineCommand] = engine_command,
+        timeout_s: float = 120.0,
+        parent: QObject | None = None,
+    ) -> None:
+        super().__init__(parent)
+        self._command_provider, self.timeout_s = command, timeout_s
+        self._proc: QProcess | None = None
+        self._buf = bytearray()
+        self._pending: collections.OrderedDict[int, _Pending] = collections.OrderedDict()
+        self._stderr: collections.deque[str] = collections.deque(maxlen=40)
+        self._next_id = 1
+        self._command: EngineCommand | None = None
+        self.info: dict[str, Any] = {}
+        self._watchdog = QTimer(self)
+        self._watchdog.setInterval(250)
+        self._watchdog.timeout.connect(self._check_deadlines)
+
+    # -- process -------------------------------------------------------------
+    @property
+    def running(self) -> bool:
+        return self._proc is not None and self._proc.state() != QProcess.NotRunning
+
+    def _start(self) -> None:
+        self._command = self._command_provider()
+        proc = QProcess(self)
+        env = QProcessEnvironment()
+        base = QProcessEnvironment.systemEnvironment()
+        for key, value in worker_environment({k: base.value(k) for k in base.keys()}, self._command.env).items():
+            env.insert(key, value)
+        proc.setProcessEnvironment(env)
+        proc.readyReadStandardOutput.connect(self._on_stdout)
+        proc.readyReadStandardError.connect(self._on_stderr)
+        proc.errorOccurred.connect(self._on_process_error)
+        proc.finished.connect(self._on_finished)
+        self._proc, self._buf = proc, bytearray()
+        self._stderr.clear()
+        self.info = {}
+        self.stateChanged.emit("starting")
+        proc.start(self._command.program, self._command.args)
+        self._watchdog.start()
+        self._send("hello", {}, None, self._on_hello, None, self.timeout_s)
+
+    def _on_hello(self, reply: dict, buffers: dict) -> None:
+        if reply.get("protocol") != protocol.PROTOCOL_VERSION:
+            self._fail_all(
+                f"the shadow engine speaks protocol {reply.get('protocol')!r}, this plug-in "
+                f"{protocol.PROTOCOL_VERSION}; re-run 'ssn-shadow install-plugin krita' from the engine's Python."
+            )
+            self.stop()
+            return
+        self.info = reply
+        self.stateChanged.emit("ready")
+        self.ready.emit(reply)
+
+    def stop(self) -> None:
+        """Kill the worker (pending requests fail) without waiting."""
+        proc, self._proc = self._proc, None
+        if proc is not None:
+            for sig in (proc.readyReadStandardOutput, proc.readyReadStandardError, proc.errorOccurred, proc.finished):
+                try:
+                    sig.disconnect()
+                except TypeError:
+                    pass
+            if proc.state() != QProcess.NotRunning:
+                proc.kill()
+                proc.waitForFinished(2000)
+            proc.deleteLater()
+        self._watchdog.stop()
+        self.stateChanged.emit("stopped")
+
+    def shutdown(self) -> None:
+        """Ask the worker to exit, then stop it."""
+        if self.running:
+            self._send("shutdown", {}, None, None, None, 5.0)
+            self._proc.waitForFinished(3000)
+        self.stop()
+
+    # -- requests ------------------------------------------------------------
+    def request(
+        self,
+        cmd: str,
+        params: dict[str, Any] | None = None,
+        buffers: dict[str, protocol.Buffer] | None = None,
+        on_reply: OnReply | None = None,
+        on_error: OnError | None = None,
+        timeout_s: float | None = None,
+    ) -> int:
+        """Send one command; ``on_reply(header, buffers)`` or ``on_error(EngineError)`` follows."""
+        if not self.running:
+            self.stop()
+            try:
+                self._start()
+            except EngineConfigError as exc:
+                self._deliver_error(on_error, EngineError("WorkerUnavailable", str(exc)))
+                return -1
+        return self._send(cmd, params or {}, buffers, on_reply, on_error, timeout_s or self.timeout_s)
+
+    def _send(self, cmd, params, buffers, on_reply, on_error, timeout_s) -> int:
+        rid = self._next_id
+        self._next_id += 1
+        buffers = buffers or {}
+        header = {"id": rid, "cmd": cmd, **params}
+        header["buffers"] = [
+            {"name": name, "dtype": b.dtype, "shape": list(b.shape), "nbytes": len(b.data)}
+            for name, b in buffers.items()
+        ]
+        self._pending[rid] = _Pending(rid, cmd, time.monotonic() + timeout_s, timeout_s, on_reply, on_error)
+        self._proc.write(json.dumps(header, separators=(",", ":")).encode("utf-8") + b"\n")
+        for b in buffers.values():
+            self._proc.write(bytes(b.data))
+        return rid
+
+    # -- replies ---------------------------------------------------------------
+    def _on_stdout(self) -> None:
+        if self._proc is None:
+            return
+        self._buf += bytes(self._proc.readAllStandardOutput())
+        while True:
+            try:
+                message = self._take_message()
+            except protocol.ProtocolError as exc:
+                self._died(f"sent a malformed reply ({exc})")
+                return
+            if message is None:
+                return
+            self._dispatch(*message)
+
+    def _take_message(self) -> Reply | None:
+        end = self._buf.find(b"\n")
+        if end < 0:
+            if len(self._buf) > protocol.MAX_HEADER:
+                raise protocol.ProtocolError("header line too long")
+            return None
+        try:
+            header = json.loads(bytes(self._buf[:end]))
+        except ValueError as exc:
+            raise protocol.ProtocolError(f"header is not JSON: {exc}") from None
+        if not isinstance(header, dict):
+            raise protocol.ProtocolError("header must be a JSON object")
+        entries = header.pop("buffers", None) or []
+        try:
+            total = sum(int(e["nbytes"]) for e in entries)
+        except (KeyError, TypeError, ValueError):
+            raise protocol.ProtocolError(f"malformed buffer list {entries!r}") from None
+        if len(self._buf) < end + 1 + total:
+            return None
+        pos, buffers = end + 1, {}
+        for e in entries:
+            n = int(e["nbytes"])
+            buffers[e["name"]] = protocol.Buffer(e["dtype"], e["shape"], bytes(self._buf[pos : pos + n]))
+            pos += n
+        del self._buf[:pos]
+        return header, buffers
+
+    def _dispatch(self, header: dict, buffers: dict) -> None:
+        pending = self._pending.pop(header.get("id"), None)
+        if pending is None:
+            return
+        if header.get("ok"):
+            if pending.on_reply is not None:
+                pending.on_reply(header, buffers)
+        else:
+            error = header.get("error") or {}
+            self._deliver_error(
+                pending.on_error,
+                EngineError(error.get("type", "Internal"), error.get("message", "unknown engine error")),
+            )
+
+    @staticmethod
+    def _deliver_error(on_error: OnError | None, error: EngineError) -> None:
+        if on_error is not None:
+            on_error(error)
+
+    # -- failures --------------------------------------------------------------
+    def _on_stderr(self) -> None:
+        if self._proc is not None:
+            text = bytes(self._proc.readAllStandardError()).decode("utf-8", "replace")
+            self._stderr.extend(line for line in text.splitlines() if line.strip())
+
+    def _on_process_error(self, error: QProcess.ProcessError) -> None:
+        if error == QProcess.FailedToStart:
+            cmd = self._command.describe() if self._command else "?"
+            self._fail_all(
+                f"could not start the shadow engine ({cmd}). Check the Python named in the plug-in's "
+                "engine.json (re-run 'ssn-shadow install-plugin krita' from the engine's environment)."
+            )
+            self.stop()
+
+    def _on_finished(self, code: int, status: QProcess.ExitStatus) -> None:
+        self._on_stderr()
+        how = "crashed" if status == QProcess.CrashExit else f"exited with code {code}"
+        self._died(how)
+
+    def _died(self, what: str) -> None:
+        tail = "\n".join(list(self._stderr)[-8:])
+        detail = f"\nLast engine output:\n{tail}" if tail else ""
+        self.stop()
+        self._fail_all(f"the shadow engine {what}; it will restart on the next request.{detail}")
+
+    def _check_deadlines(self) -> None:
+        now = time.monotonic()
+        late = next((p for p in self._pending.values() if p.deadline < now), None)
+        if late is not None:
+            self._died(f"did not answer '{late.cmd}' within {late.timeout_s:g} s and was stopped")
+
+    def _fail_all(self, message: str) -> None:
+        pending, self._pending = list(self._pending.values()), collections.OrderedDict()
+        for p in pending:
+            self._deliver_error(p.on_error, EngineError("WorkerUnavailable", message))

@@ -1,0 +1,10 @@
+"""The engine's toolkit-free modules: copies beside the plug-in, or ssn_engine in a checkout."""
+
+from __future__ import annotations
+
+try:  # installed: copies made by `ssn-shadow install-plugin krita`
+    from .engine_shared import light_map, protocol
+except ImportError:  # running from the repository (tests)
+    from ssn_engine import light_map, protocol  # type: ignore[no-redef]
+
+__all__ = ["light_map", "protocol"]

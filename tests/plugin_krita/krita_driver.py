@@ -1,0 +1,195 @@
+"""Runs inside real Krita (kritarunner): drives the plug-in's generate path against the real worker.
+
+Called as ``kritarunner -s krita_driver -f main`` with the installed plug-in's pykrita folder on
+PYTHONPATH; $SSN_TEST_RESULT names the JSON file it writes (kritarunner's exit status says nothing).
+"""
+
+import json
+import os
+import struct
+import time
+import traceback
+from array import array
+
+from krita import Krita, Selection
+from PyQt5.QtCore import QEventLoop, QTimer
+from PyQt5.QtWidgets import QApplication
+
+RESULT = os.environ.get("SSN_TEST_RESULT", "/tmp/ssn_krita_result.json")
+W, H = 480, 360
+OBJ = (200, 90, 280, 270)  # x0, y0, x1, y1 of the opaque cutout
+out = {"cases": {}, "log": []}
+
+
+def save():
+    with open(RESULT, "w") as f:
+        json.dump(out, f, indent=1)
+
+
+def pixel(depth, bgr_or_rgb, a):
+    if depth == "U8":
+        return bytes([*bgr_or_rgb, a])
+    if depth == "F32":
+        return struct.pack("<4f", *[c / 255 for c in bgr_or_rgb], a / 255)
+    raise ValueError(depth)
+
+
+def make_document(depth, with_window):
+    k = Krita.instance()
+    doc = k.createDocument(W, H, f"ssn-{depth}", "RGBA", depth, "", 72.0)
+    if with_window:
+        window = k.openWindow()
+        window.addView(doc)
+    root = doc.rootNode()
+    bg = root.childNodes()[0]
+    person = doc.createNode("Person", "paintlayer")
+    x0, y0, x1, y1 = OBJ
+    px = pixel(depth, (40, 90, 200), 255)
+    person.setPixelData(px * ((x1 - x0) * (y1 - y0)), x0, y0, x1 - x0, y1 - y0)
+    root.addChildNode(person, bg)
+    activate(doc, person)
+    return doc, person
+
+
+def activate(doc, node):
+    doc.setActiveNode(node)
+    doc.waitForDone()
+    deadline = time.monotonic() + 10  # with a view, the active node changes via the event loop
+    while (doc.activeNode() is None or doc.activeNode().name() != node.name()) and time.monotonic() < deadline:
+        QApplication.processEvents()
+        time.sleep(0.01)
+
+
+def wait_for(controller, timeout_s=90.0):
+    loop = QEventLoop()
+    timer = QTimer()
+    timer.setSingleShot(True)
+    timer.timeout.connect(loop.quit)
+    controller.busyChanged.connect(lambda busy: None if busy else loop.quit())
+    timer.start(int(timeout_s * 1000))
+    if controller.busy:
+        loop.exec_()
+    controller.busyChanged.disconnect()
+
+
+def alpha_plane(node, depth):
+    from ssn_shadow.adapters.pixel_format import extract_alpha, pixel_format
+
+    raw = extract_alpha(bytes(node.pixelData(0, 0, W, H)), pixel_format("RGBA", depth))
+    if depth == "U8":
+        return [a / 255 for a in raw]
+    return list(array("f", raw))
+
+
+def region_stats(alpha, x0, y0, x1, y1):
+    vals = [alpha[y * W + x] for y in range(max(0, y0), min(H, y1)) for x in range(max(0, x0), min(W, x1))]
+    return {"sum": round(sum(vals), 3), "max": round(max(vals) if vals else 0.0, 4)}
+
+
+def layer_names(doc):
+    return [n.name() for n in doc.rootNode().childNodes()]
+
+
+def shadow_state(doc, depth):
+    kids = doc.rootNode().childNodes()
+    names = [n.name() for n in kids]
+    if "Shadow: Person" not in names:
+        return {"names": names}
+    shadow = kids[names.index("Shadow: Person")]
+    alpha = alpha_plane(shadow, depth)
+    x0, y0, x1, y1 = OBJ
+    h = y1 - y0
+    return {
+        "names": names,
+        "shadow_index": names.index("Shadow: Person"),
+        "source_index": names.index("Person"),
+        "blend": shadow.blendingMode(),
+        "type": shadow.type(),
+        "uid": shadow.uniqueId().toString(),
+        "far_above": region_stats(alpha, 0, 0, W, y0 - h // 4),
+        "below": region_stats(alpha, 0, y1 + 2, W, H),
+        "right": region_stats(alpha, x1 + 2, y0 + h // 2, W, y1 + 40),
+        "left": region_stats(alpha, 0, y0 + h // 2, x0 - 2, y1 + 40),
+        "total": region_stats(alpha, 0, 0, W, H),
+    }
+
+
+def run_case(depth, with_window):
+    from ssn_shadow.adapters.host import KritaHost
+    from ssn_shadow.controller import ShadowController
+    from ssn_shadow.engine import EngineProcess
+    from ssn_shadow.shared import light_map as lm
+
+    k = Krita.instance()
+    case = out["cases"][depth] = {}
+    doc, person = make_document(depth, with_window)
+    source_before = bytes(person.pixelData(0, 0, W, H))
+    bg = doc.rootNode().childNodes()[0]
+    bg_before = bytes(bg.pixelData(0, 0, W, H))
+    case["selection_before"] = doc.selection() is not None
+    engine = EngineProcess()
+    host = KritaHost(k)
+    host.active_document = lambda: doc  # several test documents are open; the docker uses the active one
+    controller = ShadowController(engine, host)
+    messages = case["messages"] = []
+    controller.status.connect(lambda level, text: messages.append([level, text]))
+    renders = case["renders"] = []
+    controller.rendered.connect(lambda info: renders.append(info))
+
+    controller.light_map = lm.preset("low-sun-left")  # light left of centre: shadow to the right
+    t = time.perf_counter()
+    controller.generate()
+    wait_for(controller)
+    case["first_ms"] = round(1e3 * (time.perf_counter() - t), 1)
+    case["after_first"] = shadow_state(doc, depth)
+    save()
+
+    controller.light_map = lm.preset("low-sun-right")  # shadow to the left
+    controller.generate()
+    wait_for(controller)
+    case["after_second"] = shadow_state(doc, depth)
+    case["source_identical"] = bytes(person.pixelData(0, 0, W, H)) == source_before
+    case["background_identical"] = bytes(bg.pixelData(0, 0, W, H)) == bg_before
+    case["selection_after"] = doc.selection() is not None
+    save()
+
+    undo = k.action("edit_undo")
+    case["undo_available"] = undo is not None
+    if undo is not None:
+        steps = case["undo_steps"] = []
+        for _ in range(4):
+            text = undo.text()
+            undo.trigger()
+            doc.waitForDone()
+            steps.append([text, layer_names(doc)])
+        case["source_identical_after_undo"] = bytes(person.pixelData(0, 0, W, H)) == source_before
+    save()
+
+    if depth == "U8":  # a selection is the source when there is one, and it stays as it was
+        sel = Selection()
+        sel.select(OBJ[0], OBJ[1], (OBJ[2] - OBJ[0]) // 2, OBJ[3] - OBJ[1], 255)
+        doc.setSelection(sel)
+        activate(doc, person)
+        sel_before = bytes(doc.selection().pixelData(0, 0, W, H))
+        controller.light_map = lm.preset("low-sun-left")
+        controller.generate()
+        wait_for(controller)
+        case["with_selection"] = shadow_state(doc, depth)
+        now = doc.selection()
+        case["selection_unchanged"] = now is not None and bytes(now.pixelData(0, 0, W, H)) == sel_before
+        case["source_identical_after_selection"] = bytes(person.pixelData(0, 0, W, H)) == source_before
+    engine.shutdown()
+    save()
+
+
+def main(*args):
+    try:
+        with_window = os.environ.get("SSN_TEST_WINDOW") == "1"
+        out["krita"] = Krita.instance().version()
+        out["window"] = with_window
+        for depth in os.environ.get("SSN_TEST_DEPTHS", "U8,F32").split(","):
+            run_case(depth, with_window)
+        out["done"] = True
+    except Exception:
+        out["error"] = traceback.format_exc()
+    save()
