@@ -116,6 +116,10 @@ class EngineClient:
     ) -> tuple[dict, dict[str, Buffer]]:
         """Send one command; return the reply header and buffers, or raise EngineError."""
         with self._lock:
+            if self._proc is not None and self._proc.poll() is not None:
+                # It died between requests (crash, OOM kill): say so once, with its last words,
+                # instead of silently starting a fresh worker that has lost every cutout.
+                raise self._died(f"stopped unexpectedly (exit status {self._proc.returncode})")
             if not self.running:
                 self.close()
                 self._start()
@@ -137,6 +141,8 @@ class EngineClient:
             if isinstance(result[0], BaseException):
                 raise self._died(f"stopped unexpectedly during '{cmd}' ({result[0]})")
             reply, reply_buffers = result[0]
+            if cmd == "shutdown" and reply.get("ok"):
+                self.close()  # it exits as asked: the next request starts a fresh one
         if not reply.get("ok"):
             error = reply.get("error") or {}
             raise EngineError(error.get("type", "Internal"), error.get("message", "unknown engine error"))

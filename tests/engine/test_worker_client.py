@@ -1,0 +1,350 @@
+"""The engine worker (ssn-shadow serve) through the stdlib client, as the plug-ins use it."""
+
+from __future__ import annotations
+
+import json
+import os
+import subprocess
+import sys
+
+import numpy as np
+import pytest
+from engine_helpers import REPO, drawn_alpha
+
+from ssn_engine.client import EngineClient, EngineError, WorkerUnavailable
+from ssn_engine.light_map import PRESETS
+from ssn_engine.protocol import Buffer
+
+SERVE = [sys.executable, "-m", "ssn_engine", "serve"]
+CANVAS_W, CANVAS_H = 400, 300
+
+
+@pytest.fixture(scope="module")
+def worker_env():
+    with pytest.MonkeyPatch.context() as mp:
+        mp.setenv("PYTHONPATH", str(REPO) + (os.pathsep + os.environ["PYTHONPATH"] if os.environ.get("PYTHONPATH") else ""))
+        mp.delenv("SSN_SHADOW_MODEL_DIR", raising=False)
+        yield
+
+
+@pytest.fixture(scope="module")
+def client(worker_env):
+    c = EngineClient(command=SERVE, timeout=60)
+    yield c
+    c.close()
+
+
+def buf(array: np.ndarray) -> Buffer:
+    array = np.ascontiguousarray(array)
+    return Buffer(array.dtype.name, array.shape, array.tobytes())
+
+
+def arr(buffer: Buffer) -> np.ndarray:
+    return np.frombuffer(buffer.data, np.dtype(buffer.dtype)).reshape(buffer.shape)
+
+
+def canvas_alpha(dtype=np.uint8) -> np.ndarray:
+    """The drawn post (160 x 120) at (140, 120) on a 400 x 300 canvas."""
+    small = drawn_alpha(160, 120, np.float32)
+    out = np.zeros((CANVAS_H, CANVAS_W), np.float32)
+    out[120:240, 140:300] = small
+    if dtype == np.uint8:
+        return (out * 255).astype(np.uint8)
+    if dtype == np.uint16:
+        return (out * 65535).astype(np.uint16)
+    return out.astype(dtype)
+
+
+@pytest.fixture(scope="module")
+def cutout(client):
+    reply, _ = client.request("set_cutout", {"alpha": buf(canvas_alpha())})
+    return reply
+
+
+def _light(u, v, softness=0.002, intensity=2.0):
+    return {"format": "ssn-shadow-elm", "version": 1, "lights": [{"u": u, "v": v, "softness": softness, "intensity": intensity}]}
+
+
+def _bbox_of(alpha):
+    ys, xs = np.nonzero(alpha > 0.01 * np.iinfo(alpha.dtype).max if alpha.dtype.kind == "u" else alpha > 0.01)
+    return [int(xs.min()), int(ys.min()), int(xs.max()) + 1, int(ys.max()) + 1]
+
+
+def test_hello(client):
+    reply, buffers = client.request("hello")
+    assert reply["ok"] is True and buffers == {}
+    assert reply["protocol"] == 1
+    assert reply["method"] in ("ssn", "geometric")
+    assert isinstance(reply["method_note"], str) and reply["method_note"]
+    assert reply["resolution"] == 256
+    assert reply["presets"] == list(PRESETS)
+
+
+@pytest.mark.parametrize("dtype", [np.uint8, np.uint16, np.float32, np.float16])
+def test_set_cutout_with_every_alpha_dtype(client, dtype):
+    alpha = canvas_alpha(dtype)
+    reply, _ = client.request("set_cutout", {"alpha": buf(alpha)})
+    assert isinstance(reply["cutout"], str)
+    assert reply["bbox"] == _bbox_of(canvas_alpha(np.uint8))
+    _, ao = client.request("get_ao", cutout=reply["cutout"])
+    assert arr(ao["ao"]).shape == (256, 256) and arr(ao["ao"]).dtype == np.uint8
+    mask = arr(ao["mask"])
+    assert mask.shape == (256, 256) and mask[8].max() > 128 and mask[:6].max() == 0
+    client.request("release", cutout=reply["cutout"])
+
+
+@pytest.mark.parametrize("dtype, top", [("uint8", 255), ("uint16", 65535), ("float16", 1.0), ("float32", 1.0)])
+@pytest.mark.parametrize("channels", ["rgba", "bgra"])
+def test_render_in_every_format(client, cutout, dtype, top, channels):
+    reply, buffers = client.request(
+        "render", cutout=cutout["cutout"], preset="softbox", color=[0.2, 0.4, 0.6], opacity=0.8,
+        format={"dtype": dtype, "channels": channels},
+    )
+    layer = arr(buffers["layer"])
+    assert buffers["layer"].dtype == dtype and layer.dtype == np.dtype(dtype)
+    assert layer.shape == (reply["height"], reply["width"], 4)
+    assert 0 <= reply["x"] and reply["x"] + reply["width"] <= CANVAS_W
+    assert 0 <= reply["y"] and reply["y"] + reply["height"] <= CANVAS_H
+    assert reply["method"] in ("ssn", "geometric") and set(reply["timing_ms"]) >= {"shadow", "to_canvas", "layer"}
+    rgb = layer[..., :3].astype(np.float64) / top
+    expected = [0.2, 0.4, 0.6] if channels == "rgba" else [0.6, 0.4, 0.2]
+    assert np.allclose(rgb, expected, atol=1e-3)
+    alpha = layer[..., 3].astype(np.float64) / top
+    assert 0.3 < alpha.max() <= 0.8 + 1e-3  # A = opacity * s
+
+
+def test_render_formats_agree(client, cutout):
+    layers = {}
+    for dtype, top in (("uint8", 255), ("float32", 1.0)):
+        reply, buffers = client.request("render", cutout=cutout["cutout"], preset="two-lights", format={"dtype": dtype})
+        layers[dtype] = (arr(buffers["layer"])[..., 3] / top, (reply["x"], reply["y"]))
+    assert layers["uint8"][1] == layers["float32"][1]
+    assert np.abs(layers["uint8"][0] - layers["float32"][0]).max() <= 0.5 / 255 + 1e-6
+
+
+def _layer_mass(client, cutout_id, light_map):
+    reply, buffers = client.request("render", cutout=cutout_id, light_map=light_map, format={"dtype": "float32"})
+    full = np.zeros((CANVAS_H, CANVAS_W), np.float32)
+    if reply["width"]:
+        a = arr(buffers["layer"])[..., 3]
+        full[reply["y"] : reply["y"] + reply["height"], reply["x"] : reply["x"] + reply["width"]] = a
+    return reply, full
+
+
+def test_layer_is_placed_per_framing(client, cutout):
+    x0, y0, x1, y1 = cutout["bbox"]
+    cx = 0.5 * (x0 + x1)
+    alpha = canvas_alpha() > 127
+    yy, xx = np.mgrid[0:CANVAS_H, 0:CANVAS_W]
+
+    # light right of centre: shadow left of the object
+    _, right = _layer_mass(client, cutout["cutout"], _light(0.75, 0.6))
+    ground = right * ~alpha
+    assert ground.sum() > 50
+    assert (ground * xx).sum() / ground.sum() < cx - 10
+    # light left of centre: shadow right of the object
+    _, left = _layer_mass(client, cutout["cutout"], _light(0.25, 0.6))
+    ground = left * ~alpha
+    assert (ground * xx).sum() / ground.sum() > cx + 10
+    # light straight ahead, low: below the object's base (towards the viewer)
+    reply, ahead = _layer_mass(client, cutout["cutout"], _light(0.5, 0.7))
+    ground = ahead * ~alpha
+    assert ground[y1 + 2 :].sum() > 0.8 * ground.sum()
+    assert reply["y"] + reply["height"] > y1
+    # no shadow far above the object for any of these front lights
+    for full in (right, left, ahead):
+        assert full[: max(0, y0 - 5)].max(initial=0.0) == 0.0
+
+
+def test_no_light_gives_an_empty_layer(client, cutout):
+    empty = {"format": "ssn-shadow-elm", "version": 1, "lights": []}
+    reply, buffers = client.request("render", cutout=cutout["cutout"], light_map=empty)
+    assert (reply["width"], reply["height"]) == (0, 0) and "layer" not in buffers
+
+
+def test_edit_ao(client):
+    reply, _ = client.request("set_cutout", {"alpha": buf(canvas_alpha())})
+    key = reply["cutout"]
+    _, before = client.request("get_ao", cutout=key)
+    ao0 = arr(before["ao"])
+    assert ao0.min() < 250  # some contact occlusion was predicted
+    _, edited = client.request("edit_ao", cutout=key, edits=[{"op": "strength", "value": 0}])
+    assert np.all(arr(edited["ao"]) == 255)
+    _, now = client.request("get_ao", cutout=key)
+    assert np.all(arr(now["ao"]) == 255)
+    _, dark = client.request("edit_ao", cutout=key, edits=[{"op": "brush", "x": 0.5, "y": 0.6, "radius": 0.05, "strength": -1}])
+    dark = arr(dark["ao"])
+    assert dark[153, 128] < ao0[153, 128] and np.array_equal(dark[:100], ao0[:100])
+    _, back = client.request("edit_ao", cutout=key, edits=[])  # undo everything
+    assert np.array_equal(arr(back["ao"]), ao0)
+    with pytest.raises(EngineError) as info:
+        client.request("edit_ao", cutout=key, edits=[{"op": "grow", "pixels": "3"}])
+    assert info.value.kind == "BadRequest" and "edits[0].pixels" in str(info.value)
+    with pytest.raises(EngineError) as info:
+        client.request("edit_ao", cutout=key, edits={"op": "grow"})
+    assert info.value.kind == "BadRequest" and "edits" in str(info.value)
+
+
+def test_elm_image(client):
+    _, buffers = client.request("elm_image", preset="two-lights", width=64)
+    image = arr(buffers["image"])
+    assert image.shape == (32, 64, 3) and image.dtype == np.uint8
+    assert image.max() > image.min() + 50
+    _, buffers = client.request("elm_image", light_map=_light(0.75, 0.5, 0.001, 3.0), width=128)
+    image = arr(buffers["image"]).astype(int).sum(axis=2)
+    assert np.unravel_index(np.argmax(image), image.shape)[1] > 64  # right of centre
+    with pytest.raises(EngineError, match="width") as info:
+        client.request("elm_image", preset="softbox", width=100000)
+    assert info.value.kind == "BadRequest"
+
+
+@pytest.mark.parametrize(
+    "cmd, params, buffers, kind, fragment",
+    [
+        ("set_cutout", {}, {"alpha": np.zeros((20, 30), np.uint8)}, "EmptyAlpha", "empty"),
+        ("set_cutout", {}, {"alpha": np.full((20, 30), np.nan, np.float32)}, "EmptyAlpha", "empty"),
+        ("set_cutout", {}, {}, "BadRequest", "alpha"),
+        ("set_cutout", {}, {"alpha": np.ones((4, 5, 2), np.uint8)}, "BadRequest", "alpha"),
+        ("render", {"cutout": "c999", "preset": "softbox"}, {}, "UnknownCutout", "c999"),
+        ("get_ao", {"cutout": None}, {}, "UnknownCutout", "set_cutout"),
+        ("frobnicate", {}, {}, "BadRequest", "frobnicate"),
+        ("elm_image", {"preset": "sunset-glow", "width": 64}, {}, "LightMapError", "sunset-glow"),
+        ("elm_image", {"width": 64}, {}, "BadRequest", "light_map or preset"),
+        (
+            "elm_image",
+            {"light_map": {"format": "ssn-shadow-elm", "version": 1, "lights": [{"u": 0.5, "v": 0.5, "softness": 0.01, "intensity": 1}, {"u": 1.5, "v": 0.5, "softness": 0.01, "intensity": 1}]}, "width": 64},
+            {},
+            "LightMapError",
+            "lights[1].u",
+        ),
+        ("elm_image", {"light_map": {"format": "ssn-shadow-elm", "version": 7, "lights": []}, "width": 64}, {}, "LightMapError", "version"),
+    ],
+)
+def test_errors_and_the_worker_survives(client, cmd, params, buffers, kind, fragment):
+    with pytest.raises(EngineError) as info:
+        client.request(cmd, {k: buf(v) for k, v in buffers.items()} or None, **params)
+    assert info.value.kind == kind
+    assert fragment in str(info.value)
+    assert not isinstance(info.value, WorkerUnavailable)
+    reply, _ = client.request("hello")  # still serving
+    assert reply["protocol"] == 1
+
+
+@pytest.mark.parametrize(
+    "params, kind, fragment",
+    [
+        ({"preset": "no-such-preset"}, "LightMapError", "no-such-preset"),
+        ({"light_map": {"format": "ssn-shadow-elm", "version": 1, "lights": [{"u": 0.5, "v": 0.5, "softness": 0.01}]}}, "LightMapError", "lights[0].intensity"),
+        ({"preset": "softbox", "format": {"dtype": "int8"}}, "BadRequest", "dtype"),
+        ({"preset": "softbox", "format": {"channels": "argb"}}, "BadRequest", "channels"),
+        ({"preset": "softbox", "format": "uint8"}, "BadRequest", "format"),
+        ({"preset": "softbox", "opacity": 3}, "BadRequest", "opacity"),
+        ({"preset": "softbox", "color": [1, 2, 3]}, "BadRequest", "color"),
+    ],
+)
+def test_render_errors(client, cutout, params, kind, fragment):
+    with pytest.raises(EngineError) as info:
+        client.request("render", cutout=cutout["cutout"], **params)
+    assert info.value.kind == kind and fragment in str(info.value)
+    reply, _ = client.request("render", cutout=cutout["cutout"], preset="softbox")
+    assert reply["width"] > 0
+
+
+def test_release(client):
+    reply, _ = client.request("set_cutout", {"alpha": buf(canvas_alpha())})
+    client.request("release", cutout=reply["cutout"])
+    with pytest.raises(EngineError) as info:
+        client.request("get_ao", cutout=reply["cutout"])
+    assert info.value.kind == "UnknownCutout"
+
+
+def test_killed_worker_is_reported_then_restarted(worker_env):
+    c = EngineClient(command=SERVE, timeout=60)
+    try:
+        c.request("hello")
+        key = c.request("set_cutout", {"alpha": buf(canvas_alpha())})[0]["cutout"]
+        c._proc.kill()
+        c._proc.wait(timeout=10)
+        with pytest.raises(WorkerUnavailable, match="restart"):
+            c.request("render", cutout=key, preset="softbox")
+        reply, _ = c.request("hello")  # a fresh worker
+        assert reply["protocol"] == 1 and c.running
+        with pytest.raises(EngineError) as info:  # which has forgotten the old cutout
+            c.request("render", cutout=key, preset="softbox")
+        assert info.value.kind == "UnknownCutout"
+    finally:
+        c.close()
+
+
+def test_hung_worker_times_out(worker_env):
+    silent = [sys.executable, "-c", "import sys, time\nsys.stdin.buffer.readline()\ntime.sleep(60)"]
+    c = EngineClient(command=silent, timeout=1.5)
+    try:
+        with pytest.raises(WorkerUnavailable, match="did not answer 'hello'"):
+            c.request("hello")
+        assert not c.running
+    finally:
+        c.close()
+
+
+def test_missing_engine_command(worker_env):
+    c = EngineClient(command=["/nonexistent/python-for-ssn", "-m", "ssn_engine", "serve"])
+    with pytest.raises(WorkerUnavailable, match="could not start"):
+        c.request("hello")
+
+
+def test_client_needs_exactly_one_target():
+    with pytest.raises(ValueError):
+        EngineClient()
+    with pytest.raises(ValueError):
+        EngineClient(command=SERVE, address=("127.0.0.1", 1))
+
+
+def test_shutdown_then_a_fresh_worker(worker_env):
+    c = EngineClient(command=SERVE, timeout=60)
+    try:
+        c.request("hello")
+        proc = c._proc
+        c.request("shutdown")
+        assert proc.wait(timeout=10) is not None
+        reply, _ = c.request("hello")  # a clean shutdown is not a crash: starts a new worker
+        assert reply["protocol"] == 1
+    finally:
+        c.close()
+
+
+def test_tcp_mode(worker_env):
+    proc = subprocess.Popen(
+        SERVE + ["--port", "0"], stdout=subprocess.PIPE, stderr=subprocess.DEVNULL, text=True
+    )
+    try:
+        line = proc.stdout.readline().strip()
+        assert line.startswith("listening 127.0.0.1:")
+        port = int(line.rsplit(":", 1)[1])
+        c = EngineClient(address=("127.0.0.1", port), timeout=60)
+        reply, _ = c.request("hello")
+        assert reply["protocol"] == 1
+        key = c.request("set_cutout", {"alpha": buf(canvas_alpha(np.uint16))})[0]["cutout"]
+        reply, buffers = c.request("render", cutout=key, preset="softbox", format={"dtype": "uint16", "channels": "bgra"})
+        assert arr(buffers["layer"]).shape == (reply["height"], reply["width"], 4)
+        c.close()
+        # each connection is a fresh conversation with the same worker
+        c2 = EngineClient(address=("127.0.0.1", port), timeout=60)
+        assert c2.request("hello")[0]["protocol"] == 1
+        c2.request("shutdown")
+        assert proc.wait(timeout=10) == 0
+        with pytest.raises(WorkerUnavailable, match=str(port)):
+            c2.request("hello")  # nobody is listening any more
+    finally:
+        if proc.poll() is None:
+            proc.kill()
+        proc.wait(timeout=10)
+        proc.stdout.close()
+
+
+def test_stdio_protocol_error_ends_the_conversation_cleanly(worker_env):
+    """A stream that is not the protocol gets a BadRequest reply, not a hang."""
+    result = subprocess.run(SERVE, input=b"this is not json\n", capture_output=True, timeout=60)
+    reply = json.loads(result.stdout.splitlines()[0])
+    assert reply["ok"] is False and reply["error"]["type"] == "BadRequest"
+    assert result.returncode == 0
