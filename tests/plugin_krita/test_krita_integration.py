@@ -1,0 +1,110 @@
+"""The plug-in inside real Krita (kritarunner), against the real engine worker.
+
+Needs Debian's krita (kritarunner) and, for undo, xvfb-run: Krita's undo
+action exists only with a window, which kritarunner can open on an X
+server but not on the offscreen platform. Skips only outside CI.
+"""
+
+import json
+import os
+import shutil
+import subprocess
+import sys
+from pathlib import Path
+
+import pytest
+
+from plugin_krita.install import install
+
+REPO = Path(__file__).resolve().parents[2]
+HERE = Path(__file__).resolve().parent
+IN_CI = os.environ.get("CI") == "true"
+
+pytestmark = pytest.mark.krita
+
+
+def _need(tool: str) -> str:
+    path = shutil.which(tool)
+    if path is None:
+        if IN_CI:
+            pytest.fail(f"{tool} is missing in CI (.ci/run installs it)")
+        pytest.skip(f"{tool} not installed")
+    return path
+
+
+@pytest.fixture(scope="module")
+def pykrita(tmp_path_factory):
+    dest = tmp_path_factory.mktemp("pykrita")
+    install(dest=dest, python=sys.executable)
+    return dest
+
+
+def run_in_krita(pykrita: Path, depth: str, result: Path) -> dict:
+    kritarunner = _need("kritarunner")
+    xvfb = _need("xvfb-run")
+    env = dict(os.environ)
+    env.update(
+        SSN_TEST_DEPTHS=depth,
+        SSN_TEST_WINDOW="1",
+        SSN_TEST_RESULT=str(result),
+        # the plug-in as installed, the driver, and the repo (so the worker's Python finds ssn_engine)
+        PYTHONPATH=os.pathsep.join([str(pykrita), str(HERE), str(REPO)]),
+        XDG_RUNTIME_DIR=str(result.parent),
+    )
+    env.pop("SSN_SHADOW_ENGINE_CONFIG", None)
+    # Krita's embedded Python finds its home through the first python3 on PATH: make it Debian's,
+    # not the test's (pyenv, venv, /usr/local), or it cannot import PyQt5/PyKrita.
+    env["PATH"] = os.pathsep.join(["/usr/bin", "/bin", env.get("PATH", "")])
+    env.pop("QT_QPA_PLATFORM", None)  # xcb on the virtual X server (the unit tests set offscreen)  # use the engine.json install() wrote
+    # kritarunner's exit status says nothing (and it may crash on exit): the result file counts.
+    proc = subprocess.run(
+        [xvfb, "-a", kritarunner, "-s", "krita_driver", "-f", "main"],
+        env=env, capture_output=True, text=True, timeout=180,
+    )
+    assert result.exists(), f"Krita wrote no result\n{proc.stdout[-3000:]}\n{proc.stderr[-3000:]}"
+    data = json.loads(result.read_text())
+    assert "error" not in data, data["error"]
+    assert data.get("done"), data
+    return data["cases"][depth]
+
+
+def _check_shadow(state: dict, side: str) -> None:
+    names = state["names"]
+    assert names.count("Shadow: Person") == 1, names
+    assert state["shadow_index"] == state["source_index"] - 1, names  # directly below the source
+    assert state["blend"] == "multiply" and state["type"] == "paintlayer"
+    assert state["below"]["sum"] > 100, state  # shadow on the ground in front of the object
+    assert state[side]["sum"] > 100, state  # and beside it, away from the light
+    other = "left" if side == "right" else "right"
+    assert state[other]["sum"] < 0.05 * state[side]["sum"], state
+    assert state["far_above"]["max"] == 0.0, state  # none far above it
+
+
+@pytest.mark.parametrize("depth", ["U8", "F32"])
+def test_generate_in_real_krita(pykrita, tmp_path, depth):
+    case = run_in_krita(pykrita, depth, tmp_path / f"result-{depth}.json")
+    errors = [m for m in case["messages"] if m[0] == "error"]
+    assert not errors, errors
+
+    first, second = case["after_first"], case["after_second"]
+    _check_shadow(first, "right")  # low-sun-left: light left of centre, shadow to the right
+    _check_shadow(second, "left")  # low-sun-right: shadow to the left
+    # the second generate updates that layer: still one shadow layer in the same place, new pixels
+    assert second["names"] == first["names"] == ["Background", "Shadow: Person", "Person"]
+    assert second["left"]["sum"] > 100 and first["left"]["sum"] == 0.0
+
+    assert case["source_identical"] and case["background_identical"]
+    assert case["selection_before"] is False and case["selection_after"] is False
+
+    assert case["undo_available"], "Krita's edit_undo action is missing (no window?)"
+    steps = [names for _text, names in case["undo_steps"]]
+    assert steps[0] == ["Background", "Person"]  # one Ctrl+Z removes the new shadow layer
+    assert steps[1] == ["Background", "Shadow: Person", "Person"]  # the next brings the previous one back
+    assert steps[2] == ["Background", "Person"]  # and the next removes that one
+    assert case["source_identical_after_undo"]
+
+    if depth == "U8":
+        sel = case["with_selection"]
+        assert sel["shadow_index"] == sel["source_index"] - 1
+        assert sel["total"]["sum"] < 0.8 * first["total"]["sum"]  # half the cutout selected: a smaller shadow
+        assert case["selection_unchanged"] and case["source_identical_after_selection"]
