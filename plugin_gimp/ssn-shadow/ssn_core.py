@@ -16,7 +16,7 @@ from typing import Any, Protocol
 from ssn_engine_link import client as engine_client
 from ssn_engine_link import protocol
 from ssn_pixels import BYTES_PER_SAMPLE, PixelPlan, is_blank
-from ssn_settings import LAYER_PREFIX, SettingsError, ShadowSettings
+from ssn_settings import ARG_BY_NAME, LAYER_PREFIX, SettingsError, ShadowSettings
 
 
 class ShadowError(RuntimeError):
@@ -155,13 +155,19 @@ def make_shadow(host: Host, engine: Engine, settings: ShadowSettings | dict[str,
 
 
 def settings_from_arguments(values: dict[str, Any]) -> ShadowSettings:
-    """Build settings from procedure argument values; errors become ShadowError."""
+    """Build settings from procedure argument values (missing ones take their defaults).
+
+    Errors become :class:`ShadowError`.
+    """
+    def get(name: str) -> Any:
+        return values.get(name, ARG_BY_NAME[name].default)
+
     try:
         return ShadowSettings(
-            light_map=values.get("light-map", ""),
-            color=tuple(values.get("shadow-color", (0.0, 0.0, 0.0)))[:3],
-            opacity=values.get("opacity", 0.8),
-            ao_strength=values.get("ao-strength", 1.0),
+            light_map=get("light-map"),
+            color=tuple(get("shadow-color"))[:3],
+            opacity=get("opacity"),
+            ao_strength=get("ao-strength"),
         )
     except SettingsError as exc:
         raise ShadowError(str(exc)) from None

@@ -8,6 +8,9 @@ to the ``light-map`` argument as JSON when the user confirms.
 
 from __future__ import annotations
 
+import os
+import sys
+
 import gi
 
 gi.require_version("Gimp", "3.0")
@@ -26,6 +29,7 @@ from ssn_preview import multiply_composite, preview_size  # noqa: E402
 from ssn_settings import PROCEDURE_NAME, SettingsError, editor_light_map  # noqa: E402
 
 CUSTOM = "(custom)"
+SELFTEST_ENV = "SSN_SHADOW_DIALOG_SELFTEST"
 PREVIEW_DELAY_MS = 150
 
 
@@ -164,6 +168,8 @@ def run_dialog(procedure: Gimp.Procedure, config: Gimp.ProcedureConfig, host, en
     box.show_all()
     preview.schedule(values)
 
+    if os.environ.get(SELFTEST_ENV):
+        GLib.timeout_add(300, _selftest, dialog, editor, preview, values)
     try:
         ok = dialog.run()
         if ok:
@@ -173,3 +179,33 @@ def run_dialog(procedure: Gimp.Procedure, config: Gimp.ProcedureConfig, host, en
     finally:
         preview.close()
         dialog.destroy()
+
+
+def _selftest(dialog, editor: LightMapEditor, preview: ShadowPreview, values) -> bool:
+    """For the integration test (SSN_SHADOW_DIALOG_SELFTEST=1): add and drag a light, render, press OK.
+
+    With SSN_SHADOW_DIALOG_SCREENSHOT=<path.png> it also saves a picture of the dialog.
+    """
+    editor.press(0.85, 0.7)
+    editor.drag(0.8, 0.72)
+    editor.release()
+    editor.scroll(1)
+    preview.render(values())
+    pixbuf = preview.widget.get_pixbuf()
+    size = f"{pixbuf.get_width()}x{pixbuf.get_height()}" if pixbuf is not None else "none"
+    print(f"ssn-shadow dialog selftest: lights={len(editor.lights)} preview={size} "
+          f"status={preview.status.get_text()!r}", file=sys.stderr, flush=True)
+
+    def finish() -> bool:
+        path = os.environ.get("SSN_SHADOW_DIALOG_SCREENSHOT")
+        if path:
+            from gi.repository import Gdk
+
+            window = dialog.get_window()
+            shot = Gdk.pixbuf_get_from_window(window, 0, 0, window.get_width(), window.get_height())
+            shot.savev(path, "png", [], [])
+        dialog.response(Gtk.ResponseType.OK)
+        return False
+
+    GLib.timeout_add(400, finish)
+    return False

@@ -7,6 +7,7 @@
 #        gimp_chroot.sh run [VAR=VALUE ...] CMD [ARGS ...]
 #                                      run CMD inside the chroot with a clean environment
 #        gimp_chroot.sh gimp-eval CODE run CODE with gimp-console-3.0's python-fu-eval
+#                                      (with SSN_GIMP_XVFB=1: under xvfb-run, so plug-in dialogs can open)
 #                                      (GIMP3_DIRECTORY is taken from $SSN_GIMP3_DIRECTORY, a
 #                                      path inside the chroot, when set)
 #
@@ -25,8 +26,10 @@ DIR="${SSN_GIMP_CHROOT:-/var/cache/ssn-shadow/gimp-trixie}"
 DIR="${DIR%/}"
 MIRROR="${SSN_GIMP_MIRROR:-http://deb.debian.org/debian}"
 PACKAGES=(gimp python3-gi gir1.2-gimp-3.0)
+# xvfb + xauth: a virtual display for the dialog test (xvfb-run); small next to GIMP.
+EXTRA_PACKAGES=(xvfb xauth)
 STAMP_NAME=".ssn-shadow-chroot"
-STAMP_TEXT="ssn-shadow gimp chroot v1: debootstrap --variant=minbase trixie + ${PACKAGES[*]}"
+STAMP_TEXT="ssn-shadow gimp chroot v2: debootstrap --variant=minbase trixie + ${PACKAGES[*]} ${EXTRA_PACKAGES[*]}"
 
 die() { echo "gimp_chroot.sh: $*" >&2; exit 2; }
 
@@ -87,10 +90,10 @@ build() {
     fi
     echo "gimp_chroot.sh: debootstrap trixie into $work" >&2
     debootstrap --variant=minbase trixie "$work" "$MIRROR" >&2
-    echo "gimp_chroot.sh: installing ${PACKAGES[*]}" >&2
+    echo "gimp_chroot.sh: installing ${PACKAGES[*]} ${EXTRA_PACKAGES[*]}" >&2
     # shellcheck disable=SC2046
     in_chroot "$work" $(clean_env) DEBIAN_FRONTEND=noninteractive \
-        apt-get install -y -q --no-install-recommends "${PACKAGES[@]}" >&2
+        apt-get install -y -q --no-install-recommends "${PACKAGES[@]}" "${EXTRA_PACKAGES[@]}" >&2
     in_chroot "$work" $(clean_env) apt-get clean >&2
     [ -x "$work/usr/bin/gimp-console-3.0" ] || die "gimp-console-3.0 missing after install"
     echo "$STAMP_TEXT" > "$work/$STAMP_NAME"
@@ -118,9 +121,13 @@ case "$cmd" in
         [ $# -eq 1 ] || die "gimp-eval: give the Python code as one argument"
         extra=()
         [ -n "${SSN_GIMP3_DIRECTORY:-}" ] && extra+=("GIMP3_DIRECTORY=$SSN_GIMP3_DIRECTORY")
+        [ -n "${SSN_SHADOW_DIALOG_SELFTEST:-}" ] && extra+=("SSN_SHADOW_DIALOG_SELFTEST=$SSN_SHADOW_DIALOG_SELFTEST")
+        [ -n "${SSN_SHADOW_DIALOG_SCREENSHOT:-}" ] && extra+=("SSN_SHADOW_DIALOG_SCREENSHOT=$SSN_SHADOW_DIALOG_SCREENSHOT")
+        xvfb=()
+        [ -n "${SSN_GIMP_XVFB:-}" ] && xvfb=(xvfb-run -a)
         # shellcheck disable=SC2046
-        in_chroot "$DIR" $(clean_env) "${extra[@]}" \
+        in_chroot "$DIR" $(clean_env) "${extra[@]}" "${xvfb[@]}" \
             gimp-console-3.0 -i --batch-interpreter python-fu-eval -b "$1" --quit
         ;;
-    *) sed -n '2,12p' "$0" | sed 's/^# \{0,1\}//' >&2; exit 2 ;;
+    *) sed -n '2,/^set -euo/p' "$0" | grep '^#' | sed 's/^# \{0,1\}//' >&2; exit 2 ;;
 esac

@@ -1,0 +1,183 @@
+"""The run logic (ssn_core) with a fake GIMP host: fake engines and the real engine worker."""
+
+import sys
+
+import numpy as np
+import pytest
+from ssn_core import Cutout, ShadowError, ShadowLayerData, make_shadow, settings_from_arguments
+from ssn_pixels import plan_for_precision
+
+from ssn_engine.client import EngineClient, EngineError, WorkerUnavailable
+from ssn_engine.protocol import Buffer
+
+W, H = 160, 120
+
+
+def pawn_alpha(dtype="uint8") -> np.ndarray:
+    a = np.zeros((H, W), dtype)
+    a[20:100, 70:90] = np.iinfo(dtype).max if dtype.startswith("uint") else 1.0
+    return a
+
+
+class FakeHost:
+    """Records every call so tests can check what happens inside the undo group."""
+
+    def __init__(self, precision="u8-non-linear", alpha=None, no_cutout=False):
+        self.plan = plan_for_precision(precision)
+        alpha = pawn_alpha(self.plan.alpha_dtype) if alpha is None else alpha
+        self.alpha, self.no_cutout, self.calls, self.layers = alpha, no_cutout, [], []
+
+    def pixel_plan(self):
+        self.calls.append("pixel_plan")
+        return self.plan
+
+    def source_name(self):
+        return "Pawn"
+
+    def read_cutout(self, plan):
+        self.calls.append("read_cutout")
+        if self.no_cutout:
+            raise ShadowError("the selection is empty and the layer has no alpha")
+        return Cutout(W, H, str(self.alpha.dtype), self.alpha.tobytes(), 'the layer "Pawn"')
+
+    def undo_group_start(self):
+        self.calls.append("undo_group_start")
+
+    def undo_group_end(self):
+        self.calls.append("undo_group_end")
+
+    def add_shadow_layer(self, name, shadow, plan):
+        self.calls.append("add_shadow_layer")
+        self.layers.append((name, shadow, plan))
+        return f"layer:{name}"
+
+
+class FakeEngine:
+    """Answers like the worker, with a fixed 10 x 5 layer, or fails on one command."""
+
+    def __init__(self, fail_on=None, error=None, size=(10, 5), bad_layer=False):
+        self.fail_on, self.error, self.size, self.bad_layer = fail_on, error, size, bad_layer
+        self.requests = []
+
+    def request(self, cmd, buffers=None, timeout=None, **params):
+        self.requests.append((cmd, params, buffers))
+        if cmd == self.fail_on:
+            raise self.error
+        if cmd == "set_cutout":
+            return {"ok": True, "cutout": "c1", "bbox": [0, 0, 1, 1]}, {}
+        if cmd == "render":
+            w, h = self.size
+            dtype = params["format"]["dtype"]
+            shape = (h, w + (1 if self.bad_layer else 0), 4)
+            data = np.full(shape, 0.5, dtype) if dtype.startswith("float") else np.full(shape, 7, dtype)
+            reply = {"ok": True, "x": 3, "y": 4, "width": w, "height": h}
+            return reply, ({"layer": Buffer(dtype, shape, data.tobytes())} if w else {})
+        return {"ok": True}, {}
+
+
+ARGS = {"light-map": "low-sun-right", "shadow-color": (0, 0, 0), "opacity": 1.0, "ao-strength": 1.0}
+
+
+def test_one_layer_inside_one_undo_group():
+    host, engine = FakeHost(), FakeEngine()
+    assert make_shadow(host, engine, ARGS) == "layer:Shadow: Pawn"
+    assert host.calls == ["pixel_plan", "read_cutout", "undo_group_start", "add_shadow_layer", "undo_group_end"]
+    name, shadow, _ = host.layers[0]
+    assert (shadow.x, shadow.y, shadow.width, shadow.height, shadow.dtype) == (3, 4, 10, 5, "uint8")
+    cmds = [r[0] for r in engine.requests]
+    assert cmds == ["set_cutout", "render", "release"]  # AO strength 1: no edit_ao; the cutout is freed
+    assert engine.requests[1][1]["preset"] == "low-sun-right"
+    assert engine.requests[0][2]["alpha"].shape == (H, W)
+
+
+@pytest.mark.parametrize("precision, dtype", [("u16-linear", "uint16"), ("half-perceptual", "float16"),
+                                              ("float-linear", "float32"), ("double-non-linear", "float32")])
+def test_layer_dtype_follows_precision(precision, dtype):
+    host, engine = FakeHost(precision), FakeEngine()
+    make_shadow(host, engine, ARGS)
+    assert engine.requests[1][1]["format"] == {"dtype": dtype, "channels": "rgba"}
+    assert host.layers[0][1].dtype == dtype
+
+
+def test_ao_strength_sends_an_edit():
+    host, engine = FakeHost(), FakeEngine()
+    make_shadow(host, engine, {**ARGS, "ao-strength": 0.25})
+    assert engine.requests[1][:2] == ("edit_ao", {"cutout": "c1", "edits": [{"op": "strength", "value": 0.25}]})
+
+
+@pytest.mark.parametrize(
+    "engine, fragment",
+    [
+        (FakeEngine("set_cutout", EngineError("EmptyAlpha", "nothing selected")), "nothing selected"),
+        (FakeEngine("render", EngineError("LightMapError", "lights[0].u: bad")), "lights[0].u"),
+        (FakeEngine("set_cutout", WorkerUnavailable("could not start the shadow engine")), "could not start"),
+        (FakeEngine("render", OSError("broken pipe")), "Lost contact"),
+        (FakeEngine(size=(0, 0)), "no visible shadow"),
+        (FakeEngine(bad_layer=True), "malformed layer"),
+    ],
+)
+def test_failures_leave_the_image_untouched(engine, fragment):
+    host = FakeHost()
+    with pytest.raises(ShadowError, match=fragment.replace("[", r"\[").replace("]", r"\]")):
+        make_shadow(host, engine, ARGS)
+    assert "undo_group_start" not in host.calls and not host.layers
+    if any(r[0] == "set_cutout" for r in engine.requests) and engine.fail_on != "set_cutout":
+        assert engine.requests[-1][0] == "release"
+
+
+def test_no_cutout_and_blank_alpha_never_reach_the_engine():
+    engine = FakeEngine()
+    with pytest.raises(ShadowError, match="selection is empty"):
+        make_shadow(FakeHost(no_cutout=True), engine, ARGS)
+    with pytest.raises(ShadowError, match="fully transparent"):
+        make_shadow(FakeHost(alpha=np.zeros((H, W), "uint8")), engine, ARGS)
+    assert engine.requests == []
+
+
+def test_bad_arguments_fail_before_reading_pixels():
+    host = FakeHost()
+    with pytest.raises(ShadowError, match="opacity"):
+        make_shadow(host, FakeEngine(), {**ARGS, "opacity": 3.0})
+    assert host.calls == []
+
+
+def test_undo_group_closes_when_adding_the_layer_fails():
+    class Broken(FakeHost):
+        def add_shadow_layer(self, name, shadow, plan):
+            raise RuntimeError("boom")
+
+    host = Broken()
+    with pytest.raises(RuntimeError):
+        make_shadow(host, FakeEngine(), ARGS)
+    assert host.calls[-2:] == ["undo_group_start", "undo_group_end"]
+
+
+def test_settings_from_arguments_defaults():
+    st = settings_from_arguments({})
+    assert st.light_map == "softbox" and st.opacity == 0.8 and st.ao_strength == 1.0
+
+
+# -- with the real engine worker ---------------------------------------------------------------
+@pytest.fixture(scope="module")
+def real_engine():
+    client = EngineClient(command=[sys.executable, "-m", "ssn_engine", "serve"], timeout=120)
+    try:
+        client.request("hello")
+    except EngineError as exc:  # pragma: no cover - the worker is part of this project
+        pytest.fail(f"engine worker unavailable: {exc}")
+    yield client
+    client.close()
+
+
+@pytest.mark.parametrize("precision", ["u8-non-linear", "u16-linear", "half-linear", "float-perceptual"])
+def test_real_worker_casts_the_shadow_away_from_the_light(real_engine, precision):
+    host = FakeHost(precision)
+    make_shadow(host, real_engine, {**ARGS, "light-map": "low-sun-right"})  # light right of centre
+    _, shadow, plan = host.layers[0]
+    assert isinstance(shadow, ShadowLayerData) and shadow.dtype == plan.layer_dtype
+    a = np.frombuffer(shadow.data, shadow.dtype).reshape(shadow.height, shadow.width, 4)[..., 3].astype("f4")
+    a /= 255 if plan.layer_dtype == "uint8" else 65535 if plan.layer_dtype == "uint16" else 1
+    assert a.max() > 0.3
+    ys, xs = np.nonzero(a > 0.2)
+    assert shadow.x + xs.mean() < 80 - 5  # the pawn's centre is x = 80: the shadow falls left
+    assert 0 <= shadow.x and shadow.x + shadow.width <= W and shadow.y + shadow.height <= H

@@ -1,0 +1,60 @@
+"""engine.json reading and the client it makes, without GIMP."""
+
+import json
+
+import pytest
+import ssn_engine_link as link
+
+
+def write(tmp_path, data):
+    (tmp_path / "engine.json").write_text(data if isinstance(data, str) else json.dumps(data))
+    return tmp_path
+
+
+def test_command_config(tmp_path, monkeypatch):
+    monkeypatch.delenv(link.ADDRESS_ENV, raising=False)
+    config = {"python": "/opt/py/bin/python", "args": ["-m", "ssn_engine", "serve"]}
+    cfg = link.load_engine_config(write(tmp_path, config))
+    assert cfg == {"command": ["/opt/py/bin/python", "-m", "ssn_engine", "serve"]}
+    client = link.connect(cfg)
+    assert client.command == cfg["command"] and not client.running  # connects lazily
+
+
+def test_address_config_and_override(tmp_path, monkeypatch):
+    monkeypatch.delenv(link.ADDRESS_ENV, raising=False)
+    cfg = link.load_engine_config(write(tmp_path, {"address": ["127.0.0.1", 5123]}))
+    assert cfg == {"address": ["127.0.0.1", 5123]}
+    assert link.connect(cfg).address == ("127.0.0.1", 5123)
+    monkeypatch.setenv(link.ADDRESS_ENV, "localhost:7000")
+    assert link.load_engine_config(tmp_path / "nowhere") == {"address": ["localhost", 7000]}
+
+
+@pytest.mark.parametrize(
+    "content, fragment",
+    [
+        (None, "install-plugin gimp"),
+        ("{oops", "Cannot read"),
+        ([1, 2], "JSON object"),
+        ({"address": ["127.0.0.1"]}, '"address"'),
+        ({"python": ""}, '"python"'),
+        ({"python": "py", "args": "serve"}, '"args"'),
+    ],
+)
+def test_bad_configs_tell_what_to_do(tmp_path, monkeypatch, content, fragment):
+    monkeypatch.delenv(link.ADDRESS_ENV, raising=False)
+    if content is not None:
+        write(tmp_path, content)
+    with pytest.raises(link.EngineConfigError, match=fragment.replace("(", r"\(")):
+        link.load_engine_config(tmp_path)
+
+
+@pytest.mark.parametrize("text", ["nohost", ":80", "h:", "h:port", "h:70000"])
+def test_bad_addresses(text):
+    with pytest.raises(link.EngineConfigError):
+        link.parse_address(text)
+
+
+def test_unreachable_worker_is_a_clear_error():
+    client = link.connect({"address": ["127.0.0.1", 1]}, timeout=2)
+    with pytest.raises(link.client.WorkerUnavailable, match="no shadow engine is listening"):
+        client.request("hello")

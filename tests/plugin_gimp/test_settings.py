@@ -1,0 +1,89 @@
+"""Procedure arguments and settings validation, without GIMP."""
+
+import json
+
+import pytest
+import ssn_settings as s
+from ssn_settings import SettingsError, ShadowSettings, resolve_light_map
+
+from ssn_engine import light_map
+
+
+def test_arguments_cover_every_setting():
+    names = [a.name for a in s.ARGUMENTS]
+    assert names == ["light-map", "shadow-color", "opacity", "ao-strength"]
+    for spec in s.ARGUMENTS:
+        assert spec.kind in {"string", "double", "color"}
+        if spec.kind == "double":
+            assert spec.lo <= spec.default <= spec.hi
+    assert s.PROCEDURE_NAME == "plug-in-ssn-shadow"
+    assert s.MENU_PATH == "<Image>/Filters/Light and Shadow"
+    assert "Soft" in s.MENU_LABEL and "(SSN)" in s.MENU_LABEL
+
+
+def test_mnemonics_do_not_clash_with_ok_and_cancel():
+    taken = {"o", "c"}  # _OK, _Cancel
+    keys = [spec.label[spec.label.index("_") + 1].lower() for spec in s.ARGUMENTS if spec.name != "light-map"]
+    assert not taken & set(keys) and len(set(keys)) == len(keys)
+
+
+@pytest.mark.parametrize("name", list(light_map.PRESETS))
+def test_preset_names(name):
+    assert resolve_light_map(name) == {"preset": name}
+    assert resolve_light_map(f"  {name}\n") == {"preset": name}
+
+
+def test_empty_means_default_preset():
+    assert resolve_light_map("") == {"preset": light_map.DEFAULT_PRESET}
+
+
+def test_json_light_map_round_trips():
+    lm = light_map.LightMap([light_map.GaussianLight(0.3, 0.6, 0.01, 2.0)])
+    params = resolve_light_map(lm.to_json())
+    assert params == {"light_map": lm.to_dict()}
+    assert s.editor_light_map(lm.to_json()).lights == lm.lights
+    assert s.editor_light_map("overcast").lights == light_map.preset("overcast").lights
+
+
+@pytest.mark.parametrize(
+    "text, fragment",
+    [
+        ("sunset", "unknown preset 'sunset'"),
+        ("{not json", "not valid JSON"),
+        (json.dumps({"format": "ssn-shadow-elm", "version": 1, "lights": [{"u": 2, "v": 0, "softness": 0.01,
+                                                                           "intensity": 1}]}), "lights[0].u"),
+        (json.dumps({"format": "other", "version": 1, "lights": []}), "format"),
+    ],
+)
+def test_bad_light_maps_name_the_problem(text, fragment):
+    with pytest.raises(SettingsError) as err:
+        resolve_light_map(text)
+    assert fragment in str(err.value) and str(err.value).startswith("light-map:")
+
+
+@pytest.mark.parametrize(
+    "kwargs, fragment",
+    [
+        ({"opacity": 1.5}, "opacity"),
+        ({"opacity": float("nan")}, "opacity"),
+        ({"ao_strength": -1}, "ao-strength"),
+        ({"ao_strength": 5}, "ao-strength"),
+        ({"color": (0, 0)}, "shadow-color"),
+        ({"color": (0, 2, 0)}, "shadow-color"),
+        ({"light_map": "nope"}, "light-map"),
+    ],
+)
+def test_settings_validation(kwargs, fragment):
+    with pytest.raises(SettingsError, match=fragment):
+        ShadowSettings(**kwargs)
+
+
+def test_render_params_and_edits():
+    st = ShadowSettings("low-sun-left", (0.2, 0.1, 0.0), 0.5, 1.0)
+    assert st.render_params("uint16") == {
+        "preset": "low-sun-left", "color": [0.2, 0.1, 0.0], "opacity": 0.5,
+        "format": {"dtype": "uint16", "channels": "rgba"},
+    }
+    assert st.ao_edits() == []
+    assert ShadowSettings(ao_strength=0.0).ao_edits() == [{"op": "strength", "value": 0.0}]
+    assert ShadowSettings(ao_strength=2).ao_edits() == [{"op": "strength", "value": 2.0}]
