@@ -37,7 +37,7 @@ def test_lighten_brush_is_local_and_stays_in_range():
     ao = _ao()
     out = apply_edits(ao, [{"op": "brush", "x": 0.5, "y": 40 / N, "radius": 0.2, "strength": 1.0}])
     d = _dist(0.5, 40 / N)
-    assert out[int(40), 32] == pytest.approx(1.0, abs=0.01)  # full strength at the centre: fully open
+    assert out[40, 32] == pytest.approx(1.0, abs=0.01)  # full strength at the centre: fully open
     assert np.all(out[d < 0.2 * N] >= ao[d < 0.2 * N])
     assert np.array_equal(out[d >= 0.2 * N], ao[d >= 0.2 * N])
     assert out.max() <= 1.0
@@ -94,7 +94,10 @@ def test_edits_apply_in_order_and_do_not_modify_the_input():
     "edits, pattern",
     [
         ([{"op": "brush", "x": 0.5, "y": 0.5, "radius": 0.1}], r"edits\[0\]\.strength"),
-        ([{"op": "strength", "value": 1}, {"op": "brush", "x": "a", "y": 0.5, "radius": 0.1, "strength": 1}], r"edits\[1\]\.x"),
+        (
+            [{"op": "strength", "value": 1}, {"op": "brush", "x": "a", "y": 0.5, "radius": 0.1, "strength": 1}],
+            r"edits\[1\]\.x",
+        ),
         ([{"op": "brush", "x": 0.5, "y": 0.5, "radius": 0.1, "strength": -2}], r"edits\[0\]\.strength.*-2"),
         ([{"op": "brush", "x": 0.5, "y": float("nan"), "radius": 0.1, "strength": 1}], r"edits\[0\]\.y"),
         ([{"op": "brush", "x": 0.5, "y": 0.5, "radius": True, "strength": 1}], r"edits\[0\]\.radius"),

@@ -71,8 +71,11 @@ def test_ao_override_is_used(masks):
     assert dark.shape == (2, N, N) and dark.dtype == np.float32
     assert dark.mean() > predicted.mean() + 0.2
     # out-of-range AO values are clipped, not propagated
-    assert np.allclose(api.predict_frames(masks, elms, ao=np.full_like(masks, 5.0)),
-                       api.predict_frames(masks, elms, ao=np.ones_like(masks)), atol=1e-6)
+    assert np.allclose(
+        api.predict_frames(masks, elms, ao=np.full_like(masks, 5.0)),
+        api.predict_frames(masks, elms, ao=np.ones_like(masks)),
+        atol=1e-6,
+    )
 
 
 @pytest.mark.parametrize(
@@ -118,6 +121,7 @@ def test_negative_elm(masks):
 
 
 # -- properties ----------------------------------------------------------------
+
 
 @st.composite
 def frame_masks(draw):

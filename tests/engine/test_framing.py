@@ -6,7 +6,7 @@ import tracemalloc
 
 import numpy as np
 import pytest
-from engine_helpers import drawn_alpha, object_geometry
+from engine_helpers import drawn_alpha
 
 from ssn_engine.camera import top_row
 from ssn_engine.framing import (

@@ -166,7 +166,9 @@ def test_soft_shadow_is_linear_in_occlusion_and_a_weighted_mean_over_lights():
     rng = np.random.default_rng(2)
     o1, o2 = _occlusion(rng), _occlusion(rng)
     elm = render_light_map(one_light(0.6, 0.5, 0.02, 1.0))
-    assert np.allclose(soft_shadow(0.3 * o1 + 0.5 * o2, elm), 0.3 * soft_shadow(o1, elm) + 0.5 * soft_shadow(o2, elm), atol=1e-6)
+    assert np.allclose(
+        soft_shadow(0.3 * o1 + 0.5 * o2, elm), 0.3 * soft_shadow(o1, elm) + 0.5 * soft_shadow(o2, elm), atol=1e-6
+    )
     # two ELMs: the shadow under their sum is the irradiance-weighted mean of the two shadows
     l1, l2 = render_light_map(one_light(0.2, 0.3, 0.01, 1.0)), render_light_map(one_light(0.8, 0.7, 0.01, 2.0))
     w = texel_weights(16)

@@ -94,7 +94,7 @@ def test_delete_removes_only_that_light():
     for u in (0.1, 0.2, 0.3):
         lm.add(u, 0.5)
     lm.delete(1)
-    assert [l.u for l in lm] == [0.1, 0.3]
+    assert [light.u for light in lm] == [0.1, 0.3]
 
 
 @pytest.mark.parametrize("bad", [math.nan, math.inf, -math.inf])
@@ -230,7 +230,8 @@ def test_invalid_json_text(text):
 
 @pytest.mark.parametrize("value", ["NaN", "Infinity", "-Infinity"])
 def test_non_finite_json_numbers_rejected(value):
-    text = '{"format": "ssn-shadow-elm", "version": 1, "lights": [{"u": 0.5, "v": 0.5, "softness": 0.01, "intensity": %s}]}' % value
+    light = f'{{"u": 0.5, "v": 0.5, "softness": 0.01, "intensity": {value}}}'
+    text = f'{{"format": "ssn-shadow-elm", "version": 1, "lights": [{light}]}}'
     with pytest.raises(LightMapError, match=r"lights\[0\]\.intensity"):
         LightMap.from_json(text)
 
@@ -298,7 +299,7 @@ def test_blocking_numpy_really_blocks_it():
 
 def test_toolkit_free_modules_import_without_numpy_by_path():
     body = f"""
-folder = {str(REPO / 'ssn_engine')!r}
+folder = {str(REPO / "ssn_engine")!r}
 for name in ('light_map', 'protocol'):
     spec = importlib.util.spec_from_file_location(name, folder + '/' + name + '.py')
     module = importlib.util.module_from_spec(spec)

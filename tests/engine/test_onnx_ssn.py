@@ -68,8 +68,14 @@ def _sr_graph(r: int):
 
 
 def _card(r: int, **extra) -> dict:
-    card = {"format": "ssn-shadow-model", "version": 1, "resolution": r, "elm_shape": [16, 32],
-            "aop": "aop.onnx", "sr": "sr.onnx"}
+    card = {
+        "format": "ssn-shadow-model",
+        "version": 1,
+        "resolution": r,
+        "elm_shape": [16, 32],
+        "aop": "aop.onnx",
+        "sr": "sr.onnx",
+    }
     card.update(extra)
     return card
 

@@ -22,7 +22,9 @@ CANVAS_W, CANVAS_H = 400, 300
 @pytest.fixture(scope="module")
 def worker_env():
     with pytest.MonkeyPatch.context() as mp:
-        mp.setenv("PYTHONPATH", str(REPO) + (os.pathsep + os.environ["PYTHONPATH"] if os.environ.get("PYTHONPATH") else ""))
+        mp.setenv(
+            "PYTHONPATH", str(REPO) + (os.pathsep + os.environ["PYTHONPATH"] if os.environ.get("PYTHONPATH") else "")
+        )
         mp.delenv("SSN_SHADOW_MODEL_DIR", raising=False)
         yield
 
@@ -62,7 +64,11 @@ def cutout(client):
 
 
 def _light(u, v, softness=0.002, intensity=2.0):
-    return {"format": "ssn-shadow-elm", "version": 1, "lights": [{"u": u, "v": v, "softness": softness, "intensity": intensity}]}
+    return {
+        "format": "ssn-shadow-elm",
+        "version": 1,
+        "lights": [{"u": u, "v": v, "softness": softness, "intensity": intensity}],
+    }
 
 
 def _bbox_of(alpha):
@@ -97,7 +103,11 @@ def test_set_cutout_with_every_alpha_dtype(client, dtype):
 @pytest.mark.parametrize("channels", ["rgba", "bgra"])
 def test_render_in_every_format(client, cutout, dtype, top, channels):
     reply, buffers = client.request(
-        "render", cutout=cutout["cutout"], preset="softbox", color=[0.2, 0.4, 0.6], opacity=0.8,
+        "render",
+        cutout=cutout["cutout"],
+        preset="softbox",
+        color=[0.2, 0.4, 0.6],
+        opacity=0.8,
         format={"dtype": dtype, "channels": channels},
     )
     layer = arr(buffers["layer"])
@@ -172,7 +182,9 @@ def test_edit_ao(client):
     assert np.all(arr(edited["ao"]) == 255)
     _, now = client.request("get_ao", cutout=key)
     assert np.all(arr(now["ao"]) == 255)
-    _, dark = client.request("edit_ao", cutout=key, edits=[{"op": "brush", "x": 0.5, "y": 0.6, "radius": 0.05, "strength": -1}])
+    _, dark = client.request(
+        "edit_ao", cutout=key, edits=[{"op": "brush", "x": 0.5, "y": 0.6, "radius": 0.05, "strength": -1}]
+    )
     dark = arr(dark["ao"])
     assert dark[153, 128] < ao0[153, 128] and np.array_equal(dark[:100], ao0[:100])
     _, back = client.request("edit_ao", cutout=key, edits=[])  # undo everything
@@ -212,12 +224,28 @@ def test_elm_image(client):
         ("elm_image", {"width": 64}, {}, "BadRequest", "light_map or preset"),
         (
             "elm_image",
-            {"light_map": {"format": "ssn-shadow-elm", "version": 1, "lights": [{"u": 0.5, "v": 0.5, "softness": 0.01, "intensity": 1}, {"u": 1.5, "v": 0.5, "softness": 0.01, "intensity": 1}]}, "width": 64},
+            {
+                "light_map": {
+                    "format": "ssn-shadow-elm",
+                    "version": 1,
+                    "lights": [
+                        {"u": 0.5, "v": 0.5, "softness": 0.01, "intensity": 1},
+                        {"u": 1.5, "v": 0.5, "softness": 0.01, "intensity": 1},
+                    ],
+                },
+                "width": 64,
+            },
             {},
             "LightMapError",
             "lights[1].u",
         ),
-        ("elm_image", {"light_map": {"format": "ssn-shadow-elm", "version": 7, "lights": []}, "width": 64}, {}, "LightMapError", "version"),
+        (
+            "elm_image",
+            {"light_map": {"format": "ssn-shadow-elm", "version": 7, "lights": []}, "width": 64},
+            {},
+            "LightMapError",
+            "version",
+        ),
     ],
 )
 def test_errors_and_the_worker_survives(client, cmd, params, buffers, kind, fragment):
@@ -234,7 +262,17 @@ def test_errors_and_the_worker_survives(client, cmd, params, buffers, kind, frag
     "params, kind, fragment",
     [
         ({"preset": "no-such-preset"}, "LightMapError", "no-such-preset"),
-        ({"light_map": {"format": "ssn-shadow-elm", "version": 1, "lights": [{"u": 0.5, "v": 0.5, "softness": 0.01}]}}, "LightMapError", "lights[0].intensity"),
+        (
+            {
+                "light_map": {
+                    "format": "ssn-shadow-elm",
+                    "version": 1,
+                    "lights": [{"u": 0.5, "v": 0.5, "softness": 0.01}],
+                }
+            },
+            "LightMapError",
+            "lights[0].intensity",
+        ),
         ({"preset": "softbox", "format": {"dtype": "int8"}}, "BadRequest", "dtype"),
         ({"preset": "softbox", "format": {"channels": "argb"}}, "BadRequest", "channels"),
         ({"preset": "softbox", "format": "uint8"}, "BadRequest", "format"),
@@ -314,9 +352,7 @@ def test_shutdown_then_a_fresh_worker(worker_env):
 
 
 def test_tcp_mode(worker_env):
-    proc = subprocess.Popen(
-        SERVE + ["--port", "0"], stdout=subprocess.PIPE, stderr=subprocess.DEVNULL, text=True
-    )
+    proc = subprocess.Popen(SERVE + ["--port", "0"], stdout=subprocess.PIPE, stderr=subprocess.DEVNULL, text=True)
     try:
         line = proc.stdout.readline().strip()
         assert line.startswith("listening 127.0.0.1:")
@@ -325,7 +361,9 @@ def test_tcp_mode(worker_env):
         reply, _ = c.request("hello")
         assert reply["protocol"] == 1
         key = c.request("set_cutout", {"alpha": buf(canvas_alpha(np.uint16))})[0]["cutout"]
-        reply, buffers = c.request("render", cutout=key, preset="softbox", format={"dtype": "uint16", "channels": "bgra"})
+        reply, buffers = c.request(
+            "render", cutout=key, preset="softbox", format={"dtype": "uint16", "channels": "bgra"}
+        )
         assert arr(buffers["layer"]).shape == (reply["height"], reply["width"], 4)
         c.close()
         # each connection is a fresh conversation with the same worker

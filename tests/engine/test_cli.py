@@ -1,0 +1,266 @@
+"""The ssn-shadow command line (ssn_engine.cli)."""
+
+from __future__ import annotations
+
+import json
+import re
+import subprocess
+import sys
+
+import numpy as np
+import pytest
+from engine_helpers import drawn_alpha, engine_env
+from PIL import Image
+
+from ssn_engine.cli import main
+from ssn_engine.light_map import PRESETS, LightMap
+
+
+def run_cli(*args, timeout=300):
+    env = engine_env()
+    return subprocess.run(
+        [sys.executable, "-m", "ssn_engine", *args], capture_output=True, text=True, timeout=timeout, env=env
+    )
+
+
+W, H = 240, 180
+
+
+@pytest.fixture
+def cutout_png(tmp_path):
+    """A small RGBA cutout: the drawn post, orange, on a transparent 240 x 180 canvas."""
+    alpha = np.zeros((H, W), np.uint8)
+    alpha[40:160, 40:200] = drawn_alpha(160, 120)
+    rgba = np.zeros((H, W, 4), np.uint8)
+    rgba[..., :3] = (220, 120, 40)
+    rgba[..., 3] = alpha
+    path = tmp_path / "cutout.png"
+    Image.fromarray(rgba, "RGBA").save(path)
+    return path
+
+
+def _read(path):
+    return np.asarray(Image.open(path))
+
+
+def test_demo_writes_a_shaded_composite(tmp_path):
+    from engine_helpers import pawn
+
+    from ssn_engine.samples import SAMPLE_SIZE, studio_background
+
+    out = tmp_path / "demo.png"
+    result = run_cli("demo", "--out", str(out))
+    assert result.returncode == 0, result.stderr
+    assert f"wrote {out}" in result.stdout and "method:" in result.stdout
+    image = _read(out)
+    assert (image.shape[1], image.shape[0]) == SAMPLE_SIZE
+    bg = studio_background().astype(int)
+    alpha = pawn()[..., 3]
+    ys, xs = np.nonzero(alpha > 127)
+    base, x0, x1 = ys.max(), xs.min(), xs.max()
+    below = (slice(base + 3, base + 25), slice(x0 + 20, x1 - 20))  # the ground just below the pawn
+    assert image[below][..., :3].astype(int).mean() < bg[below].mean() - 20
+    far = (slice(0, 60), slice(0, 60))  # a corner of the wall: untouched
+    assert np.array_equal(image[far][..., :3], bg[far].astype(np.uint8))
+    opaque = alpha == 255
+    assert np.array_equal(image[opaque][:, :3], pawn()[opaque][:, :3])  # the cutout itself is unchanged
+
+
+def test_render_layer_and_composite(tmp_path, cutout_png, capsys):
+    layer, comp = tmp_path / "layer.png", tmp_path / "comp.png"
+    code = main(
+        [
+            "render",
+            str(cutout_png),
+            "--layer",
+            str(layer),
+            "--composite",
+            str(comp),
+            "--color",
+            "#203040",
+            "--opacity",
+            "0.5",
+            "--preset",
+            "low-sun-right",
+        ]
+    )
+    assert code == 0
+    out = capsys.readouterr().out
+    assert f"wrote {layer}" in out and f"wrote {comp}" in out and "method:" in out
+    lay = _read(layer)
+    assert lay.shape == (H, W, 4)
+    assert lay[..., 3].max() > 60 and lay[..., 3].max() <= 128  # opacity 0.5
+    assert np.all(lay[lay[..., 3] > 0][:, :3] == (0x20, 0x30, 0x40))
+    # low-sun-right: the light is right of centre, so the shadow falls left of the object
+    ground = lay[..., 3].astype(float) * (_read(cutout_png)[..., 3] == 0)
+    xx = np.arange(W)[None, :]
+    assert (ground * xx).sum() / ground.sum() < 120 - 10
+    c = _read(comp)
+    assert c.shape[:2] == (H, W)
+    assert np.all(c[0, 0, :3] == 255)  # default white background
+    cut = _read(cutout_png)
+    opaque = cut[..., 3] == 255
+    assert np.array_equal(c[opaque][:, :3], cut[opaque][:, :3])
+    shaded = ground > 40
+    assert c[shaded][:, :3].mean() < 230
+
+
+def test_render_over_a_background_with_a_light_map(tmp_path, cutout_png):
+    bg = np.full((H, W, 3), 180, np.uint8)
+    bg_path, elm_path, comp = tmp_path / "bg.png", tmp_path / "elm.json", tmp_path / "comp.png"
+    Image.fromarray(bg).save(bg_path)
+    lm = LightMap()
+    lm.add(0.5, 0.75, 0.002, 3.0)  # straight ahead: shadow towards the viewer
+    elm_path.write_text(lm.to_json())
+    assert (
+        main(
+            [
+                "render",
+                str(cutout_png),
+                "--composite",
+                str(comp),
+                "--background",
+                str(bg_path),
+                "--light-map",
+                str(elm_path),
+                "--opacity",
+                "1",
+            ]
+        )
+        == 0
+    )
+    c = _read(comp)[..., :3].astype(int)
+    assert c[165:178, 100:140].mean() < 150  # below the object's base (row 160): darker
+    assert np.all(c[:30] == 180)  # above the object: the background as it was
+
+
+def test_ao_strength_changes_the_contact_shadow(tmp_path, cutout_png):
+    a, b = tmp_path / "a.png", tmp_path / "b.png"
+    assert main(["render", str(cutout_png), "--layer", str(a), "--preset", "overcast"]) == 0
+    assert main(["render", str(cutout_png), "--layer", str(b), "--preset", "overcast", "--ao-strength", "0"]) == 0
+    la, lb = _read(a)[..., 3].astype(int), _read(b)[..., 3].astype(int)
+    assert lb.sum() < la.sum()
+    assert np.all(lb <= la + 1)
+
+
+def _error(capsys, *args):
+    code = main(list(args))
+    return code, capsys.readouterr().err
+
+
+def test_missing_file(tmp_path, capsys):
+    code, err = _error(capsys, "render", str(tmp_path / "nope.png"), "--layer", str(tmp_path / "l.png"))
+    assert code == 2 and "nope.png" in err and "no such file" in err
+
+
+def test_corrupt_png(tmp_path, capsys):
+    bad = tmp_path / "bad.png"
+    bad.write_bytes(b"\x89PNG\r\n\x1a\n" + bytes(range(200)))
+    code, err = _error(capsys, "render", str(bad), "--layer", str(tmp_path / "l.png"))
+    assert code == 2 and "bad.png" in err and "not a readable image" in err
+
+
+def test_fully_transparent_cutout(tmp_path, capsys):
+    empty = tmp_path / "empty.png"
+    Image.fromarray(np.zeros((20, 30, 4), np.uint8), "RGBA").save(empty)
+    code, err = _error(capsys, "render", str(empty), "--layer", str(tmp_path / "l.png"))
+    assert code == 2 and "empty" in err
+    assert not (tmp_path / "l.png").exists()
+
+
+def test_unknown_preset_is_a_usage_error(cutout_png, tmp_path, capsys):
+    with pytest.raises(SystemExit) as info:
+        main(["render", str(cutout_png), "--layer", str(tmp_path / "l.png"), "--preset", "sunset-glow"])
+    assert info.value.code == 2
+    err = capsys.readouterr().err
+    assert "sunset-glow" in err and "softbox" in err
+
+
+@pytest.mark.parametrize(
+    "text, fragment",
+    [
+        ("{broken", "not valid JSON"),
+        (
+            json.dumps(
+                {
+                    "format": "ssn-shadow-elm",
+                    "version": 1,
+                    "lights": [{"u": 2, "v": 0.5, "softness": 0.01, "intensity": 1}],
+                }
+            ),
+            "lights[0].u",
+        ),
+    ],
+)
+def test_malformed_light_map(cutout_png, tmp_path, capsys, text, fragment):
+    elm = tmp_path / "elm.json"
+    elm.write_text(text)
+    code, err = _error(capsys, "render", str(cutout_png), "--layer", str(tmp_path / "l.png"), "--light-map", str(elm))
+    assert code == 2 and fragment in err
+
+
+def test_missing_light_map_file(cutout_png, tmp_path, capsys):
+    code, err = _error(
+        capsys, "render", str(cutout_png), "--layer", str(tmp_path / "l.png"), "--light-map", str(tmp_path / "x.json")
+    )
+    assert code == 2 and "x.json" in err
+
+
+def test_background_size_mismatch(cutout_png, tmp_path, capsys):
+    bg = tmp_path / "bg.png"
+    Image.fromarray(np.zeros((10, 10, 3), np.uint8)).save(bg)
+    code, err = _error(
+        capsys, "render", str(cutout_png), "--composite", str(tmp_path / "c.png"), "--background", str(bg)
+    )
+    assert code == 2 and "10 x 10" in err and f"{W} x {H}" in err
+    assert not (tmp_path / "c.png").exists()
+
+
+def test_nothing_to_write(cutout_png, capsys):
+    code, err = _error(capsys, "render", str(cutout_png))
+    assert code == 2 and "--layer" in err
+
+
+@pytest.mark.parametrize("args", [["--color", "red"], ["--opacity", "1.5"], ["--opacity", "x"]])
+def test_bad_option_values(cutout_png, tmp_path, capsys, args):
+    with pytest.raises(SystemExit) as info:
+        main(["render", str(cutout_png), "--layer", str(tmp_path / "l.png"), *args])
+    assert info.value.code == 2
+    assert args[0] in capsys.readouterr().err
+
+
+def test_presets_lists_all_and_prints_json(capsys):
+    assert main(["presets"]) == 0
+    listing = capsys.readouterr().out
+    for name in PRESETS:
+        assert re.search(rf"^{re.escape(name)}\s+\d+ lights?$", listing, re.M)
+    for name in PRESETS:
+        assert main(["presets", name]) == 0
+        text = capsys.readouterr().out
+        assert LightMap.from_json(text).to_dict() == json.loads(text)
+        assert json.loads(text)["format"] == "ssn-shadow-elm"
+    code, err = _error(capsys, "presets", "sunset-glow")
+    assert code == 2 and "sunset-glow" in err
+
+
+def test_subprocess_exit_code_and_message():
+    result = run_cli("render", "/nonexistent/cutout.png", "--layer", "/tmp/x.png")
+    assert result.returncode == 2
+    assert result.stderr.startswith("ssn-shadow: error:") and "no such file" in result.stderr
+    assert "Traceback" not in result.stderr
+
+
+def test_benchmark_prints_the_stage_table():
+    result = run_cli("benchmark", "--repeats", "2")
+    assert result.returncode == 0, result.stderr
+    lines = result.stdout.splitlines()
+    header = next(i for i, line in enumerate(lines) if line.startswith("stage"))
+    assert "median ms" in lines[header] and "p95 ms" in lines[header]
+    rows = lines[header + 1 : header + 6]
+    names = ["AOP", "SR", "geometric card", "end to end 4000x3000", "light moved 4000x3000"]
+    assert len(rows) == len(names)
+    for name, row in zip(names, rows, strict=True):
+        assert row.startswith(name), row
+        median, p95 = (float(v) for v in row.split()[-2:])
+        assert 0 < median <= p95
+    assert any(line.startswith("peak resident memory:") for line in lines)
