@@ -15,6 +15,7 @@ import numpy as np
 from skimage.morphology import dilation, disk, erosion
 
 MAX_GROW = 32  # frame pixels
+MAX_STRENGTH = 4.0
 
 
 class AOEditError(ValueError):
@@ -73,7 +74,7 @@ def apply_edits(ao: np.ndarray, edits: Iterable[dict[str, Any]]) -> np.ndarray:
         elif op == "grow":
             out = grow(out, int(round(_field(edit, "pixels", where, -MAX_GROW, MAX_GROW))))
         elif op == "strength":
-            out = scale_strength(out, _field(edit, "value", where, 0.0, 4.0))
+            out = scale_strength(out, _field(edit, "value", where, 0.0, MAX_STRENGTH))
         else:
             raise AOEditError(f"{where}.op: expected 'brush', 'grow' or 'strength', got {op!r}")
     return np.clip(out, 0.0, 1.0)

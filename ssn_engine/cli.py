@@ -26,14 +26,19 @@ def _color(text: str) -> tuple[float, float, float]:
     return tuple(int(value[i : i + 2], 16) / 255 for i in (0, 2, 4))  # type: ignore[return-value]
 
 
-def _unit(text: str) -> float:
-    try:
-        value = float(text)
-    except ValueError:
-        raise argparse.ArgumentTypeError(f"expected a number, got {text!r}") from None
-    if not 0.0 <= value <= 1.0:
-        raise argparse.ArgumentTypeError(f"expected a number in [0, 1], got {text}")
-    return value
+def _number_in(lo: float, hi: float):
+    """An argparse type for a number in [lo, hi]."""
+
+    def parse(text: str) -> float:
+        try:
+            value = float(text)
+        except ValueError:
+            raise argparse.ArgumentTypeError(f"expected a number, got {text!r}") from None
+        if not lo <= value <= hi:
+            raise argparse.ArgumentTypeError(f"expected a number in [{lo:g}, {hi:g}], got {text}")
+        return value
+
+    return parse
 
 
 def _light_map(args: argparse.Namespace):
@@ -174,6 +179,7 @@ def cmd_install_plugin(args: argparse.Namespace) -> int:
 
 
 def _add_shadow_options(p: argparse.ArgumentParser) -> None:
+    from .ao_edit import MAX_STRENGTH
     from .light_map import DEFAULT_PRESET, PRESETS
     from .methods import METHOD_NAMES
 
@@ -181,9 +187,9 @@ def _add_shadow_options(p: argparse.ArgumentParser) -> None:
     light.add_argument("--preset", default=DEFAULT_PRESET, choices=list(PRESETS), help="light preset (default: %(default)s)")
     light.add_argument("--light-map", metavar="ELM.json", help="light map JSON (see 'ssn-shadow presets NAME')")
     p.add_argument("--color", type=_color, default=(0.0, 0.0, 0.0), help="shadow colour, e.g. #1a1a2e (default black)")
-    p.add_argument("--opacity", type=_unit, default=0.85, help="shadow opacity in [0, 1] (default %(default)s)")
+    p.add_argument("--opacity", type=_number_in(0.0, 1.0), default=0.85, help="shadow opacity in [0, 1] (default %(default)s)")
     p.add_argument("--ao-edits", metavar="EDITS.json", help="JSON list of AO edits (docs/protocol.md)")
-    p.add_argument("--ao-strength", type=float, help="scale the contact (AO) occlusion; 0 removes it")
+    p.add_argument("--ao-strength", type=_number_in(0.0, MAX_STRENGTH), help="scale the contact (AO) occlusion; 0 removes it")
     p.add_argument("--method", default="auto", choices=METHOD_NAMES, help="auto: SSN if a model is installed, else geometric")
 
 
