@@ -55,7 +55,7 @@ def run_in_krita(pykrita: Path, depth: str, result: Path) -> dict:
     # Krita's embedded Python finds its home through the first python3 on PATH: make it Debian's,
     # not the test's (pyenv, venv, /usr/local), or it cannot import PyQt5/PyKrita.
     env["PATH"] = os.pathsep.join(["/usr/bin", "/bin", env.get("PATH", "")])
-    env.pop("QT_QPA_PLATFORM", None)  # xcb on the virtual X server (the unit tests set offscreen)  # use the engine.json install() wrote
+    env.pop("QT_QPA_PLATFORM", None)  # xcb on the virtual X server (the unit tests set offscreen)
     # kritarunner's exit status says nothing (and it may crash on exit): the result file counts.
     proc = subprocess.run(
         [xvfb, "-a", kritarunner, "-s", "krita_driver", "-f", "main"],

@@ -37,7 +37,7 @@ def map_values(light_map: Any, width: int, height: int) -> list[list[float]]:
 def map_rgb(light_map: Any, width: int = 96, height: int = 48) -> bytes:
     """RGB888 bytes (height x width x 3) of the tone-mapped light map."""
     lut = bytes(
-        round(255 * (n + (l - n) * k / 255)) for k in range(256) for n, l in zip(NIGHT, LIGHT)
+        round(255 * (n + (b - n) * k / 255)) for k in range(256) for n, b in zip(NIGHT, LIGHT, strict=True)
     )  # 256 entries x 3 channels
     out = bytearray(width * height * 3)
     p = 0

@@ -136,7 +136,7 @@ class ShadowPanel(QWidget):
 
     def _wire(self) -> None:
         c = self.controller
-        self.generate.clicked.connect(self._guard(c.generate))
+        self.generate.clicked.connect(self._guard(lambda *_: c.generate()))
         self.live.toggled.connect(self._guard(self._set_live))
         self.presets.activated.connect(self._guard(self._choose_preset))
         self.map_widget.lightsChanged.connect(self._guard(self._lights_changed))
@@ -147,13 +147,13 @@ class ShadowPanel(QWidget):
         self.intensity.sliderPressed.connect(self._guard(self._slider_pressed))
         self.ao_preview.brushed.connect(self._guard(self._brush))
         self.brush_size.valueChanged.connect(self._guard(self._brush_size))
-        self.grow.clicked.connect(self._guard(lambda: self._grow(2)))
-        self.shrink.clicked.connect(self._guard(lambda: self._grow(-2)))
+        self.grow.clicked.connect(self._guard(lambda *_: self._grow(2)))
+        self.shrink.clicked.connect(self._guard(lambda *_: self._grow(-2)))
         self.ao_strength.valueChanged.connect(self._guard(self._ao_strength))
         self.ao_strength.sliderPressed.connect(self._guard(self._slider_pressed))
-        self.ao_undo.clicked.connect(self._guard(self._undo_ao))
-        self.ao_reset.clicked.connect(self._guard(self._reset_ao))
-        self.color_button.clicked.connect(self._guard(self._pick_colour))
+        self.ao_undo.clicked.connect(self._guard(lambda *_: self._undo_ao()))
+        self.ao_reset.clicked.connect(self._guard(lambda *_: self._reset_ao()))
+        self.color_button.clicked.connect(self._guard(lambda *_: self._pick_colour()))
         self.opacity.valueChanged.connect(self._guard(self._opacity))
         self.opacity.sliderPressed.connect(self._guard(self._slider_pressed))
         c.busyChanged.connect(self._guard(self._show_busy))
@@ -256,7 +256,8 @@ class ShadowPanel(QWidget):
         if self._syncing:
             return
         self.ao_edits.strength = value / 100.0
-        self.controller.set_ao_edits(self.ao_edits.to_list(), self._take_stroke() or not self.ao_strength.isSliderDown())
+        started = self._take_stroke() or not self.ao_strength.isSliderDown()
+        self.controller.set_ao_edits(self.ao_edits.to_list(), started)
 
     def _undo_ao(self) -> None:
         if self.ao_edits.undo():

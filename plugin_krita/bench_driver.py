@@ -1,0 +1,128 @@
+"""Runs inside Krita (kritarunner): live updates per second while a light is dragged, and Generate latency.
+
+Started by ``python -m plugin_krita.benchmark``; writes JSON to $SSN_BENCH_RESULT.
+"""
+
+import json
+import os
+import time
+import traceback
+
+from krita import Krita
+from PyQt5.QtCore import QEventLoop, QTimer
+from PyQt5.QtWidgets import QApplication
+
+RESULT = os.environ.get("SSN_BENCH_RESULT", "/tmp/ssn_bench.json")
+DRAG_S = float(os.environ.get("SSN_BENCH_DRAG_S", "8"))
+out = {}
+
+
+def save():
+    with open(RESULT, "w") as f:
+        json.dump(out, f, indent=1)
+
+
+def document(w, h):
+    doc = Krita.instance().createDocument(w, h, f"bench-{w}x{h}", "RGBA", "U8", "", 72.0)
+    root = doc.rootNode()
+    person = doc.createNode("Person", "paintlayer")
+    x0, x1, y0, y1 = int(0.4 * w), int(0.6 * w), int(0.2 * h), int(0.75 * h)
+    row = bytes([40, 90, 200, 255]) * (x1 - x0)
+    person.setPixelData(row * (y1 - y0), x0, y0, x1 - x0, y1 - y0)
+    root.addChildNode(person, root.childNodes()[0])
+    window = Krita.instance().openWindow()  # a real view: the canvas redraws as the layer changes
+    window.addView(doc)
+    doc.setActiveNode(person)
+    doc.waitForDone()
+    deadline = time.monotonic() + 10
+    while (doc.activeNode() is None or doc.activeNode().name() != "Person") and time.monotonic() < deadline:
+        QApplication.processEvents()
+        time.sleep(0.01)
+    return doc
+
+
+def controller_for(doc):
+    from ssn_shadow.adapters.host import KritaHost
+    from ssn_shadow.controller import ShadowController
+    from ssn_shadow.engine import EngineProcess
+
+    host = KritaHost(Krita.instance())
+    host.active_document = lambda: doc
+    return ShadowController(EngineProcess(), host)
+
+
+def spin(controller, timeout_s):
+    loop = QEventLoop()
+    QTimer.singleShot(int(timeout_s * 1000), loop.quit)
+    controller.busyChanged.connect(lambda busy: None if busy else loop.quit())
+    if controller.busy:
+        loop.exec_()
+    controller.busyChanged.disconnect()
+
+
+def live_drag(doc):
+    c = controller_for(doc)
+    messages = out["live_messages"] = []
+    c.status.connect(lambda level, text: messages.append([level, text]) if level != "info" else None)
+    c.generate()
+    spin(c, 120)
+    frames = []
+    timings = out["write_timings"] = []
+    c.rendered.connect(lambda info: frames.append((time.perf_counter(), info["elapsed_ms"])))
+    c.rendered.connect(lambda info: timings.append([info["timing_ms"], dict(c.host.writer.last_timing)]))
+    light = {"i": 0}
+
+    def move():  # what the light map widget does on every mouse move (60 Hz)
+        light["i"] += 1
+        u = 0.30 + 0.4 * ((light["i"] % 240) / 240.0)
+        c.light_map.move(0, u, 0.6)
+        c.lights_edited(True, light["i"] == 1)
+
+    timer = QTimer()
+    timer.timeout.connect(move)
+    t0 = time.perf_counter()
+    timer.start(16)
+    loop = QEventLoop()
+    QTimer.singleShot(int(DRAG_S * 1000), loop.quit)
+    loop.exec_()
+    timer.stop()
+    spin(c, 30)
+    t1 = time.perf_counter()
+    in_window = [f for f in frames if f[0] <= t0 + DRAG_S]
+    out["live"] = {
+        "canvas": "2000x2000",
+        "drag_s": DRAG_S,
+        "mouse_moves": light["i"],
+        "layer_updates": len(in_window),
+        "updates_per_s": round(len(in_window) / DRAG_S, 2),
+        "median_latency_ms": sorted(f[1] for f in in_window)[len(in_window) // 2] if in_window else None,
+        "total_s": round(t1 - t0, 2),
+    }
+    c.engine.shutdown()
+
+
+def generate_latency(doc, runs=3):
+    c = controller_for(doc)
+    c.generate()  # warm: worker start, model load
+    spin(c, 120)
+    times = []
+    for i in range(runs):
+        c.forget_cutout()  # a fresh cutout each time: the full path (read alpha, AO, render, write)
+        c.light_map.move(0, 0.3 + 0.1 * i, 0.6)
+        t = time.perf_counter()
+        c.generate()
+        spin(c, 120)
+        times.append(round(1e3 * (time.perf_counter() - t), 1))
+    out["generate_4000x3000_ms"] = times
+    c.engine.shutdown()
+
+
+def main(*args):
+    try:
+        live_drag(document(2000, 2000))
+        save()
+        generate_latency(document(4000, 3000))
+        out["done"] = True
+    except Exception:
+        out["error"] = traceback.format_exc()
+    save()

@@ -1,0 +1,64 @@
+"""Benchmark the Krita docker in real Krita: live updates per second while a light is dragged on a
+2000 x 2000 canvas, and the time from Generate to a visible layer on a 4000 x 3000 canvas.
+
+``python -m plugin_krita.benchmark`` (needs Debian's krita: kritarunner).
+"""
+
+from __future__ import annotations
+
+import json
+import os
+import shutil
+import subprocess
+import sys
+import tempfile
+from pathlib import Path
+
+from .install import install
+
+HERE = Path(__file__).resolve().parent
+REPO = HERE.parent
+
+
+def run(drag_s: float = 8.0) -> dict:
+    kritarunner = shutil.which("kritarunner")
+    if kritarunner is None:
+        raise SystemExit("kritarunner not found: apt-get install krita")
+    with tempfile.TemporaryDirectory() as tmp:
+        pykrita = install(Path(tmp) / "pykrita", python=sys.executable).parent
+        result = Path(tmp) / "bench.json"
+        env = dict(os.environ)
+        env.update(
+            SSN_BENCH_RESULT=str(result),
+            SSN_BENCH_DRAG_S=str(drag_s),
+            PYTHONPATH=os.pathsep.join([str(pykrita), str(HERE), str(REPO)]),
+            PATH=os.pathsep.join(["/usr/bin", "/bin", env.get("PATH", "")]),  # Krita's own python3 first
+        )
+        env.pop("SSN_SHADOW_ENGINE_CONFIG", None)
+        env.pop("QT_QPA_PLATFORM", None)
+        xvfb = shutil.which("xvfb-run")  # Krita's windows need an X server (apt-get install xvfb)
+        if xvfb is None:
+            raise SystemExit("xvfb-run not found: apt-get install xvfb")
+        proc = subprocess.run([xvfb, "-a", kritarunner, "-s", "bench_driver", "-f", "main"], env=env,
+                              capture_output=True, text=True, timeout=600)
+        if not result.exists():
+            raise SystemExit(f"Krita wrote no result:\n{proc.stdout[-2000:]}\n{proc.stderr[-2000:]}")
+        return json.loads(result.read_text())
+
+
+def main() -> None:
+    data = run()
+    if "error" in data:
+        raise SystemExit(data["error"])
+    live = data["live"]
+    gen = data["generate_4000x3000_ms"]
+    print(f"live updates while dragging a light, 2000 x 2000 canvas: {live['updates_per_s']:.1f} per second "
+          f"({live['layer_updates']} layer updates in {live['drag_s']:g} s of 60 Hz mouse moves; "
+          f"median request-to-layer latency {live['median_latency_ms']} ms)")
+    print(f"Generate to visible layer, 4000 x 3000 canvas: median {sorted(gen)[len(gen) // 2]:.0f} ms "
+          f"(runs: {', '.join(f'{t:.0f}' for t in gen)} ms; full path: read alpha, AO, render, write)")
+    print(json.dumps(data))
+
+
+if __name__ == "__main__":
+    main()

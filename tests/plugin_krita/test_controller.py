@@ -1,0 +1,105 @@
+from helpers import FakeHost, wait_until, worker_command
+from plugin_krita.ssn_shadow.controller import ShadowController
+from plugin_krita.ssn_shadow.engine import EngineProcess
+from plugin_krita.ssn_shadow.settings import EngineCommand
+
+
+def make(host, command=worker_command):
+    engine = EngineProcess(command)
+    c = ShadowController(engine, host)
+    messages, aos = [], []
+    c.status.connect(lambda level, text: messages.append((level, text)))
+    c.aoChanged.connect(lambda ao, mask, n: aos.append(n))
+    return c, engine, messages, aos
+
+
+def test_generate_then_live_drag(qapp):
+    host = FakeHost()
+    c, engine, messages, aos = make(host)
+    busy = []
+    c.busyChanged.connect(busy.append)
+    try:
+        c.generate()
+        assert c.busy
+        assert wait_until(lambda: not c.busy and host.writes), messages
+        rect, nbytes, new_step = host.writes[0]
+        assert new_step and rect[2] > 0 and nbytes == rect[2] * rect[3] * 4
+        assert busy[:2] == [True, False] and wait_until(lambda: aos)
+        cutout = c.cutout
+
+        c.generate()  # same alpha: the engine's cutout (and its AO) is reused
+        assert wait_until(lambda: not c.busy and len(host.writes) == 2)
+        assert c.cutout == cutout and host.writes[1][2]
+
+        for i in range(30):  # a fast drag: requests coalesce, only the first is an undo step
+            c.light_map.move(0, 0.2 + 0.01 * i, 0.6)
+            c.lights_edited(True, i == 0)
+        assert wait_until(lambda: not c.busy)
+        live = host.writes[2:]
+        assert 1 <= len(live) < 30
+        assert live[0][2] and not any(w[2] for w in live[1:])
+        assert host.reads == 2  # live updates do not read the image again
+        assert not [m for m in messages if m[0] == "error"]
+
+        c.set_ao_edits([{"op": "strength", "value": 2.0}], stroke_started=True)
+        assert wait_until(lambda: not c.busy and len(aos) >= 2)
+    finally:
+        engine.shutdown()
+
+
+def test_live_off_does_not_render(qapp):
+    host = FakeHost()
+    c, engine, messages, _ = make(host)
+    c.live = False
+    c.lights_edited(True, True)
+    assert not c.busy and not host.writes
+    engine.stop()
+
+
+def test_source_problems_are_shown_not_raised(qapp):
+    host = FakeHost(fail="Select the layer that holds the cutout.")
+    c, engine, messages, _ = make(host)
+    c.generate()
+    assert not c.busy and messages[-1] == ("warning", "Select the layer that holds the cutout.")
+    engine.stop()
+
+
+def test_empty_alpha_message(qapp):
+    host = FakeHost(alpha=bytes(200 * 160))
+    c, engine, messages, _ = make(host)
+    try:
+        c.generate()
+        assert wait_until(lambda: not c.busy)
+        assert messages[-1][0] == "warning" and not host.writes
+    finally:
+        engine.shutdown()
+
+
+def test_missing_worker_message_and_recovery(qapp):
+    commands = [EngineCommand("/nonexistent/python", ["-m", "ssn_engine", "serve"])]
+    host = FakeHost()
+    c, engine, messages, _ = make(host, lambda: commands[-1])
+    try:
+        c.generate()
+        assert wait_until(lambda: not c.busy)
+        assert messages[-1][0] == "error" and "could not start the shadow engine" in messages[-1][1]
+        commands.append(worker_command())  # fixed (e.g. re-installed): the next request restarts it
+        c.generate()
+        assert wait_until(lambda: not c.busy and host.writes)
+    finally:
+        engine.shutdown()
+
+
+def test_worker_crash_mid_session_recovers(qapp):
+    host = FakeHost()
+    c, engine, messages, _ = make(host)
+    try:
+        c.generate()
+        assert wait_until(lambda: not c.busy and host.writes)
+        engine._proc.kill()  # the worker dies
+        assert wait_until(lambda: not engine.running)
+        c.light_map.move(0, 0.3, 0.5)
+        c.lights_edited(True, True)  # needs the cutout again: sent again from the kept source
+        assert wait_until(lambda: not c.busy and len(host.writes) == 2), messages
+    finally:
+        engine.shutdown()

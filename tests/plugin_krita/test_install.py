@@ -1,0 +1,53 @@
+import json
+import sys
+import zipfile
+from pathlib import Path
+
+import pytest
+
+from plugin_krita.install import build_zip, default_pykrita_dir, install
+
+
+def test_default_folders():
+    home = Path("/home/a")
+    assert default_pykrita_dir("linux", {}, home) == home / ".local/share/krita/pykrita"
+    assert default_pykrita_dir("linux", {"XDG_DATA_HOME": "/x"}, home) == Path("/x/krita/pykrita")
+    assert default_pykrita_dir("win32", {"APPDATA": "C:/U/AppData/Roaming"}, home) == Path(
+        "C:/U/AppData/Roaming/krita/pykrita"
+    )
+    assert default_pykrita_dir("darwin", {}, home) == home / "Library/Application Support/krita/pykrita"
+
+
+@pytest.mark.parametrize("link", [False, True])
+def test_install_copies_or_links(tmp_path, link):
+    pkg = install(tmp_path, python="/opt/engine/bin/python", link=link)
+    assert pkg == tmp_path / "ssn_shadow"
+    assert (tmp_path / "ssn_shadow.desktop").exists()
+    assert pkg.is_symlink() == link
+    for name in ("__init__.py", "engine_shared/light_map.py", "engine_shared/protocol.py", "engine_shared/client.py"):
+        assert (pkg / name).is_file(), name
+    config = json.loads((pkg / "engine.json").read_text())
+    assert config["python"] == "/opt/engine/bin/python" and config["args"] == ["-m", "ssn_engine", "serve"]
+    again = install(tmp_path, link=not link)  # re-install over either kind
+    assert again.is_symlink() == (not link)
+    assert json.loads((again / "engine.json").read_text())["python"] == sys.executable
+
+
+def test_zip_is_importable_by_krita(tmp_path):
+    z = build_zip(tmp_path / "ssn-shadow-krita.zip")
+    names = zipfile.ZipFile(z).namelist()
+    assert "ssn_shadow.desktop" in names and "ssn_shadow/" in names
+    assert "ssn_shadow/engine.json" in names and "ssn_shadow/engine_shared/protocol.py" in names
+    assert not any("__pycache__" in n for n in names)
+    importer = Path("/usr/share/krita/pykrita/plugin_importer/plugin_importer.py")
+    if not importer.exists():
+        pytest.skip("Krita's plugin importer is not installed")
+    sys.path.insert(0, str(importer.parent))
+    try:
+        import plugin_importer
+    finally:
+        sys.path.remove(str(importer.parent))
+    (tmp_path / "res").mkdir()
+    imported = plugin_importer.PluginImporter(str(z), str(tmp_path / "res"), lambda p: True).import_all()
+    assert [p["name"] for p in imported] == ["ssn_shadow"]
+    assert (tmp_path / "res/pykrita/ssn_shadow/engine_shared/light_map.py").is_file()

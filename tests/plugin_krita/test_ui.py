@@ -1,0 +1,137 @@
+from PyQt5.QtCore import QEvent, QPoint, QPointF, Qt
+from PyQt5.QtGui import QMouseEvent, QWheelEvent
+from PyQt5.QtTest import QTest
+from PyQt5.QtWidgets import QApplication
+
+from helpers import FakeHost
+from plugin_krita.ssn_shadow.ao_edits import AoEdits
+from plugin_krita.ssn_shadow.controller import ShadowController
+from plugin_krita.ssn_shadow.shared import light_map as lm
+from plugin_krita.ssn_shadow.ui.light_map_widget import LightMapWidget, slider_to_softness, softness_to_slider
+from plugin_krita.ssn_shadow.ui.map_image import map_rgb
+from plugin_krita.ssn_shadow.ui.panel import ShadowPanel
+
+
+class NoEngine:
+    """An engine that never answers (enough for UI state)."""
+
+    def __init__(self):
+        self.sent = []
+
+    def request(self, cmd, params=None, buffers=None, on_reply=None, on_error=None, timeout_s=None):
+        self.sent.append(cmd)
+        return len(self.sent)
+
+
+def widget(qapp, light_map=None):
+    w = LightMapWidget(light_map if light_map is not None else lm.LightMap())
+    w.resize(400, 200)
+    w.show()
+    events = []
+    w.lightsChanged.connect(lambda dragging, started: events.append((dragging, started)))
+    return w, events
+
+
+def pos(w, u, v):
+    p = w.from_uv(u, v)
+    return QPoint(round(p.x()), round(p.y()))
+
+
+def test_click_adds_drag_moves_right_click_deletes(qapp):
+    w, events = widget(qapp)
+    QTest.mouseClick(w, Qt.LeftButton, Qt.NoModifier, pos(w, 0.3, 0.5))
+    assert len(w.light_map) == 1 and w.selected == 0 and events[0] == (True, True)
+    light = w.light_map.lights[0]
+    assert abs(light.u - 0.3) < 0.01 and abs(light.v - 0.5) < 0.02
+
+    QTest.mousePress(w, Qt.LeftButton, Qt.NoModifier, pos(w, 0.3, 0.5))
+    move = QMouseEvent(QEvent.MouseMove, QPointF(pos(w, 0.6, 0.2)), Qt.NoButton, Qt.LeftButton, Qt.NoModifier)
+    QApplication.sendEvent(w, move)
+    QTest.mouseRelease(w, Qt.LeftButton, Qt.NoModifier, pos(w, 0.6, 0.2))
+    light = w.light_map.lights[0]
+    assert len(w.light_map) == 1 and abs(light.u - 0.6) < 0.01 and abs(light.v - 0.2) < 0.02
+    assert (True, True) in events[1:]  # the first move of a drag starts a new undo step
+
+    QTest.mouseClick(w, Qt.RightButton, Qt.NoModifier, pos(w, 0.6, 0.2))
+    assert len(w.light_map) == 0
+
+
+def test_wheel_softness_and_delete_key(qapp):
+    w, events = widget(qapp, lm.preset("softbox"))
+    before = w.light_map.lights[0].softness
+    centre = QPointF(pos(w, w.light_map.lights[0].u, w.light_map.lights[0].v))
+    ev = QWheelEvent(centre, w.mapToGlobal(centre.toPoint()), QPoint(), QPoint(0, 120), Qt.NoButton, Qt.NoModifier,
+                     Qt.NoScrollPhase, False)
+    QApplication.sendEvent(w, ev)
+    assert w.light_map.lights[0].softness > before
+    w.setFocus()
+    QTest.keyClick(w, Qt.Key_Delete)
+    assert len(w.light_map) == 0
+
+
+def test_map_image_follows_the_lights():
+    empty = map_rgb(lm.LightMap(), 16, 8)
+    lit = map_rgb(lm.LightMap([lm.GaussianLight(0.5, 0.5, 0.01, 3.0)]), 16, 8)
+    assert len(lit) == 16 * 8 * 3 and lit != empty
+    centre = (4 * 16 + 8) * 3
+    assert lit[centre] > empty[centre]  # bright where the light is
+    wrapped = map_rgb(lm.LightMap([lm.GaussianLight(0.0, 0.5, 0.01, 3.0)]), 16, 8)
+    assert wrapped[(4 * 16) * 3] == wrapped[(4 * 16 + 15) * 3]  # u wraps around
+
+
+def test_softness_slider_round_trip():
+    for s in (1e-4, 0.002, 0.01, 0.1):
+        assert abs(slider_to_softness(softness_to_slider(s)) / s - 1) < 0.05
+
+
+def test_ao_edits_list():
+    e = AoEdits()
+    e.brush(0.5, 0.9, 0.05, -0.5, True)
+    e.brush(0.52, 0.9, 0.05, -0.5, False)
+    e.grow(2)
+    e.strength = 1.5
+    ops = e.to_list()
+    assert [o["op"] for o in ops] == ["brush", "brush", "grow", "strength"]
+    assert e.undo() and [o["op"] for o in e.to_list()] == ["brush", "brush", "strength"]
+    assert e.undo() and e.to_list() == [{"op": "strength", "value": 1.5}]
+    e.reset()
+    assert e.to_list() == [] and not e.undo()
+
+
+def test_panel_state(qapp):
+    engine = NoEngine()
+    c = ShadowController(engine, FakeHost())
+    panel = ShadowPanel(c)
+    panel.show()
+    assert not panel.busy.isVisible()
+    panel.generate.click()
+    assert panel.busy.isVisible() and engine.sent == ["set_cutout"]
+    c._fail("the shadow engine exited with code 1; it will restart on the next request.")
+    assert not panel.busy.isVisible() and "restart" in panel.message.text()
+
+    panel.presets.setCurrentIndex(panel.presets.findText("two-lights"))
+    panel.presets.activated.emit(panel.presets.currentIndex())
+    assert len(c.light_map) == 2 and panel.map_widget.light_map is c.light_map
+
+    panel.live.setChecked(False)
+    assert c.live is False
+    panel.opacity.setValue(40)
+    assert c.opacity == 0.4
+    panel.set_colour((0.1, 0.1, 0.3))
+    assert c.color == (0.1, 0.1, 0.3)
+    panel.intensity.setValue(250)
+    assert c.light_map.lights[panel.map_widget.selected].intensity == 2.5
+
+
+def test_ui_errors_are_shown_not_raised(qapp):
+    c = ShadowController(NoEngine(), FakeHost())
+    panel = ShadowPanel(c)
+
+    def boom():
+        raise RuntimeError("kaput")
+
+    c.generate = boom
+    panel.generate.clicked.disconnect()
+    panel.generate.clicked.connect(panel._guard(lambda *_: c.generate()))
+    panel.generate.click()
+    assert "kaput" in panel.message.text()
