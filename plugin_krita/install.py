@@ -66,8 +66,17 @@ def install(dest: Path | None = None, python: str | None = None, link: bool = Fa
         shutil.copytree(PACKAGE, target, ignore=shutil.ignore_patterns(*_GENERATED))
         shutil.copy2(DESKTOP, desktop)
     copy_shared_modules(target)
-    write_engine_config(target, str(Path(python).absolute()) if python else None)
+    write_engine_config(target, _resolve_python(python))
     return target
+
+
+def _resolve_python(python: str | None) -> str | None:
+    """An absolute path for a --python given as a path or as a command name on PATH."""
+    if not python:
+        return None
+    if os.sep in python or (os.altsep and os.altsep in python):
+        return str(Path(python).absolute())
+    return shutil.which(python) or python
 
 
 def build_zip(out: Path) -> Path:
