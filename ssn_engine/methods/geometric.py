@@ -2,10 +2,12 @@
 
 The mask is taken to be a card standing upright on the ground, facing the
 camera of the conventions (45 degree field of view, 15 degree pitch), its
-lowest mask row touching the ground. Every ELM texel casts one hard shadow
-of the card along its centre direction; the shadow is their sum with the
-conventions' weights L_t W_t. The AO map is the card's own ambient
-occlusion (the same sum under a uniform sky).
+lowest mask row touching the ground. Every texel of the 16 x 32 ELM casts
+one hard shadow of the card along its centre direction; the shadow is their
+sum with the conventions' weights L_t W_t. The AO map is the card's own
+ambient occlusion (the same sum under a uniform sky). The hard shadows are
+traced once per mask (like the training data's bases), so moving a light
+costs one weighted sum.
 
 Edited AO maps steer the result near contact points: the received light is
 scaled by the edited over the card's ambient visibility (A = AO^3).
@@ -13,6 +15,7 @@ scaled by the edited over the card's ambient visibility (A = AO^3).
 
 from __future__ import annotations
 
+import collections
 import hashlib
 
 import numpy as np
@@ -24,9 +27,9 @@ from ..hemisphere import texel_centres, texel_weights
 from .base import check_batch
 
 INTERNAL = 128  # the card is traced at this resolution, then upsampled
-AO_GRID = 6  # texel rows of the uniform sky used for the card's AO
-MIN_SHARE = 1e-4
-TURN = 0.5  # share of the way the card turns towards each light  # texels carrying less of the ELM's weight are skipped
+TURN = 0.5  # share of the way the card turns towards each light
+CHUNK = 64  # directions traced at once (bounds memory)
+CACHED_CARDS = 4
 
 
 def _resize(image: np.ndarray, size: int) -> np.ndarray:
@@ -76,7 +79,8 @@ class _Card:
         g = self.ground
         w = directions.astype(np.float64)
         azimuth = np.arctan2(w[:, 0], -w[:, 2])  # from the horizontal forward (0, 0, -1)
-        facing = np.where(azimuth > np.pi / 2, azimuth - np.pi, np.where(azimuth < -np.pi / 2, azimuth + np.pi, azimuth))
+        facing = np.where(azimuth > np.pi / 2, azimuth - np.pi, azimuth)
+        facing = np.where(facing < -np.pi / 2, facing + np.pi, facing)
         turn = TURN * facing
         ax, az = np.cos(turn), np.sin(turn)  # the card's horizontal axis: right (1, 0, 0) turned
         wy = np.maximum(w[:, 1], 1e-6)
@@ -95,17 +99,22 @@ class _Card:
         ).reshape(hit.shape)
         return np.where(hit, values, 0.0)
 
-    def shadow(self, elm_weights: np.ndarray, directions: np.ndarray) -> np.ndarray:
-        """Weighted sum of hard shadows, as an (m, m) frame."""
+    def trace(self, directions: np.ndarray) -> None:
+        """Trace the hard shadow of every direction (T, 3) once: ``self.bases`` (T, P) float32."""
+        self.bases = np.zeros((len(directions), len(self.ground) if not self.empty else 0), np.float32)
+        if self.empty:
+            return
+        for i in range(0, len(directions), CHUNK):
+            self.bases[i : i + CHUNK] = self.occlusion(directions[i : i + CHUNK])
+
+    def shadow(self, weights: np.ndarray) -> np.ndarray:
+        """The weighted mean (m, m) of the traced hard shadows, weights (T,) >= 0."""
         m = self.mask.shape[0]
         out = np.zeros((m, m), np.float32)
-        total = elm_weights.sum()
+        total = float(weights.sum())
         if self.empty or total <= 0:
             return out
-        share = elm_weights / total
-        keep = share > MIN_SHARE
-        occ = self.occlusion(directions[keep])
-        out[self.valid] = share[keep] @ occ / share[keep].sum()
+        out[self.valid] = (weights / total).astype(np.float32) @ self.bases
         return np.clip(out, 0.0, 1.0)
 
 
@@ -116,29 +125,22 @@ class GeometricCard:
 
     def __init__(self, resolution: int = 256) -> None:
         self.resolution = resolution
-        cam = Camera(INTERNAL, 0.5)
-        self._dirs16 = cam.to_world(texel_centres(16))  # (16, 32, 3)
-        self._w16 = texel_weights(16)
-        self._dirs_ao = cam.to_world(texel_centres(AO_GRID)).reshape(-1, 3)
-        self._w_ao = texel_weights(AO_GRID).ravel()
-
-        self._cache: tuple[bytes, _Card, np.ndarray] | None = None
+        self._dirs = Camera(INTERNAL, 0.5).to_world(texel_centres(16)).reshape(-1, 3)
+        self._weights = texel_weights(16).ravel()
+        self._cache: collections.OrderedDict[bytes, tuple[_Card, np.ndarray]] = collections.OrderedDict()
 
     def _card(self, mask: np.ndarray) -> tuple[_Card, np.ndarray]:
-        """The card for a mask and its AO at the internal resolution (last mask cached)."""
+        """The traced card for a mask and its AO at the internal resolution (recent masks cached)."""
         key = hashlib.blake2b(np.ascontiguousarray(mask, np.float32).tobytes(), digest_size=16).digest()
-        if self._cache is None or self._cache[0] != key:
+        if key not in self._cache:
             card = _Card(_resize(mask, INTERNAL))
-            ao = (1.0 - card.shadow(self._w_ao, self._dirs_ao)) ** (1.0 / 3.0)
-            self._cache = (key, card, ao)
-        return self._cache[1], self._cache[2]
-
-    def _blocks(self, weights: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
-        """Merge 2 x 2 texels into one light at their weighted mean direction (128 at most)."""
-        w = weights.reshape(8, 2, 16, 2).sum(axis=(1, 3)).ravel()
-        d = (weights[..., None] * self._dirs16).reshape(8, 2, 16, 2, 3).sum(axis=(1, 3)).reshape(-1, 3)
-        d /= np.maximum(np.linalg.norm(d, axis=-1, keepdims=True), 1e-12)
-        return w, d
+            card.trace(self._dirs)
+            ao = (1.0 - card.shadow(self._weights)) ** (1.0 / 3.0)
+            self._cache[key] = (card, ao)
+            while len(self._cache) > CACHED_CARDS:
+                self._cache.popitem(last=False)
+        self._cache.move_to_end(key)
+        return self._cache[key]
 
     def predict_ao(self, masks: np.ndarray) -> np.ndarray:
         check_batch(masks, None, self.resolution)
@@ -147,12 +149,12 @@ class GeometricCard:
     def render(self, masks: np.ndarray, ao: np.ndarray, elms: np.ndarray) -> np.ndarray:
         check_batch(masks, elms, self.resolution, ao)
         out = []
-        for mask, edited, elm in zip(masks, ao, elms):
+        for mask, edited, elm in zip(masks, ao, elms, strict=True):
             card, card_ao = self._card(mask)
             if elm.max() <= 0:
                 out.append(np.zeros(mask.shape, np.float32))
                 continue
-            s = _resize(card.shadow(*self._blocks(np.maximum(elm, 0) * self._w16)), self.resolution)
+            s = _resize(card.shadow(np.maximum(elm, 0).ravel() * self._weights), self.resolution)
             # Both visibilities at frame resolution, so an unedited AO map changes nothing.
             card_visibility = np.maximum(_resize(card_ao, self.resolution), 1e-3) ** 3
             edited_visibility = np.clip(edited, 0, 1) ** 3
