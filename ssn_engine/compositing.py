@@ -61,10 +61,11 @@ def shadow_layer(
     c = _colour(color)
     if channels == "bgra":
         c = c[::-1]
-    out = np.empty(shadow.shape + (4,), np.float32)
-    out[..., :3] = c
-    out[..., 3] = _opacity(opacity) * np.clip(shadow, 0.0, 1.0)
-    return from_unit_float(out, dtype)
+    out = np.empty(shadow.shape + (4,), dtype)
+    out[..., :3] = from_unit_float(c, dtype)
+    alpha = np.clip(shadow, 0.0, 1.0).astype(np.float32, copy=False) * np.float32(_opacity(opacity))
+    out[..., 3] = from_unit_float(alpha, dtype)
+    return out
 
 
 def composite_shadow(

@@ -7,7 +7,8 @@
 #        gimp_chroot.sh run [VAR=VALUE ...] CMD [ARGS ...]
 #                                      run CMD inside the chroot with a clean environment
 #        gimp_chroot.sh gimp-eval CODE run CODE with gimp-console-3.0's python-fu-eval
-#                                      (with SSN_GIMP_XVFB=1: under xvfb-run, so plug-in dialogs can open)
+#                                      (with SSN_GIMP_XVFB=1: under xvfb-run, so plug-in dialogs can open;
+#                                      with SSN_GIMP_GUI=1: the full gimp-3.0 GUI under xvfb-run)
 #                                      (GIMP3_DIRECTORY is taken from $SSN_GIMP3_DIRECTORY, a
 #                                      path inside the chroot, when set)
 #
@@ -26,10 +27,10 @@ DIR="${SSN_GIMP_CHROOT:-/var/cache/ssn-shadow/gimp-trixie}"
 DIR="${DIR%/}"
 MIRROR="${SSN_GIMP_MIRROR:-http://deb.debian.org/debian}"
 PACKAGES=(gimp python3-gi gir1.2-gimp-3.0)
-# xvfb + xauth: a virtual display for the dialog test (xvfb-run); small next to GIMP.
-EXTRA_PACKAGES=(xvfb xauth)
+# xvfb + xauth: a virtual display for the dialog and undo tests (xvfb-run); xdotool presses Ctrl+Z.
+EXTRA_PACKAGES=(xvfb xauth xdotool)
 STAMP_NAME=".ssn-shadow-chroot"
-STAMP_TEXT="ssn-shadow gimp chroot v2: debootstrap --variant=minbase trixie + ${PACKAGES[*]} ${EXTRA_PACKAGES[*]}"
+STAMP_TEXT="ssn-shadow gimp chroot v3: debootstrap --variant=minbase trixie + ${PACKAGES[*]} ${EXTRA_PACKAGES[*]}"
 
 die() { echo "gimp_chroot.sh: $*" >&2; exit 2; }
 
@@ -124,10 +125,15 @@ case "$cmd" in
         [ -n "${SSN_SHADOW_DIALOG_SELFTEST:-}" ] && extra+=("SSN_SHADOW_DIALOG_SELFTEST=$SSN_SHADOW_DIALOG_SELFTEST")
         [ -n "${SSN_SHADOW_DIALOG_SCREENSHOT:-}" ] && extra+=("SSN_SHADOW_DIALOG_SCREENSHOT=$SSN_SHADOW_DIALOG_SCREENSHOT")
         xvfb=()
-        [ -n "${SSN_GIMP_XVFB:-}" ] && xvfb=(xvfb-run -a)
+        gimp=(gimp-console-3.0 -i)
+        [ -n "${SSN_GIMP_XVFB:-}" ] && xvfb=(xvfb-run -a -s "-screen 0 1280x1024x24")
+        if [ -n "${SSN_GIMP_GUI:-}" ]; then
+            xvfb=(xvfb-run -a -s "-screen 0 1280x1024x24")
+            gimp=(gimp-3.0 --no-splash)
+        fi
         # shellcheck disable=SC2046
         in_chroot "$DIR" $(clean_env) "${extra[@]}" "${xvfb[@]}" \
-            gimp-console-3.0 -i --batch-interpreter python-fu-eval -b "$1" --quit
+            "${gimp[@]}" --batch-interpreter python-fu-eval -b "$1" --quit
         ;;
     *) sed -n '2,/^set -euo/p' "$0" | grep '^#' | sed 's/^# \{0,1\}//' >&2; exit 2 ;;
 esac

@@ -4,9 +4,10 @@ The chroot (plugin_gimp/tools/gimp_chroot.sh, cached outside the checkout in
 $SSN_GIMP_CHROOT, default /var/cache/ssn-shadow/gimp-trixie) is built once per
 machine. The engine worker runs on the host (``ssn-shadow serve --port 0``);
 the plug-in reaches it through the loopback socket, the chroot sharing the
-host's network namespace. One GIMP session runs every case of
-gimp_batch_check.py; this test checks what it reports against the engine run
-directly on the same cutout.
+host's network namespace. One gimp-console session runs every case of
+gimp_batch_check.py (checked against the engine run directly on the same
+cutout); a second one under Xvfb drives the dialog (gimp_dialog_check.py);
+the GIMP GUI under Xvfb gets a real Ctrl+Z (gimp_undo_check.py).
 
 Skips when the chroot is missing and cannot be built, unless CI=true (then it
 fails instead).
@@ -35,6 +36,8 @@ pytestmark = pytest.mark.gimp
 ROOT = Path(__file__).resolve().parents[2]
 TOOL = ROOT / "plugin_gimp" / "tools" / "gimp_chroot.sh"
 BATCH_SCRIPT = Path(__file__).with_name("gimp_batch_check.py")
+DIALOG_SCRIPT = Path(__file__).with_name("gimp_dialog_check.py")
+UNDO_SCRIPT = Path(__file__).with_name("gimp_undo_check.py")
 IN_CI = os.environ.get("CI") == "true"
 
 W, H = 320, 240
@@ -117,33 +120,43 @@ def worker():
 
 
 @pytest.fixture(scope="module")
-def gimp_results(chroot, worker):
+def workdir(chroot, worker):
+    """A throwaway folder inside the chroot's /tmp with a GIMP profile holding the plug-in: (host path, inner path)."""
     port, _ = worker
     work = Path(tempfile.mkdtemp(prefix="ssn-gimp-test-", dir=chroot / "tmp"))
-    inner = "/tmp/" + work.name  # the same folder seen from inside the chroot
     try:
         install(work / "profile" / "plug-ins" / "ssn-shadow", address=("127.0.0.1", port))
         (work / "out").mkdir()
-        shutil.copy(BATCH_SCRIPT, work / "check.py")
-        (work / "job.json").write_text(json.dumps({"out_dir": inner + "/out", "cases": CASES}))
-        code = f'JOB_PATH = "{inner}/job.json"; exec(open("{inner}/check.py").read())'
-        env = {**os.environ, "SSN_GIMP3_DIRECTORY": inner + "/profile"}
-        start = time.monotonic()
-        run = subprocess.run([str(TOOL), "gimp-eval", code], env=env, capture_output=True, text=True, timeout=240)
-        seconds = time.monotonic() - start
-        log = run.stdout + run.stderr
-        results_path = work / "out" / "results.json"
-        assert results_path.exists(), f"GIMP wrote no results (rc {run.returncode}):\n{log[-6000:]}"
-        results = {r["name"]: r for r in json.loads(results_path.read_text())}
-        arrays = {}
-        for name, r in results.items():
-            for key in ("cutout_pixels", "shadow_pixels"):
-                if key in r:
-                    arrays[(name, key)] = np.fromfile(work / "out" / Path(r[key]).name, dtype="<f4")
-        print(f"gimp-console session: {seconds:.1f} s for {len(CASES)} cases")
-        yield results, arrays, log
+        yield work, "/tmp/" + work.name  # the same folder seen from inside the chroot
     finally:
         shutil.rmtree(work, ignore_errors=True)
+
+
+def run_gimp(inner: str, code: str, **env: str) -> tuple[subprocess.CompletedProcess, float]:
+    env = {**os.environ, "SSN_GIMP3_DIRECTORY": inner + "/profile", **env}
+    start = time.monotonic()
+    run = subprocess.run([str(TOOL), "gimp-eval", code], env=env, capture_output=True, text=True, timeout=240)
+    return run, time.monotonic() - start
+
+
+@pytest.fixture(scope="module")
+def gimp_results(workdir):
+    work, inner = workdir
+    shutil.copy(BATCH_SCRIPT, work / "check.py")
+    (work / "job.json").write_text(json.dumps({"out_dir": inner + "/out", "cases": CASES}))
+    run, seconds = run_gimp(inner, f'JOB_PATH = "{inner}/job.json"; exec(open("{inner}/check.py").read())')
+    log = run.stdout + run.stderr
+    results_path = work / "out" / "results.json"
+    assert results_path.exists(), f"GIMP wrote no results (rc {run.returncode}):\n{log[-6000:]}"
+    results = {r["name"]: r for r in json.loads(results_path.read_text())}
+    arrays = {}
+    for name, r in results.items():
+        for key in ("cutout_pixels", "shadow_pixels"):
+            if key in r:
+                arrays[(name, key)] = np.fromfile(work / "out" / Path(r[key]).name, dtype="<f4")
+    runs = ", ".join(f"{r['name']} {r['seconds']:.2f} s" for r in results.values() if "seconds" in r)
+    print(f"\ngimp-console session: {seconds:.1f} s for {len(CASES)} cases; procedure runs: {runs}")
+    return results, arrays, log
 
 
 def _expected(worker_port: int, case: dict, cutout: np.ndarray) -> tuple[dict, np.ndarray]:
@@ -226,8 +239,47 @@ def test_errors_are_clear_and_change_nothing(gimp_results, case):
 
 
 def test_undo_group_closed(gimp_results):
-    """GIMP 3's PDB has no undo command, so the test cannot press Ctrl+Z; it checks instead that the
-    plug-in left no undo group open (GIMP core warns when a plug-in does) and no plug-in crashed."""
+    """The plug-in left no undo group open (GIMP core warns when a plug-in does) and nothing crashed."""
     _, _, log = gimp_results
     assert "inconsistent" not in log.lower(), log[-4000:]
     assert "plug-in crashed" not in log.lower() and "traceback" not in log.lower(), log[-4000:]
+
+
+def test_one_undo_removes_the_shadow(workdir):
+    """GIMP 3's PDB has no undo command, so the GUI (gimp-3.0 under Xvfb) gets a real Ctrl+Z (xdotool)."""
+    work, inner = workdir
+    shutil.copy(UNDO_SCRIPT, work / "undo.py")
+    run, seconds = run_gimp(inner, f'OUT_PATH = "{inner}/out/undo.json"; exec(open("{inner}/undo.py").read())',
+                            SSN_GIMP_GUI="1")
+    log = run.stdout + run.stderr
+    print(f"\ngimp-3.0 GUI undo session: {seconds:.1f} s")
+    assert (work / "out" / "undo.json").exists(), log[-6000:]
+    result = json.loads((work / "out" / "undo.json").read_text())
+    assert result["status"] == "success"
+    assert result["after"] == ["Pawn", "Shadow: Pawn", "Background"]
+    assert result["window"], f"no image window found: {result}\n{log[-3000:]}"
+    assert result["after_undo"] == result["before"] == ["Pawn", "Background"], result
+
+
+def test_interactive_dialog(workdir):
+    """The dialog under Xvfb: built, light map edited, preview rendered, OK pressed (the plug-in's
+    SSN_SHADOW_DIALOG_SELFTEST hook), and the shadow layer made from the edited light map."""
+    work, inner = workdir
+    shutil.copy(DIALOG_SCRIPT, work / "dialog.py")
+    env = {"SSN_GIMP_XVFB": "1", "SSN_SHADOW_DIALOG_SELFTEST": "1"}
+    if os.environ.get("SSN_GIMP_DIALOG_SCREENSHOT"):
+        env["SSN_SHADOW_DIALOG_SCREENSHOT"] = inner + "/out/dialog.png"
+    run, seconds = run_gimp(inner, f'OUT_PATH = "{inner}/out/dialog.json"; exec(open("{inner}/dialog.py").read())',
+                            **env)
+    log = run.stdout + run.stderr
+    print(f"\ngimp-console dialog session: {seconds:.1f} s")
+    assert (work / "out" / "dialog.json").exists(), log[-6000:]
+    result = json.loads((work / "out" / "dialog.json").read_text())
+    assert result["status"] == "success", result.get("error")
+    assert result["layers"] == ["Pawn", "Shadow: Pawn", "Background"]
+    line = next((ln for ln in log.splitlines() if ln.startswith("ssn-shadow dialog selftest:")), None)
+    assert line is not None, log[-6000:]
+    assert "lights=2" in line and "preview=200x150" in line and "status=''" in line
+    assert "traceback" not in log.lower(), log[-6000:]
+    if os.environ.get("SSN_GIMP_DIALOG_SCREENSHOT"):
+        shutil.copy(work / "out" / "dialog.png", os.environ["SSN_GIMP_DIALOG_SCREENSHOT"])
