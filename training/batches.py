@@ -1,0 +1,172 @@
+"""Training batches: cached views at the network's resolution plus random ELMs and exact ground truth.
+
+A :class:`ViewCache` keeps, per view, the mask and AO resampled to R (PIL
+bilinear, as the engine feeds the network) and the occlusion bases
+area-averaged to R x R (uint8, rounded; the shadow is linear in them, so this
+is the ground truth at R up to 0.5/255 per texel). When the dataset is larger
+than the cache, the cache rotates: every batch replaces a few cached views
+with uncached ones.
+
+Targets, for a light map rendered to ``L`` on the dataset's Hb x 2Hb grid and
+``L16`` on the network's 16 x 32 grid (``peak = max L16``):
+- "shadow": s = sum_t L_t W_t occ_t / sum_t L_t W_t (the conventions' s), via the store's algebra.
+- "irradiance": E = sum_t (L_t / peak) W_t (1 - occ_t), the raw irradiance in the units of the
+  network's (peak-1) ELM input: the Non-inv-SSN ablation's target. s = 1 - E / E0.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+
+import numpy as np
+
+from ssn_engine.hemisphere import network_elm, texel_weights
+
+from .elm import LightBatch, render_lights, sample_lights
+from .frames import area_downsample, resize_frames
+
+TARGETS = ("shadow", "irradiance")
+
+
+@dataclass
+class CachedView:
+    """One view at the network's resolution R."""
+
+    key: tuple
+    mask: np.ndarray  # (R, R) float32
+    ao: np.ndarray  # (R, R) float32
+    occ: np.ndarray  # (T, R*R) uint8, occ * 255
+
+
+def view_key(store, i: int) -> tuple:
+    """A key of view ``i`` that survives re-opening the store (ids shift when meshes are added)."""
+    info = store.info(i)
+    return (info["mesh_id"], float(info["yaw"]), float(info["pitch"]))
+
+
+def load_view(store, i: int, resolution: int) -> CachedView:
+    """Load view ``i`` of ``store`` and bring it to ``resolution``."""
+    v = store.load(i)
+    t = v.occlusion.shape[0] * v.occlusion.shape[1]
+    occ = area_downsample(np.asarray(v.occlusion).reshape(t, *v.occlusion.shape[2:]), resolution)
+    occ = np.rint(occ).astype(np.uint8).reshape(t, -1)
+    mask = resize_frames(v.mask[None], resolution)[0]
+    ao = resize_frames(v.ao[None], resolution)[0]
+    return CachedView(view_key(store, i), mask, np.clip(ao, 0.0, 1.0), occ)
+
+
+def targets_for(occ: np.ndarray, elm_hb: np.ndarray, peak: np.ndarray, weights: np.ndarray, target: str) -> np.ndarray:
+    """Ground truth for one view and m light maps: occ (T, P) uint8, elm_hb (m, Hb, 2Hb), peak (m,) -> (m, P)."""
+    w = elm_hb.reshape(len(elm_hb), -1).astype(np.float64) * weights.reshape(1, -1)
+    occ_f = occ.astype(np.float32)
+    if target == "shadow":
+        total = w.sum(axis=1, keepdims=True)
+        wn = np.where(total > 0, w / np.where(total > 0, total, 1.0), 0.0) / 255.0
+        return np.clip(wn.astype(np.float32) @ occ_f, 0.0, 1.0)
+    if target == "irradiance":
+        wn = w / np.where(peak > 0, peak, 1.0)[:, None]
+        blocked = (wn / 255.0).astype(np.float32) @ occ_f
+        return np.maximum(wn.sum(axis=1, keepdims=True).astype(np.float32) - blocked, 0.0)
+    raise ValueError(f"target must be one of {TARGETS}, got {target!r}")
+
+
+def irradiance_to_shadow(e: np.ndarray, elm16: np.ndarray) -> np.ndarray:
+    """s = 1 - E / E0 for irradiance in the units of the peak-1 ELM ``elm16`` (n, 16, 32); E (n, ...)."""
+    e0 = (network_elm(elm16).astype(np.float64) * texel_weights(16)).sum(axis=(1, 2))
+    e0 = e0.reshape((-1,) + (1,) * (e.ndim - 1))
+    s = np.where(e0 > 0, 1.0 - e / np.where(e0 > 0, e0, 1.0), 0.0)
+    return np.clip(s, 0.0, 1.0).astype(np.float32)
+
+
+class ViewCache:
+    """Views of one split at resolution R, loaded lazily, at most ``max_views`` kept."""
+
+    def __init__(self, store, split: str, resolution: int, max_views: int = 300, kind: str | None = None):
+        self.resolution, self.max_views, self.split, self.kind = resolution, max_views, split, kind
+        self.views: dict[tuple, CachedView] = {}
+        self.open(store)
+
+    def open(self, store) -> None:
+        """(Re-)read the store's list of views (a growing dataset adds meshes)."""
+        self.store = store
+        self.ids = store.view_ids(self.split, self.kind)
+        self.keys = {view_key(store, i): i for i in self.ids}
+        self.weights = texel_weights(store.meta["elm_rows"])
+        self.views = {k: v for k, v in self.views.items() if k in self.keys}
+
+    def __len__(self) -> int:
+        return len(self.ids)
+
+    def fill(self, rng: np.random.Generator, swap: int = 1) -> None:
+        """Load views until the cache is full; when full, replace ``swap`` random cached views by uncached ones."""
+        missing = [k for k in self.keys if k not in self.views]
+        if not missing:
+            return
+        order = rng.permutation(len(missing))
+        room = self.max_views - len(self.views)
+        if room <= 0:
+            cached = list(self.views)
+            for j in rng.choice(len(cached), size=min(swap, len(cached)), replace=False):
+                del self.views[cached[j]]
+            room = min(swap, len(missing))
+        for j in order[:room]:
+            k = missing[j]
+            self.views[k] = load_view(self.store, self.keys[k], self.resolution)
+
+    def get(self, key: tuple) -> CachedView:
+        if key not in self.views:
+            self.views[key] = load_view(self.store, self.keys[key], self.resolution)
+        return self.views[key]
+
+
+@dataclass
+class Batch:
+    """Numpy arrays: mask, ao, target (B, R, R); elm (B, 16, 32) network-normalised; lights; view keys."""
+
+    mask: np.ndarray
+    ao: np.ndarray
+    elm: np.ndarray
+    target: np.ndarray
+    lights: LightBatch
+    keys: list
+
+
+def make_batch(views: list[CachedView], lights: LightBatch, elm_rows: int, weights: np.ndarray,
+               target: str = "shadow") -> Batch:
+    """Ground truth for ``views[b]`` under light map ``b``."""
+    elm_hb = render_lights(lights, elm_rows)
+    elm16 = render_lights(lights, 16)
+    peak = elm16.reshape(len(elm16), -1).max(axis=1)
+    r = views[0].mask.shape[-1]
+    out = np.empty((len(views), r * r), np.float32)
+    by_view: dict[int, list[int]] = {}
+    for b, v in enumerate(views):
+        by_view.setdefault(id(v), []).append(b)
+    for idx in by_view.values():
+        out[idx] = targets_for(views[idx[0]].occ, elm_hb[idx], peak[idx], weights, target)
+    return Batch(
+        mask=np.stack([v.mask for v in views]),
+        ao=np.stack([v.ao for v in views]),
+        elm=network_elm(elm16),
+        target=out.reshape(len(views), r, r),
+        lights=lights,
+        keys=[v.key for v in views],
+    )
+
+
+class BatchSampler:
+    """Random training batches: ``batch // elms_per_view`` cached views, each under ``elms_per_view`` random ELMs."""
+
+    def __init__(self, cache: ViewCache, batch: int, target: str = "shadow", elms_per_view: int = 2,
+                 swap: int = 1, max_lights: int = 50):
+        self.cache, self.batch, self.target = cache, batch, target
+        self.elms_per_view, self.swap, self.max_lights = elms_per_view, swap, max_lights
+
+    def __call__(self, rng: np.random.Generator) -> Batch:
+        self.cache.fill(rng, self.swap)
+        keys = list(self.cache.views)
+        n_views = max(1, self.batch // self.elms_per_view)
+        chosen = [keys[j] for j in rng.choice(len(keys), size=n_views, replace=len(keys) < n_views)]
+        views = [self.cache.get(chosen[b % n_views]) for b in range(self.batch)]
+        lights = sample_lights(rng, self.batch, self.max_lights)
+        return make_batch(views, lights, self.cache.store.meta["elm_rows"], self.cache.weights, self.target)

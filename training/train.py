@@ -1,0 +1,337 @@
+"""Train the AOP or the SR module (paper Section 5): ``python -m training.train --module aop|sr --run runs/NAME``.
+
+Resumable: the run directory holds ``last.pt`` (written every ``--ckpt-minutes``
+and on SIGTERM/SIGINT), ``best.pt`` (lowest validation loss), ``log.csv``,
+``loss.png`` and ``samples_*.png``; running the same command again resumes.
+On several GPUs or machines, launch with torchrun (DistributedDataParallel):
+``torchrun --nproc_per_node=4 -m training.train --module sr ...``.
+
+Schedule: Adam, learning rate ``--lr`` (1e-3), linear warm-up over
+``--warmup`` steps, then cosine decay to ``--lr-min`` at ``--steps``.
+"""
+
+from __future__ import annotations
+
+import argparse
+import csv
+import json
+import os
+import queue
+import signal
+import sys
+import threading
+import time
+from pathlib import Path
+
+import numpy as np
+import torch
+from torch.nn import functional as F
+
+from . import checkpoint
+from .batches import BatchSampler, ViewCache, make_batch
+from .elm import sample_lights
+from .model import UNetConfig, build
+from .model.complexity import describe
+from .perturb import perturb_ao
+from .plots import image_grid, loss_curve
+from .progress import Progress
+
+LOG_FIELDS = ["step", "samples", "lr", "train_loss", "val_loss", "seconds", "samples_per_s"]
+
+
+def parse_args(argv: list[str] | None = None) -> argparse.Namespace:
+    p = argparse.ArgumentParser(prog="python -m training.train", description=__doc__.split("\n")[0])
+    p.add_argument("--module", choices=["aop", "sr"], required=True)
+    p.add_argument("--target", choices=["shadow", "irradiance"], default="shadow",
+                   help="SR target: the conventions' shadow s (SSN) or raw irradiance E (Non-inv-SSN ablation)")
+    p.add_argument("--data", default="data/ssn128", help="dataset root (training.data.store.ViewStore)")
+    p.add_argument("--run", required=True, help="run directory (checkpoints, logs)")
+    p.add_argument("--resolution", type=int, default=128)
+    p.add_argument("--widths", default="8,16,32,64,96,128", help="channels per U-Net stage")
+    p.add_argument("--groups", type=int, default=8)
+    p.add_argument("--batch", type=int, default=16, help="batch per process")
+    p.add_argument("--steps", type=int, default=6000)
+    p.add_argument("--lr", type=float, default=1e-3)
+    p.add_argument("--lr-min", type=float, default=1e-5)
+    p.add_argument("--warmup", type=int, default=100)
+    p.add_argument("--seed", type=int, default=0)
+    p.add_argument("--threads", type=int, default=2, help="torch CPU threads")
+    p.add_argument("--cache-views", type=int, default=300, help="views kept in memory (rotating)")
+    p.add_argument("--elms-per-view", type=int, default=4)
+    p.add_argument("--no-perturb", action="store_true", help="SR: feed the ground-truth AO unperturbed")
+    p.add_argument("--ckpt-minutes", type=float, default=4.0)
+    p.add_argument("--refresh-minutes", type=float, default=10.0, help="re-open the store (growing dataset)")
+    p.add_argument("--val-every", type=int, default=250)
+    p.add_argument("--val-samples", type=int, default=48)
+    p.add_argument("--log-every", type=int, default=20)
+    p.add_argument("--max-minutes", type=float, default=0.0, help="stop (with a checkpoint) after this long; 0: no limit")
+    p.add_argument("--fresh", action="store_true", help="ignore an existing checkpoint in --run")
+    args = p.parse_args(argv)
+    args.widths = tuple(int(w) for w in str(args.widths).split(","))
+    return args
+
+
+def lr_at(step: int, args: argparse.Namespace) -> float:
+    """Linear warm-up, then cosine decay from ``lr`` to ``lr_min`` at ``steps``."""
+    if step < args.warmup:
+        return args.lr * (step + 1) / args.warmup
+    t = min(1.0, (step - args.warmup) / max(1, args.steps - args.warmup))
+    return args.lr_min + 0.5 * (args.lr - args.lr_min) * (1 + np.cos(np.pi * t))
+
+
+def setup_distributed() -> tuple[int, int, torch.device]:
+    """(rank, world size, device); initialises torch.distributed when launched by torchrun."""
+    world = int(os.environ.get("WORLD_SIZE", "1"))
+    rank = int(os.environ.get("RANK", "0"))
+    local = int(os.environ.get("LOCAL_RANK", "0"))
+    if torch.cuda.is_available():
+        torch.cuda.set_device(local)
+        device = torch.device("cuda", local)
+    else:
+        device = torch.device("cpu")
+    if world > 1:
+        torch.distributed.init_process_group("nccl" if device.type == "cuda" else "gloo")
+    return rank, world, device
+
+
+class Prefetcher:
+    """Builds batches in a background thread (numpy releases the GIL) while the model trains."""
+
+    def __init__(self, make, rng: np.random.Generator, depth: int = 2):
+        self.make, self.rng = make, rng
+        self.q: queue.Queue = queue.Queue(maxsize=depth)
+        self.stop = False
+        self.thread = threading.Thread(target=self._run, daemon=True)
+        self.thread.start()
+
+    def _run(self) -> None:
+        while not self.stop:
+            try:
+                item = self.make(self.rng)
+            except Exception as exc:  # hand the error to the consumer
+                item = exc
+            self.q.put(item)
+            if isinstance(item, Exception):
+                return
+
+    def next(self):
+        item = self.q.get()
+        if isinstance(item, Exception):
+            raise item
+        return item
+
+    def close(self) -> None:
+        self.stop = True
+        while not self.q.empty():
+            self.q.get_nowait()
+
+
+def to_tensors(batch, device: torch.device) -> dict[str, torch.Tensor]:
+    t = lambda a: torch.from_numpy(np.ascontiguousarray(a)).to(device)
+    return {"mask": t(batch.mask[:, None]), "ao": t(batch.ao[:, None]), "elm": t(batch.elm),
+            "target": t(batch.target[:, None])}
+
+
+def forward(model, module: str, x: dict[str, torch.Tensor], ao: torch.Tensor | None = None) -> torch.Tensor:
+    if module == "aop":
+        return model(x["mask"])
+    return model(x["mask"], x["ao"] if ao is None else ao, x["elm"])
+
+
+def target_of(module: str, x: dict[str, torch.Tensor]) -> torch.Tensor:
+    return x["ao"] if module == "aop" else x["target"]
+
+
+def build_val(store, args, weights_rows: int):
+    """A fixed validation batch (val split; the train split if val is empty)."""
+    split = "val" if store.view_ids("val") else "train"
+    cache = ViewCache(store, split, args.resolution, max_views=args.val_samples)
+    rng = np.random.default_rng([args.seed, 7919])
+    ids = cache.ids
+    chosen = [ids[j] for j in rng.choice(len(ids), size=args.val_samples, replace=len(ids) < args.val_samples)]
+    from .batches import load_view, view_key
+
+    views = {}
+    for i in chosen:
+        k = view_key(store, i)
+        if k not in views:
+            views[k] = load_view(store, i, args.resolution)
+    vs = [views[view_key(store, i)] for i in chosen]
+    lights = sample_lights(rng, len(vs))
+    return make_batch(vs, lights, weights_rows, cache.weights, args.target), split
+
+
+@torch.no_grad()
+def validate(model, module: str, val: dict[str, torch.Tensor], chunk: int = 16) -> tuple[float, torch.Tensor]:
+    model.eval()
+    preds = []
+    for i in range(0, val["mask"].shape[0], chunk):
+        part = {k: v[i : i + chunk] for k, v in val.items()}
+        preds.append(forward(model, module, part))
+    model.train()
+    pred = torch.cat(preds)
+    return float(F.mse_loss(pred, target_of(module, val))), pred
+
+
+def write_samples(path: Path, module: str, val: dict[str, torch.Tensor], pred: torch.Tensor, n: int = 6) -> None:
+    rows = []
+    for b in range(min(n, pred.shape[0])):
+        m, a = val["mask"][b, 0].cpu().numpy(), val["ao"][b, 0].cpu().numpy()
+        p, g = pred[b, 0].cpu().numpy(), target_of(module, val)[b, 0].cpu().numpy()
+        scale = max(float(g.max()), 1e-6) if module == "sr" and g.max() > 1 else 1.0
+        elm = np.kron(val["elm"][b].cpu().numpy(), np.ones((4, 4))) if module == "sr" else None
+        row = [m, a] if module == "aop" else [m, a, elm]
+        rows.append(row + [p / scale, g / scale, np.abs(p - g) / scale * 4])
+    labels = (["mask", "gt ao"] if module == "aop" else ["mask", "gt ao", "elm"]) + ["pred", "gt", "|err|x4"]
+    image_grid(rows, path, labels, cell=112)
+
+
+def read_log(path: Path) -> list[dict]:
+    if not path.is_file():
+        return []
+    with path.open() as f:
+        return list(csv.DictReader(f))
+
+
+def plot_log(run: Path, title: str) -> None:
+    rows = read_log(run / "log.csv")
+    train = [(float(r["step"]), float(r["train_loss"])) for r in rows if r["train_loss"]]
+    val = [(float(r["step"]), float(r["val_loss"])) for r in rows if r["val_loss"]]
+    loss_curve({"train (per-pixel L2)": train, "val": val}, run / "loss.png", title)
+
+
+def main(argv: list[str] | None = None) -> int:
+    args = parse_args(argv)
+    if args.module == "aop":
+        args.target = "ao"
+    torch.set_num_threads(args.threads)
+    rank, world, device = setup_distributed()
+    main_proc = rank == 0
+    run = Path(args.run)
+    run.mkdir(parents=True, exist_ok=True)
+    torch.manual_seed(args.seed)
+
+    from .data.store import ViewStore
+
+    store = ViewStore(args.data)
+    config = UNetConfig(widths=args.widths, groups=args.groups, resolution=args.resolution)
+    model = build(args.module, config).to(device)
+    if main_proc:
+        print(describe(args.module, model, args.resolution), flush=True)
+    opt = torch.optim.Adam(model.parameters(), lr=args.lr)
+    step, samples, best = 0, 0, float("inf")
+    ckpt_path = None if args.fresh else checkpoint.resume_path(run)
+    if ckpt_path is not None:
+        ckpt = checkpoint.load(ckpt_path)
+        if ckpt["module"] != args.module or ckpt.get("target") != args.target or ckpt["unet"] != config.to_dict():
+            raise SystemExit(f"{ckpt_path} is a {ckpt['module']}/{ckpt.get('target')} {ckpt['unet']} run; "
+                             "use another --run or --fresh")
+        model.load_state_dict(ckpt["model"])
+        opt.load_state_dict(ckpt["optimizer"])
+        step, samples, best = ckpt["step"], ckpt["samples"], ckpt.get("best_val", float("inf"))
+        if main_proc:
+            print(f"resumed from {ckpt_path} at step {step}", flush=True)
+    if main_proc:
+        (run / "config.json").write_text(json.dumps({**vars(args), "widths": list(args.widths)}, indent=1))
+    ddp = torch.nn.parallel.DistributedDataParallel(model) if world > 1 else model
+
+    cache = ViewCache(store, "train", args.resolution, max_views=args.cache_views)
+    sampler = BatchSampler(cache, args.batch, "shadow" if args.module == "aop" else args.target, args.elms_per_view)
+    rows = store.meta["elm_rows"]
+    val_batch, val_split = build_val(store, args, rows) if main_proc else (None, None)
+    val = to_tensors(val_batch, device) if val_batch is not None else None
+    if main_proc:
+        print(f"train views: {len(cache)} (cache {args.cache_views}), val: {args.val_samples} samples from the "
+              f"{val_split} split, batch {args.batch} x {world} process(es), device {device}", flush=True)
+    gen = torch.Generator().manual_seed(args.seed * 1000 + rank + step)
+    pre = Prefetcher(sampler, np.random.default_rng([args.seed, rank, step]))
+
+    stop = {"flag": False}
+
+    def on_signal(signum, _frame):
+        stop["flag"] = True
+
+    signal.signal(signal.SIGTERM, on_signal)
+    signal.signal(signal.SIGINT, on_signal)
+
+    def save_ckpt(path: Path) -> None:
+        checkpoint.save(path, {"model": model.state_dict(), "optimizer": opt.state_dict(), "step": step,
+                               "samples": samples, "best_val": best, "module": args.module, "target": args.target,
+                               "unet": config.to_dict(), "args": {**vars(args), "widths": list(args.widths)},
+                               "elm_rows": rows, "data": str(args.data)})
+
+    log_path = run / "log.csv"
+    new_log = not log_path.is_file()
+    log_f = log_path.open("a", newline="") if main_proc else None
+    writer = csv.DictWriter(log_f, LOG_FIELDS) if log_f else None
+    if writer and new_log:
+        writer.writeheader()
+    t_start = time.perf_counter()
+    t_ckpt = t_refresh = time.perf_counter()
+    prior_seconds = float(read_log(log_path)[-1]["seconds"]) if main_proc and not new_log and read_log(log_path) else 0.0
+    progress = Progress(args.steps, start=step, every=args.log_every)
+    running, n_running, t_log = 0.0, 0, time.perf_counter()
+    ddp.train()
+    while step < args.steps and not stop["flag"]:
+        lr = lr_at(step, args)
+        for g in opt.param_groups:
+            g["lr"] = lr
+        x = to_tensors(pre.next(), device)
+        ao_in = None
+        if args.module == "sr" and not args.no_perturb:
+            ao_in = perturb_ao(x["ao"].cpu(), gen).to(device)
+        pred = forward(ddp, args.module, x, ao_in)
+        loss = F.mse_loss(pred, target_of(args.module, x))
+        opt.zero_grad(set_to_none=True)
+        loss.backward()
+        opt.step()
+        step += 1
+        samples += args.batch * world
+        running += float(loss)
+        n_running += 1
+        if main_proc:
+            progress.update(step, f"loss {running / n_running:.5f} lr {lr:.2e}")
+        do_val = main_proc and (step % args.val_every == 0 or step == args.steps)
+        if main_proc and (step % args.log_every == 0 or do_val):
+            row = {"step": step, "samples": samples, "lr": f"{lr:.3e}", "train_loss": f"{running / n_running:.6f}",
+                   "val_loss": "", "seconds": f"{prior_seconds + time.perf_counter() - t_start:.1f}",
+                   "samples_per_s": f"{n_running * args.batch * world / (time.perf_counter() - t_log):.2f}"}
+            running, n_running, t_log = 0.0, 0, time.perf_counter()
+            if do_val:
+                v, vpred = validate(model, args.module, val)
+                row["val_loss"] = f"{v:.6f}"
+                write_samples(run / "samples_latest.png", args.module, val, vpred)
+                if v < best:
+                    best = v
+                    save_ckpt(run / checkpoint.BEST)
+            writer.writerow(row)
+            log_f.flush()
+            if do_val:
+                plot_log(run, f"{args.module.upper()} ({args.target}) {run.name}")
+        if main_proc and time.perf_counter() - t_ckpt > args.ckpt_minutes * 60:
+            save_ckpt(run / checkpoint.LAST)
+            t_ckpt = time.perf_counter()
+        if time.perf_counter() - t_refresh > args.refresh_minutes * 60:
+            store = ViewStore(args.data)
+            pre.close()
+            cache.open(store)
+            pre = Prefetcher(sampler, np.random.default_rng([args.seed, rank, step]))
+            t_refresh = time.perf_counter()
+            if main_proc:
+                print(f"\nstore re-opened: {len(cache)} train views", flush=True)
+        if args.max_minutes and time.perf_counter() - t_start > args.max_minutes * 60:
+            break
+    pre.close()
+    if main_proc:
+        progress.close()
+        save_ckpt(run / checkpoint.LAST)
+        plot_log(run, f"{args.module.upper()} ({args.target}) {run.name}")
+        print(f"stopped at step {step} ({samples} samples); checkpoint {run / checkpoint.LAST}", flush=True)
+        log_f.close()
+    if world > 1:
+        torch.distributed.destroy_process_group()
+    return 0
+
+
+if __name__ == "__main__":
+    sys.exit(main())
