@@ -52,11 +52,19 @@ class Camera:
 
     def project(self, points: np.ndarray) -> np.ndarray:
         """World points (..., 3) to continuous image coordinates (..., 2) as (col, row)."""
-        rel = np.asarray(points, np.float64) - self.centre
-        z = rel @ self.view
-        col = 0.5 * self.n + self.focal * (rel @ RIGHT) / z
-        row = 0.5 * self.n - self.focal * (rel @ self.up) / z + self.shift
-        return np.stack([col, row], axis=-1)
+        points = np.asarray(points, np.float64)
+        return np.stack(self.project_xyz(points[..., 0], points[..., 1], points[..., 2]), axis=-1)
+
+    def project_xyz(self, x: np.ndarray, y: np.ndarray, z: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+        """Like :meth:`project` for coordinates given as separate arrays; returns (col, row)."""
+        c, v, u = (tuple(float(a) for a in vec) for vec in (self.centre, self.view, self.up))  # keep x's dtype
+        rx, ry, rz = x - c[0], y - c[1], z - c[2]
+        depth = rx * v[0] + ry * v[1] + rz * v[2]
+        up = rx * u[0] + ry * u[1] + rz * u[2]
+        f, half = float(self.focal), 0.5 * self.n
+        col = half + f * rx / depth  # RIGHT is the x axis
+        row = half - f * up / depth + float(self.shift)
+        return col, row
 
     def frame_top(self, points: np.ndarray) -> Camera:
         """Set the lens shift so that the highest projected point lies on row round(0.03 N)."""

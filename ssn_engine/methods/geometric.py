@@ -64,7 +64,7 @@ class _Card:
         cam.shift = base - cam.project(np.array([0.0, 0.0, 0.0]))[1]
         self.camera, self.height = cam, height
         ground, self.valid = cam.ground_points()
-        self.ground = ground[self.valid]  # (P, 3)
+        self.ground = ground[self.valid].astype(np.float32)  # (P, 3)
 
     def occlusion(self, directions: np.ndarray) -> np.ndarray:
         """Hard-shadow occlusion (T, P) of the card turned towards each world direction (T, 3).
@@ -77,7 +77,7 @@ class _Card:
         ground at x * axis - h * w_h / w_y.
         """
         g = self.ground
-        w = directions.astype(np.float64)
+        w = directions.astype(np.float32)
         azimuth = np.arctan2(w[:, 0], -w[:, 2])  # from the horizontal forward (0, 0, -1)
         facing = np.where(azimuth > np.pi / 2, azimuth - np.pi, azimuth)
         facing = np.where(facing < -np.pi / 2, facing + np.pi, facing)
@@ -91,12 +91,10 @@ class _Card:
         x = (gx * dz[:, None] - gz * dx[:, None]) / det[:, None]
         h = (ax[:, None] * gz - az[:, None] * gx) / det[:, None]
         hit = (h >= 0) & (h <= self.height * 1.001)
-        points = np.stack([x, np.where(hit, h, 0.0), np.zeros_like(x)], axis=-1)
-        image = self.camera.project(points)
-        row = np.minimum(image[..., 1], self.lowest_centre)
-        values = map_coordinates(
-            self.mask, [row.ravel() - 0.5, image[..., 0].ravel() - 0.5], order=1, cval=0.0
-        ).reshape(hit.shape)
+        col, row = self.camera.project_xyz(x, np.where(hit, h, 0.0), 0.0)
+        row = np.minimum(row, self.lowest_centre)
+        values = map_coordinates(self.mask, [row.ravel() - 0.5, col.ravel() - 0.5], order=1, cval=0.0)
+        values = values.reshape(hit.shape)
         return np.where(hit, values, 0.0)
 
     def trace(self, directions: np.ndarray) -> None:
