@@ -58,7 +58,8 @@ def run_benchmark(repeats: int = 20, method: str = "auto") -> dict[str, np.ndarr
     """Time the stages and print a table (milliseconds); returns the raw timings."""
     loaded = load_method(method)
     m = loaded.method
-    print(f"machine: {platform.processor() or platform.machine()}, {os.cpu_count()} cores; method: {m.name} ({loaded.note})")
+    machine = f"{platform.processor() or platform.machine()}, {os.cpu_count()} cores"
+    print(f"machine: {machine}; method: {m.name} ({loaded.note})")
     mask, _ = frame_alpha(pawn_cutout()[..., 3], m.resolution)
     masks = mask[None]
     # AO is cached per mask where a method caches it: alternate with the mirror image to time real work.

@@ -184,21 +184,27 @@ def _add_shadow_options(p: argparse.ArgumentParser) -> None:
     from .methods import METHOD_NAMES
 
     light = p.add_mutually_exclusive_group()
-    light.add_argument("--preset", default=DEFAULT_PRESET, choices=list(PRESETS), help="light preset (default: %(default)s)")
+    light.add_argument(
+        "--preset", default=DEFAULT_PRESET, choices=list(PRESETS), help="light preset (default: %(default)s)"
+    )
     light.add_argument("--light-map", metavar="ELM.json", help="light map JSON (see 'ssn-shadow presets NAME')")
     p.add_argument("--color", type=_color, default=(0.0, 0.0, 0.0), help="shadow colour, e.g. #1a1a2e (default black)")
-    p.add_argument("--opacity", type=_number_in(0.0, 1.0), default=0.85, help="shadow opacity in [0, 1] (default %(default)s)")
+    p.add_argument(
+        "--opacity", type=_number_in(0.0, 1.0), default=0.85, help="shadow opacity in [0, 1] (default %(default)s)"
+    )
     p.add_argument("--ao-edits", metavar="EDITS.json", help="JSON list of AO edits (docs/protocol.md)")
-    p.add_argument("--ao-strength", type=_number_in(0.0, MAX_STRENGTH), help="scale the contact (AO) occlusion; 0 removes it")
-    p.add_argument("--method", default="auto", choices=METHOD_NAMES, help="auto: SSN if a model is installed, else geometric")
+    p.add_argument(
+        "--ao-strength", type=_number_in(0.0, MAX_STRENGTH), help="scale the contact (AO) occlusion; 0 removes it"
+    )
+    p.add_argument(
+        "--method", default="auto", choices=METHOD_NAMES, help="auto: SSN if a model is installed, else geometric"
+    )
 
 
 def build_parser() -> argparse.ArgumentParser:
     from . import __version__
 
-    parser = argparse.ArgumentParser(
-        prog="ssn-shadow", description="Soft shadows for 2D cutouts (SSN, CVPR 2021)."
-    )
+    parser = argparse.ArgumentParser(prog="ssn-shadow", description="Soft shadows for 2D cutouts (SSN, CVPR 2021).")
     parser.add_argument("--version", action="version", version=f"ssn-shadow {__version__}")
     sub = parser.add_subparsers(dest="command", required=True, metavar="COMMAND")
 

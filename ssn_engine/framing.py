@@ -113,9 +113,7 @@ def frame_alpha(alpha: np.ndarray, n: int = 256) -> tuple[np.ndarray, Framing]:
     scale = OBJECT_EXTENT * n / max(bw, bh)
     col0 = int(round(0.5 * n - 0.5 * bw * scale))
     row0 = top_row(n)
-    framing = Framing(
-        n, alpha.shape[1], alpha.shape[0], scale, col0 - x0 * scale, row0 - y0 * scale, (x0, y0, x1, y1)
-    )
+    framing = Framing(n, alpha.shape[1], alpha.shape[0], scale, col0 - x0 * scale, row0 - y0 * scale, (x0, y0, x1, y1))
     fw, fh = min(math.ceil(bw * scale), n - col0), min(math.ceil(bh * scale), n - row0)
     pad = math.ceil(1.0 / scale) + 1  # zero margin: the box may reach past the bbox by a frame pixel
     crop = np.zeros((bh + 1 + pad, bw + 1 + pad), np.float32)

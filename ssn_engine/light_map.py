@@ -105,9 +105,7 @@ class LightMap:
 
     def move(self, index: int, u: float, v: float) -> None:
         """Move a light; u wraps around the azimuth, v is clamped to the map."""
-        self.lights[index] = replace(
-            self.lights[index], u=_clamp(u, -1e9, 1e9) % 1.0, v=_clamp(v, 0.0, 1.0)
-        )
+        self.lights[index] = replace(self.lights[index], u=_clamp(u, -1e9, 1e9) % 1.0, v=_clamp(v, 0.0, 1.0))
 
     def resize(self, index: int, softness: float) -> None:
         """Set a light's softness (sigma^2), clamped to Table 1's range."""
@@ -115,9 +113,7 @@ class LightMap:
 
     def reweight(self, index: int, intensity: float) -> None:
         """Set a light's peak intensity, clamped to Table 1's range."""
-        self.lights[index] = replace(
-            self.lights[index], intensity=_clamp(intensity, *INTENSITY_RANGE)
-        )
+        self.lights[index] = replace(self.lights[index], intensity=_clamp(intensity, *INTENSITY_RANGE))
 
     def delete(self, index: int) -> None:
         del self.lights[index]
@@ -145,7 +141,7 @@ class LightMap:
 
     # -- JSON --------------------------------------------------------------
     def to_dict(self) -> dict[str, Any]:
-        return {"format": FORMAT, "version": VERSION, "lights": [l.to_dict() for l in self.lights]}
+        return {"format": FORMAT, "version": VERSION, "lights": [light.to_dict() for light in self.lights]}
 
     def to_json(self) -> str:
         return json.dumps(self.to_dict(), indent=2)
@@ -158,9 +154,7 @@ class LightMap:
         if data.get("format") != FORMAT:
             raise LightMapError(f"format: expected {FORMAT!r}, got {data.get('format')!r}")
         if data.get("version") != VERSION:
-            raise LightMapError(
-                f"version: this ssn-shadow reads version {VERSION}, got {data.get('version')!r}"
-            )
+            raise LightMapError(f"version: this ssn-shadow reads version {VERSION}, got {data.get('version')!r}")
         lights = data.get("lights")
         if not isinstance(lights, list):
             raise LightMapError("lights: expected a list")
@@ -174,9 +168,7 @@ class LightMap:
             if missing:
                 raise LightMapError(f"lights[{i}].{sorted(missing)[0]}: missing")
             try:
-                parsed.append(
-                    GaussianLight(item["u"], item["v"], item["softness"], item["intensity"])
-                )
+                parsed.append(GaussianLight(item["u"], item["v"], item["softness"], item["intensity"]))
             except LightMapError as exc:
                 raise LightMapError(f"lights[{i}].{exc}") from None
         return cls(parsed)
@@ -208,7 +200,7 @@ class LightMap:
 
 
 def _preset(*lights: tuple[float, float, float, float]) -> Callable[[], LightMap]:
-    return lambda: LightMap([GaussianLight(*l) for l in lights])
+    return lambda: LightMap([GaussianLight(*light) for light in lights])
 
 
 # (u, v, softness, intensity). u = 0.5 is the sky behind the object (shadow
@@ -236,6 +228,4 @@ def preset(name: str) -> LightMap:
     try:
         return PRESETS[name]()
     except KeyError:
-        raise LightMapError(
-            f"unknown preset {name!r}; choose one of: {', '.join(PRESETS)}"
-        ) from None
+        raise LightMapError(f"unknown preset {name!r}; choose one of: {', '.join(PRESETS)}") from None

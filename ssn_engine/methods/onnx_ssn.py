@@ -37,7 +37,10 @@ def _resample(frames: np.ndarray, size: int) -> np.ndarray:
     if frames.shape[-1] == size:
         return np.ascontiguousarray(frames, np.float32)
     return np.stack(
-        [np.asarray(Image.fromarray(f.astype(np.float32), "F").resize((size, size), Image.Resampling.BILINEAR)) for f in frames]
+        [
+            np.asarray(Image.fromarray(f.astype(np.float32), "F").resize((size, size), Image.Resampling.BILINEAR))
+            for f in frames
+        ]
     )
 
 
@@ -97,7 +100,9 @@ class OnnxSSN:
             ao = self._aop.run(["ao"], {"mask": mask})[0]
             s = self._sr.run(["shadow"], {"mask": mask, "ao": ao, "elm": np.zeros((1, 16, 32), np.float32)})[0]
         except Exception as exc:
-            raise ModelError(f"model in {self.meta.get('aop')} / {self.meta.get('sr')} failed a test run: {exc}") from None
+            raise ModelError(
+                f"model in {self.meta.get('aop')} / {self.meta.get('sr')} failed a test run: {exc}"
+            ) from None
         if s.shape != mask.shape:
             raise ModelError(f"sr output has shape {s.shape}, expected {mask.shape}")
 
