@@ -44,12 +44,15 @@ def view_key(store, i: int) -> tuple:
     return (info["mesh_id"], float(info["yaw"]), float(info["pitch"]))
 
 
-def load_view(store, i: int, resolution: int) -> CachedView:
-    """Load view ``i`` of ``store`` and bring it to ``resolution``."""
+def load_view(store, i: int, resolution: int, with_occ: bool = True) -> CachedView:
+    """Load view ``i`` of ``store`` and bring it to ``resolution`` (``with_occ`` False: no bases, for AOP)."""
     v = store.load(i)
     t = v.occlusion.shape[0] * v.occlusion.shape[1]
-    occ = area_downsample(np.asarray(v.occlusion).reshape(t, *v.occlusion.shape[2:]), resolution)
-    occ = np.rint(occ).astype(np.uint8).reshape(t, -1)
+    if with_occ:
+        occ = area_downsample(np.asarray(v.occlusion).reshape(t, *v.occlusion.shape[2:]), resolution)
+        occ = np.rint(occ).astype(np.uint8).reshape(t, -1)
+    else:
+        occ = np.zeros((0, resolution * resolution), np.uint8)
     mask = resize_frames(v.mask[None], resolution)[0]
     ao = resize_frames(v.ao[None], resolution)[0]
     return CachedView(view_key(store, i), mask, np.clip(ao, 0.0, 1.0), occ)
@@ -70,10 +73,12 @@ def targets_for(occ: np.ndarray, elm_hb: np.ndarray, peak: np.ndarray, weights: 
     raise ValueError(f"target must be one of {TARGETS}, got {target!r}")
 
 
-def irradiance_to_shadow(e: np.ndarray, elm16: np.ndarray) -> np.ndarray:
-    """s = 1 - E / E0 for irradiance in the units of the peak-1 ELM ``elm16`` (n, 16, 32); E (n, ...)."""
-    e0 = (network_elm(elm16).astype(np.float64) * texel_weights(16)).sum(axis=(1, 2))
-    e0 = e0.reshape((-1,) + (1,) * (e.ndim - 1))
+def irradiance_to_shadow(e: np.ndarray, elm_hb: np.ndarray, elm16: np.ndarray) -> np.ndarray:
+    """s = 1 - E / E0 for irradiance E (n, ...) in the units of the peak-1 network ELM: E0 = sum_t (L_t / peak) W_t
+    on the basis grid of ``elm_hb`` (n, Hb, 2Hb), peak = max of ``elm16`` (n, 16, 32)."""
+    peak = elm16.reshape(len(elm16), -1).max(axis=1)
+    e0 = (elm_hb.astype(np.float64) * texel_weights(elm_hb.shape[1])).sum(axis=(1, 2))
+    e0 = np.where(peak > 0, e0 / np.where(peak > 0, peak, 1.0), 0.0).reshape((-1,) + (1,) * (e.ndim - 1))
     s = np.where(e0 > 0, 1.0 - e / np.where(e0 > 0, e0, 1.0), 0.0)
     return np.clip(s, 0.0, 1.0).astype(np.float32)
 
@@ -81,8 +86,10 @@ def irradiance_to_shadow(e: np.ndarray, elm16: np.ndarray) -> np.ndarray:
 class ViewCache:
     """Views of one split at resolution R, loaded lazily, at most ``max_views`` kept."""
 
-    def __init__(self, store, split: str, resolution: int, max_views: int = 300, kind: str | None = None):
+    def __init__(self, store, split: str, resolution: int, max_views: int = 300, kind: str | None = None,
+                 with_occ: bool = True):
         self.resolution, self.max_views, self.split, self.kind = resolution, max_views, split, kind
+        self.with_occ = with_occ
         self.views: dict[tuple, CachedView] = {}
         self.open(store)
 
@@ -97,25 +104,27 @@ class ViewCache:
     def __len__(self) -> int:
         return len(self.ids)
 
-    def fill(self, rng: np.random.Generator, swap: int = 1) -> None:
-        """Load views until the cache is full; when full, replace ``swap`` random cached views by uncached ones."""
+    def fill(self, rng: np.random.Generator, swap: int = 1, per_call: int = 4, minimum: int = 16) -> None:
+        """Load up to ``per_call`` uncached views (at least ``minimum`` cached after the call) while there is
+        room; when full, replace ``swap`` random cached views by uncached ones."""
         missing = [k for k in self.keys if k not in self.views]
         if not missing:
             return
-        order = rng.permutation(len(missing))
         room = self.max_views - len(self.views)
         if room <= 0:
             cached = list(self.views)
             for j in rng.choice(len(cached), size=min(swap, len(cached)), replace=False):
                 del self.views[cached[j]]
-            room = min(swap, len(missing))
-        for j in order[:room]:
+            room = swap
+        else:
+            room = min(room, max(per_call, minimum - len(self.views)))
+        for j in rng.permutation(len(missing))[:room]:
             k = missing[j]
-            self.views[k] = load_view(self.store, self.keys[k], self.resolution)
+            self.views[k] = load_view(self.store, self.keys[k], self.resolution, self.with_occ)
 
     def get(self, key: tuple) -> CachedView:
         if key not in self.views:
-            self.views[key] = load_view(self.store, self.keys[key], self.resolution)
+            self.views[key] = load_view(self.store, self.keys[key], self.resolution, self.with_occ)
         return self.views[key]
 
 
@@ -132,17 +141,17 @@ class Batch:
 
 
 def make_batch(views: list[CachedView], lights: LightBatch, elm_rows: int, weights: np.ndarray,
-               target: str = "shadow") -> Batch:
-    """Ground truth for ``views[b]`` under light map ``b``."""
+               target: str | None = "shadow") -> Batch:
+    """Ground truth for ``views[b]`` under light map ``b`` (``target`` None: no shadow target, for AOP)."""
     elm_hb = render_lights(lights, elm_rows)
     elm16 = render_lights(lights, 16)
     peak = elm16.reshape(len(elm16), -1).max(axis=1)
     r = views[0].mask.shape[-1]
-    out = np.empty((len(views), r * r), np.float32)
+    out = np.zeros((len(views), r * r), np.float32)
     by_view: dict[int, list[int]] = {}
     for b, v in enumerate(views):
         by_view.setdefault(id(v), []).append(b)
-    for idx in by_view.values():
+    for idx in by_view.values() if target is not None else []:
         out[idx] = targets_for(views[idx[0]].occ, elm_hb[idx], peak[idx], weights, target)
     return Batch(
         mask=np.stack([v.mask for v in views]),
@@ -157,7 +166,7 @@ def make_batch(views: list[CachedView], lights: LightBatch, elm_rows: int, weigh
 class BatchSampler:
     """Random training batches: ``batch // elms_per_view`` cached views, each under ``elms_per_view`` random ELMs."""
 
-    def __init__(self, cache: ViewCache, batch: int, target: str = "shadow", elms_per_view: int = 2,
+    def __init__(self, cache: ViewCache, batch: int, target: str | None = "shadow", elms_per_view: int = 2,
                  swap: int = 1, max_lights: int = 50):
         self.cache, self.batch, self.target = cache, batch, target
         self.elms_per_view, self.swap, self.max_lights = elms_per_view, swap, max_lights

@@ -73,6 +73,7 @@ def image_grid(rows: list[list[np.ndarray]], path: str | Path, labels: list[str]
     for i, row in enumerate(rows):
         for j, a in enumerate(row):
             a = np.clip(np.asarray(a, np.float32), 0, 1)
-            tile = Image.fromarray((a * 255 + 0.5).astype(np.uint8), "L").resize((cell, cell), Image.Resampling.BILINEAR)
+            tile = Image.fromarray((a * 255 + 0.5).astype(np.uint8), "L")
+            tile = tile.resize((cell, cell), Image.Resampling.BILINEAR)
             img.paste(tile, (pad + j * (cell + pad), label_h + pad + i * (cell + pad)))
     img.save(path, optimize=True)

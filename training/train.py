@@ -64,7 +64,8 @@ def parse_args(argv: list[str] | None = None) -> argparse.Namespace:
     p.add_argument("--val-every", type=int, default=250)
     p.add_argument("--val-samples", type=int, default=48)
     p.add_argument("--log-every", type=int, default=20)
-    p.add_argument("--max-minutes", type=float, default=0.0, help="stop (with a checkpoint) after this long; 0: no limit")
+    p.add_argument("--max-minutes", type=float, default=0.0,
+                   help="stop (with a checkpoint) after this long; 0: no limit")
     p.add_argument("--fresh", action="store_true", help="ignore an existing checkpoint in --run")
     args = p.parse_args(argv)
     args.widths = tuple(int(w) for w in str(args.widths).split(","))
@@ -155,10 +156,11 @@ def build_val(store, args, weights_rows: int):
     for i in chosen:
         k = view_key(store, i)
         if k not in views:
-            views[k] = load_view(store, i, args.resolution)
+            views[k] = load_view(store, i, args.resolution, with_occ=args.module != "aop")
     vs = [views[view_key(store, i)] for i in chosen]
     lights = sample_lights(rng, len(vs))
-    return make_batch(vs, lights, weights_rows, cache.weights, args.target), split
+    target = None if args.module == "aop" else args.target
+    return make_batch(vs, lights, weights_rows, cache.weights, target), split
 
 
 @torch.no_grad()
@@ -200,7 +202,8 @@ def plot_log(run: Path, title: str) -> None:
     loss_curve({"train (per-pixel L2)": train, "val": val}, run / "loss.png", title)
 
 
-def main(argv: list[str] | None = None) -> int:
+def main(argv: list[str] | None = None, store=None) -> int:
+    """Train; ``store`` replaces ``ViewStore(--data)`` (tests pass an in-memory stand-in)."""
     args = parse_args(argv)
     if args.module == "aop":
         args.target = "ao"
@@ -213,9 +216,11 @@ def main(argv: list[str] | None = None) -> int:
 
     from .data.store import ViewStore
 
-    store = ViewStore(args.data)
+    fixed_store = store is not None
+    store = store if fixed_store else ViewStore(args.data)
     config = UNetConfig(widths=args.widths, groups=args.groups, resolution=args.resolution)
-    model = build(args.module, config).to(device)
+    head_bias = {"ao": 1.0, "shadow": 0.0, "irradiance": 1.0}[args.target]
+    model = build(args.module, config, head_bias).to(device)
     if main_proc:
         print(describe(args.module, model, args.resolution), flush=True)
     opt = torch.optim.Adam(model.parameters(), lr=args.lr)
@@ -235,8 +240,9 @@ def main(argv: list[str] | None = None) -> int:
         (run / "config.json").write_text(json.dumps({**vars(args), "widths": list(args.widths)}, indent=1))
     ddp = torch.nn.parallel.DistributedDataParallel(model) if world > 1 else model
 
-    cache = ViewCache(store, "train", args.resolution, max_views=args.cache_views)
-    sampler = BatchSampler(cache, args.batch, "shadow" if args.module == "aop" else args.target, args.elms_per_view)
+    aop = args.module == "aop"
+    cache = ViewCache(store, "train", args.resolution, max_views=100000 if aop else args.cache_views, with_occ=not aop)
+    sampler = BatchSampler(cache, args.batch, None if args.module == "aop" else args.target, args.elms_per_view)
     rows = store.meta["elm_rows"]
     val_batch, val_split = build_val(store, args, rows) if main_proc else (None, None)
     val = to_tensors(val_batch, device) if val_batch is not None else None
@@ -268,7 +274,8 @@ def main(argv: list[str] | None = None) -> int:
         writer.writeheader()
     t_start = time.perf_counter()
     t_ckpt = t_refresh = time.perf_counter()
-    prior_seconds = float(read_log(log_path)[-1]["seconds"]) if main_proc and not new_log and read_log(log_path) else 0.0
+    old_rows = read_log(log_path) if main_proc and not new_log else []
+    prior_seconds = float(old_rows[-1]["seconds"]) if old_rows else 0.0
     progress = Progress(args.steps, start=step, every=args.log_every)
     running, n_running, t_log = 0.0, 0, time.perf_counter()
     ddp.train()
@@ -287,7 +294,7 @@ def main(argv: list[str] | None = None) -> int:
         opt.step()
         step += 1
         samples += args.batch * world
-        running += float(loss)
+        running += loss.item()
         n_running += 1
         if main_proc:
             progress.update(step, f"loss {running / n_running:.5f} lr {lr:.2e}")
@@ -311,7 +318,7 @@ def main(argv: list[str] | None = None) -> int:
         if main_proc and time.perf_counter() - t_ckpt > args.ckpt_minutes * 60:
             save_ckpt(run / checkpoint.LAST)
             t_ckpt = time.perf_counter()
-        if time.perf_counter() - t_refresh > args.refresh_minutes * 60:
+        if not fixed_store and time.perf_counter() - t_refresh > args.refresh_minutes * 60:
             store = ViewStore(args.data)
             pre.close()
             cache.open(store)

@@ -103,7 +103,7 @@ class UNet(nn.Module):
             assert code is not None
             b, _, h, w = x.shape
             x = self.inject(torch.cat([x, code[:, :, None, None].expand(b, code.shape[1], h, w)], dim=1))
-        for stage, skip in zip(self.decoder, reversed(skips[:-1])):
+        for stage, skip in zip(self.decoder, reversed(skips[:-1]), strict=True):
             x = stage(x, skip)
         return self.head(x)
 
@@ -140,10 +140,17 @@ class ModelSpec:
     config: UNetConfig = field(default_factory=UNetConfig)
 
 
-def build(module: str, config: UNetConfig) -> nn.Module:
-    """AOPNet or SRNet for ``module`` in {"aop", "sr"}."""
+def build(module: str, config: UNetConfig, head_bias: float | None = None) -> nn.Module:
+    """AOPNet or SRNet for ``module`` in {"aop", "sr"}; ``head_bias`` sets the output's initial offset
+    (the typical target value: 1 for AO, 0 for s), so the linear head does not spend its first
+    thousand Adam steps moving a bias."""
     if module == "aop":
-        return AOPNet(config)
-    if module == "sr":
-        return SRNet(config)
-    raise ValueError(f"module must be 'aop' or 'sr', got {module!r}")
+        net: nn.Module = AOPNet(config)
+    elif module == "sr":
+        net = SRNet(config)
+    else:
+        raise ValueError(f"module must be 'aop' or 'sr', got {module!r}")
+    if head_bias is not None:
+        with torch.no_grad():
+            net.unet.head.bias.fill_(head_bias)
+    return net

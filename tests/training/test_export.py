@@ -1,0 +1,68 @@
+"""ONNX export to the engine's contract, parity with torch, and loading by the engine."""
+
+from __future__ import annotations
+
+import json
+
+import numpy as np
+import pytest
+
+torch = pytest.importorskip("torch")
+pytest.importorskip("onnx")
+ort = pytest.importorskip("onnxruntime")
+
+from test_train_standin import FakeStore  # noqa: E402
+
+from training.export import main as export_main  # noqa: E402
+from training.train import main as train_main  # noqa: E402
+
+TINY = ["--resolution", "32", "--widths", "4,8,8", "--groups", "2", "--batch", "4", "--val-samples", "4",
+        "--val-every", "2", "--threads", "1", "--warmup", "1", "--steps", "2"]
+
+
+@pytest.fixture(scope="module")
+def exported(tmp_path_factory):
+    tmp = tmp_path_factory.mktemp("export")
+    for module in ("aop", "sr"):
+        assert train_main(["--module", module, "--run", str(tmp / module), *TINY], store=FakeStore(res=32)) == 0
+    out = tmp / "model"
+    code = export_main(["--aop", str(tmp / "aop" / "last.pt"), "--sr", str(tmp / "sr" / "last.pt"),
+                        "--out", str(out), "--data", str(tmp / "no-data")])
+    assert code == 0
+    return out
+
+
+def test_contract_names_shapes_and_card(exported):
+    card = json.loads((exported / "model.json").read_text())
+    assert card["format"] == "ssn-shadow-model" and card["version"] == 1
+    assert card["resolution"] == 32 and card["elm_shape"] == [16, 32]
+    aop = ort.InferenceSession(str(exported / "aop.onnx"), providers=["CPUExecutionProvider"])
+    sr = ort.InferenceSession(str(exported / "sr.onnx"), providers=["CPUExecutionProvider"])
+    assert [i.name for i in aop.get_inputs()] == ["mask"] and [o.name for o in aop.get_outputs()] == ["ao"]
+    assert [i.name for i in sr.get_inputs()] == ["mask", "ao", "elm"]
+    assert [o.name for o in sr.get_outputs()] == ["shadow"]
+    for batch in (1, 3):
+        m = np.random.default_rng(batch).random((batch, 1, 32, 32), dtype=np.float32)
+        ao = aop.run(None, {"mask": m})[0]
+        s = sr.run(None, {"mask": m, "ao": ao, "elm": np.ones((batch, 16, 32), np.float32)})[0]
+        assert ao.shape == s.shape == (batch, 1, 32, 32)
+        assert 0 <= s.min() and s.max() <= 1 and 0 <= ao.min() and ao.max() <= 1
+
+
+def test_parity_is_recorded_and_within_bound(exported):
+    report = json.loads((exported / "model.json").read_text())["export"]
+    for module in ("aop", "sr"):
+        assert report[module]["max_abs_diff"] <= 1e-4
+        assert report[module]["weights"] in ("float16", "float32")
+    assert report["timing"]["sr_at_R_ms"] > 0
+
+
+def test_the_engine_loads_the_export(exported):
+    from ssn_engine.methods.onnx_ssn import OnnxSSN
+
+    method = OnnxSSN(exported)
+    masks = np.zeros((2, 256, 256), np.float32)
+    masks[:, 60:200, 100:150] = 1
+    ao = method.predict_ao(masks)
+    s = method.render(masks, ao, np.ones((2, 16, 32), np.float32))
+    assert s.shape == (2, 256, 256) and s.dtype == np.float32

@@ -1,0 +1,56 @@
+"""The U-Nets: shapes, configurable width and depth, the ELM injection, complexity report."""
+
+from __future__ import annotations
+
+import pytest
+
+torch = pytest.importorskip("torch")
+
+from training.model import AOPNet, SRNet, UNetConfig, build  # noqa: E402
+from training.model.complexity import count_macs, count_parameters, describe  # noqa: E402
+
+TINY = UNetConfig(widths=(4, 8, 8), groups=2, resolution=32)
+
+
+@pytest.mark.parametrize("widths", [(4, 8), (4, 8, 8), (4, 8, 16, 16)])
+def test_shapes_for_any_depth(widths):
+    cfg = UNetConfig(widths=widths, groups=2, resolution=32)
+    x = torch.rand(2, 1, 32, 32)
+    assert AOPNet(cfg)(x).shape == (2, 1, 32, 32)
+    assert SRNet(cfg)(x, x, torch.rand(2, 16, 32)).shape == (2, 1, 32, 32)
+
+
+def test_encoder_downsamples_and_uses_groupnorm():
+    net = build("aop", UNetConfig(widths=(4, 8, 16), groups=2))
+    strides = [m.stride[0] for m in net.modules() if isinstance(m, torch.nn.Conv2d) and m.kernel_size == (3, 3)]
+    assert strides.count(2) == 2
+    assert any(isinstance(m, torch.nn.GroupNorm) for m in net.modules())
+
+
+def test_sr_output_depends_on_the_elm():
+    torch.manual_seed(0)
+    net = SRNet(TINY).eval()
+    x = torch.rand(1, 1, 32, 32)
+    a = net(x, x, torch.zeros(1, 16, 32))
+    e = torch.zeros(1, 16, 32)
+    e[0, 3, 7] = 1
+    assert (net(x, x, e) - a).abs().max() > 1e-4
+
+
+def test_sr_bottleneck_takes_the_flattened_elm():
+    net = SRNet(TINY)
+    assert net.unet.inject[0].in_channels == 8 + 16 * 32
+
+
+def test_head_bias_and_complexity_report():
+    net = build("aop", TINY, head_bias=1.0)
+    assert float(net.unet.head.bias) == 1.0
+    assert count_parameters(net) > 0
+    assert count_macs(net, torch.zeros(1, 1, 32, 32)) > 32 * 32 * 9 * 4
+    text = describe("sr", build("sr", TINY), 32)
+    assert "parameters" in text and "multiply-adds" in text
+
+
+def test_config_round_trip():
+    cfg = UNetConfig(widths=(8, 16), groups=4, resolution=64)
+    assert UNetConfig.from_dict(cfg.to_dict()) == cfg

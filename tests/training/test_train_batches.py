@@ -1,0 +1,74 @@
+"""Ground truth of training batches: the store's algebra at the network's resolution."""
+
+from __future__ import annotations
+
+import numpy as np
+from test_train_standin import FakeStore
+
+from ssn_engine.hemisphere import network_elm
+from training.batches import BatchSampler, ViewCache, irradiance_to_shadow, load_view, make_batch, targets_for
+from training.elm import render_lights, sample_lights
+from training.frames import area_downsample, resize_frames
+
+
+def test_area_downsample_is_a_block_mean():
+    x = np.arange(16, dtype=np.float32).reshape(1, 4, 4)
+    np.testing.assert_allclose(area_downsample(x, 2)[0], [[2.5, 4.5], [10.5, 12.5]])
+    assert area_downsample(x, 4) is not None
+
+
+def test_shadow_target_is_the_downsampled_store_shadow():
+    store = FakeStore(res=32)
+    v16 = load_view(store, 0, 16)
+    lights = sample_lights(np.random.default_rng(0), 3)
+    elm = render_lights(lights, 4)
+    got = targets_for(v16.occ, elm, np.ones(3), store._weights, "shadow").reshape(3, 16, 16)
+    ref = np.stack([area_downsample(store.shadow(store.load(0).occlusion, e)[None], 16)[0] for e in elm])
+    np.testing.assert_allclose(got, ref, atol=2.5 / 255)
+
+
+def test_irradiance_target_and_conversion_back_to_shadow():
+    store = FakeStore(res=16)
+    v = load_view(store, 1, 16)
+    lights = sample_lights(np.random.default_rng(1), 4)
+    elm_hb, elm16 = render_lights(lights, 4), render_lights(lights, 16)
+    peak = elm16.reshape(4, -1).max(axis=1)
+    e = targets_for(v.occ, elm_hb, peak, store._weights, "irradiance")
+    for b in range(4):
+        np.testing.assert_allclose(e[b], store.irradiance(store.load(1).occlusion, elm_hb[b] / peak[b]).ravel(),
+                                   rtol=1e-4, atol=1e-5)
+    s = targets_for(v.occ, elm_hb, peak, store._weights, "shadow")
+    np.testing.assert_allclose(irradiance_to_shadow(e, elm_hb, elm16), s, atol=1e-5)
+
+
+def test_batch_shapes_inputs_and_elm_normalisation():
+    store = FakeStore(res=32)
+    cache = ViewCache(store, "train", 16, max_views=3)
+    b = BatchSampler(cache, 6, "shadow", elms_per_view=2)(np.random.default_rng(0))
+    assert b.mask.shape == b.ao.shape == b.target.shape == (6, 16, 16)
+    assert b.elm.shape == (6, 16, 32)
+    np.testing.assert_allclose(b.elm.reshape(6, -1).max(axis=1), 1.0)
+    keys = {k: i for k, i in cache.keys.items()}
+    np.testing.assert_allclose(b.mask[0], resize_frames(store.load(keys[b.keys[0]]).mask[None], 16)[0])
+    assert 0 <= b.target.min() and b.target.max() <= 1
+    assert np.allclose(network_elm(render_lights(b.lights, 16)), b.elm)
+
+
+def test_cache_rotates_within_its_limit():
+    store = FakeStore(res=16, n_meshes=6, views=3)
+    cache = ViewCache(store, "train", 16, max_views=4)
+    rng = np.random.default_rng(0)
+    seen = set()
+    for _ in range(20):
+        cache.fill(rng, swap=1)
+        assert len(cache.views) <= 4
+        seen |= set(cache.views)
+    assert len(seen) == len(cache.ids)
+
+
+def test_aop_batches_skip_the_target():
+    store = FakeStore(res=16)
+    cache = ViewCache(store, "train", 16, with_occ=False)
+    b = make_batch([cache.get(next(iter(cache.keys)))] * 2, sample_lights(np.random.default_rng(0), 2), 4,
+                   cache.weights, None)
+    assert b.target.shape == (2, 16, 16) and not b.target.any()

@@ -1,0 +1,79 @@
+"""A few training steps on the stand-in store: files, resume, schedule, evaluation."""
+
+from __future__ import annotations
+
+import csv
+
+import numpy as np
+import pytest
+
+torch = pytest.importorskip("torch")
+
+from test_train_standin import FakeStore  # noqa: E402
+
+from training import checkpoint  # noqa: E402
+from training.train import lr_at, main, parse_args  # noqa: E402
+
+TINY = ["--resolution", "16", "--widths", "4,8,8", "--groups", "2", "--batch", "4", "--val-samples", "4",
+        "--val-every", "2", "--log-every", "1", "--threads", "1", "--warmup", "2", "--elms-per-view", "2"]
+
+
+def _run(tmp_path, module, steps, extra=()):
+    run = tmp_path / module
+    argv = ["--module", module, "--run", str(run), "--steps", str(steps), *TINY, *extra]
+    assert main(argv, store=FakeStore(res=32)) == 0
+    return run
+
+
+@pytest.mark.parametrize("module,extra", [("aop", []), ("sr", []), ("sr", ["--target", "irradiance"])])
+def test_training_writes_checkpoints_logs_and_figures(tmp_path, module, extra):
+    run = _run(tmp_path, module, 4, extra)
+    for name in ("last.pt", "best.pt", "log.csv", "loss.png", "samples_latest.png", "config.json"):
+        assert (run / name).is_file(), name
+    rows = list(csv.DictReader((run / "log.csv").open()))
+    assert [int(r["step"]) for r in rows] == [1, 2, 3, 4]
+    assert all(np.isfinite(float(r["train_loss"])) for r in rows)
+    ck = checkpoint.load(run / "last.pt")
+    assert ck["step"] == 4 and ck["module"] == module
+
+
+def test_resume_continues_from_the_last_checkpoint(tmp_path):
+    run = _run(tmp_path, "sr", 3)
+    before = checkpoint.load(run / "last.pt")
+    _run(tmp_path, "sr", 5)
+    after = checkpoint.load(run / "last.pt")
+    assert before["step"] == 3 and after["step"] == 5
+    steps = [int(r["step"]) for r in csv.DictReader((run / "log.csv").open())]
+    assert steps == [1, 2, 3, 4, 5]
+
+
+def test_resume_refuses_another_network(tmp_path):
+    _run(tmp_path, "sr", 2)
+    with pytest.raises(SystemExit):
+        _run(tmp_path, "sr", 3, ["--widths", "4,8"])
+
+
+def test_schedule_warms_up_then_decays():
+    args = parse_args(["--module", "sr", "--run", "x", "--steps", "100", "--warmup", "10"])
+    lrs = [lr_at(s, args) for s in range(100)]
+    assert lrs[0] < lrs[9] == pytest.approx(1e-3)
+    assert all(a >= b for a, b in zip(lrs[10:], lrs[11:], strict=False))
+    assert lrs[-1] == pytest.approx(1e-5, rel=0.05)
+
+
+def test_evaluate_on_the_standin(tmp_path):
+    from training.evaluate import evaluate, parse_args as eval_args
+
+    aop = _run(tmp_path, "aop", 2) / "last.pt"
+    sr = _run(tmp_path, "sr", 2) / "last.pt"
+    noninv = _run(tmp_path / "n", "sr", 2, ["--target", "irradiance"]) / "last.pt"
+    args = eval_args(["--aop", str(aop), "--sr", str(sr), "--noninv", str(noninv), "--n-elms", "4",
+                      "--per-view", "2", "--out", str(tmp_path / "eval"), "--threads", "1"])
+    res = evaluate(args, store=FakeStore(res=32))
+    assert set(res["groups"]) == {"objects", "humans"}
+    for group in res["groups"].values():
+        assert set(group["metrics"]) == {"geometric", "Non-inv-SSN", "SSN", "GT-AO-SSN"}
+        for m in group["metrics"].values():
+            assert 0 <= m["RMSE"] <= 1 and -1 <= m["ZNCC"] <= 1
+    assert (tmp_path / "eval" / "tables.md").read_text().count("| SSN |") == 2
+    assert (tmp_path / "eval" / "grid.png").is_file()

@@ -1,0 +1,185 @@
+"""Paper Section 6 benchmark: ``python -m training.evaluate --aop A.pt --sr S.pt [--noninv N.pt]``.
+
+On the test split, objects (object + animal) and humans separately, every view
+is paired with ``--per-view`` ELMs from a fixed pool of ``--n-elms`` random
+Table 1 light maps (seeded). Rows: the engine's geometric card baseline,
+Non-inv-SSN (SR trained on raw irradiance, converted to s = 1 - E / E0), SSN
+(AOP -> SR), GT-AO-SSN (ground-truth AO into SR). Metrics on s at the
+dataset's resolution N; networks at R see frames resampled N -> R -> N as in
+the engine.
+"""
+
+from __future__ import annotations
+
+import argparse
+import json
+import sys
+import time
+from pathlib import Path
+
+import numpy as np
+import torch
+
+from .batches import irradiance_to_shadow
+from .checkpoint import load_model
+from .elm import render_lights, sample_lights
+from .frames import resize_frames
+from .metrics import NAMES, all_metrics, mean_metrics
+from .plots import image_grid
+from .progress import Progress
+
+GROUPS = {"objects": ("object", "animal"), "humans": ("human",)}
+PAPER = {
+    "objects": {"Non-inv-SSN": (0.0926, 0.0894, 0.7521, 0.2913), "SSN": (0.0561, 0.0506, 0.8192, 0.0616),
+                "GT-AO-SSN": (0.0342, 0.0304, 0.9171, 0.0461)},
+    "humans": {"SSN": (0.0194, 0.0163, 0.8943, 0.0467), "GT-AO-SSN": (0.0150, 0.0127, 0.9316, 0.0403)},
+}
+
+
+def parse_args(argv: list[str] | None = None) -> argparse.Namespace:
+    p = argparse.ArgumentParser(prog="python -m training.evaluate", description=__doc__.split("\n")[0])
+    p.add_argument("--data", default="data/ssn128")
+    p.add_argument("--split", default="test")
+    p.add_argument("--aop", required=True, help="AOP checkpoint")
+    p.add_argument("--sr", required=True, help="SR checkpoint (shadow target)")
+    p.add_argument("--noninv", help="SR checkpoint trained on irradiance (Non-inv-SSN)")
+    p.add_argument("--no-geometric", action="store_true")
+    p.add_argument("--n-elms", type=int, default=64, help="size of the fixed pool of random ELMs")
+    p.add_argument("--per-view", type=int, default=2, help="ELMs per view")
+    p.add_argument("--max-views", type=int, default=0, help="at most this many views per group (evenly spaced); 0: all")
+    p.add_argument("--seed", type=int, default=2021)
+    p.add_argument("--threads", type=int, default=2)
+    p.add_argument("--out", default="runs/eval")
+    args = p.parse_args(argv)
+    return args
+
+
+def elm_pool(n: int, seed: int, elm_rows: int) -> tuple[np.ndarray, np.ndarray]:
+    """The fixed ELM pool on the dataset's grid and on the network's 16 x 32 grid."""
+    lights = sample_lights(np.random.default_rng([seed, 1]), n)
+    return render_lights(lights, elm_rows), render_lights(lights, 16)
+
+
+def pick_views(ids: list[int], max_views: int) -> list[int]:
+    if not max_views or len(ids) <= max_views:
+        return list(ids)
+    return [ids[int(j)] for j in np.linspace(0, len(ids) - 1, max_views).round()]
+
+
+class Networks:
+    """AOP and SR (and optionally Non-inv SR) checkpoints, run at their resolution R on N x N frames."""
+
+    def __init__(self, aop: str, sr: str, noninv: str | None):
+        self.aop, ck = load_model(aop)
+        self.sr, ck_sr = load_model(sr)
+        self.noninv = load_model(noninv)[0] if noninv else None
+        self.r = ck["unet"]["resolution"]
+        self.info = {"aop": {"path": aop, "step": ck["step"], "samples": ck["samples"]},
+                     "sr": {"path": sr, "step": ck_sr["step"], "samples": ck_sr["samples"]}}
+
+    @torch.no_grad()
+    def predict_ao(self, masks: np.ndarray) -> np.ndarray:
+        n = masks.shape[-1]
+        m = torch.from_numpy(resize_frames(masks, self.r)[:, None])
+        ao = self.aop(m)[:, 0].clamp(0, 1).numpy()
+        return np.clip(resize_frames(ao, n), 0, 1)
+
+    @torch.no_grad()
+    def render(self, masks: np.ndarray, ao: np.ndarray, elm16: np.ndarray, elm_hb: np.ndarray | None = None,
+               noninv: bool = False) -> np.ndarray:
+        from ssn_engine.hemisphere import network_elm
+
+        n = masks.shape[-1]
+        m = torch.from_numpy(resize_frames(masks, self.r)[:, None])
+        a = torch.from_numpy(resize_frames(ao, self.r)[:, None])
+        e = torch.from_numpy(network_elm(elm16))
+        out = (self.noninv if noninv else self.sr)(m, a, e)[:, 0].numpy()
+        if noninv:
+            out = irradiance_to_shadow(resize_frames(out, n), elm_hb, elm16)
+        else:
+            out = resize_frames(np.clip(out, 0, 1), n)
+        return np.clip(out, 0, 1).astype(np.float32)
+
+
+def evaluate(args: argparse.Namespace, store=None) -> dict:
+    from ssn_engine.methods.geometric import GeometricCard
+
+    from .data.store import ViewStore
+
+    torch.set_num_threads(args.threads)
+    store = store if store is not None else ViewStore(args.data)
+    n_px, rows_hb = store.meta["res"], store.meta["elm_rows"]
+    elm_hb, elm16 = elm_pool(args.n_elms, args.seed, rows_hb)
+    nets = Networks(args.aop, args.sr, args.noninv)
+    geo = None if args.no_geometric else GeometricCard(resolution=n_px)
+    methods = (["geometric"] if geo else []) + (["Non-inv-SSN"] if nets.noninv else []) + ["SSN", "GT-AO-SSN"]
+    results: dict = {"methods": methods, "groups": {}, "n_elms": args.n_elms, "per_view": args.per_view,
+                     "data": str(args.data), "N": n_px, "R": nets.r, "split": args.split, "networks": nets.info}
+    grid_rows = []
+    t0 = time.perf_counter()
+    for group, kinds in GROUPS.items():
+        ids = [i for k in kinds for i in store.view_ids(args.split, k)]
+        ids = pick_views(sorted(ids), args.max_views)
+        per = {m: [] for m in methods}
+        prog = Progress(len(ids), every=max(1, len(ids) // 10))
+        for j, i in enumerate(ids):
+            v = store.load(i)
+            pick = [(j * args.per_view + k) % args.n_elms for k in range(args.per_view)]
+            gt = np.stack([store.shadow(v.occlusion, elm_hb[q]) for q in pick])
+            masks = np.repeat(v.mask[None], len(pick), 0)
+            gt_ao = np.repeat(v.ao[None], len(pick), 0)
+            preds = {}
+            ao_pred = nets.predict_ao(masks[:1]).repeat(len(pick), 0)
+            if geo:
+                preds["geometric"] = geo.render(masks, geo.predict_ao(masks[:1]).repeat(len(pick), 0), elm16[pick])
+            if nets.noninv:
+                preds["Non-inv-SSN"] = nets.render(masks, ao_pred, elm16[pick], elm_hb[pick], noninv=True)
+            preds["SSN"] = nets.render(masks, ao_pred, elm16[pick])
+            preds["GT-AO-SSN"] = nets.render(masks, gt_ao, elm16[pick])
+            for m in methods:
+                per[m].extend(all_metrics(preds[m][b], gt[b]) for b in range(len(pick)))
+            if j % max(1, len(ids) // 3) == 0 and len(grid_rows) < 6:
+                elm_img = np.kron(elm16[pick[0]] / max(elm16[pick[0]].max(), 1e-9), np.ones((n_px // 32, n_px // 32)))
+                elm_img = np.pad(elm_img, ((0, n_px - elm_img.shape[0]), (0, 0)))
+                grid_rows.append([v.mask, elm_img, gt[0]] + [preds[m][0] for m in methods])
+            prog.update(j + 1, group)
+        prog.close()
+        results["groups"][group] = {"views": len(ids), "images": len(ids) * args.per_view,
+                                    "metrics": {m: mean_metrics(per[m]) for m in methods}}
+    results["seconds"] = time.perf_counter() - t0
+    out = Path(args.out)
+    out.mkdir(parents=True, exist_ok=True)
+    (out / "results.json").write_text(json.dumps(results, indent=1))
+    (out / "tables.md").write_text(tables_markdown(results))
+    if grid_rows:
+        image_grid(grid_rows, out / "grid.png", ["mask", "ELM", "ground truth"] + methods, cell=128)
+    return results
+
+
+def tables_markdown(results: dict) -> str:
+    """Our tables beside the paper's Tables 1 (objects) and 2 (humans)."""
+    lines = []
+    for group, r in results["groups"].items():
+        lines.append(f"### {group.capitalize()} ({r['views']} test views x {results['per_view']} ELMs"
+                     f" = {r['images']} images)\n")
+        lines.append("| Method | " + " | ".join(NAMES) + " | paper " + " | paper ".join(NAMES) + " |")
+        lines.append("|---" * (1 + 2 * len(NAMES)) + "|")
+        for m in results["methods"]:
+            ours = " | ".join(f"{r['metrics'][m][k]:.4f}" for k in NAMES)
+            paper = PAPER.get(group, {}).get(m)
+            theirs = " | ".join(f"{x:.4f}" for x in paper) if paper else " | ".join("-" for _ in NAMES)
+            lines.append(f"| {m} | {ours} | {theirs} |")
+        lines.append("")
+    return "\n".join(lines)
+
+
+def main(argv: list[str] | None = None) -> int:
+    args = parse_args(argv)
+    results = evaluate(args)
+    print(tables_markdown(results))
+    print(f"{results['seconds']:.0f} s; written to {args.out}")
+    return 0
+
+
+if __name__ == "__main__":
+    sys.exit(main())

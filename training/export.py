@@ -1,0 +1,231 @@
+"""Export AOP and SR to the engine's ONNX contract, check parity with torch, time SR, and optionally install.
+
+``python -m training.export --aop runs/aop/best.pt --sr runs/sr/best.pt --out runs/export``
+writes aop.onnx, sr.onnx and model.json (ssn_engine/methods/onnx_ssn.py's contract):
+- aop.onnx: "mask" [batch, 1, R, R] -> "ao" [batch, 1, R, R], clamped to [0, 1]
+- sr.onnx: "mask", "ao" [batch, 1, R, R], "elm" [batch, 16, 32] (network_elm-normalised) -> "shadow" [batch, 1, R, R]
+Weights are stored as float16 (cast to float32 inside the graph) when that keeps the parity bound
+(max abs difference to torch <= ``--tol`` on test inputs), else as float32. ``--install DIR`` copies the
+model and a model card there (the engine's default is ssn_engine/models).
+"""
+
+from __future__ import annotations
+
+import argparse
+import json
+import shutil
+import sys
+import time
+from pathlib import Path
+
+import numpy as np
+import torch
+from torch import nn
+
+from .checkpoint import load_model
+
+TOL = 1e-4
+
+
+class Clamped(nn.Module):
+    """The network with its output clamped to [0, 1] (the contract's range)."""
+
+    def __init__(self, net: nn.Module):
+        super().__init__()
+        self.net = net
+
+    def forward(self, *inputs: torch.Tensor) -> torch.Tensor:
+        return self.net(*inputs).clamp(0.0, 1.0)
+
+
+def export_graph(net: nn.Module, module: str, resolution: int, path: Path, opset: int = 18) -> None:
+    """torch.onnx.export with the contract's names and a dynamic batch axis."""
+    mask = torch.rand(2, 1, resolution, resolution)
+    if module == "aop":
+        args, names, out = (mask,), ["mask"], ["ao"]
+    else:
+        args, names, out = (mask, torch.rand(2, 1, resolution, resolution), torch.rand(2, 16, 32)), \
+            ["mask", "ao", "elm"], ["shadow"]
+    axes = {n: {0: "batch"} for n in names + out}
+    torch.onnx.export(Clamped(net).eval(), args, str(path), input_names=names, output_names=out,
+                      dynamic_axes=axes, opset_version=opset, dynamo=False)
+
+
+def to_fp16_weights(src: Path, dst: Path) -> None:
+    """Store every float32 initializer as float16 followed by a Cast back to float32 (compute stays float32)."""
+    import onnx
+    from onnx import TensorProto, helper, numpy_helper
+
+    model = onnx.load(str(src))
+    g = model.graph
+    new_inits, casts = [], []
+    for init in g.initializer:
+        arr = numpy_helper.to_array(init)
+        if arr.dtype == np.float32 and arr.size > 16:
+            half = numpy_helper.from_array(arr.astype(np.float16), init.name + "__fp16")
+            new_inits.append(half)
+            casts.append(helper.make_node("Cast", [half.name], [init.name], to=TensorProto.FLOAT))
+        else:
+            new_inits.append(init)
+    del g.initializer[:]
+    g.initializer.extend(new_inits)
+    nodes = list(g.node)
+    del g.node[:]
+    g.node.extend(casts + nodes)
+    onnx.checker.check_model(model)
+    onnx.save(model, str(dst))
+
+
+def session(path: Path, threads: int = 0):
+    import onnxruntime as ort
+
+    o = ort.SessionOptions()
+    o.graph_optimization_level = ort.GraphOptimizationLevel.ORT_ENABLE_ALL
+    if threads:
+        o.intra_op_num_threads = threads
+    return ort.InferenceSession(str(path), o, providers=["CPUExecutionProvider"])
+
+
+def test_inputs(data: str | None, resolution: int, n: int = 8, seed: int = 0) -> dict[str, np.ndarray]:
+    """Masks and AO maps of test views (random blobs without data) and random Table 1 ELMs."""
+    from ssn_engine.hemisphere import network_elm
+
+    from .elm import render_lights, sample_lights
+    from .frames import resize_frames
+
+    rng = np.random.default_rng(seed)
+    if data and Path(data, "dataset.json").is_file():
+        from .data.store import ViewStore
+
+        store = ViewStore(data)
+        ids = store.view_ids("test") or store.view_ids(None)
+        pick = [ids[int(j)] for j in np.linspace(0, len(ids) - 1, n).round()]
+        views = [store.load(i) for i in pick]
+        mask = resize_frames(np.stack([v.mask for v in views]), resolution)
+        ao = resize_frames(np.stack([v.ao for v in views]), resolution)
+    else:
+        mask = (rng.random((n, resolution, resolution)) > 0.5).astype(np.float32)
+        ao = rng.random((n, resolution, resolution)).astype(np.float32)
+    elm = network_elm(render_lights(sample_lights(rng, n), 16))
+    return {"mask": mask[:, None], "ao": ao[:, None], "elm": elm}
+
+
+def parity(path: Path, net: nn.Module, module: str, x: dict[str, np.ndarray]) -> float:
+    """Max abs difference between onnxruntime and torch (clamped) outputs."""
+    names = ["mask"] if module == "aop" else ["mask", "ao", "elm"]
+    feeds = {k: x[k] for k in names}
+    got = session(path).run(None, feeds)[0]
+    with torch.no_grad():
+        ref = Clamped(net)(*[torch.from_numpy(x[k]) for k in names]).numpy()
+    return float(np.abs(got - ref).max())
+
+
+def time_sr(path: Path, resolution: int, repeats: int = 30) -> dict[str, float]:
+    """Median SR latency (one image) through onnxruntime: at R alone, and the engine's N = 256 path."""
+    from ssn_engine.methods.onnx_ssn import _resample
+
+    s = session(path)
+    mask = np.random.default_rng(0).random((1, 1, resolution, resolution), dtype=np.float32)
+    feeds = {"mask": mask, "ao": mask, "elm": np.random.default_rng(1).random((1, 16, 32), dtype=np.float32)}
+    frame = np.random.default_rng(2).random((1, 256, 256), dtype=np.float32)
+
+    def engine_path():
+        m = _resample(frame, resolution)[:, None]
+        out = s.run(None, {"mask": m, "ao": m, "elm": feeds["elm"]})[0][:, 0]
+        return _resample(out, 256)
+
+    out = {}
+    for name, fn in (("sr_at_R_ms", lambda: s.run(None, feeds)), ("sr_engine_256_ms", engine_path)):
+        fn()
+        ts = []
+        for _ in range(repeats):
+            t = time.perf_counter()
+            fn()
+            ts.append(time.perf_counter() - t)
+        out[name] = 1000 * float(np.median(ts))
+    return out
+
+
+def mesh_attribution(data: str) -> list[dict]:
+    """Licence and attribution of every mesh in the dataset's train and val splits."""
+    from .data.store import ViewStore
+
+    if not Path(data, "dataset.json").is_file():
+        return []
+    store = ViewStore(data)
+    rows = []
+    for m in store.meshes:
+        mesh = m["mesh"]
+        p = mesh.get("params", {})
+        if mesh["split"] in ("train", "val"):
+            rows.append({"id": mesh["id"], "split": mesh["split"], "licence": p.get("licence", "generated"),
+                         "attribution": p.get("attribution", "procedural / project-generated"),
+                         "source": p.get("source_repo", mesh.get("source", ""))})
+    return rows
+
+
+def parse_args(argv: list[str] | None = None) -> argparse.Namespace:
+    p = argparse.ArgumentParser(prog="python -m training.export", description=__doc__.split("\n")[0])
+    p.add_argument("--aop", required=True)
+    p.add_argument("--sr", required=True)
+    p.add_argument("--out", default="runs/export")
+    p.add_argument("--data", default="data/ssn128", help="dataset for test inputs and the card's attribution")
+    p.add_argument("--tol", type=float, default=TOL)
+    p.add_argument("--fp32", action="store_true", help="do not try float16 weights")
+    p.add_argument("--metrics", help="evaluate's results.json, copied into the card")
+    p.add_argument("--install", help="copy the model here (e.g. ssn_engine/models)")
+    return p.parse_args(argv)
+
+
+def main(argv: list[str] | None = None) -> int:
+    args = parse_args(argv)
+    out = Path(args.out)
+    out.mkdir(parents=True, exist_ok=True)
+    card: dict = {"format": "ssn-shadow-model", "version": 1, "aop": "aop.onnx", "sr": "sr.onnx", "elm_shape": [16, 32]}
+    report = {}
+    for module, ck_path in (("aop", args.aop), ("sr", args.sr)):
+        net, ck = load_model(ck_path)
+        r = ck["unet"]["resolution"]
+        card["resolution"] = r
+        x = test_inputs(args.data, r)
+        fp32 = out / f"{module}.fp32.onnx"
+        export_graph(net, module, r, fp32)
+        diff32 = parity(fp32, net, module, x)
+        final, diff, dtype = fp32, diff32, "float32"
+        if not args.fp32:
+            fp16 = out / f"{module}.fp16.onnx"
+            to_fp16_weights(fp32, fp16)
+            diff16 = parity(fp16, net, module, x)
+            report[f"{module}_parity_fp16"] = diff16
+            if diff16 <= args.tol:
+                final, diff, dtype = fp16, diff16, "float16"
+        shutil.copy(final, out / f"{module}.onnx")
+        report[f"{module}_parity_fp32"] = diff32
+        report[module] = {"checkpoint": str(ck_path), "step": ck["step"], "samples": ck["samples"],
+                          "widths": ck["unet"]["widths"], "weights": dtype, "max_abs_diff": diff,
+                          "bytes": (out / f"{module}.onnx").stat().st_size}
+        if diff > args.tol:
+            print(f"{module}: parity FAILED: max abs diff {diff:.2e} > {args.tol:.0e}", file=sys.stderr)
+            return 1
+        print(f"{module}: {dtype} weights, max abs diff to torch {diff:.2e} (fp32 graph {diff32:.2e}), "
+              f"{report[module]['bytes'] / 1e6:.2f} MB", flush=True)
+    report["timing"] = time_sr(out / "sr.onnx", card["resolution"])
+    print(f"SR median latency (onnxruntime, this CPU): {report['timing']['sr_at_R_ms']:.1f} ms at R = "
+          f"{card['resolution']}, {report['timing']['sr_engine_256_ms']:.1f} ms on a 256 frame incl. resampling")
+    card["export"] = report
+    if args.metrics:
+        card["metrics"] = json.loads(Path(args.metrics).read_text())
+    card["training_data"] = args.data
+    (out / "model.json").write_text(json.dumps(card, indent=1))
+    (out / "attribution.json").write_text(json.dumps(mesh_attribution(args.data), indent=1))
+    if args.install:
+        dst = Path(args.install)
+        dst.mkdir(parents=True, exist_ok=True)
+        for name in ("aop.onnx", "sr.onnx", "model.json"):
+            shutil.copy(out / name, dst / name)
+        print(f"installed into {dst}")
+    return 0
+
+
+if __name__ == "__main__":
+    sys.exit(main())

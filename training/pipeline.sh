@@ -1,0 +1,24 @@
+#!/usr/bin/env bash
+# The CPU training sequence of docs/training.md: AOP, then SSN (shadow target) and Non-inv-SSN (irradiance target)
+# side by side with one thread each (same budget, a fair ablation). Every stage resumes from its run's last.pt,
+# so re-running this script continues where a stopped run left off.
+# Usage: training/pipeline.sh [DATA] [RUNS]   (env: AOP_STEPS, SR_STEPS, AOP_MIN, SR_MIN, BATCH)
+set -u
+DATA=${1:-data/ssn128}
+RUNS=${2:-runs}
+AOP_STEPS=${AOP_STEPS:-600}
+SR_STEPS=${SR_STEPS:-1500}
+AOP_MIN=${AOP_MIN:-22}
+SR_MIN=${SR_MIN:-70}
+BATCH=${BATCH:-8}
+COMMON="--data $DATA --batch $BATCH --ckpt-minutes 3 --val-every 100 --log-every 10"
+python -m training.train --module aop --run "$RUNS/aop" --steps "$AOP_STEPS" --warmup 50 --threads 2 \
+    --max-minutes "$AOP_MIN" $COMMON
+python -m training.train --module sr --target shadow --run "$RUNS/sr" --steps "$SR_STEPS" --warmup 50 --threads 1 \
+    --max-minutes "$SR_MIN" $COMMON &
+SR=$!
+python -m training.train --module sr --target irradiance --run "$RUNS/sr_noninv" --steps "$SR_STEPS" --warmup 50 \
+    --threads 1 --max-minutes "$SR_MIN" $COMMON &
+NONINV=$!
+trap 'kill -TERM $SR $NONINV 2>/dev/null' TERM INT
+wait $SR $NONINV
