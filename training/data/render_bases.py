@@ -148,6 +148,41 @@ def _scan_edge(px, pz, qx, qz, coef, row_z, row_x0, row_dx, rowmap, first, diff,
         box[1] = i1 - 1
 
 
+@njit(cache=True, inline="always")
+def _scan_edge_rows(px, pz, ka, qx, qz, kb, coef, row_z, row_x0, row_dx, diff, box):
+    """Like :func:`_scan_edge` with each endpoint's first row at or beyond it (ka, kb) known.
+
+    The crossed rows depend only on each endpoint's own index, so edges that
+    share a vertex always agree on it (closed outlines stay closed).
+    """
+    if ka == kb:
+        return
+    n = diff.shape[1]
+    if ka < kb:
+        i0, i1, sgn = ka, kb, coef
+    else:
+        i0, i1, sgn = kb, ka, -coef
+    slope = (qx - px) / (qz - pz)
+    cmin = box[2]
+    for i in range(i0, i1):
+        x = px + (row_z[i] - pz) * slope
+        jc = (x - row_x0[i]) / row_dx[i]
+        if jc >= n - 1:
+            continue
+        if jc < -1.0:
+            idx = 0
+        else:
+            idx = int(math.floor(jc)) + 1
+        diff[i, idx] += sgn
+        if idx < cmin:
+            cmin = idx
+    box[2] = cmin
+    if i0 < box[0]:
+        box[0] = i0
+    if i1 - 1 > box[1]:
+        box[1] = i1 - 1
+
+
 @njit(cache=True)
 def _resolve(diff, box, out):
     """Running sums of ``diff`` over the touched box; ``out += (sum != 0)``; clears ``diff``."""
@@ -175,56 +210,64 @@ def occlusion_counts(
 ):
     """Per texel and pixel, how many of the texel's directions are blocked: (T, n, n) uint8.
 
-    ``dirs`` (T, S, 3) world directions with positive y, S <= 255. A face's
-    sign over a texel is settled by one dot product with the texel's mean
-    direction when the samples' spread cannot change it, else per sample.
+    ``dirs`` (T, S, 3) world directions with positive y, S <= 255. Per texel, a
+    face's sign is settled by one dot product with the texel's mean direction
+    when the samples' spread cannot change it, else per sample; edges whose
+    coefficient is the same non-zero value for every sample are scanned
+    directly, edges touching an undecided face get one coefficient per sample.
     """
     t_count, s_count = dirs.shape[0], dirs.shape[1]
     nf = normals.shape[0]
     ne = edges.shape[0]
+    nv = verts.shape[0]
     out = np.zeros((t_count, n, n), np.uint8)
     for t in prange(t_count):
         diff = np.zeros((n, n), np.int32)
         box = np.array([n, -1, n], np.int64)
-        code = np.empty(nf, np.int8)
+        code = np.empty(nf, np.int8)  # +1 / -1 / 0 for all samples, else MIXED
+        slot = np.empty(nf, np.int64)  # row of a MIXED face in ``signs``
+        signs = np.empty((nf, s_count), np.int8)
         cx, cy, cz = 0.0, 0.0, 0.0
         for s in range(s_count):
             cx += dirs[t, s, 0]
             cy += dirs[t, s, 1]
             cz += dirs[t, s, 2]
+        cx, cy, cz = cx / s_count, cy / s_count, cz / s_count
         radius = 0.0
         for s in range(s_count):
-            d2 = (dirs[t, s, 0] - cx / s_count) ** 2 + (dirs[t, s, 1] - cy / s_count) ** 2
-            d2 += (dirs[t, s, 2] - cz / s_count) ** 2
+            d2 = (dirs[t, s, 0] - cx) ** 2 + (dirs[t, s, 1] - cy) ** 2 + (dirs[t, s, 2] - cz) ** 2
             radius = max(radius, math.sqrt(d2))
         radius = radius * (1.0 + 1e-9) + 1e-12
-        cx, cy, cz = cx / s_count, cy / s_count, cz / s_count
+        n_signs = 0
         for f in range(nf):
-            dc = normals[f, 0] * cx + normals[f, 1] * cy + normals[f, 2] * cz
-            nn = math.sqrt(normals[f, 0] ** 2 + normals[f, 1] ** 2 + normals[f, 2] ** 2)
+            nx, ny, nz = normals[f, 0], normals[f, 1], normals[f, 2]
+            nn = math.sqrt(nx * nx + ny * ny + nz * nz)
+            dc = nx * cx + ny * cy + nz * cz
             if nn == 0.0:
                 code[f] = 0
-                continue
-            if dc > nn * radius:
+            elif dc > nn * radius:
                 code[f] = 1
-                continue
-            if dc < -nn * radius:
+            elif dc < -nn * radius:
                 code[f] = -1
-                continue
-            c0 = _sign(normals[f, 0] * dirs[t, 0, 0] + normals[f, 1] * dirs[t, 0, 1] + normals[f, 2] * dirs[t, 0, 2])
-            c = c0
-            for s in range(1, s_count):
-                cs = _sign(
-                    normals[f, 0] * dirs[t, s, 0] + normals[f, 1] * dirs[t, s, 1] + normals[f, 2] * dirs[t, s, 2]
-                )
-                if cs != c0:
-                    c = MIXED
-                    break
-            code[f] = c
-        # Edges whose coefficient is fixed over the texel, and edges to re-evaluate per direction.
+            else:
+                c0 = _sign(nx * dirs[t, 0, 0] + ny * dirs[t, 0, 1] + nz * dirs[t, 0, 2])
+                signs[n_signs, 0] = c0
+                same = True
+                for s in range(1, s_count):
+                    cs = _sign(nx * dirs[t, s, 0] + ny * dirs[t, s, 1] + nz * dirs[t, s, 2])
+                    signs[n_signs, s] = cs
+                    same = same and cs == c0
+                if same:
+                    code[f] = c0
+                else:
+                    code[f] = MIXED
+                    slot[f] = n_signs
+                    n_signs += 1
+        # Edges with a fixed non-zero coefficient, and edges with one coefficient per sample.
         fixed = np.empty(ne, np.int32)
         fixed_coef = np.empty(ne, np.int32)
         mixed = np.empty(ne, np.int32)
+        mixed_coef = np.empty((ne, s_count), np.int32)
         n_fixed = 0
         n_mixed = 0
         for e in range(ne):
@@ -234,15 +277,26 @@ def occlusion_counts(
                 cf = code[inc_face[k]]
                 if cf == MIXED:
                     is_mixed = True
-                    break
-                coef += cf * inc_dir[k]
+                else:
+                    coef += cf * inc_dir[k]
             if is_mixed:
+                for s in range(s_count):
+                    mixed_coef[n_mixed, s] = coef
+                for k in range(ptr[e], ptr[e + 1]):
+                    f = inc_face[k]
+                    if code[f] == MIXED:
+                        for s in range(s_count):
+                            mixed_coef[n_mixed, s] += signs[slot[f], s] * inc_dir[k]
                 mixed[n_mixed] = e
                 n_mixed += 1
             elif coef != 0:
                 fixed[n_fixed] = e
                 fixed_coef[n_fixed] = coef
                 n_fixed += 1
+        vx = np.empty(nv)
+        vz = np.empty(nv)
+        vk = np.empty(nv, np.int64)
+        stamp = np.full(nv, -1, np.int64)
         for s in range(s_count):
             wx, wy, wz = dirs[t, s, 0], dirs[t, s, 1], dirs[t, s, 2]
             kx = wx / wy
@@ -252,31 +306,23 @@ def occlusion_counts(
                     e = fixed[m]
                     coef = fixed_coef[m]
                 else:
-                    e = mixed[m - n_fixed]
-                    coef = 0
-                    for k in range(ptr[e], ptr[e + 1]):
-                        f = inc_face[k]
-                        coef += (
-                            _sign(normals[f, 0] * wx + normals[f, 1] * wy + normals[f, 2] * wz) * inc_dir[k]
-                        )
+                    coef = mixed_coef[m - n_fixed, s]
                     if coef == 0:
                         continue
+                    e = mixed[m - n_fixed]
                 a = edges[e, 0]
                 b = edges[e, 1]
-                _scan_edge(
-                    verts[a, 0] - kx * verts[a, 1],
-                    verts[a, 2] - kz * verts[a, 1],
-                    verts[b, 0] - kx * verts[b, 1],
-                    verts[b, 2] - kz * verts[b, 1],
-                    coef,
-                    row_z,
-                    row_x0,
-                    row_dx,
-                    rowmap,
-                    first,
-                    diff,
-                    box,
-                )
+                if stamp[a] != s:
+                    stamp[a] = s
+                    vx[a] = verts[a, 0] - kx * verts[a, 1]
+                    vz[a] = verts[a, 2] - kz * verts[a, 1]
+                    vk[a] = _first_row(vz[a], rowmap, row_z, first)
+                if stamp[b] != s:
+                    stamp[b] = s
+                    vx[b] = verts[b, 0] - kx * verts[b, 1]
+                    vz[b] = verts[b, 2] - kz * verts[b, 1]
+                    vk[b] = _first_row(vz[b], rowmap, row_z, first)
+                _scan_edge_rows(vx[a], vz[a], vk[a], vx[b], vz[b], vk[b], coef, row_z, row_x0, row_dx, diff, box)
             _resolve(diff, box, out[t])
     return out
 
