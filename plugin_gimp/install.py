@@ -98,8 +98,11 @@ def install(
     """
     dest = Path(dest) if dest is not None else default_dest()
     if dest.name != PLUGIN_NAME:
-        print(f"warning: GIMP only runs a plug-in whose folder is named like its script; {dest.name!r} "
-              f"is not {PLUGIN_NAME!r}", file=sys.stderr)
+        print(
+            f"warning: GIMP only runs a plug-in whose folder is named like its script; {dest.name!r} "
+            f"is not {PLUGIN_NAME!r}",
+            file=sys.stderr,
+        )
     _clear(dest)
     dest.mkdir(parents=True, exist_ok=True)
     for source in plugin_files():

@@ -131,8 +131,7 @@ def compute_shadow(host: Host, engine: Engine, settings: ShadowSettings) -> tupl
         release(engine, cutout_id)
     if shadow.width == 0:
         raise ShadowError(
-            "These lights cast no visible shadow inside the canvas. "
-            "Try a light lower in the sky or a higher opacity."
+            "These lights cast no visible shadow inside the canvas. Try a light lower in the sky or a higher opacity."
         )
     return shadow, plan
 
@@ -159,6 +158,7 @@ def settings_from_arguments(values: dict[str, Any]) -> ShadowSettings:
 
     Errors become :class:`ShadowError`.
     """
+
     def get(name: str) -> Any:
         return values.get(name, ARG_BY_NAME[name].default)
 

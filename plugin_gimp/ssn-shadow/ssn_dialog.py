@@ -80,8 +80,9 @@ class ShadowPreview:
             self.status.set_text(str(exc))
             return
         pixels, w, h, stride, channels = self.background
-        rgb = multiply_composite(pixels, w, h, stride, channels, shadow.data, shadow.x, shadow.y,
-                                 shadow.width, shadow.height)
+        rgb = multiply_composite(
+            pixels, w, h, stride, channels, shadow.data, shadow.x, shadow.y, shadow.width, shadow.height
+        )
         self.widget.set_from_pixbuf(
             GdkPixbuf.Pixbuf.new_from_bytes(GLib.Bytes.new(rgb), GdkPixbuf.Colorspace.RGB, False, 8, w, h, 3 * w)
         )
@@ -157,8 +158,15 @@ def run_dialog(procedure: Gimp.Procedure, config: Gimp.ProcedureConfig, host, en
     row.pack_start(Gtk.Label(label="Preset:"), False, False, 0)
     row.pack_start(presets, True, True, 0)
     box.pack_start(row, False, False, 0)
-    box.pack_start(Gtk.Label(label="Light map (click: add, drag: move, wheel: size, Shift+wheel: "
-                                   "intensity, right-click: remove)", xalign=0.0), False, False, 0)
+    box.pack_start(
+        Gtk.Label(
+            label="Light map (click: add, drag: move, wheel: size, Shift+wheel: intensity, right-click: remove)",
+            xalign=0.0,
+        ),
+        False,
+        False,
+        0,
+    )
     box.pack_start(area, False, False, 0)
     box.pack_start(Gtk.Label(label="Preview", xalign=0.0), False, False, 0)
     box.pack_start(preview.widget, False, False, 0)
@@ -169,7 +177,7 @@ def run_dialog(procedure: Gimp.Procedure, config: Gimp.ProcedureConfig, host, en
     preview.schedule(values)
 
     if os.environ.get(SELFTEST_ENV):
-        GLib.timeout_add(300, _selftest, dialog, editor, preview, values)
+        GLib.timeout_add(300, _selftest, dialog, area, preview, values)
     try:
         ok = dialog.run()
         if ok:
@@ -181,26 +189,38 @@ def run_dialog(procedure: Gimp.Procedure, config: Gimp.ProcedureConfig, host, en
         dialog.destroy()
 
 
-def _selftest(dialog, editor: LightMapEditor, preview: ShadowPreview, values) -> bool:
-    """For the integration test (SSN_SHADOW_DIALOG_SELFTEST=1): add and drag a light, render, press OK.
+def _selftest(dialog, area: LightMapArea, preview: ShadowPreview, values) -> bool:
+    """For the integration test (SSN_SHADOW_DIALOG_SELFTEST=1): add and drag a light through the
+    widget's event handlers, resize it, render the preview, press OK.
 
     With SSN_SHADOW_DIALOG_SCREENSHOT=<path.png> it also saves a picture of the dialog.
     """
-    editor.press(0.85, 0.7)
-    editor.drag(0.8, 0.72)
-    editor.release()
+    from types import SimpleNamespace
+
+    from gi.repository import Gdk
+
+    editor = area.editor
+    x, y = 0.85 * area.width, 0.7 * area.height
+    press = SimpleNamespace(x=x, y=y, button=1, type=Gdk.EventType.BUTTON_PRESS, state=0)
+    area._on_press(area, press)
+    moved = SimpleNamespace(x=x - 0.05 * area.width, y=y + 0.02 * area.height, state=Gdk.ModifierType.BUTTON1_MASK)
+    area._on_motion(area, moved)
+    area._on_release(area, SimpleNamespace(button=1))
     editor.scroll(1)
+    light = editor.lights.lights[editor.selected]
+    print(f"ssn-shadow dialog selftest: light at u={light.u:.3f} v={light.v:.3f}", file=sys.stderr, flush=True)
     preview.render(values())
     pixbuf = preview.widget.get_pixbuf()
     size = f"{pixbuf.get_width()}x{pixbuf.get_height()}" if pixbuf is not None else "none"
-    print(f"ssn-shadow dialog selftest: lights={len(editor.lights)} preview={size} "
-          f"status={preview.status.get_text()!r}", file=sys.stderr, flush=True)
+    print(
+        f"ssn-shadow dialog selftest: lights={len(editor.lights)} preview={size} status={preview.status.get_text()!r}",
+        file=sys.stderr,
+        flush=True,
+    )
 
     def finish() -> bool:
         path = os.environ.get("SSN_SHADOW_DIALOG_SCREENSHOT")
         if path:
-            from gi.repository import Gdk
-
             window = dialog.get_window()
             shot = Gdk.pixbuf_get_from_window(window, 0, 0, window.get_width(), window.get_height())
             shot.savev(path, "png", [], [])

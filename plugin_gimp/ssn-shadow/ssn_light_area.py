@@ -31,6 +31,9 @@ class LightMapArea(Gtk.EventBox):
         self.width, self.height = MAP_WIDTH, MAP_WIDTH // 2
         self.image = Gtk.Image()
         self.add(self.image)
+        # exactly the picture's size, so event coordinates are picture coordinates
+        self.set_halign(Gtk.Align.CENTER)
+        self.set_valign(Gtk.Align.CENTER)
         self.set_can_focus(True)
         self.add_events(
             Gdk.EventMask.BUTTON_PRESS_MASK
@@ -54,10 +57,7 @@ class LightMapArea(Gtk.EventBox):
         self.refresh()
 
     def _uv(self, event) -> tuple[float, float]:
-        alloc = self.image.get_allocation()
-        ox = (alloc.width - self.width) / 2  # the picture is centred in the image widget
-        oy = (alloc.height - self.height) / 2
-        return (event.x - ox) / self.width, min(max((event.y - oy) / self.height, 0.0), 1.0)
+        return event.x / self.width, min(max(event.y / self.height, 0.0), 1.0)
 
     def refresh(self) -> None:
         """Redraw the map and the markers."""

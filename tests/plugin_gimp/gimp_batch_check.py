@@ -32,14 +32,24 @@ def build(case):
     precision = getattr(Gimp.Precision, case["precision"])
     image = Gimp.Image.new_with_precision(w, h, base, precision)
     rgb = case["base"] == "RGB"
-    bg = Gimp.Layer.new(image, "Background", w, h, Gimp.ImageType.RGB_IMAGE if rgb else Gimp.ImageType.GRAY_IMAGE,
-                        100.0, Gimp.LayerMode.NORMAL)
+    bg = Gimp.Layer.new(
+        image,
+        "Background",
+        w,
+        h,
+        Gimp.ImageType.RGB_IMAGE if rgb else Gimp.ImageType.GRAY_IMAGE,
+        100.0,
+        Gimp.LayerMode.NORMAL,
+    )
     image.insert_layer(bg, None, 0)
     bg.fill(Gimp.FillType.WHITE)
     c = case["cutout"]
     has_alpha = c.get("alpha", True)
-    ltype = (Gimp.ImageType.RGBA_IMAGE if has_alpha else Gimp.ImageType.RGB_IMAGE) if rgb else (
-        Gimp.ImageType.GRAYA_IMAGE if has_alpha else Gimp.ImageType.GRAY_IMAGE)
+    ltype = (
+        (Gimp.ImageType.RGBA_IMAGE if has_alpha else Gimp.ImageType.RGB_IMAGE)
+        if rgb
+        else (Gimp.ImageType.GRAYA_IMAGE if has_alpha else Gimp.ImageType.GRAY_IMAGE)
+    )
     layer = Gimp.Layer.new(image, c["name"], c["w"], c["h"], ltype, 100.0, Gimp.LayerMode.NORMAL)
     image.insert_layer(layer, None, 0)
     layer.set_offsets(c["x"], c["y"])
@@ -48,7 +58,7 @@ def build(case):
     x0, y0, x1, y1 = c["rect"]
     for yy in range(y0, y1):
         row = yy * c["w"] * 4
-        px[row + x0 * 4: row + x1 * 4] = bytes([200, 60, 40, 255]) * (x1 - x0)
+        px[row + x0 * 4 : row + x1 * 4] = bytes([200, 60, 40, 255]) * (x1 - x0)
     if not has_alpha:
         layer.fill(Gimp.FillType.WHITE)
     layer.get_buffer().set(Gegl.Rectangle.new(0, 0, c["w"], c["h"]), "R'G'B'A u8", bytes(px))

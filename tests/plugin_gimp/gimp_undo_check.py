@@ -43,7 +43,7 @@ layer = Gimp.Layer.new(image, "Pawn", 200, 150, Gimp.ImageType.RGBA_IMAGE, 100.0
 image.insert_layer(layer, None, 0)
 px = bytearray(200 * 150 * 4)
 for y in range(20, 130):
-    px[(y * 200 + 85) * 4:(y * 200 + 115) * 4] = bytes([30, 30, 200, 255]) * 30
+    px[(y * 200 + 85) * 4 : (y * 200 + 115) * 4] = bytes([30, 30, 200, 255]) * 30
 layer.get_buffer().set(Gegl.Rectangle.new(0, 0, 200, 150), "R'G'B'A u8", bytes(px))
 layer.get_buffer().flush()
 image.clean_all()

@@ -90,8 +90,15 @@ def test_one_layer_inside_one_undo_group():
     assert engine.requests[0][2]["alpha"].shape == (H, W)
 
 
-@pytest.mark.parametrize("precision, dtype", [("u16-linear", "uint16"), ("half-perceptual", "float16"),
-                                              ("float-linear", "float32"), ("double-non-linear", "float32")])
+@pytest.mark.parametrize(
+    "precision, dtype",
+    [
+        ("u16-linear", "uint16"),
+        ("half-perceptual", "float16"),
+        ("float-linear", "float32"),
+        ("double-non-linear", "float32"),
+    ],
+)
 def test_layer_dtype_follows_precision(precision, dtype):
     host, engine = FakeHost(precision), FakeEngine()
     make_shadow(host, engine, ARGS)

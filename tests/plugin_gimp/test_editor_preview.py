@@ -84,8 +84,8 @@ def test_overlay_draws_rings_and_guides():
     rgb = bytearray(3 * w * h)
     overlay_markers(rgb, w, h, light_map.LightMap([light_map.GaussianLight(0.25, 0.5, 0.01, 1)]), 0)
     centre = 3 * (16 * w + 16)
-    assert rgb[centre: centre + 3] == bytes((255, 200, 0))  # the selected light's centre cross
-    assert rgb[3 * 32: 3 * 32 + 3] == bytes((110, 110, 130))  # the u = 0.5 guide on row 0
+    assert rgb[centre : centre + 3] == bytes((255, 200, 0))  # the selected light's centre cross
+    assert rgb[3 * 32 : 3 * 32 + 3] == bytes((110, 110, 130))  # the u = 0.5 guide on row 0
 
 
 def test_preview_size():

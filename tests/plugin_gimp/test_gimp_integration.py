@@ -47,32 +47,88 @@ LEFT_LIGHT = json.dumps(
 )
 CASES = [
     # u8 perceptual RGB, cutout from the layer's alpha (layer offset on the canvas); light right -> shadow left
-    {"id": "rgb-u8-nonlinear", "base": "RGB", "precision": "U8_NON_LINEAR", "cutout": PAWN,
-     "args": {"light-map": "low-sun-right", "opacity": 1.0, "ao-strength": 1.0, "shadow-color": [0, 0, 0]},
-     "side": "left"},
+    {
+        "id": "rgb-u8-nonlinear",
+        "base": "RGB",
+        "precision": "U8_NON_LINEAR",
+        "cutout": PAWN,
+        "args": {"light-map": "low-sun-right", "opacity": 1.0, "ao-strength": 1.0, "shadow-color": [0, 0, 0]},
+        "side": "left",
+    },
     # u16 linear RGB, ELM JSON with a light left of centre -> shadow right; colour, opacity, AO strength
-    {"id": "rgb-u16-linear", "base": "RGB", "precision": "U16_LINEAR", "cutout": PAWN,
-     "args": {"light-map": LEFT_LIGHT, "opacity": 0.7, "ao-strength": 0.5, "shadow-color": [0.2, 0.1, 0.4]},
-     "side": "right"},
+    {
+        "id": "rgb-u16-linear",
+        "base": "RGB",
+        "precision": "U16_LINEAR",
+        "cutout": PAWN,
+        "args": {"light-map": LEFT_LIGHT, "opacity": 0.7, "ao-strength": 0.5, "shadow-color": [0.2, 0.1, 0.4]},
+        "side": "right",
+    },
     # float linear grey
-    {"id": "gray-float-linear", "base": "GRAY", "precision": "FLOAT_LINEAR", "cutout": PAWN,
-     "args": {"light-map": "low-sun-right", "opacity": 0.9, "ao-strength": 2.0, "shadow-color": [0, 0, 0]},
-     "side": "left"},
+    {
+        "id": "gray-float-linear",
+        "base": "GRAY",
+        "precision": "FLOAT_LINEAR",
+        "cutout": PAWN,
+        "args": {"light-map": "low-sun-right", "opacity": 0.9, "ao-strength": 2.0, "shadow-color": [0, 0, 0]},
+        "side": "left",
+    },
     # half perceptual RGB; the layer has no alpha, the cutout is an ellipse selection
-    {"id": "rgb-half-perceptual-selection", "base": "RGB", "precision": "HALF_PERCEPTUAL",
-     "cutout": {**PAWN, "alpha": False}, "select": [140, 40, 40, 170],
-     "args": {"light-map": "low-sun-left", "opacity": 1.0, "ao-strength": 1.0, "shadow-color": [0, 0, 0]},
-     "side": "right"},
+    {
+        "id": "rgb-half-perceptual-selection",
+        "base": "RGB",
+        "precision": "HALF_PERCEPTUAL",
+        "cutout": {**PAWN, "alpha": False},
+        "select": [140, 40, 40, 170],
+        "args": {"light-map": "low-sun-left", "opacity": 1.0, "ao-strength": 1.0, "shadow-color": [0, 0, 0]},
+        "side": "right",
+    },
     # u16 perceptual grey from the layer alpha, the default preset
-    {"id": "gray-u16-perceptual", "base": "GRAY", "precision": "U16_PERCEPTUAL", "cutout": PAWN,
-     "args": {"light-map": "softbox", "opacity": 0.8, "ao-strength": 1.0, "shadow-color": [0, 0, 0]},
-     "side": None},
+    {
+        "id": "gray-u16-perceptual",
+        "base": "GRAY",
+        "precision": "U16_PERCEPTUAL",
+        "cutout": PAWN,
+        "args": {"light-map": "softbox", "opacity": 0.8, "ao-strength": 1.0, "shadow-color": [0, 0, 0]},
+        "side": None,
+    },
+    # 32-bit integer and double precisions (the worker renders float32; babl converts)
+    {
+        "id": "rgb-u32-linear",
+        "base": "RGB",
+        "precision": "U32_LINEAR",
+        "cutout": PAWN,
+        "args": {"light-map": "low-sun-right", "opacity": 1.0, "ao-strength": 1.0, "shadow-color": [0, 0, 0]},
+        "side": "left",
+    },
+    {
+        "id": "gray-double-perceptual",
+        "base": "GRAY",
+        "precision": "DOUBLE_PERCEPTUAL",
+        "cutout": PAWN,
+        "args": {"light-map": LEFT_LIGHT, "opacity": 1.0, "ao-strength": 1.0, "shadow-color": [0, 0, 0]},
+        "side": "right",
+    },
     # errors: no selection and no alpha; a malformed light map
-    {"id": "error-no-alpha", "base": "RGB", "precision": "U8_NON_LINEAR", "cutout": {**PAWN, "alpha": False},
-     "args": {"light-map": "softbox"}, "error": "selection is empty"},
-    {"id": "error-bad-light-map", "base": "RGB", "precision": "U8_NON_LINEAR", "cutout": PAWN,
-     "args": {"light-map": '{"format": "ssn-shadow-elm", "version": 1, "lights": [{"u": 1.5, "v": 0.2, '
-              '"softness": 0.01, "intensity": 1}]}'}, "error": "lights[0].u"},
+    {
+        "id": "error-no-alpha",
+        "base": "RGB",
+        "precision": "U8_NON_LINEAR",
+        "cutout": {**PAWN, "alpha": False},
+        "args": {"light-map": "softbox"},
+        "error": "selection is empty",
+    },
+    {
+        "id": "error-bad-light-map",
+        "base": "RGB",
+        "precision": "U8_NON_LINEAR",
+        "cutout": PAWN,
+        "args": {
+            "light-map": '{"format": "ssn-shadow-elm", "version": 1, "lights": [{"u": 1.5, "v": 0.2, '
+            '"softness": 0.01, "intensity": 1}]}'
+        },
+        "error": "lights[0].u",
+    },
 ]
 for _case in CASES:
     _case.update(width=W, height=H)
@@ -81,9 +137,11 @@ for _case in CASES:
 def _chroot_dir() -> Path | None:
     """The ready chroot, building it if possible; None if it cannot be had."""
     status = subprocess.run([str(TOOL), "status"], capture_output=True, text=True)
-    if status.returncode == 0:
+    if status.returncode == 0 and os.geteuid() == 0:
         return Path(status.stdout.split(None, 1)[1].strip())
-    if os.geteuid() != 0 or shutil.which("debootstrap") is None:
+    if os.geteuid() != 0:  # chroot and mount need root, even for a ready chroot
+        return None
+    if shutil.which("debootstrap") is None:
         return None
     build = subprocess.run([str(TOOL), "build"], capture_output=True, text=True, timeout=1800)
     if build.returncode != 0:
@@ -107,7 +165,10 @@ def worker():
     """A host engine worker on a loopback port: yields (port, client)."""
     proc = subprocess.Popen(
         [sys.executable, "-m", "ssn_engine", "serve", "--port", "0"],
-        cwd=ROOT, stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True,
+        cwd=ROOT,
+        stdout=subprocess.PIPE,
+        stderr=subprocess.PIPE,
+        text=True,
     )
     try:
         line = proc.stdout.readline()
@@ -173,8 +234,12 @@ def _expected(worker_port: int, case: dict, cutout: np.ndarray) -> tuple[dict, n
         lm = args["light-map"]
         params = {"light_map": json.loads(lm)} if lm.startswith("{") else {"preset": lm}
         reply, buffers = client.request(
-            "render", cutout=cid, color=list(args["shadow-color"]), opacity=args["opacity"],
-            format={"dtype": "float32", "channels": "rgba"}, **params,
+            "render",
+            cutout=cid,
+            color=list(args["shadow-color"]),
+            opacity=args["opacity"],
+            format={"dtype": "float32", "channels": "rgba"},
+            **params,
         )
         layer = np.frombuffer(buffers["layer"].data, "<f4").reshape(reply["height"], reply["width"], 4)
         return reply, layer
@@ -249,8 +314,9 @@ def test_one_undo_removes_the_shadow(workdir):
     """GIMP 3's PDB has no undo command, so the GUI (gimp-3.0 under Xvfb) gets a real Ctrl+Z (xdotool)."""
     work, inner = workdir
     shutil.copy(UNDO_SCRIPT, work / "undo.py")
-    run, seconds = run_gimp(inner, f'OUT_PATH = "{inner}/out/undo.json"; exec(open("{inner}/undo.py").read())',
-                            SSN_GIMP_GUI="1")
+    run, seconds = run_gimp(
+        inner, f'OUT_PATH = "{inner}/out/undo.json"; exec(open("{inner}/undo.py").read())', SSN_GIMP_GUI="1"
+    )
     log = run.stdout + run.stderr
     print(f"\ngimp-3.0 GUI undo session: {seconds:.1f} s")
     assert (work / "out" / "undo.json").exists(), log[-6000:]
@@ -269,17 +335,20 @@ def test_interactive_dialog(workdir):
     env = {"SSN_GIMP_XVFB": "1", "SSN_SHADOW_DIALOG_SELFTEST": "1"}
     if os.environ.get("SSN_GIMP_DIALOG_SCREENSHOT"):
         env["SSN_SHADOW_DIALOG_SCREENSHOT"] = inner + "/out/dialog.png"
-    run, seconds = run_gimp(inner, f'OUT_PATH = "{inner}/out/dialog.json"; exec(open("{inner}/dialog.py").read())',
-                            **env)
+    run, seconds = run_gimp(
+        inner, f'OUT_PATH = "{inner}/out/dialog.json"; exec(open("{inner}/dialog.py").read())', **env
+    )
     log = run.stdout + run.stderr
     print(f"\ngimp-console dialog session: {seconds:.1f} s")
     assert (work / "out" / "dialog.json").exists(), log[-6000:]
     result = json.loads((work / "out" / "dialog.json").read_text())
     assert result["status"] == "success", result.get("error")
     assert result["layers"] == ["Pawn", "Shadow: Pawn", "Background"]
-    line = next((ln for ln in log.splitlines() if ln.startswith("ssn-shadow dialog selftest:")), None)
+    line = next((ln for ln in log.splitlines() if ln.startswith("ssn-shadow dialog selftest: lights=")), None)
     assert line is not None, log[-6000:]
     assert "lights=2" in line and "preview=200x150" in line and "status=''" in line
+    # the light added by a press at (0.85, 0.7) of the map and dragged by (-0.05, +0.02) through the widget
+    assert "ssn-shadow dialog selftest: light at u=0.800 v=0.720" in log, log[-3000:]
     assert "traceback" not in log.lower(), log[-6000:]
     if os.environ.get("SSN_GIMP_DIALOG_SCREENSHOT"):
         shutil.copy(work / "out" / "dialog.png", os.environ["SSN_GIMP_DIALOG_SCREENSHOT"])

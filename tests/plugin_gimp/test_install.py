@@ -29,8 +29,17 @@ def test_copy_install(tmp_path):
     dest = inst.install(tmp_path / "plug-ins" / "ssn-shadow", python="/opt/venv/bin/python")
     main = dest / "ssn-shadow.py"
     assert main.is_file() and not main.is_symlink() and os.access(main, os.X_OK)
-    for module in ("ssn_core.py", "ssn_settings.py", "ssn_pixels.py", "ssn_gimp_host.py", "ssn_dialog.py",
-                   "ssn_editor.py", "ssn_light_area.py", "ssn_preview.py", "ssn_engine_link.py"):
+    for module in (
+        "ssn_core.py",
+        "ssn_settings.py",
+        "ssn_pixels.py",
+        "ssn_gimp_host.py",
+        "ssn_dialog.py",
+        "ssn_editor.py",
+        "ssn_light_area.py",
+        "ssn_preview.py",
+        "ssn_engine_link.py",
+    ):
         assert (dest / module).is_file(), module
     for module in ("light_map.py", "protocol.py", "client.py", "__init__.py"):
         assert (dest / "engine_shared" / module).is_file()
@@ -68,7 +77,12 @@ def test_installed_plugin_imports_shared_copies(tmp_path):
     dest = inst.install(tmp_path / "ssn-shadow")
     code = "import ssn_settings, ssn_engine_link as l; print(l.light_map.__name__)"
     env = {k: v for k, v in os.environ.items() if k != "PYTHONPATH"}
-    out = subprocess.run([sys.executable, "-I", "-c", f"import sys; sys.path.insert(0, '.'); {code}"],
-                         cwd=dest, capture_output=True, text=True, env=env)
+    out = subprocess.run(
+        [sys.executable, "-I", "-c", f"import sys; sys.path.insert(0, '.'); {code}"],
+        cwd=dest,
+        capture_output=True,
+        text=True,
+        env=env,
+    )
     assert out.returncode == 0, out.stderr
     assert out.stdout.strip() == "engine_shared.light_map"

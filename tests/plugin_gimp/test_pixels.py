@@ -3,9 +3,14 @@
 import pytest
 from ssn_pixels import PixelFormatError, is_blank, layer_image_type, plan_for_precision
 
-COMPONENTS = {"u8": ("u8", "uint8", "u8", "uint8"), "u16": ("u16", "uint16", "u16", "uint16"),
-              "u32": ("float", "float32", "u16", "uint16"), "half": ("half", "float16", "u16", "uint16"),
-              "float": ("float", "float32", "u16", "uint16"), "double": ("float", "float32", "u16", "uint16")}
+COMPONENTS = {
+    "u8": ("u8", "uint8", "u8", "uint8"),
+    "u16": ("u16", "uint16", "u16", "uint16"),
+    "u32": ("float", "float32", "u16", "uint16"),
+    "half": ("half", "float16", "u16", "uint16"),
+    "float": ("float", "float32", "u16", "uint16"),
+    "double": ("float", "float32", "u16", "uint16"),
+}
 
 
 @pytest.mark.parametrize("trc", ["linear", "non-linear", "perceptual"])
@@ -14,7 +19,11 @@ def test_every_gimp_precision_has_a_plan(component, trc):
     plan = plan_for_precision(f"{component}-{trc}")
     layer_type, layer_dtype, alpha_type, alpha_dtype = COMPONENTS[component]
     assert (plan.layer_type, plan.layer_dtype, plan.alpha_type, plan.alpha_dtype) == (
-        layer_type, layer_dtype, alpha_type, alpha_dtype)
+        layer_type,
+        layer_dtype,
+        alpha_type,
+        alpha_dtype,
+    )
     # explicit babl formats: colour in sRGB perceptual encoding, alpha and masks linear, whatever the TRC
     assert plan.shadow_format == f"R'G'B'A {layer_type}"
     assert plan.layer_alpha_format == f"A {alpha_type}"

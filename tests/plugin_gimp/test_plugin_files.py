@@ -33,8 +33,9 @@ def test_plugin_is_thin_no_heavy_imports():
             if isinstance(node, ast.Import):
                 names = [a.name for a in node.names]
             elif isinstance(node, ast.ImportFrom) and node.module:
-                names = [node.module] + ([f"{node.module}.{a.name}" for a in node.names]
-                                         if node.module == "ssn_engine" else [])
+                names = [node.module] + (
+                    [f"{node.module}.{a.name}" for a in node.names] if node.module == "ssn_engine" else []
+                )
             for name in names:
                 assert not name.startswith(("numpy", "PIL", "onnxruntime", "skimage")), (path.name, name)
                 if name.startswith("ssn_engine."):

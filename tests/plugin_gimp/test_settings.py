@@ -50,8 +50,16 @@ def test_json_light_map_round_trips():
     [
         ("sunset", "unknown preset 'sunset'"),
         ("{not json", "not valid JSON"),
-        (json.dumps({"format": "ssn-shadow-elm", "version": 1, "lights": [{"u": 2, "v": 0, "softness": 0.01,
-                                                                           "intensity": 1}]}), "lights[0].u"),
+        (
+            json.dumps(
+                {
+                    "format": "ssn-shadow-elm",
+                    "version": 1,
+                    "lights": [{"u": 2, "v": 0, "softness": 0.01, "intensity": 1}],
+                }
+            ),
+            "lights[0].u",
+        ),
         (json.dumps({"format": "other", "version": 1, "lights": []}), "format"),
     ],
 )
@@ -81,7 +89,9 @@ def test_settings_validation(kwargs, fragment):
 def test_render_params_and_edits():
     st = ShadowSettings("low-sun-left", (0.2, 0.1, 0.0), 0.5, 1.0)
     assert st.render_params("uint16") == {
-        "preset": "low-sun-left", "color": [0.2, 0.1, 0.0], "opacity": 0.5,
+        "preset": "low-sun-left",
+        "color": [0.2, 0.1, 0.0],
+        "opacity": 0.5,
         "format": {"dtype": "uint16", "channels": "rgba"},
     }
     assert st.ao_edits() == []
