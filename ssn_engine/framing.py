@@ -153,9 +153,15 @@ def shadow_to_canvas(shadow: np.ndarray, framing: Framing) -> CanvasShadow:
     if x1 <= x0 or y1 <= y0:
         return CanvasShadow(np.zeros((0, 0), np.float32), 0, 0)
     s = framing.scale
-    # PIL's affine maps output pixel centres to input points; we sample the
-    # frame at canvas pixel centres, canvas = (x0 + ox + 0.5, y0 + oy + 0.5).
-    data = (s, 0.0, x0 * s + framing.offset_x, 0.0, s, y0 * s + framing.offset_y)
-    image = Image.fromarray(np.ascontiguousarray(shadow, np.float32), "F")
-    out = image.transform((x1 - x0, y1 - y0), Image.Transform.AFFINE, data, Image.Resampling.BILINEAR)
+    # A pure scale and offset: PIL's separable resize over a box of the frame
+    # samples it at canvas pixel centres (and antialiases when shrinking).
+    pad = math.ceil(s) + 1  # zero margin so the box never leaves the padded frame
+    image = Image.fromarray(np.pad(np.asarray(shadow, np.float32), pad), "F")
+    box = (
+        x0 * s + framing.offset_x + pad,
+        y0 * s + framing.offset_y + pad,
+        x1 * s + framing.offset_x + pad,
+        y1 * s + framing.offset_y + pad,
+    )
+    out = image.resize((x1 - x0, y1 - y0), Image.Resampling.BILINEAR, box=box)
     return CanvasShadow(np.clip(np.asarray(out), 0.0, 1.0), x0, y0)
