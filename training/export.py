@@ -164,6 +164,39 @@ def mesh_attribution(data: str) -> list[dict]:
     return rows
 
 
+def model_card(card: dict, attribution: list[dict], command: str) -> str:
+    """The model card (markdown) shipped next to model.json."""
+    ex = card["export"]
+    lines = [
+        "# SSN shadow model (AOP + SR)", "",
+        "The paper's Soft Shadow Network (Sheng et al., CVPR 2021) as two ONNX graphs for "
+        "`ssn_engine.methods.onnx_ssn`: AOP (mask -> AO map A^(1/3)) and SR (mask, AO, 16 x 32 ELM -> shadow s,",
+        "the conventions' normalised inverse shadow).", "",
+        f"- Resolution R = {card['resolution']} (the engine resamples its 256 x 256 frames to R and back).",
+    ]
+    for m in ("aop", "sr"):
+        r = ex[m]
+        lines.append(f"- {m.upper()}: U-Net widths {r['widths']}, {r['step']} steps ({r['samples']} samples), "
+                     f"{r['weights']} weights, {r['bytes'] / 1e6:.2f} MB, "
+                     f"max abs diff to torch {r['max_abs_diff']:.1e}")
+    t = ex["timing"]
+    lines += [f"- SR latency (onnxruntime, median, 2-core CPU): {t['sr_at_R_ms']:.1f} ms at R, "
+              f"{t['sr_engine_256_ms']:.1f} ms for a 256 frame including resampling.", "",
+              "## Training data", "",
+              f"Shadow bases of `{card.get('training_data')}` (training/data, `python -m training.make_dataset`), "
+              "train split; soft shadows from random Table 1 light maps on the fly, exact linear algebra on the bases.",
+              ""]
+    if "metrics" in card:
+        from .evaluate import tables_markdown
+
+        lines += ["## Test metrics (`python -m training.evaluate`)", "", tables_markdown(card["metrics"]), ""]
+    lines += ["## Reproduce", "", "```", command, "```", "", "## Mesh attribution", "",
+              "The training meshes are CC BY (attribution below), CC0 or public domain. Per mesh:", "",
+              "| mesh | licence | attribution | source |", "|---|---|---|---|"]
+    lines += [f"| {a['id']} | {a['licence']} | {a['attribution']} | {a['source']} |" for a in attribution]
+    return "\n".join(lines) + "\n"
+
+
 def parse_args(argv: list[str] | None = None) -> argparse.Namespace:
     p = argparse.ArgumentParser(prog="python -m training.export", description=__doc__.split("\n")[0])
     p.add_argument("--aop", required=True)
@@ -174,6 +207,8 @@ def parse_args(argv: list[str] | None = None) -> argparse.Namespace:
     p.add_argument("--fp32", action="store_true", help="do not try float16 weights")
     p.add_argument("--metrics", help="evaluate's results.json, copied into the card")
     p.add_argument("--install", help="copy the model here (e.g. ssn_engine/models)")
+    p.add_argument("--command", default="training/pipeline.sh data/ssn128 runs",
+                   help="the reproducing command recorded in the card")
     return p.parse_args(argv)
 
 
@@ -217,11 +252,12 @@ def main(argv: list[str] | None = None) -> int:
         card["metrics"] = json.loads(Path(args.metrics).read_text())
     card["training_data"] = args.data
     (out / "model.json").write_text(json.dumps(card, indent=1))
-    (out / "attribution.json").write_text(json.dumps(mesh_attribution(args.data), indent=1))
+    attribution = mesh_attribution(args.data)
+    (out / "MODEL_CARD.md").write_text(model_card(card, attribution, args.command))
     if args.install:
         dst = Path(args.install)
         dst.mkdir(parents=True, exist_ok=True)
-        for name in ("aop.onnx", "sr.onnx", "model.json"):
+        for name in ("aop.onnx", "sr.onnx", "model.json", "MODEL_CARD.md"):
             shutil.copy(out / name, dst / name)
         print(f"installed into {dst}")
     return 0

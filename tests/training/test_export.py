@@ -55,6 +55,7 @@ def test_parity_is_recorded_and_within_bound(exported):
         assert report[module]["max_abs_diff"] <= 1e-4
         assert report[module]["weights"] in ("float16", "float32")
     assert report["timing"]["sr_at_R_ms"] > 0
+    assert "# SSN shadow model" in (exported / "MODEL_CARD.md").read_text()
 
 
 def test_the_engine_loads_the_export(exported):

@@ -24,7 +24,7 @@ ELM_SHAPE = (16, 32)
 class UNetConfig:
     """Width per stage (stage 0 at full resolution; len(widths) - 1 downsamplings)."""
 
-    widths: tuple[int, ...] = (16, 32, 48, 64, 96, 128)
+    widths: tuple[int, ...] = (8, 16, 32, 64, 96, 128)
     groups: int = 8
     resolution: int = 128
 
