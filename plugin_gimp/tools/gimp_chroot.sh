@@ -84,13 +84,18 @@ build() {
         return 0
     fi
     local work="$DIR.partial" start=$SECONDS
-    safe_rm "$work"
+    if [ -e "$work" ]; then
+        echo "gimp_chroot.sh: removing the interrupted build $work" >&2
+        safe_rm "$work"
+    fi
     if [ -e "$DIR" ]; then
         echo "gimp_chroot.sh: $DIR is incomplete or from an older recipe; rebuilding" >&2
         safe_rm "$DIR"
     fi
     echo "gimp_chroot.sh: debootstrap trixie into $work" >&2
-    debootstrap --variant=minbase trixie "$work" "$MIRROR" >&2
+    # in a private mount namespace too: the /proc and /sys that debootstrap mounts in the target
+    # vanish with it even if it is killed half-way
+    unshare --mount --propagation private debootstrap --variant=minbase trixie "$work" "$MIRROR" >&2
     echo "gimp_chroot.sh: installing ${PACKAGES[*]} ${EXTRA_PACKAGES[*]}" >&2
     # shellcheck disable=SC2046
     in_chroot "$work" $(clean_env) DEBIAN_FRONTEND=noninteractive \
