@@ -38,6 +38,7 @@ TOOL = ROOT / "plugin_gimp" / "tools" / "gimp_chroot.sh"
 BATCH_SCRIPT = Path(__file__).with_name("gimp_batch_check.py")
 DIALOG_SCRIPT = Path(__file__).with_name("gimp_dialog_check.py")
 UNDO_SCRIPT = Path(__file__).with_name("gimp_undo_check.py")
+RELAY_SCRIPT = Path(__file__).with_name("stdio_relay.py")
 IN_CI = os.environ.get("CI") == "true"
 
 W, H = 320, 240
@@ -193,8 +194,8 @@ def workdir(chroot, worker):
         shutil.rmtree(work, ignore_errors=True)
 
 
-def run_gimp(inner: str, code: str, **env: str) -> tuple[subprocess.CompletedProcess, float]:
-    env = {**os.environ, "SSN_GIMP3_DIRECTORY": inner + "/profile", **env}
+def run_gimp(inner: str, code: str, profile: str = "profile", **env: str) -> tuple[subprocess.CompletedProcess, float]:
+    env = {**os.environ, "SSN_GIMP3_DIRECTORY": f"{inner}/{profile}", **env}
     start = time.monotonic()
     run = subprocess.run([str(TOOL), "gimp-eval", code], env=env, capture_output=True, text=True, timeout=240)
     return run, time.monotonic() - start
@@ -352,3 +353,32 @@ def test_interactive_dialog(workdir):
     assert "traceback" not in log.lower(), log[-6000:]
     if os.environ.get("SSN_GIMP_DIALOG_SCREENSHOT"):
         shutil.copy(work / "out" / "dialog.png", os.environ["SSN_GIMP_DIALOG_SCREENSHOT"])
+
+
+def test_spawned_worker(workdir, worker):
+    """The default engine.json (a command the plug-in spawns, talking over its stdin/stdout), in real GIMP.
+
+    The chroot has no ssn-shadow, so the command is a stdlib relay to the host worker: the plug-in's
+    own subprocess path runs, and the worker is the real one."""
+    work, inner = workdir
+    port, _ = worker
+    dest = install(work / "profile-spawn" / "plug-ins" / "ssn-shadow", python="/usr/bin/python3")
+    shutil.copy(RELAY_SCRIPT, work / "relay.py")
+    config = json.loads((dest / "engine.json").read_text())
+    config["args"] = [inner + "/relay.py", "127.0.0.1", str(port)]
+    (dest / "engine.json").write_text(json.dumps(config))
+    out = work / "out-spawn"
+    out.mkdir()
+    case = next(c for c in CASES if c["id"] == "rgb-u8-nonlinear")
+    shutil.copy(BATCH_SCRIPT, work / "check.py")
+    (work / "job-spawn.json").write_text(json.dumps({"out_dir": inner + "/out-spawn", "cases": [case]}))
+    run, seconds = run_gimp(
+        inner, f'JOB_PATH = "{inner}/job-spawn.json"; exec(open("{inner}/check.py").read())', profile="profile-spawn"
+    )
+    print(f"\ngimp-console spawned-worker session: {seconds:.1f} s")
+    log = run.stdout + run.stderr
+    assert (out / "results.json").exists(), log[-6000:]
+    (result,) = json.loads((out / "results.json").read_text())
+    assert result["status"] == "success", result.get("error")
+    assert result["layers_after"] == ["Pawn", "Shadow: Pawn", "Background"]
+    assert result["source_unchanged"] and result["selection_unchanged"]
