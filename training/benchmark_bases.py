@@ -1,0 +1,120 @@
+"""Throughput of the occlusion-basis renderer: seconds per view and where the time goes.
+
+    python -m training.benchmark_bases [--res 256 128] [--meshes 8] [--views 3] [--threads 1]
+
+Renders ``--views`` views of ``--meshes`` shared meshes spread over the triangle-count
+range (plus one anny human when anny is installed), one worker, and prints per-mesh
+seconds per view and a breakdown of one view into its stages. A benchmark that prints
+figures, not a test: numbers depend on the machine and its load.
+"""
+
+from __future__ import annotations
+
+import argparse
+import time
+
+import numpy as np
+
+from ssn_engine.hemisphere import stratified_directions, texel_weights
+from training.data import meshes, sources, spans
+from training.data import render_bases as rb
+from training.data.generate import view_specs
+
+
+def pick_items(count: int) -> list[sources.Item]:
+    items = sources.manifest_items()
+    rows = {r["id"]: int(r["faces"]) for r in meshes.read_manifest()}
+    items.sort(key=lambda it: rows[it.id])
+    idx = np.linspace(0, len(items) - 1, count).round().astype(int)
+    picked = [items[i] for i in idx]
+    try:
+        import anny  # noqa: F401
+
+        from training.data.humans import human_items
+        picked.append(human_items(1, 0)[0])
+    except ImportError:
+        pass
+    return picked
+
+
+def stages(mesh, topo, yaw, pitch, fov, n, hb, samples, rng) -> dict[str, float]:
+    """One view, stage by stage (same calls as render_view), seconds per stage."""
+    t = {}
+    t0 = time.perf_counter()
+    v = np.ascontiguousarray(meshes.yawed(mesh.vertices, yaw))
+    cam = rb.view_camera(v, n, fov, pitch)
+    rows = rb.ground_rows(cam)
+    dirs = np.ascontiguousarray(cam.to_world(stratified_directions(hb, samples, rng)).reshape(-1, samples, 3))
+    normals = meshes.face_normals(v, mesh.faces)
+    t["setup (camera, directions, normals)"] = time.perf_counter() - t0
+    args = (v, normals, topo.edges, topo.ptr, topo.inc_face, topo.inc_dir, dirs, rows.z, rows.x0, rows.dx,
+            rows.rowmap, rows.first, n)
+    times = []
+    for stage in (1, 2, 3):
+        t0 = time.perf_counter()
+        counts = rb.occlusion_counts(*args, stage)
+        times.append(time.perf_counter() - t0)
+    t["per texel: classify faces and edges"] = times[0]
+    t["per direction: visit edges, project vertices"] = max(times[1] - times[0], 0.0)
+    t["per direction: scan-convert edges, running sums"] = max(times[2] - times[1], 0.0)
+    t0 = time.perf_counter()
+    w = (texel_weights(hb) / np.pi / samples).reshape(-1)
+    np.cbrt(np.clip(1.0 - rb.weighted_sum(counts, w), 0.0, 1.0))
+    t["AO"] = time.perf_counter() - t0
+    t0 = time.perf_counter()
+    rb.mask_coverage(v, mesh.faces, topo, cam, max(4, -(-1024 // n)))
+    t["mask"] = time.perf_counter() - t0
+    t0 = time.perf_counter()
+    spans.pack(spans.quantise_counts(counts, samples))
+    t["quantise and pack"] = time.perf_counter() - t0
+    return t
+
+
+def main(argv: list[str] | None = None) -> None:
+    p = argparse.ArgumentParser(description=__doc__.splitlines()[0])
+    p.add_argument("--res", type=int, nargs="+", default=[256, 128])
+    p.add_argument("--meshes", type=int, default=8)
+    p.add_argument("--views", type=int, default=3)
+    p.add_argument("--elm-rows", type=int, default=16)
+    p.add_argument("--samples", type=int, default=16)
+    p.add_argument("--threads", type=int, default=1)
+    args = p.parse_args(argv)
+    rb.set_threads(args.threads)
+    items = pick_items(args.meshes)
+    built = [(it, sources.build_mesh(it)) for it in items]
+    built = [(it, m, meshes.topology(m)) for it, m in built]
+    specs = view_specs()
+    pick = np.linspace(0, len(specs) - 1, args.views).round().astype(int)
+    # compile every specialisation once
+    rb.render_view(built[0][1], built[0][2], 0.0, 15.0, 45.0, 32, args.elm_rows, args.samples,
+                   np.random.default_rng(0))
+    stages(built[0][1], built[0][2], 0.0, 15.0, 45.0, 32, args.elm_rows, args.samples, np.random.default_rng(0))
+    for n in args.res:
+        print(f"\nN = {n}, grid {args.elm_rows} x {2 * args.elm_rows}, {args.samples} directions per texel, "
+              f"{args.threads} thread(s)")
+        print(f"{'mesh':34s} {'faces':>6s} {'s/view':>7s} {'MiB/view':>8s}")
+        all_t, total = [], {}
+        for it, mesh, topo in built:
+            per, size = [], []
+            for k in pick:
+                yaw, pitch = specs[k]
+                rng = np.random.default_rng([0, k])
+                t0 = time.perf_counter()
+                r = rb.render_view(mesh, topo, yaw, pitch, 45.0, n, args.elm_rows, args.samples, rng)
+                s, d = spans.pack(spans.quantise_counts(r.counts.reshape(-1, n, n), args.samples))
+                per.append(time.perf_counter() - t0)
+                size.append(s.nbytes + d.nbytes + 2 * 2 * n * n)
+            all_t += per
+            print(f"{it.id:34s} {len(mesh.faces):6d} {np.mean(per):7.2f} {np.mean(size) / 2**20:8.2f}")
+            for key, val in stages(mesh, topo, *specs[pick[len(pick) // 2]], 45.0, n, args.elm_rows,
+                                   args.samples, np.random.default_rng(1)).items():
+                total[key] = total.get(key, 0.0) + val
+        print(f"{'mean':34s} {'':6s} {np.mean(all_t):7.2f}")
+        whole = sum(total.values())
+        print("where the time goes (one view per mesh, summed):")
+        for key, val in total.items():
+            print(f"  {key:52s} {val:7.2f} s  {100 * val / whole:5.1f} %")
+
+
+if __name__ == "__main__":
+    main()

@@ -1,0 +1,157 @@
+"""Varied people from the ``anny`` body model (Apache-2.0 code, CC0 MakeHuman data; needs torch).
+
+Each item's parameters are drawn from its seed with numpy alone and stored in
+the item (phenotypes, pose family and every joint angle), so the set is
+reproducible and inspectable without anny; :func:`build` poses the model.
+
+Angles are in degrees, as ``anny``'s "local-ref" deltas (rotations about
+world-aligned axes of the reference pose, anny's frame: x to the body's left,
+-y forward, z up). Signs were measured on the model's joints: for the left
+arm +y lowers the arm towards the body and -y raises it sideways, -x swings
+it forward; for the legs -x swings the thigh forward and +x bends the knee.
+Right-side y and z rotations are mirrored. Every angle is clipped to a
+natural range (``LIMITS``).
+"""
+
+from __future__ import annotations
+
+import math
+
+import numpy as np
+
+from .meshes import Mesh
+from .sources import Item, split_for
+
+POSES = ("standing", "walking", "arms_raised", "arms_crossed", "arm_out", "hands_on_hips")
+PHENOTYPES = ("gender", "age", "muscle", "weight", "height", "proportions")
+LIMITS = {  # (axis, lo, hi) per joint role, degrees, in the left side's convention
+    "upperarm_y": (-160.0, 60.0), "upperarm_x": (-110.0, 50.0), "upperarm_z": (-60.0, 60.0),
+    "elbow_x": (-140.0, 0.0), "elbow_z": (-110.0, 40.0),
+    "hip_x": (-70.0, 30.0), "hip_y": (-25.0, 25.0), "knee_x": (0.0, 110.0),
+    "spine_x": (-20.0, 20.0), "spine_z": (-25.0, 25.0), "head_z": (-45.0, 45.0), "head_x": (-25.0, 25.0),
+}
+
+
+def _angles(pose: str, rng: np.random.Generator) -> dict[str, float]:
+    """Joint angles (left-side convention for arms and legs, suffix _L/_R) of one pose family."""
+    u = rng.uniform
+    a: dict[str, float] = {}
+    for side in ("L", "R"):
+        a[f"upperarm_y_{side}"] = u(30, 50)
+        a[f"upperarm_x_{side}"] = u(-15, 10)
+        a[f"elbow_x_{side}"] = u(-25, 0)
+        a[f"hip_x_{side}"] = u(-6, 4)
+        a[f"hip_y_{side}"] = u(-6, 6)
+        a[f"knee_x_{side}"] = u(0, 8)
+    if pose == "walking":
+        phase, stride = u(0, 2 * math.pi), u(15, 32)
+        for side, sgn in (("L", 1.0), ("R", -1.0)):
+            s = sgn * math.sin(phase)
+            a[f"hip_x_{side}"] = -stride * s
+            a[f"knee_x_{side}"] = max(0.0, 45 * sgn * math.sin(phase + 1.2)) + u(0, 8)
+            a[f"upperarm_x_{side}"] = 0.8 * stride * s
+            a[f"elbow_x_{side}"] = u(-35, -5)
+    elif pose == "arms_raised":
+        both = rng.random() < 0.6
+        for side in ("L", "R"):
+            if both or side == "L":
+                a[f"upperarm_y_{side}"] = u(-150, -70)
+                a[f"upperarm_x_{side}"] = u(-30, 10)
+                a[f"elbow_x_{side}"] = u(-60, 0)
+    elif pose == "arms_crossed":
+        for side in ("L", "R"):
+            a[f"upperarm_y_{side}"] = u(35, 50)
+            a[f"upperarm_x_{side}"] = u(-45, -25)
+            a[f"elbow_x_{side}"] = u(-110, -80)
+            a[f"elbow_z_{side}"] = u(-80, -50)
+    elif pose == "arm_out":
+        side = "L" if rng.random() < 0.5 else "R"
+        a[f"upperarm_y_{side}"] = u(-50, -30)
+        a[f"upperarm_x_{side}"] = u(-70, 0)
+        a[f"elbow_x_{side}"] = u(-30, 0)
+    elif pose == "hands_on_hips":
+        for side in ("L", "R"):
+            a[f"upperarm_y_{side}"] = u(0, 15)
+            a[f"upperarm_x_{side}"] = u(5, 25)
+            a[f"elbow_x_{side}"] = u(-100, -70)
+            a[f"elbow_z_{side}"] = u(-60, -30)
+    a["spine_x"] = u(-8, 8)
+    a["spine_z"] = u(-12, 12)
+    a["head_z"] = u(-30, 30)
+    a["head_x"] = u(-12, 12)
+    out = {}
+    for key, value in a.items():
+        role = key[:-2] if key.endswith(("_L", "_R")) else key
+        lo, hi = LIMITS[role]
+        out[key] = float(np.clip(value, lo, hi))
+    return out
+
+
+def draw_params(seed: int) -> dict:
+    """Phenotypes (uniform in [0, 1], age in [0.25, 1]), pose family and joint angles of one person."""
+    rng = np.random.default_rng([seed, 7])
+    pheno = {k: float(rng.uniform(0.25 if k == "age" else 0.0, 1.0)) for k in PHENOTYPES}
+    pose = POSES[int(rng.integers(len(POSES)))]
+    return {"seed": int(seed), "phenotypes": pheno, "pose": pose, "angles": _angles(pose, rng)}
+
+
+def human_items(count: int, seed: int) -> list[Item]:
+    """``count`` anny people; split by index (80/10/10)."""
+    out = []
+    for i in range(count):
+        params = draw_params(int(seed) * 100003 + i) | {
+            "licence": "CC0-1.0 (MakeHuman body data via anny, Apache-2.0 code)",
+            "attribution": "anny (NAVER Corp.) / MakeHuman"}
+        out.append(Item(f"anny_{seed}_{i:04d}", split_for(i), "human", f"anny_{params['pose']}", "anny", params))
+    return out
+
+
+_MODEL = None
+
+
+def _model():
+    global _MODEL
+    if _MODEL is None:
+        import anny
+        import torch
+
+        torch.set_num_threads(1)
+        model = anny.Anny()
+        _MODEL = (model, model.get_triangular_faces().numpy().astype(np.int32))
+    return _MODEL
+
+
+def _rotation(axes: list[tuple[str, float]]):
+    import roma
+    import torch
+
+    r = torch.eye(3, dtype=torch.float64)
+    for axis, deg in axes:
+        v = torch.zeros(3, dtype=torch.float64)
+        v["xyz".index(axis)] = math.radians(deg)
+        r = r @ roma.rotvec_to_rotmat(v)
+    t = torch.eye(4, dtype=torch.float64)
+    t[:3, :3] = r
+    return t[None]
+
+
+def build(params: dict) -> Mesh:
+    """Pose anny with the recorded parameters; returns the mesh in y-up world axes."""
+    import torch
+
+    model, faces = _model()
+    a = params["angles"]
+    pose = {}
+    for side, m in (("L", 1.0), ("R", -1.0)):
+        pose[f"upperarm01.{side}"] = _rotation([("y", m * a[f"upperarm_y_{side}"]), ("x", a[f"upperarm_x_{side}"])])
+        pose[f"lowerarm01.{side}"] = _rotation([("x", a[f"elbow_x_{side}"]), ("z", m * a.get(f"elbow_z_{side}", 0.0))])
+        pose[f"upperleg01.{side}"] = _rotation([("x", a[f"hip_x_{side}"]), ("y", m * a[f"hip_y_{side}"])])
+        pose[f"lowerleg01.{side}"] = _rotation([("x", a[f"knee_x_{side}"])])
+    pose["spine03"] = _rotation([("x", a["spine_x"]), ("z", a["spine_z"])])
+    pose["head"] = _rotation([("z", a["head_z"]), ("x", a["head_x"])])
+    with torch.no_grad():
+        out = model(pose_parameters={k: v.to(model.dtype) for k, v in pose.items()},
+                    phenotype_kwargs=params["phenotypes"])
+    v = out["vertices"][0].double().numpy()
+    # anny: x left, -y forward, z up -> world: y up, the person facing +z (towards the yaw-0 camera).
+    return Mesh(np.stack([v[:, 0], v[:, 2], -v[:, 1]], axis=1), faces)
