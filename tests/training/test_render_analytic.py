@@ -5,7 +5,6 @@ from __future__ import annotations
 import numpy as np
 import pytest
 
-from ssn_engine.camera import Camera
 from ssn_engine.hemisphere import stratified_directions, texel_edges, texel_weights
 from training.data import meshes, procedural
 from training.data import render_bases as rb

@@ -80,14 +80,14 @@ def _centroid(img: np.ndarray) -> np.ndarray:
 def test_light_right_of_centre_casts_the_shadow_left():
     mesh = meshes.normalise(procedural.box((0.2, 1.0, 0.2)))
     s, mask = _shadow_of(mesh, 0.75, 0.5)  # azimuth +90: to the camera's right
-    (sx, sy), (mx, my) = _centroid(s), _centroid(mask)
+    (sx, sy), (mx, _) = _centroid(s), _centroid(mask)
     assert sx < mx - 5 and abs(sy - np.argwhere(mask > 0)[:, 0].max()) < 10
 
 
 def test_light_at_centre_column_casts_the_shadow_down_the_frame():
     mesh = meshes.normalise(procedural.box((0.2, 1.0, 0.2)))
     s, mask = _shadow_of(mesh, 0.5, 0.5)  # straight ahead, behind the object
-    (sx, sy), (mx, my) = _centroid(s), _centroid(mask)
+    (sx, sy), (mx, _) = _centroid(s), _centroid(mask)
     assert abs(sx - mx) < 1.0 and sy > np.argwhere(mask > 0)[:, 0].max()
     s_back, _ = _shadow_of(mesh, 0.0, 0.5)  # behind the camera: the shadow goes away, up the frame
     assert _centroid(s_back)[1] < sy

@@ -25,7 +25,7 @@ def summarise(root: Path) -> dict:
 
     def count(key: str) -> dict:
         c: Counter = Counter()
-        for m, v in zip(meshes, views):
+        for m, v in zip(meshes, views, strict=True):
             c[(m["split"], m[key])] += v
         return {f"{s}/{k}": n for (s, k), n in sorted(c.items())}
 
@@ -35,7 +35,7 @@ def summarise(root: Path) -> dict:
         "samples_per_texel": store.meta["samples_per_texel"], "seed": store.meta["seed"],
         "meshes": len(meshes), "views": n_views,
         "meshes_per_split": dict(Counter(m["split"] for m in meshes)),
-        "views_per_split": dict(Counter(m["split"] for m, v in zip(meshes, views) for _ in range(v))),
+        "views_per_split": dict(Counter(m["split"] for m, v in zip(meshes, views, strict=True) for _ in range(v))),
         "views_per_split_kind": count("kind"), "views_per_split_source": count("source"),
         "views_per_split_category": count("category"),
         "bytes": view_bytes, "bytes_per_view": view_bytes / max(n_views, 1),

@@ -127,9 +127,10 @@ def generate(kind: str, seed: int) -> Mesh:
             h = rng.uniform(0.6, 1.5)
             p = cylinder(rng.uniform(0.005, 0.03), h, 16, (rng.uniform(-0.3, 0.3), 0, rng.uniform(-0.3, 0.3)))
             parts.append(tilt(p, rng.uniform(-0.3, 0.3)) if rng.random() < 0.4 else p)
-        if rng.random() < 0.4:
-            top = max(p.vertices[:, 1].max() for p in parts)
-            parts.append(box((rng.uniform(0.2, 0.6), rng.uniform(0.1, 0.3), 0.02), (0, top, 0)))
+        if rng.random() < 0.4:  # a sign on the tallest pole's top
+            tallest = max(parts, key=lambda p: p.vertices[:, 1].max())
+            tip = tallest.vertices[tallest.vertices[:, 1] >= tallest.vertices[:, 1].max() - 1e-9].mean(axis=0)
+            parts.append(box((rng.uniform(0.2, 0.6), rng.uniform(0.1, 0.3), 0.02), tip))
         return merge(parts)
     if kind == "slab":  # flat slabs: standing panels or lying plates, maybe on small feet
         w, h, t = rng.uniform(0.3, 1.0), rng.uniform(0.3, 1.0), rng.uniform(0.01, 0.05)
@@ -144,7 +145,8 @@ def generate(kind: str, seed: int) -> Mesh:
         if rng.random() < 0.5:
             major = rng.uniform(0.2, 0.5)
             minor = rng.uniform(0.02, 0.1)
-            return rotate_y(torus(major, minor, (0, major + minor, 0), upright=rng.random() < 0.7), rng.uniform(0, np.pi))
+            ring = torus(major, minor, (0, major + minor, 0), upright=rng.random() < 0.7)
+            return rotate_y(ring, rng.uniform(0, np.pi))
         w, h, bar = rng.uniform(0.4, 1.0), rng.uniform(0.4, 1.0), rng.uniform(0.03, 0.1)
         d = rng.uniform(0.03, 0.3)
         frame = [box((w, bar, d), (0, bar / 2, 0)), box((w, bar, d), (0, h - bar / 2, 0)),
@@ -165,7 +167,10 @@ def generate(kind: str, seed: int) -> Mesh:
         w, d, h = rng.uniform(0.4, 1.0), rng.uniform(0.3, 1.0), rng.uniform(0.2, 0.8)
         leg = rng.uniform(0.01, 0.05)
         legs = [cylinder(leg, h, 12, (sx * w * 0.45, 0, sz * d * 0.45)) for sx in (-1, 1) for sz in (-1, 1)]
-        top = box((w, 0.03, d), (0, h + 0.015, 0)) if rng.random() < 0.6 else cylinder(max(w, d) / 2, 0.03, 48, (0, h, 0))
+        if rng.random() < 0.6:
+            top = box((w, 0.03, d), (0, h + 0.015, 0))
+        else:
+            top = cylinder(max(w, d) / 2, 0.03, 48, (0, h, 0))
         return merge(legs + [top])
     raise ValueError(f"unknown procedural kind {kind!r}")
 
