@@ -66,7 +66,11 @@ class EngineClient:
         if self.command is not None:
             try:
                 self._proc = subprocess.Popen(
-                    list(self.command), stdin=subprocess.PIPE, stdout=subprocess.PIPE, stderr=subprocess.PIPE
+                    list(self.command),
+                    stdin=subprocess.PIPE,
+                    stdout=subprocess.PIPE,
+                    stderr=subprocess.PIPE,
+                    creationflags=getattr(subprocess, "CREATE_NO_WINDOW", 0),  # no console flash on Windows
                 )
             except OSError as exc:
                 raise WorkerUnavailable(

@@ -78,11 +78,12 @@ class Worker:
 
     @staticmethod
     def _light_map(header: dict) -> LightMap:
-        if header.get("light_map") is not None:
+        given = [key for key in ("light_map", "preset") if header.get(key) is not None]
+        if len(given) != 1:
+            raise RequestError("BadRequest", "light_map or preset: give exactly one")
+        if given[0] == "light_map":
             return LightMap.from_dict(header["light_map"])
-        if header.get("preset") is not None:
-            return preset(header["preset"])
-        raise RequestError("BadRequest", "light_map or preset: one is required")
+        return preset(header["preset"])
 
     # -- commands ------------------------------------------------------------
     def hello(self, header: dict, buffers: dict) -> tuple[dict, dict]:
@@ -153,8 +154,8 @@ class Worker:
 
     def elm_image(self, header: dict, buffers: dict) -> tuple[dict, dict]:
         width = header.get("width", 256)
-        if not isinstance(width, int) or not 2 <= width <= MAX_ELM_IMAGE_WIDTH:
-            raise RequestError("BadRequest", f"width: expected an integer in [2, {MAX_ELM_IMAGE_WIDTH}]")
+        if not isinstance(width, int) or width % 2 or not 2 <= width <= MAX_ELM_IMAGE_WIDTH:
+            raise RequestError("BadRequest", f"width: expected an even integer in [2, {MAX_ELM_IMAGE_WIDTH}]")
         return {}, {"image": to_buffer(elm_display_image(self._light_map(header), width))}
 
     def release(self, header: dict, buffers: dict) -> tuple[dict, dict]:

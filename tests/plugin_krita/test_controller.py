@@ -1,4 +1,4 @@
-from helpers import FakeHost, wait_until, worker_command
+from krita_helpers import FakeHost, wait_until, worker_command
 from plugin_krita.ssn_shadow.controller import ShadowController
 from plugin_krita.ssn_shadow.engine import EngineProcess
 from plugin_krita.ssn_shadow.settings import EngineCommand

@@ -2,7 +2,7 @@ import sys
 
 import pytest
 
-from helpers import cutout_alpha, wait_until, worker_command
+from krita_helpers import cutout_alpha, wait_until, worker_command
 from plugin_krita.ssn_shadow.engine import EngineProcess
 from plugin_krita.ssn_shadow.settings import EngineCommand
 from plugin_krita.ssn_shadow.shared import protocol

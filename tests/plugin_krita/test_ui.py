@@ -3,7 +3,7 @@ from PyQt5.QtGui import QMouseEvent, QWheelEvent
 from PyQt5.QtTest import QTest
 from PyQt5.QtWidgets import QApplication
 
-from helpers import FakeHost
+from krita_helpers import FakeHost
 from plugin_krita.ssn_shadow.ao_edits import AoEdits
 from plugin_krita.ssn_shadow.controller import ShadowController
 from plugin_krita.ssn_shadow.shared import light_map as lm
