@@ -113,5 +113,7 @@ def test_spans_round_trip_and_quantisation():
     occ[2] = 0
     s, d = spans.pack(occ)
     assert d.size < occ.size and np.array_equal(spans.unpack(s, d, 40), occ)
+    s2, d2 = spans.pack_numpy(occ)
+    assert np.array_equal(s, s2) and np.array_equal(d, d2)
     q = spans.quantise_counts(np.arange(17), 16)
     assert q[0] == 0 and q[16] == 255 and np.all(np.abs(q / 255 - np.arange(17) / 16) <= 0.5 / 255 + 1e-12)

@@ -223,6 +223,9 @@ def occlusion_counts(
     ne = edges.shape[0]
     nv = verts.shape[0]
     out = np.zeros((t_count, n, n), np.uint8)
+    norms = np.empty(nf)
+    for f in range(nf):
+        norms[f] = math.sqrt(normals[f, 0] ** 2 + normals[f, 1] ** 2 + normals[f, 2] ** 2)
     for t in prange(t_count):
         diff = np.zeros((n, n), np.int32)
         box = np.array([n, -1, n], np.int64)
@@ -243,7 +246,7 @@ def occlusion_counts(
         n_signs = 0
         for f in range(nf):
             nx, ny, nz = normals[f, 0], normals[f, 1], normals[f, 2]
-            nn = math.sqrt(nx * nx + ny * ny + nz * nz)
+            nn = norms[f]
             dc = nx * cx + ny * cy + nz * cz
             if nn == 0.0:
                 code[f] = 0

@@ -17,7 +17,46 @@ def quantise_counts(counts: np.ndarray, samples: int) -> np.ndarray:
 
 
 def pack(occ: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
-    """(T, N, N) uint8 -> spans (T, N, 2) uint16, data (K,) uint8."""
+    """(T, N, N) uint8 -> spans (T, N, 2) uint16, data (K,) uint8 (numba when available)."""
+    try:
+        from numba import njit
+    except ImportError:
+        return pack_numpy(occ)
+    global _pack_compiled
+    if _pack_compiled is None:
+        _pack_compiled = njit(cache=True)(_pack_loops)
+    spans, data, k = _pack_compiled(np.ascontiguousarray(occ))
+    return spans, data[:k].copy()
+
+
+_pack_compiled = None
+
+
+def _pack_loops(occ):
+    t_count, n, m = occ.shape
+    spans = np.zeros((t_count, n, 2), np.uint16)
+    data = np.empty(occ.size, np.uint8)
+    k = 0
+    for t in range(t_count):
+        for i in range(n):
+            lo = 0
+            while lo < m and occ[t, i, lo] == 0:
+                lo += 1
+            if lo == m:
+                continue
+            hi = m
+            while occ[t, i, hi - 1] == 0:
+                hi -= 1
+            spans[t, i, 0] = lo
+            spans[t, i, 1] = hi
+            for j in range(lo, hi):
+                data[k] = occ[t, i, j]
+                k += 1
+    return spans, data, k
+
+
+def pack_numpy(occ: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+    """Pure-numpy :func:`pack` (same output)."""
     t, n, _ = occ.shape
     nz = occ != 0
     row_any = nz.any(axis=2)
