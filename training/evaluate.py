@@ -20,7 +20,7 @@ from pathlib import Path
 import numpy as np
 import torch
 
-from .batches import irradiance_to_shadow
+from .batches import irradiance_to_shadow, view_key
 from .checkpoint import load_model
 from .elm import render_lights, sample_lights
 from .frames import resize_frames
@@ -40,10 +40,11 @@ def parse_args(argv: list[str] | None = None) -> argparse.Namespace:
     p = argparse.ArgumentParser(prog="python -m training.evaluate", description=__doc__.split("\n")[0])
     p.add_argument("--data", default="data/ssn128")
     p.add_argument("--split", default="test")
-    p.add_argument("--aop", required=True, help="AOP checkpoint")
-    p.add_argument("--sr", required=True, help="SR checkpoint (shadow target)")
+    p.add_argument("--aop", help="AOP checkpoint (without --aop and --sr: the geometric baseline alone)")
+    p.add_argument("--sr", help="SR checkpoint (shadow target)")
     p.add_argument("--noninv", help="SR checkpoint trained on irradiance (Non-inv-SSN)")
     p.add_argument("--no-geometric", action="store_true")
+    p.add_argument("--geo-cache", help="npz of geometric predictions to reuse and extend (they do not change)")
     p.add_argument("--n-elms", type=int, default=64, help="size of the fixed pool of random ELMs")
     p.add_argument("--per-view", type=int, default=2, help="ELMs per view")
     p.add_argument("--max-views", type=int, default=0, help="at most this many views per group (evenly spaced); 0: all")
@@ -110,11 +111,15 @@ def evaluate(args: argparse.Namespace, store=None) -> dict:
     store = store if store is not None else ViewStore(args.data)
     n_px, rows_hb = store.meta["res"], store.meta["elm_rows"]
     elm_hb, elm16 = elm_pool(args.n_elms, args.seed, rows_hb)
-    nets = Networks(args.aop, args.sr, args.noninv)
+    nets = Networks(args.aop, args.sr, args.noninv) if args.aop and args.sr else None
     geo = None if args.no_geometric else GeometricCard(resolution=n_px)
-    methods = (["geometric"] if geo else []) + (["Non-inv-SSN"] if nets.noninv else []) + ["SSN", "GT-AO-SSN"]
+    methods = (["geometric"] if geo else []) + (["Non-inv-SSN"] if nets and nets.noninv else [])
+    methods += ["SSN", "GT-AO-SSN"] if nets else []
     results: dict = {"methods": methods, "groups": {}, "n_elms": args.n_elms, "per_view": args.per_view,
-                     "data": str(args.data), "N": n_px, "R": nets.r, "split": args.split, "networks": nets.info}
+                     "data": str(args.data), "N": n_px, "R": nets.r if nets else None, "split": args.split,
+                     "networks": nets.info if nets else {}}
+    cache_path = Path(args.geo_cache) if args.geo_cache else None
+    geo_cache = dict(np.load(cache_path)) if cache_path and cache_path.is_file() else {}
     grid_rows = []
     t0 = time.perf_counter()
     for group, kinds in GROUPS.items():
@@ -129,13 +134,20 @@ def evaluate(args: argparse.Namespace, store=None) -> dict:
             masks = np.repeat(v.mask[None], len(pick), 0)
             gt_ao = np.repeat(v.ao[None], len(pick), 0)
             preds = {}
-            ao_pred = nets.predict_ao(masks[:1]).repeat(len(pick), 0)
             if geo:
-                preds["geometric"] = geo.render(masks, geo.predict_ao(masks[:1]).repeat(len(pick), 0), elm16[pick])
-            if nets.noninv:
-                preds["Non-inv-SSN"] = nets.render(masks, ao_pred, elm16[pick], elm_hb[pick], noninv=True)
-            preds["SSN"] = nets.render(masks, ao_pred, elm16[pick])
-            preds["GT-AO-SSN"] = nets.render(masks, gt_ao, elm16[pick])
+                keys = ["|".join(map(str, (*view_key(store, i), args.seed, args.n_elms, q))) for q in pick]
+                if all(k in geo_cache for k in keys):
+                    preds["geometric"] = np.stack([geo_cache[k].astype(np.float32) for k in keys])
+                else:
+                    geo_ao = geo.predict_ao(masks[:1]).repeat(len(pick), 0)
+                    preds["geometric"] = geo.render(masks, geo_ao, elm16[pick])
+                    geo_cache.update({k: p.astype(np.float16) for k, p in zip(keys, preds["geometric"], strict=True)})
+            if nets:
+                ao_pred = nets.predict_ao(masks[:1]).repeat(len(pick), 0)
+                if nets.noninv:
+                    preds["Non-inv-SSN"] = nets.render(masks, ao_pred, elm16[pick], elm_hb[pick], noninv=True)
+                preds["SSN"] = nets.render(masks, ao_pred, elm16[pick])
+                preds["GT-AO-SSN"] = nets.render(masks, gt_ao, elm16[pick])
             for m in methods:
                 per[m].extend(all_metrics(preds[m][b], gt[b]) for b in range(len(pick)))
             if j % max(1, len(ids) // 3) == 0 and len(grid_rows) < 6:
@@ -147,6 +159,9 @@ def evaluate(args: argparse.Namespace, store=None) -> dict:
         results["groups"][group] = {"views": len(ids), "images": len(ids) * args.per_view,
                                     "metrics": {m: mean_metrics(per[m]) for m in methods}}
     results["seconds"] = time.perf_counter() - t0
+    if cache_path:
+        cache_path.parent.mkdir(parents=True, exist_ok=True)
+        np.savez(cache_path, **geo_cache)
     out = Path(args.out)
     out.mkdir(parents=True, exist_ok=True)
     (out / "results.json").write_text(json.dumps(results, indent=1))

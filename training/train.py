@@ -28,6 +28,8 @@ import torch
 from torch.nn import functional as F
 
 from . import checkpoint
+from ssn_engine.hemisphere import texel_weights
+
 from .batches import BatchSampler, ViewCache, make_batch
 from .elm import sample_lights
 from .model import UNetConfig, build
@@ -143,24 +145,33 @@ def target_of(module: str, x: dict[str, torch.Tensor]) -> torch.Tensor:
     return x["ao"] if module == "aop" else x["target"]
 
 
-def build_val(store, args, weights_rows: int):
-    """A fixed validation batch (val split; the train split if val is empty)."""
-    split = "val" if store.view_ids("val") else "train"
-    cache = ViewCache(store, split, args.resolution, max_views=args.val_samples)
-    rng = np.random.default_rng([args.seed, 7919])
-    ids = cache.ids
-    chosen = [ids[j] for j in rng.choice(len(ids), size=args.val_samples, replace=len(ids) < args.val_samples)]
+def build_val(store, args, weights_rows: int, run: Path | None = None):
+    """A fixed validation batch (val split; the train split if val is empty). The chosen views are saved in
+    ``run/val_views.json`` and reused on resume, so validation losses stay comparable while the store grows."""
     from .batches import load_view, view_key
 
+    saved = run / "val_views.json" if run is not None else None
+    split = "val" if store.view_ids("val") else "train"
+    rng = np.random.default_rng([args.seed, 7919])
+    ids_by_key = {view_key(store, i): i for i in store.view_ids(None)}
+    if saved is not None and saved.is_file():
+        record = json.loads(saved.read_text())
+        split = record["split"]
+        chosen = [ids_by_key[tuple(k)] for k in record["views"] if tuple(k) in ids_by_key]
+    else:
+        ids = store.view_ids(split)
+        chosen = [ids[j] for j in rng.choice(len(ids), size=args.val_samples, replace=len(ids) < args.val_samples)]
+        if saved is not None:
+            saved.write_text(json.dumps({"split": split, "views": [list(view_key(store, i)) for i in chosen]}))
     views = {}
     for i in chosen:
         k = view_key(store, i)
         if k not in views:
             views[k] = load_view(store, i, args.resolution, with_occ=args.module != "aop")
     vs = [views[view_key(store, i)] for i in chosen]
-    lights = sample_lights(rng, len(vs))
+    lights = sample_lights(np.random.default_rng([args.seed, 104729]), len(vs))
     target = None if args.module == "aop" else args.target
-    return make_batch(vs, lights, weights_rows, cache.weights, target), split
+    return make_batch(vs, lights, weights_rows, texel_weights(weights_rows), target), split
 
 
 @torch.no_grad()
@@ -244,7 +255,7 @@ def main(argv: list[str] | None = None, store=None) -> int:
     cache = ViewCache(store, "train", args.resolution, max_views=100000 if aop else args.cache_views, with_occ=not aop)
     sampler = BatchSampler(cache, args.batch, None if args.module == "aop" else args.target, args.elms_per_view)
     rows = store.meta["elm_rows"]
-    val_batch, val_split = build_val(store, args, rows) if main_proc else (None, None)
+    val_batch, val_split = build_val(store, args, rows, run) if main_proc else (None, None)
     val = to_tensors(val_batch, device) if val_batch is not None else None
     if main_proc:
         print(f"train views: {len(cache)} (cache {args.cache_views}), val: {args.val_samples} samples from the "

@@ -77,3 +77,16 @@ def test_evaluate_on_the_standin(tmp_path):
             assert 0 <= m["RMSE"] <= 1 and -1 <= m["ZNCC"] <= 1
     assert (tmp_path / "eval" / "tables.md").read_text().count("| SSN |") == 2
     assert (tmp_path / "eval" / "grid.png").is_file()
+
+
+def test_geometric_cache_reproduces_the_baseline(tmp_path):
+    from training.evaluate import evaluate, parse_args as eval_args
+
+    argv = ["--n-elms", "4", "--per-view", "1", "--out", str(tmp_path / "e"), "--threads", "1",
+            "--geo-cache", str(tmp_path / "geo.npz")]
+    first = evaluate(eval_args(argv), store=FakeStore(res=32))
+    assert first["methods"] == ["geometric"] and (tmp_path / "geo.npz").is_file()
+    second = evaluate(eval_args(argv), store=FakeStore(res=32))
+    for g in first["groups"]:
+        for k, v in first["groups"][g]["metrics"]["geometric"].items():
+            assert second["groups"][g]["metrics"]["geometric"][k] == pytest.approx(v, abs=2e-3)
