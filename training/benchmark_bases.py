@@ -70,6 +70,37 @@ def stages(mesh, topo, yaw, pitch, fov, n, hb, samples, rng) -> dict[str, float]
     return t
 
 
+def embree_seconds_per_view(mesh, n: int, hb: int, samples: int, texels: int = 32) -> float:
+    """Seconds per view of brute-force shadow rays in Embree (Mitsuba 3 llvm_ad_rgb, one thread),
+    extrapolated from ``texels`` texels: the alternative this renderer was chosen against."""
+    import drjit as dr
+    import mitsuba as mi
+
+    mi.set_variant("llvm_ad_rgb")
+    dr.set_thread_count(1)
+    m = mi.Mesh("m", vertex_count=len(mesh.vertices), face_count=len(mesh.faces))
+    params = mi.traverse(m)
+    params["vertex_positions"] = dr.ravel(mi.TensorXf(mesh.vertices.astype(np.float32)))
+    params["faces"] = dr.ravel(mi.TensorXu(mesh.faces.astype(np.uint32)))
+    params.update()
+    scene = mi.load_dict({"type": "scene", "m": m})
+    cam = rb.view_camera(mesh.vertices, n, 45.0, 15.0)
+    g, down = cam.ground_points()
+    o = np.repeat(g[down][:, None], samples, 1).reshape(-1, 3).astype(np.float32)
+    origin = mi.Point3f(o[:, 0], o[:, 1], o[:, 2])
+    dirs = cam.to_world(stratified_directions(hb, samples, np.random.default_rng(0))).reshape(-1, samples, 3)
+    step = max(1, len(dirs) // texels)
+    seconds, used = 0.0, 0
+    for t in range(0, len(dirs), step):
+        d = np.repeat(dirs[t][None], down.sum(), 0).reshape(-1, 3).astype(np.float32)
+        ray = mi.Ray3f(origin, mi.Vector3f(d[:, 0], d[:, 1], d[:, 2]))
+        t0 = time.perf_counter()
+        np.asarray(scene.ray_test(ray))
+        seconds += time.perf_counter() - t0
+        used += 1
+    return seconds * len(dirs) / used
+
+
 def main(argv: list[str] | None = None) -> None:
     p = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     p.add_argument("--res", type=int, nargs="+", default=[256, 128])
@@ -78,6 +109,7 @@ def main(argv: list[str] | None = None) -> None:
     p.add_argument("--elm-rows", type=int, default=16)
     p.add_argument("--samples", type=int, default=16)
     p.add_argument("--threads", type=int, default=1)
+    p.add_argument("--embree", action="store_true", help="also time Embree ray casting (needs mitsuba)")
     args = p.parse_args(argv)
     rb.set_threads(args.threads)
     items = pick_items(args.meshes)
@@ -110,6 +142,11 @@ def main(argv: list[str] | None = None) -> None:
                                    args.samples, np.random.default_rng(1)).items():
                 total[key] = total.get(key, 0.0) + val
         print(f"{'mean':34s} {'':6s} {np.mean(all_t):7.2f}")
+        if args.embree:
+            print("Embree shadow rays (Mitsuba 3 llvm_ad_rgb, one thread, extrapolated from 32 texels):")
+            for it, mesh, _ in built:
+                sec = embree_seconds_per_view(mesh, n, args.elm_rows, args.samples)
+                print(f"  {it.id:32s} {sec:7.2f} s/view")
         whole = sum(total.values())
         print("where the time goes (one view per mesh, summed):")
         for key, val in total.items():
