@@ -129,6 +129,7 @@ def _scan_edge(px, pz, qx, qz, coef, row_z, row_x0, row_dx, rowmap, first, diff,
     i1 = _first_row(zhi, rowmap, row_z, i0)
     slope = (qx - px) / (qz - pz)
     cmin = box[2]
+    cmax = box[3]
     for i in range(i0, i1):
         x = px + (row_z[i] - pz) * slope
         jc = (x - row_x0[i]) / row_dx[i]
@@ -141,7 +142,10 @@ def _scan_edge(px, pz, qx, qz, coef, row_z, row_x0, row_dx, rowmap, first, diff,
         diff[i, idx] += sgn
         if idx < cmin:
             cmin = idx
+        if idx > cmax:
+            cmax = idx
     box[2] = cmin
+    box[3] = cmax
     if i0 < box[0]:
         box[0] = i0
     if i1 - 1 > box[1]:
@@ -164,6 +168,7 @@ def _scan_edge_rows(px, pz, ka, qx, qz, kb, coef, row_z, row_x0, row_dx, diff, b
         i0, i1, sgn = kb, ka, -coef
     slope = (qx - px) / (qz - pz)
     cmin = box[2]
+    cmax = box[3]
     for i in range(i0, i1):
         x = px + (row_z[i] - pz) * slope
         jc = (x - row_x0[i]) / row_dx[i]
@@ -176,7 +181,10 @@ def _scan_edge_rows(px, pz, ka, qx, qz, kb, coef, row_z, row_x0, row_dx, diff, b
         diff[i, idx] += sgn
         if idx < cmin:
             cmin = idx
+        if idx > cmax:
+            cmax = idx
     box[2] = cmin
+    box[3] = cmax
     if i0 < box[0]:
         box[0] = i0
     if i1 - 1 > box[1]:
@@ -185,18 +193,25 @@ def _scan_edge_rows(px, pz, ka, qx, qz, kb, coef, row_z, row_x0, row_dx, diff, b
 
 @njit(cache=True)
 def _resolve(diff, box, out):
-    """Running sums of ``diff`` over the touched box; ``out += (sum != 0)``; clears ``diff``."""
+    """Running sums of ``diff`` over the touched box; ``out += (sum != 0)``; clears ``diff``.
+
+    ``box`` = [row min, row max, column min, column max] of the touched entries;
+    right of column max a row's sum is constant.
+    """
     n = diff.shape[1]
     for i in range(box[0], box[1] + 1):
         run = 0
-        for j in range(box[2], n):
+        for j in range(box[2], box[3] + 1):
             run += diff[i, j]
             diff[i, j] = 0
-            if run != 0:
+            out[i, j] += run != 0
+        if run != 0:
+            for j in range(box[3] + 1, n):
                 out[i, j] += 1
     box[0] = diff.shape[0]
     box[1] = -1
     box[2] = n
+    box[3] = -1
 
 
 @njit(cache=True, inline="always")
@@ -228,7 +243,7 @@ def occlusion_counts(
         norms[f] = math.sqrt(normals[f, 0] ** 2 + normals[f, 1] ** 2 + normals[f, 2] ** 2)
     for t in prange(t_count):
         diff = np.zeros((n, n), np.int32)
-        box = np.array([n, -1, n], np.int64)
+        box = np.array([n, -1, n, -1], np.int64)
         code = np.empty(nf, np.int8)  # +1 / -1 / 0 for all samples, else MIXED
         slot = np.empty(nf, np.int64)  # row of a MIXED face in ``signs``
         signs = np.empty((nf, s_count), np.int8)
@@ -347,7 +362,7 @@ def coverage_grid(px, py, face_sign, edges, ptr, inc_face, inc_dir, rows, cols, 
     row_dx = np.full(n_rows, 1.0 / ss)
     rowmap = np.array([0.0, -float(ss), 0.0, 1.0, 1.0, 0.0])
     diff = np.zeros((n_rows, n_cols), np.int32)
-    box = np.array([n_rows, -1, n_cols], np.int64)
+    box = np.array([n_rows, -1, n_cols, -1], np.int64)
     out = np.zeros((n_rows, n_cols), np.uint8)
     for e in range(edges.shape[0]):
         coef = 0
