@@ -10,6 +10,7 @@ from PIL import Image
 from ssn_engine.hemisphere import render_light_map
 from ssn_engine.light_map import LightMap
 
+from .sources import stable_hash
 from .store import ViewStore
 
 
@@ -26,11 +27,23 @@ def sheet_elms(hb: int) -> list[np.ndarray]:
 
 
 def pick_views(store: ViewStore, count: int) -> list[int]:
-    """Up to ``count`` views from different meshes, spread over the store."""
-    per_mesh = len(store) // max(len(store.meshes), 1) or 1
-    mesh_step = max(1, len(store.meshes) // count)
-    ids = [m * per_mesh + (m // mesh_step) % per_mesh for m in range(0, len(store.meshes), mesh_step)]
-    return [i for i in ids if i < len(store)][:count]
+    """Up to ``count`` views of different meshes, in turn from each (source, kind) group (hash order)."""
+    groups: dict[tuple[str, str], list[int]] = {}
+    first = 0
+    for mesh in store.meshes:
+        key = (mesh["mesh"]["source"], mesh["mesh"]["kind"])
+        groups.setdefault(key, []).append((stable_hash(mesh["mesh"]["id"]), first))
+        first += len(mesh["views"])
+    lists = [[f for _, f in sorted(groups[k])] for k in sorted(groups)]
+    picked: list[int] = []
+    per_group = -(-count // max(len(lists), 1))
+    for r in range(max((len(x) for x in lists), default=0)):
+        for x in lists:
+            if r < len(x) and len(picked) < count:
+                step = max(1, len(x) // per_group)
+                start = x[(r * step) % len(x)]
+                picked.append(start + (3 * r + 1 + len(picked)) % 15)
+    return picked
 
 
 def write_contact_sheet(root: Path, count: int = 8, tile: int = 128, path: Path | None = None) -> Path:
