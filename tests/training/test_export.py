@@ -67,3 +67,14 @@ def test_the_engine_loads_the_export(exported):
     ao = method.predict_ao(masks)
     s = method.render(masks, ao, np.ones((2, 16, 32), np.float32))
     assert s.shape == (2, 256, 256) and s.dtype == np.float32
+
+
+def test_two_pass_group_norm_is_group_norm():
+    from training.export import TwoPassGroupNorm
+
+    gn = torch.nn.GroupNorm(4, 8)
+    with torch.no_grad():
+        gn.weight.uniform_(0.5, 2)
+        gn.bias.uniform_(-1, 1)
+    x = torch.randn(3, 8, 16, 12) * 5 + 2
+    torch.testing.assert_close(TwoPassGroupNorm(gn)(x), gn(x), atol=2e-5, rtol=1e-5)
