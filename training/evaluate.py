@@ -175,7 +175,7 @@ def tables_markdown(results: dict) -> str:
     """Our tables beside the paper's Tables 1 (objects) and 2 (humans)."""
     lines = []
     for group, r in results["groups"].items():
-        lines.append(f"### {group.capitalize()} ({r['views']} test views x {results['per_view']} ELMs"
+        lines.append(f"### {group.capitalize()} ({r['views']} {results['split']} views x {results['per_view']} ELMs"
                      f" = {r['images']} images)\n")
         lines.append("| Method | " + " | ".join(NAMES) + " | paper " + " | paper ".join(NAMES) + " |")
         lines.append("|---" * (1 + 2 * len(NAMES)) + "|")

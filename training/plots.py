@@ -8,7 +8,8 @@ from pathlib import Path
 import numpy as np
 from PIL import Image, ImageDraw
 
-COLOURS = [(31, 119, 180), (255, 127, 14), (44, 160, 44), (214, 39, 40), (148, 103, 189)]
+COLOURS = [(31, 119, 180), (255, 127, 14), (44, 160, 44), (214, 39, 40), (148, 103, 189), (140, 86, 75),
+           (227, 119, 194), (127, 127, 127)]
 
 
 def loss_curve(series: dict[str, list[tuple[float, float]]], path: str | Path, title: str = "",
@@ -77,3 +78,22 @@ def image_grid(rows: list[list[np.ndarray]], path: str | Path, labels: list[str]
             tile = tile.resize((cell, cell), Image.Resampling.BILINEAR)
             img.paste(tile, (pad + j * (cell + pad), label_h + pad + i * (cell + pad)))
     img.save(path, optimize=True)
+
+
+def runs_figure(runs: list[str], path: str | Path, title: str = "training loss (per-pixel L2)") -> None:
+    """One loss-curve PNG for several runs: train and validation loss of each against samples seen."""
+    import csv
+
+    series: dict[str, list[tuple[float, float]]] = {}
+    for run in runs:
+        rows = list(csv.DictReader((Path(run) / "log.csv").open()))
+        name = Path(run).name
+        series[f"{name} train"] = [(float(r["samples"]), float(r["train_loss"])) for r in rows if r["train_loss"]]
+        series[f"{name} val"] = [(float(r["samples"]), float(r["val_loss"])) for r in rows if r["val_loss"]]
+    loss_curve(series, path, title, xlabel="samples", size=(900, 480))
+
+
+if __name__ == "__main__":
+    import sys
+
+    runs_figure(sys.argv[2:], sys.argv[1])
