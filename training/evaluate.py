@@ -48,6 +48,8 @@ def parse_args(argv: list[str] | None = None) -> argparse.Namespace:
     p.add_argument("--n-elms", type=int, default=64, help="size of the fixed pool of random ELMs")
     p.add_argument("--per-view", type=int, default=2, help="ELMs per view")
     p.add_argument("--max-views", type=int, default=0, help="at most this many views per group (evenly spaced); 0: all")
+    p.add_argument("--floor", type=float, default=0.0,
+                   help="output floor applied to the networks' shadows (the shipped model.json's output_floor)")
     p.add_argument("--seed", type=int, default=2021)
     p.add_argument("--threads", type=int, default=2)
     p.add_argument("--out", default="runs/eval")
@@ -70,7 +72,8 @@ def pick_views(ids: list[int], max_views: int) -> list[int]:
 class Networks:
     """AOP and SR (and optionally Non-inv SR) checkpoints, run at their resolution R on N x N frames."""
 
-    def __init__(self, aop: str, sr: str, noninv: str | None):
+    def __init__(self, aop: str, sr: str, noninv: str | None, floor: float = 0.0):
+        self.floor = floor
         self.aop, ck = load_model(aop)
         self.sr, ck_sr = load_model(sr)
         self.noninv = load_model(noninv)[0] if noninv else None
@@ -89,6 +92,7 @@ class Networks:
     def render(self, masks: np.ndarray, ao: np.ndarray, elm16: np.ndarray, elm_hb: np.ndarray | None = None,
                noninv: bool = False) -> np.ndarray:
         from ssn_engine.hemisphere import network_elm
+        from ssn_engine.methods.onnx_ssn import apply_floor
 
         n = masks.shape[-1]
         m = torch.from_numpy(resize_frames(masks, self.r)[:, None])
@@ -99,7 +103,7 @@ class Networks:
             out = irradiance_to_shadow(resize_frames(out, n), elm_hb, elm16)
         else:
             out = resize_frames(np.clip(out, 0, 1), n)
-        return np.clip(out, 0, 1).astype(np.float32)
+        return apply_floor(out, self.floor).astype(np.float32)
 
 
 def evaluate(args: argparse.Namespace, store=None) -> dict:
@@ -111,13 +115,13 @@ def evaluate(args: argparse.Namespace, store=None) -> dict:
     store = store if store is not None else ViewStore(args.data)
     n_px, rows_hb = store.meta["res"], store.meta["elm_rows"]
     elm_hb, elm16 = elm_pool(args.n_elms, args.seed, rows_hb)
-    nets = Networks(args.aop, args.sr, args.noninv) if args.aop and args.sr else None
+    nets = Networks(args.aop, args.sr, args.noninv, args.floor) if args.aop and args.sr else None
     geo = None if args.no_geometric else GeometricCard(resolution=n_px)
     methods = (["geometric"] if geo else []) + (["Non-inv-SSN"] if nets and nets.noninv else [])
     methods += ["SSN", "GT-AO-SSN"] if nets else []
     results: dict = {"methods": methods, "groups": {}, "n_elms": args.n_elms, "per_view": args.per_view,
                      "data": str(args.data), "N": n_px, "R": nets.r if nets else None, "split": args.split,
-                     "networks": nets.info if nets else {}}
+                     "floor": args.floor, "networks": nets.info if nets else {}}
     cache_path = Path(args.geo_cache) if args.geo_cache else None
     geo_cache = dict(np.load(cache_path)) if cache_path and cache_path.is_file() else {}
     grid_rows = []

@@ -228,6 +228,9 @@ def model_card(card: dict, attribution: list[dict], command: str) -> str:
         lines.append(f"- {m.upper()}: U-Net widths {r['widths']}, {r['step']} steps ({r['samples']} samples), "
                      f"{r['weights']} weights, {r['bytes'] / 1e6:.2f} MB, "
                      f"max abs diff to torch {r['max_abs_diff']:.1e}")
+    if card.get("output_floor"):
+        lines.append(f"- Output floor {card['output_floor']}: the engine maps s to (s - floor) / (1 - floor), clipped "
+                     "(removes the network's faint noise; chosen on the validation split, docs/benchmark.md).")
     t = ex["timing"]
     lines += [f"- SR latency (onnxruntime, median, 2-core CPU): {t['sr_at_R_ms']:.1f} ms at R, "
               f"{t['sr_engine_256_ms']:.1f} ms for a 256 frame including resampling.", "",
@@ -257,6 +260,8 @@ def parse_args(argv: list[str] | None = None) -> argparse.Namespace:
     p.add_argument("--max-shift", type=float, default=None,
                    help="largest output change that rounding the weights to float16 may cause (default: --tol)")
     p.add_argument("--metrics", help="evaluate's results.json, copied into the card")
+    p.add_argument("--floor", type=float, default=0.0,
+                   help="model.json output_floor: the engine removes shadow values below it (evaluate --floor)")
     p.add_argument("--install", help="copy the model here (e.g. ssn_engine/models)")
     p.add_argument("--command", default="training/pipeline.sh data/ssn128 runs",
                    help="the reproducing command recorded in the card")
@@ -269,7 +274,8 @@ def main(argv: list[str] | None = None) -> int:
         args.max_shift = args.tol
     out = Path(args.out)
     out.mkdir(parents=True, exist_ok=True)
-    card: dict = {"format": "ssn-shadow-model", "version": 1, "aop": "aop.onnx", "sr": "sr.onnx", "elm_shape": [16, 32]}
+    card: dict = {"format": "ssn-shadow-model", "version": 1, "aop": "aop.onnx", "sr": "sr.onnx", "elm_shape": [16, 32],
+                  "output_floor": args.floor}
     report = {}
     for module, ck_path in (("aop", args.aop), ("sr", args.sr)):
         net, ck = load_model(ck_path)

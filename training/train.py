@@ -59,7 +59,7 @@ def parse_args(argv: list[str] | None = None) -> argparse.Namespace:
     p.add_argument("--seed", type=int, default=0)
     p.add_argument("--threads", type=int, default=2, help="torch CPU threads")
     p.add_argument("--cache-views", type=int, default=300, help="views kept in memory (rotating)")
-    p.add_argument("--elms-per-view", type=int, default=4)
+    p.add_argument("--elms-per-view", type=int, default=4, help="SR: ELMs per view in a batch (AOP: 1)")
     p.add_argument("--no-perturb", action="store_true", help="SR: feed the ground-truth AO unperturbed")
     p.add_argument("--ckpt-minutes", type=float, default=4.0)
     p.add_argument("--refresh-minutes", type=float, default=10.0, help="re-open the store (growing dataset)")
@@ -253,7 +253,8 @@ def main(argv: list[str] | None = None, store=None) -> int:
 
     aop = args.module == "aop"
     cache = ViewCache(store, "train", args.resolution, max_views=100000 if aop else args.cache_views, with_occ=not aop)
-    sampler = BatchSampler(cache, args.batch, None if args.module == "aop" else args.target, args.elms_per_view)
+    # AOP ignores the light, so repeating a view under several ELMs would only shrink its batch.
+    sampler = BatchSampler(cache, args.batch, None if aop else args.target, 1 if aop else args.elms_per_view)
     rows = store.meta["elm_rows"]
     val_batch, val_split = build_val(store, args, rows, run) if main_proc else (None, None)
     val = to_tensors(val_batch, device) if val_batch is not None else None

@@ -1,9 +1,11 @@
 """The SSN network as two ONNX graphs: AOP (mask -> AO) and SR (mask, AO, ELM -> shadow).
 
-A model folder holds ``model.json`` and the two graphs (see docs/models.md):
+A model folder holds ``model.json`` and the two graphs (docs/engine.md, "Model files"):
 - aop.onnx: "mask" [b, 1, R, R] -> "ao" [b, 1, R, R]
 - sr.onnx: "mask" [b, 1, R, R], "ao" [b, 1, R, R], "elm" [b, 16, 32] -> "shadow" [b, 1, R, R]
 The ELM goes in normalised by :func:`ssn_engine.hemisphere.network_elm`.
+``model.json`` may set ``output_floor``: shadow values below it are the network's
+residual noise and are removed by :func:`apply_floor` (chosen on the validation split).
 Frames are N x N (N = 256); a model trained at another R is fed resampled frames.
 """
 
@@ -31,6 +33,13 @@ _EXPECTED = {
     "aop": ({"mask": 4}, {"ao": 4}),
     "sr": ({"mask": 4, "ao": 4, "elm": 3}, {"shadow": 4}),
 }
+
+
+def apply_floor(shadow: np.ndarray, floor: float) -> np.ndarray:
+    """``(s - floor) / (1 - floor)`` clipped to [0, 1]: removes a faint noise floor, keeps full shadow at 1."""
+    if floor <= 0.0:
+        return np.clip(shadow, 0.0, 1.0)
+    return np.clip((shadow - np.float32(floor)) / np.float32(1.0 - floor), 0.0, 1.0)
 
 
 def _resample(frames: np.ndarray, size: int) -> np.ndarray:
@@ -88,7 +97,10 @@ class OnnxSSN:
         r = meta.get("resolution")
         if not isinstance(r, int) or r < 16 or r % 16:
             raise ModelError(f"{card}: resolution must be a multiple of 16, got {r!r}")
-        self.meta, self.model_resolution = meta, r
+        floor = meta.get("output_floor", 0.0)
+        if not isinstance(floor, (int, float)) or not 0.0 <= floor < 0.5:
+            raise ModelError(f"{card}: output_floor must be a number in [0, 0.5), got {floor!r}")
+        self.meta, self.model_resolution, self.output_floor = meta, r, float(floor)
         self._aop = _session(model_dir / meta.get("aop", "aop.onnx"), "aop")
         self._sr = _session(model_dir / meta.get("sr", "sr.onnx"), "sr")
         self._check_run()
@@ -120,6 +132,6 @@ class OnnxSSN:
             "elm": network_elm(elms),
         }
         s = self._sr.run(["shadow"], feeds)[0][:, 0]
-        s = np.clip(_resample(s, self.resolution), 0.0, 1.0)
+        s = apply_floor(_resample(s, self.resolution), self.output_floor)
         s[np.asarray(elms).max(axis=(1, 2)) <= 0] = 0.0  # no light, no shadow (conventions)
         return s

@@ -123,6 +123,20 @@ def test_ssn_loads_and_runs_at_any_model_resolution(tmp_path, monkeypatch, mask,
     assert np.allclose(method.render(masks, np.zeros_like(ao), elms), 1.0)
 
 
+def test_output_floor_removes_faint_values_and_keeps_full_shadow(tmp_path, monkeypatch, mask):
+    plain = OnnxSSN(make_model_dir(tmp_path / "plain", 256))
+    floored = OnnxSSN(make_model_dir(tmp_path / "floored", 256, _card(256, output_floor=0.1)))
+    masks = np.stack([mask])
+    ao = np.full_like(masks, 0.95)  # 1 - ao = 0.05: a faint everywhere-shadow below the floor
+    elms = elm_for(0.5, 0.3)[None]
+    s, f = plain.render(masks, ao, elms), floored.render(masks, ao, elms)
+    background = masks[0] == 0
+    assert np.allclose(s[0][background], 0.05, atol=1e-6) and not f[0][background].any()
+    assert np.allclose(f[0][masks[0] == 1], 1.0)
+    inside = (s > 0.2) & (s < 0.9)
+    assert np.allclose(f[inside], (s[inside] - 0.1) / 0.9, atol=1e-6)
+
+
 def test_predict_frames_uses_the_installed_model(tmp_path, monkeypatch, mask):
     folder = make_model_dir(tmp_path / "m", 128)
     monkeypatch.setenv("SSN_SHADOW_MODEL_DIR", str(folder))
@@ -188,6 +202,8 @@ def test_graphs_named_in_the_card(tmp_path, monkeypatch, mask):
         (json.dumps(_card(256, elm_shape=[8, 16])), "elm_shape"),
         (json.dumps(_card(100)), "resolution"),
         (json.dumps(_card("256")), "resolution"),
+        (json.dumps(_card(256, output_floor=0.7)), "output_floor"),
+        (json.dumps(_card(256, output_floor="0.01")), "output_floor"),
     ],
 )
 def test_wrong_model_card(tmp_path, monkeypatch, card_text, fragment):

@@ -27,7 +27,7 @@ def exported(tmp_path_factory):
         assert train_main(["--module", module, "--run", str(tmp / module), *TINY], store=FakeStore(res=32)) == 0
     out = tmp / "model"
     code = export_main(["--aop", str(tmp / "aop" / "last.pt"), "--sr", str(tmp / "sr" / "last.pt"),
-                        "--out", str(out), "--data", str(tmp / "no-data")])
+                        "--out", str(out), "--data", str(tmp / "no-data"), "--floor", "0.01"])
     assert code == 0
     return out
 
@@ -55,13 +55,15 @@ def test_parity_is_recorded_and_within_bound(exported):
         assert report[module]["max_abs_diff"] <= 1e-4
         assert report[module]["weights"] in ("float16", "float32")
     assert report["timing"]["sr_at_R_ms"] > 0
-    assert "# SSN shadow model" in (exported / "MODEL_CARD.md").read_text()
+    card = (exported / "MODEL_CARD.md").read_text()
+    assert "# SSN shadow model" in card and "Output floor 0.01" in card
 
 
 def test_the_engine_loads_the_export(exported):
     from ssn_engine.methods.onnx_ssn import OnnxSSN
 
     method = OnnxSSN(exported)
+    assert method.output_floor == 0.01  # export --floor reaches the engine through model.json
     masks = np.zeros((2, 256, 256), np.float32)
     masks[:, 60:200, 100:150] = 1
     ao = method.predict_ao(masks)

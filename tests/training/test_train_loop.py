@@ -77,6 +77,10 @@ def test_evaluate_on_the_standin(tmp_path):
             assert 0 <= m["RMSE"] <= 1 and -1 <= m["ZNCC"] <= 1
     assert (tmp_path / "eval" / "tables.md").read_text().count("| SSN |") == 2
     assert (tmp_path / "eval" / "grid.png").is_file()
+    floored = evaluate(eval_args(["--aop", str(aop), "--sr", str(sr), "--n-elms", "4", "--per-view", "2",
+                                  "--no-geometric", "--floor", "0.5", "--out", str(tmp_path / "e2"), "--threads", "1"]),
+                       store=FakeStore(res=32))
+    assert floored["floor"] == 0.5 and set(floored["methods"]) == {"SSN", "GT-AO-SSN"}
 
 
 def test_geometric_cache_reproduces_the_baseline(tmp_path):
