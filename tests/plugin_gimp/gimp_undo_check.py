@@ -13,8 +13,10 @@ import time
 import gi
 
 gi.require_version("Gimp", "3.0")
-gi.require_version("Gegl", "0.4")
-from gi.repository import Gegl, Gimp  # noqa: E402
+from gi.repository import Gimp  # noqa: E402
+
+# image, layer: from gimp_pawn_scene.py, exec'd first in the same globals
+image, layer = globals()["image"], globals()["layer"]
 
 OUT = globals().get("OUT_PATH", "/tmp/ssn-undo.json")
 out = {}
@@ -34,17 +36,6 @@ def xdotool(*args):
     return subprocess.run(["xdotool", *args], capture_output=True, text=True, timeout=20)
 
 
-Gegl.init(None)
-image = Gimp.Image.new(200, 150, Gimp.ImageBaseType.RGB)
-bg = Gimp.Layer.new(image, "Background", 200, 150, Gimp.ImageType.RGB_IMAGE, 100.0, Gimp.LayerMode.NORMAL)
-image.insert_layer(bg, None, 0)
-bg.fill(Gimp.FillType.WHITE)
-layer = Gimp.Layer.new(image, "Pawn", 200, 150, Gimp.ImageType.RGBA_IMAGE, 100.0, Gimp.LayerMode.NORMAL)
-image.insert_layer(layer, None, 0)
-px = bytearray(200 * 150 * 4)
-for y in range(20, 130):
-    px[(y * 200 + 85) * 4 : (y * 200 + 115) * 4] = bytes([30, 30, 200, 255]) * 30
-layer.get_buffer().set(Gegl.Rectangle.new(0, 0, 200, 150), "R'G'B'A u8", bytes(px))
 layer.get_buffer().flush()
 image.clean_all()
 Gimp.Display.new(image)

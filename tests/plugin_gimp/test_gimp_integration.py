@@ -38,6 +38,7 @@ TOOL = ROOT / "plugin_gimp" / "tools" / "gimp_chroot.sh"
 BATCH_SCRIPT = Path(__file__).with_name("gimp_batch_check.py")
 DIALOG_SCRIPT = Path(__file__).with_name("gimp_dialog_check.py")
 UNDO_SCRIPT = Path(__file__).with_name("gimp_undo_check.py")
+SCENE_SCRIPT = Path(__file__).with_name("gimp_pawn_scene.py")
 RELAY_SCRIPT = Path(__file__).with_name("stdio_relay.py")
 IN_CI = os.environ.get("CI") == "true"
 
@@ -311,12 +312,18 @@ def test_undo_group_closed(gimp_results):
     assert "plug-in crashed" not in log.lower() and "traceback" not in log.lower(), log[-4000:]
 
 
+def _exec_scene_then(inner: str, script: str) -> str:
+    """python-fu-eval code: build the shared pawn scene, then run ``script`` in the same globals."""
+    return f'exec(open("{inner}/scene.py").read()); exec(open("{inner}/{script}").read())'
+
+
 def test_one_undo_removes_the_shadow(workdir):
     """GIMP 3's PDB has no undo command, so the GUI (gimp-3.0 under Xvfb) gets a real Ctrl+Z (xdotool)."""
     work, inner = workdir
     shutil.copy(UNDO_SCRIPT, work / "undo.py")
+    shutil.copy(SCENE_SCRIPT, work / "scene.py")
     run, seconds = run_gimp(
-        inner, f'OUT_PATH = "{inner}/out/undo.json"; exec(open("{inner}/undo.py").read())', SSN_GIMP_GUI="1"
+        inner, f'OUT_PATH = "{inner}/out/undo.json"; {_exec_scene_then(inner, "undo.py")}', SSN_GIMP_GUI="1"
     )
     log = run.stdout + run.stderr
     print(f"\ngimp-3.0 GUI undo session: {seconds:.1f} s")
@@ -333,11 +340,12 @@ def test_interactive_dialog(workdir):
     SSN_SHADOW_DIALOG_SELFTEST hook), and the shadow layer made from the edited light map."""
     work, inner = workdir
     shutil.copy(DIALOG_SCRIPT, work / "dialog.py")
+    shutil.copy(SCENE_SCRIPT, work / "scene.py")
     env = {"SSN_GIMP_XVFB": "1", "SSN_SHADOW_DIALOG_SELFTEST": "1"}
     if os.environ.get("SSN_GIMP_DIALOG_SCREENSHOT"):
         env["SSN_SHADOW_DIALOG_SCREENSHOT"] = inner + "/out/dialog.png"
     run, seconds = run_gimp(
-        inner, f'OUT_PATH = "{inner}/out/dialog.json"; exec(open("{inner}/dialog.py").read())', **env
+        inner, f'OUT_PATH = "{inner}/out/dialog.json"; {_exec_scene_then(inner, "dialog.py")}', **env
     )
     log = run.stdout + run.stderr
     print(f"\ngimp-console dialog session: {seconds:.1f} s")

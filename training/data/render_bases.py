@@ -118,7 +118,6 @@ def _scan_edge(px, pz, qx, qz, coef, row_z, row_x0, row_dx, rowmap, first, diff,
     """
     if pz == qz:
         return
-    n = diff.shape[1]
     if pz < qz:
         zlo, zhi, sgn = pz, qz, coef
     else:
@@ -127,6 +126,13 @@ def _scan_edge(px, pz, qx, qz, coef, row_z, row_x0, row_dx, rowmap, first, diff,
     if i0 >= row_z.shape[0] or row_z[i0] >= zhi:
         return  # no row centre in [zlo, zhi): the common case for short contour edges
     i1 = _first_row(zhi, rowmap, row_z, i0)
+    _add_crossings(px, pz, qx, qz, i0, i1, sgn, row_z, row_x0, row_dx, diff, box)
+
+
+@njit(cache=True, inline="always")
+def _add_crossings(px, pz, qx, qz, i0, i1, sgn, row_z, row_x0, row_dx, diff, box):
+    """Add ``sgn`` where edge P->Q crosses rows i0..i1-1 (at the first pixel centre right of it); grow ``box``."""
+    n = diff.shape[1]
     slope = (qx - px) / (qz - pz)
     cmin = box[2]
     cmax = box[3]
@@ -161,34 +167,11 @@ def _scan_edge_rows(px, pz, ka, qx, qz, kb, coef, row_z, row_x0, row_dx, diff, b
     """
     if ka == kb:
         return
-    n = diff.shape[1]
     if ka < kb:
         i0, i1, sgn = ka, kb, coef
     else:
         i0, i1, sgn = kb, ka, -coef
-    slope = (qx - px) / (qz - pz)
-    cmin = box[2]
-    cmax = box[3]
-    for i in range(i0, i1):
-        x = px + (row_z[i] - pz) * slope
-        jc = (x - row_x0[i]) / row_dx[i]
-        if jc >= n - 1:
-            continue
-        if jc < -1.0:
-            idx = 0
-        else:
-            idx = int(math.floor(jc)) + 1
-        diff[i, idx] += sgn
-        if idx < cmin:
-            cmin = idx
-        if idx > cmax:
-            cmax = idx
-    box[2] = cmin
-    box[3] = cmax
-    if i0 < box[0]:
-        box[0] = i0
-    if i1 - 1 > box[1]:
-        box[1] = i1 - 1
+    _add_crossings(px, pz, qx, qz, i0, i1, sgn, row_z, row_x0, row_dx, diff, box)
 
 
 @njit(cache=True)
