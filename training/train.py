@@ -28,6 +28,7 @@ import torch
 from torch.nn import functional as F
 
 from . import checkpoint
+from .checkpoint import load_model
 from ssn_engine.hemisphere import texel_weights
 
 from .batches import BatchSampler, ViewCache, make_batch
@@ -61,6 +62,9 @@ def parse_args(argv: list[str] | None = None) -> argparse.Namespace:
     p.add_argument("--cache-views", type=int, default=300, help="views kept in memory (rotating)")
     p.add_argument("--elms-per-view", type=int, default=4, help="SR: ELMs per view in a batch (AOP: 1)")
     p.add_argument("--no-perturb", action="store_true", help="SR: feed the ground-truth AO unperturbed")
+    p.add_argument("--ao-from", help="SR: an AOP checkpoint whose predicted AO replaces the (perturbed) ground-truth "
+                                      "AO in a fraction --ao-from-prob of the samples (the AO SR gets in use)")
+    p.add_argument("--ao-from-prob", type=float, default=0.5)
     p.add_argument("--ckpt-minutes", type=float, default=4.0)
     p.add_argument("--refresh-minutes", type=float, default=10.0, help="re-open the store (growing dataset)")
     p.add_argument("--val-every", type=int, default=250)
@@ -139,6 +143,18 @@ def forward(model, module: str, x: dict[str, torch.Tensor], ao: torch.Tensor | N
     if module == "aop":
         return model(x["mask"])
     return model(x["mask"], x["ao"] if ao is None else ao, x["elm"])
+
+
+@torch.no_grad()
+def mix_predicted_ao(aop_net, x: dict[str, torch.Tensor], ao: torch.Tensor, prob: float,
+                     gen: torch.Generator) -> torch.Tensor:
+    """``ao`` with each sample replaced, with probability ``prob``, by the AOP network's prediction."""
+    use = torch.rand(ao.shape[0], generator=gen) < prob
+    if not use.any():
+        return ao
+    out = ao.clone()
+    out[use.to(ao.device)] = aop_net(x["mask"][use.to(ao.device)]).clamp(0.0, 1.0)
+    return out
 
 
 def target_of(module: str, x: dict[str, torch.Tensor]) -> torch.Tensor:
@@ -262,6 +278,7 @@ def main(argv: list[str] | None = None, store=None) -> int:
         print(f"train views: {len(cache)} (cache {args.cache_views}), val: {args.val_samples} samples from the "
               f"{val_split} split, batch {args.batch} x {world} process(es), device {device}", flush=True)
     gen = torch.Generator().manual_seed(args.seed * 1000 + rank + step)
+    aop_net = load_model(args.ao_from)[0].to(device) if args.module == "sr" and args.ao_from else None
     pre = Prefetcher(sampler, np.random.default_rng([args.seed, rank, step]))
 
     stop = {"flag": False}
@@ -299,6 +316,8 @@ def main(argv: list[str] | None = None, store=None) -> int:
         ao_in = None
         if args.module == "sr" and not args.no_perturb:
             ao_in = perturb_ao(x["ao"].cpu(), gen).to(device)
+        if aop_net is not None:
+            ao_in = mix_predicted_ao(aop_net, x, x["ao"] if ao_in is None else ao_in, args.ao_from_prob, gen)
         pred = forward(ddp, args.module, x, ao_in)
         loss = F.mse_loss(pred, target_of(args.module, x))
         opt.zero_grad(set_to_none=True)

@@ -94,3 +94,27 @@ def test_geometric_cache_reproduces_the_baseline(tmp_path):
     for g in first["groups"]:
         for k, v in first["groups"][g]["metrics"]["geometric"].items():
             assert second["groups"][g]["metrics"]["geometric"][k] == pytest.approx(v, abs=2e-3)
+
+
+def test_predicted_ao_replaces_the_chosen_samples():
+    from training.train import mix_predicted_ao
+
+    class ConstantAOP(torch.nn.Module):
+        def forward(self, mask):
+            return torch.full_like(mask, 0.25)
+
+    x = {"mask": torch.rand(64, 1, 8, 8)}
+    ao = torch.ones(64, 1, 8, 8)
+    gen = torch.Generator().manual_seed(0)
+    mixed = mix_predicted_ao(ConstantAOP(), x, ao, 0.5, gen)
+    replaced = (mixed == 0.25).flatten(1).all(1)
+    kept = (mixed == 1.0).flatten(1).all(1)
+    assert bool((replaced | kept).all()) and 16 < int(replaced.sum()) < 48  # whole samples, about half
+    assert bool((ao == 1).all())  # the input is not modified
+    assert torch.equal(mix_predicted_ao(ConstantAOP(), x, ao, 0.0, gen), ao)
+
+
+def test_sr_trains_on_predicted_ao(tmp_path):
+    aop = _run(tmp_path / "a", "aop", 2) / "last.pt"
+    run = _run(tmp_path, "sr", 3, ["--ao-from", str(aop), "--ao-from-prob", "1"])
+    assert checkpoint.load(run / "last.pt")["args"]["ao_from"] == str(aop)
