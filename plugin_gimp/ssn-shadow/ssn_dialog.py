@@ -42,6 +42,7 @@ class ShadowPreview:
         self.status = Gtk.Label(xalign=0.0)
         self.status.set_line_wrap(True)
         self.cutout_id: str | None = None
+        self.cover: bytes | None = None
         self._pending = 0
         width, height = host.image.get_width(), host.image.get_height()
         self.tw, self.th, _ = preview_size(width, height)
@@ -55,6 +56,7 @@ class ShadowPreview:
                 raw = memoryview(small.data).cast("H")
                 small = Cutout(small.width, small.height, "uint8", bytes(v >> 8 for v in raw), small.source)
             self.cutout_id = upload_cutout(engine, small)
+            self.cover = small.data  # the cutout hides the shadow layer below it
         except (ShadowError, engine_client.EngineError) as exc:
             self.status.set_text(str(exc))
 
@@ -81,7 +83,7 @@ class ShadowPreview:
             return
         pixels, w, h, stride, channels = self.background
         rgb = multiply_composite(
-            pixels, w, h, stride, channels, shadow.data, shadow.x, shadow.y, shadow.width, shadow.height
+            pixels, w, h, stride, channels, shadow.data, shadow.x, shadow.y, shadow.width, shadow.height, self.cover
         )
         self.widget.set_from_pixbuf(
             GdkPixbuf.Pixbuf.new_from_bytes(GLib.Bytes.new(rgb), GdkPixbuf.Colorspace.RGB, False, 8, w, h, 3 * w)

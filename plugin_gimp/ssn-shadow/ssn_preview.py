@@ -3,7 +3,9 @@
 The preview casts the shadow of a thumbnail-sized cutout (the same framing
 scales with the cutout, so its geometry matches the full-size result) and
 composites it like GIMP's Multiply layer would, in the thumbnail's 8-bit
-values: ``out = bg * (1 - a * (1 - colour))``.
+values: ``out = bg * (1 - a * (1 - colour))``. The real shadow layer lies
+below the cutout, so where the cutout covers the thumbnail (``cover``, its
+8-bit alpha) the shadow is hidden in proportion.
 """
 
 from __future__ import annotations
@@ -30,9 +32,11 @@ def multiply_composite(
     y: int,
     layer_width: int,
     layer_height: int,
+    cover: bytes | None = None,
 ) -> bytes:
     """Multiply a straight-alpha RGBA u8 layer placed at (x, y) onto an 8-bit RGB/RGBA image.
 
+    ``cover``: the cutout's u8 alpha (``width * height``) above the layer, hiding it.
     Returns packed RGB bytes (rowstride ``3 * width``).
     """
     out = bytearray(3 * width * height)
@@ -47,6 +51,8 @@ def multiply_composite(
         for lx in range(max(0, -x), min(layer_width, width - x)):
             k = base + 4 * lx
             a = layer[k + 3]
+            if cover is not None:
+                a = a * (255 - cover[(y + ly) * width + x + lx]) // 255
             if not a:
                 continue
             j = 3 * ((y + ly) * width + x + lx)

@@ -100,5 +100,8 @@ def test_multiply_composite():
     assert out == bytes([200, 200, 200, 0, 100, 0])
     half = multiply_composite(bg, 2, 1, 8, 4, bytes([0, 0, 0, 128]), 0, 0, 1, 1)
     assert half[:3] == bytes([100, 100, 100]) and half[3:] == bytes([100, 100, 100])
+    # the cutout above the shadow layer hides it: fully where opaque, half where half transparent
+    cover = multiply_composite(bg, 2, 1, 8, 4, bytes([0, 0, 0, 255]) * 2, 0, 0, 2, 1, bytes([255, 128]))
+    assert cover[:3] == bytes([200, 200, 200]) and cover[3:] == bytes([50, 50, 50])
     # a layer hanging off the image is clipped
     assert multiply_composite(bg, 2, 1, 8, 4, bytes([0, 0, 0, 255]) * 4, 1, -1, 2, 2)[3:] == bytes(3)
