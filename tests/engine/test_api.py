@@ -10,6 +10,7 @@ from hypothesis import strategies as st
 
 import ssn_engine
 from ssn_engine import api
+from ssn_engine.ao_edit import scale_strength
 from ssn_engine.framing import frame_alpha
 from ssn_engine.hemisphere import render_light_map
 from ssn_engine.light_map import GaussianLight, LightMap
@@ -66,10 +67,12 @@ def test_ao_override_is_used(masks):
     predicted = api.predict_frames(masks, elms)
     same = api.predict_frames(masks, elms, ao=api.default_method().method.predict_ao(masks))
     assert np.allclose(predicted, same, atol=1e-6)
-    dark_ao = np.zeros_like(masks)  # fully occluded ground everywhere
-    dark = api.predict_frames(masks, elms, ao=dark_ao)
-    assert dark.shape == (2, N, N) and dark.dtype == np.float32
-    assert dark.mean() > predicted.mean() + 0.2
+    ao = api.default_method().method.predict_ao(masks)
+    # the paper's user control: more occlusion near the contact darkens the shadow, none lightens it
+    darker = api.predict_frames(masks, elms, ao=np.stack([scale_strength(a, 2.0) for a in ao]))
+    lighter = api.predict_frames(masks, elms, ao=np.stack([scale_strength(a, 0.0) for a in ao]))
+    assert darker.shape == (2, N, N) and darker.dtype == np.float32
+    assert darker.mean() > 1.2 * predicted.mean() and lighter.mean() < 0.8 * predicted.mean()
     # out-of-range AO values are clipped, not propagated
     assert np.allclose(
         api.predict_frames(masks, elms, ao=np.full_like(masks, 5.0)),

@@ -139,8 +139,8 @@ def test_ao_strength_changes_the_contact_shadow(tmp_path, cutout_png):
     assert main(["render", str(cutout_png), "--layer", str(a), "--preset", "overcast"]) == 0
     assert main(["render", str(cutout_png), "--layer", str(b), "--preset", "overcast", "--ao-strength", "0"]) == 0
     la, lb = _read(a)[..., 3].astype(int), _read(b)[..., 3].astype(int)
-    assert lb.sum() < la.sum()
-    assert np.all(lb <= la + 1)
+    assert lb.sum() < 0.9 * la.sum()  # AO strength 0 removes the contact occlusion: clearly less shadow
+    assert np.mean(lb > la + 2) < 0.02  # and almost nowhere more
 
 
 def _error(capsys, *args):

@@ -163,7 +163,7 @@ def test_layer_is_placed_per_framing(client, cutout):
     assert reply["y"] + reply["height"] > y1
     # no shadow far above the object for any of these front lights
     for full in (right, left, ahead):
-        assert full[: max(0, y0 - 5)].max(initial=0.0) == 0.0
+        assert full[: max(0, y0 - 5)].max(initial=0.0) < 1 / 255  # nothing an 8-bit layer would show
 
 
 def test_no_light_gives_an_empty_layer(client, cutout):

@@ -76,7 +76,7 @@ def _check_shadow(state: dict, side: str) -> None:
     assert state["below"]["sum"] > 100, state  # shadow on the ground in front of the object
     assert state[side]["sum"] > 100, state  # and beside it, away from the light
     other = "left" if side == "right" else "right"
-    assert state[other]["sum"] < 0.05 * state[side]["sum"], state
+    assert state[other]["sum"] < 0.15 * state[side]["sum"], state  # the lit side: a faint contact shadow at most
     assert state["far_above"]["max"] == 0.0, state  # none far above it
 
 
@@ -91,7 +91,7 @@ def test_generate_in_real_krita(pykrita, tmp_path, depth):
     _check_shadow(second, "left")  # low-sun-right: shadow to the left
     # the second generate updates that layer: still one shadow layer in the same place, new pixels
     assert second["names"] == first["names"] == ["Background", "Shadow: Person", "Person"]
-    assert second["left"]["sum"] > 100 and first["left"]["sum"] == 0.0
+    assert second["left"]["sum"] > 5 * first["left"]["sum"] and second["left"]["sum"] > 100
 
     assert case["source_identical"] and case["background_identical"]
     assert case["selection_before"] is False and case["selection_after"] is False
