@@ -28,7 +28,6 @@ import torch
 from torch.nn import functional as F
 
 from . import checkpoint
-from .checkpoint import load_model
 from ssn_engine.hemisphere import texel_weights
 
 from .batches import BatchSampler, ViewCache, make_batch
@@ -149,11 +148,11 @@ def forward(model, module: str, x: dict[str, torch.Tensor], ao: torch.Tensor | N
 def mix_predicted_ao(aop_net, x: dict[str, torch.Tensor], ao: torch.Tensor, prob: float,
                      gen: torch.Generator) -> torch.Tensor:
     """``ao`` with each sample replaced, with probability ``prob``, by the AOP network's prediction."""
-    use = torch.rand(ao.shape[0], generator=gen) < prob
+    use = (torch.rand(ao.shape[0], generator=gen) < prob).to(ao.device)
     if not use.any():
         return ao
     out = ao.clone()
-    out[use.to(ao.device)] = aop_net(x["mask"][use.to(ao.device)]).clamp(0.0, 1.0)
+    out[use] = aop_net(x["mask"][use]).clamp(0.0, 1.0)
     return out
 
 
@@ -278,7 +277,7 @@ def main(argv: list[str] | None = None, store=None) -> int:
         print(f"train views: {len(cache)} (cache {args.cache_views}), val: {args.val_samples} samples from the "
               f"{val_split} split, batch {args.batch} x {world} process(es), device {device}", flush=True)
     gen = torch.Generator().manual_seed(args.seed * 1000 + rank + step)
-    aop_net = load_model(args.ao_from)[0].to(device) if args.module == "sr" and args.ao_from else None
+    aop_net = checkpoint.load_model(args.ao_from)[0].to(device) if args.module == "sr" and args.ao_from else None
     pre = Prefetcher(sampler, np.random.default_rng([args.seed, rank, step]))
 
     stop = {"flag": False}
