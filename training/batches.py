@@ -16,7 +16,7 @@ Targets, for a light map rendered to ``L`` on the dataset's Hb x 2Hb grid and
 
 from __future__ import annotations
 
-from dataclasses import dataclass
+from dataclasses import dataclass, replace
 
 import numpy as np
 
@@ -140,6 +140,21 @@ class Batch:
     keys: list
 
 
+def mirror(batch: Batch, which: np.ndarray) -> Batch:
+    """Mirror the samples ``which`` (bool, (B,)) left to right: frames flip in x and the light maps in azimuth.
+
+    The camera's vertical plane is a mirror of the scene (no roll, horizontal-only framing symmetric), and the
+    conventions' azimuth a -> -a maps ELM column j to W - 1 - j (u -> 1 - u), so a mirrored sample is exactly the
+    mirrored scene under the mirrored light: a second, equally valid training sample.
+    """
+    def flip(x: np.ndarray) -> np.ndarray:
+        return np.where(which.reshape((-1,) + (1,) * (x.ndim - 1)), x[..., ::-1], x)
+
+    lights = replace(batch.lights, u=np.where(which[:, None], 1.0 - batch.lights.u, batch.lights.u))
+    return Batch(mask=flip(batch.mask), ao=flip(batch.ao), elm=flip(batch.elm), target=flip(batch.target),
+                 lights=lights, keys=batch.keys)
+
+
 def make_batch(views: list[CachedView], lights: LightBatch, elm_rows: int, weights: np.ndarray,
                target: str | None = "shadow") -> Batch:
     """Ground truth for ``views[b]`` under light map ``b`` (``target`` None: no shadow target, for AOP)."""
@@ -164,12 +179,13 @@ def make_batch(views: list[CachedView], lights: LightBatch, elm_rows: int, weigh
 
 
 class BatchSampler:
-    """Random training batches: ``batch // elms_per_view`` cached views, each under ``elms_per_view`` random ELMs."""
+    """Random training batches: ``batch // elms_per_view`` cached views, each under ``elms_per_view`` random ELMs;
+    ``flip``: each sample mirrored left to right with probability 1/2 (:func:`mirror`)."""
 
     def __init__(self, cache: ViewCache, batch: int, target: str | None = "shadow", elms_per_view: int = 2,
-                 swap: int = 1, max_lights: int = 50):
+                 swap: int = 1, max_lights: int = 50, flip: bool = False):
         self.cache, self.batch, self.target = cache, batch, target
-        self.elms_per_view, self.swap, self.max_lights = elms_per_view, swap, max_lights
+        self.elms_per_view, self.swap, self.max_lights, self.flip = elms_per_view, swap, max_lights, flip
 
     def __call__(self, rng: np.random.Generator) -> Batch:
         self.cache.fill(rng, self.swap)
@@ -178,4 +194,5 @@ class BatchSampler:
         chosen = [keys[j] for j in rng.choice(len(keys), size=n_views, replace=len(keys) < n_views)]
         views = [self.cache.get(chosen[b % n_views]) for b in range(self.batch)]
         lights = sample_lights(rng, self.batch, self.max_lights)
-        return make_batch(views, lights, self.cache.store.meta["elm_rows"], self.cache.weights, self.target)
+        batch = make_batch(views, lights, self.cache.store.meta["elm_rows"], self.cache.weights, self.target)
+        return mirror(batch, rng.random(self.batch) < 0.5) if self.flip else batch

@@ -5,8 +5,17 @@ from __future__ import annotations
 import numpy as np
 from test_train_standin import FakeStore
 
-from ssn_engine.hemisphere import network_elm
-from training.batches import BatchSampler, ViewCache, irradiance_to_shadow, load_view, make_batch, targets_for
+from ssn_engine.hemisphere import network_elm, texel_weights
+from training.batches import (
+    BatchSampler,
+    CachedView,
+    ViewCache,
+    irradiance_to_shadow,
+    load_view,
+    make_batch,
+    mirror,
+    targets_for,
+)
 from training.elm import render_lights, sample_lights
 from training.frames import area_downsample, resize_frames
 
@@ -72,3 +81,29 @@ def test_aop_batches_skip_the_target():
     b = make_batch([cache.get(next(iter(cache.keys)))] * 2, sample_lights(np.random.default_rng(0), 2), 4,
                    cache.weights, None)
     assert b.target.shape == (2, 16, 16) and not b.target.any()
+
+
+def _mirror_symmetric_view(res: int = 16, rows: int = 2) -> CachedView:
+    """A view whose scene is its own mirror image: a symmetric mask, and the hard shadow of ELM column j a
+    copy shifted by 2j - (W - 1) pixels (so column W - 1 - j casts the mirrored shadow)."""
+    mask = np.zeros((res, res), np.float32)
+    mask[3:9, res // 2 - 3 : res // 2 + 3] = 1.0
+    occ = np.stack([np.roll(mask, (1 + i, 2 * j - (2 * rows - 1)), (0, 1)) * (0.4 + 0.3 * i)
+                    for i in range(rows) for j in range(2 * rows)])
+    return CachedView(("sym",), mask, 1.0 - 0.5 * mask, np.rint(occ * 255).astype(np.uint8).reshape(len(occ), -1))
+
+
+def test_mirrored_sample_is_the_mirrored_scene_under_the_mirrored_light():
+    view, rows = _mirror_symmetric_view(), 2
+    weights = texel_weights(rows)
+    lights = sample_lights(np.random.default_rng(3), 4)
+    b = make_batch([view] * 4, lights, rows, weights, "shadow")
+    assert not np.allclose(b.target, b.target[..., ::-1], atol=1e-3)  # the lights are not symmetric themselves
+    which = np.array([True, False, True, False])
+    m = mirror(b, which)
+    direct = make_batch([view] * 4, m.lights, rows, weights, "shadow")
+    np.testing.assert_allclose(m.target, direct.target, atol=1e-6)
+    np.testing.assert_allclose(m.elm, direct.elm, atol=1e-6)
+    np.testing.assert_array_equal(m.target[1], b.target[1])
+    np.testing.assert_array_equal(m.mask[0], b.mask[0][:, ::-1])
+    np.testing.assert_allclose(mirror(m, which).elm, b.elm)
