@@ -24,6 +24,7 @@ from .batches import irradiance_to_shadow, view_key
 from .checkpoint import load_model
 from .elm import render_lights, sample_lights
 from .frames import resize_frames
+from .model import MirrorAverage
 from .metrics import NAMES, all_metrics, mean_metrics
 from .plots import image_grid
 from .progress import Progress
@@ -50,6 +51,8 @@ def parse_args(argv: list[str] | None = None) -> argparse.Namespace:
     p.add_argument("--max-views", type=int, default=0, help="at most this many views per group (evenly spaced); 0: all")
     p.add_argument("--floor", type=float, default=0.0,
                    help="output floor applied to the networks' shadows (the shipped model.json's output_floor)")
+    p.add_argument("--mirror-average", action="store_true",
+                   help="run every network as training.model.MirrorAverage (export --mirror-average)")
     p.add_argument("--seed", type=int, default=2021)
     p.add_argument("--threads", type=int, default=2)
     p.add_argument("--out", default="runs/eval")
@@ -72,14 +75,19 @@ def pick_views(ids: list[int], max_views: int) -> list[int]:
 class Networks:
     """AOP and SR (and optionally Non-inv SR) checkpoints, run at their resolution R on N x N frames."""
 
-    def __init__(self, aop: str, sr: str, noninv: str | None, floor: float = 0.0):
+    def __init__(self, aop: str, sr: str, noninv: str | None, floor: float = 0.0, mirror_average: bool = False):
+        def load(path: str):
+            net, ck = load_model(path)
+            return (MirrorAverage(net) if mirror_average else net), ck
+
         self.floor = floor
-        self.aop, ck = load_model(aop)
-        self.sr, ck_sr = load_model(sr)
-        self.noninv = load_model(noninv)[0] if noninv else None
+        self.aop, ck = load(aop)
+        self.sr, ck_sr = load(sr)
+        self.noninv = load(noninv)[0] if noninv else None
         self.r = ck["unet"]["resolution"]
         self.info = {"aop": {"path": aop, "step": ck["step"], "samples": ck["samples"]},
-                     "sr": {"path": sr, "step": ck_sr["step"], "samples": ck_sr["samples"]}}
+                     "sr": {"path": sr, "step": ck_sr["step"], "samples": ck_sr["samples"]},
+                     "mirror_average": mirror_average}
 
     @torch.no_grad()
     def predict_ao(self, masks: np.ndarray) -> np.ndarray:
@@ -115,7 +123,7 @@ def evaluate(args: argparse.Namespace, store=None) -> dict:
     store = store if store is not None else ViewStore(args.data)
     n_px, rows_hb = store.meta["res"], store.meta["elm_rows"]
     elm_hb, elm16 = elm_pool(args.n_elms, args.seed, rows_hb)
-    nets = Networks(args.aop, args.sr, args.noninv, args.floor) if args.aop and args.sr else None
+    nets = Networks(args.aop, args.sr, args.noninv, args.floor, args.mirror_average) if args.aop and args.sr else None
     geo = None if args.no_geometric else GeometricCard(resolution=n_px)
     methods = (["geometric"] if geo else []) + (["Non-inv-SSN"] if nets and nets.noninv else [])
     methods += ["SSN", "GT-AO-SSN"] if nets else []

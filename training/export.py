@@ -24,6 +24,7 @@ import torch
 from torch import nn
 
 from .checkpoint import load_model
+from .model import MirrorAverage
 
 TOL = 1e-4
 
@@ -231,6 +232,9 @@ def model_card(card: dict, attribution: list[dict], command: str) -> str:
     if card.get("output_floor"):
         lines.append(f"- Output floor {card['output_floor']}: the engine maps s to (s - floor) / (1 - floor), clipped "
                      "(removes the network's faint noise; chosen on the validation split, docs/benchmark.md).")
+    if card.get("mirror_average"):
+        lines.append("- Mirror-averaged graphs: each runs its network on the input and on its mirror image (frames "
+                     "in x, the ELM in azimuth) and averages (training.model.MirrorAverage).")
     t = ex["timing"]
     lines += [f"- SR latency (onnxruntime, median, 2-core CPU): {t['sr_at_R_ms']:.1f} ms at R, "
               f"{t['sr_engine_256_ms']:.1f} ms for a 256 frame including resampling.", "",
@@ -262,6 +266,8 @@ def parse_args(argv: list[str] | None = None) -> argparse.Namespace:
     p.add_argument("--metrics", help="evaluate's results.json, copied into the card")
     p.add_argument("--floor", type=float, default=0.0,
                    help="model.json output_floor: the engine removes shadow values below it (evaluate --floor)")
+    p.add_argument("--mirror-average", action="store_true",
+                   help="export each network as training.model.MirrorAverage (twice the compute, mirror-symmetric)")
     p.add_argument("--install", help="copy the model here (e.g. ssn_engine/models)")
     p.add_argument("--command", default="training/pipeline.sh data/ssn128 runs",
                    help="the reproducing command recorded in the card")
@@ -275,10 +281,11 @@ def main(argv: list[str] | None = None) -> int:
     out = Path(args.out)
     out.mkdir(parents=True, exist_ok=True)
     card: dict = {"format": "ssn-shadow-model", "version": 1, "aop": "aop.onnx", "sr": "sr.onnx", "elm_shape": [16, 32],
-                  "output_floor": args.floor}
+                  "output_floor": args.floor, "mirror_average": args.mirror_average}
     report = {}
     for module, ck_path in (("aop", args.aop), ("sr", args.sr)):
         net, ck = load_model(ck_path)
+        net = MirrorAverage(net).eval() if args.mirror_average else net
         r = ck["unet"]["resolution"]
         card["resolution"] = r
         x = test_inputs(args.data, r)

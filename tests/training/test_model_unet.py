@@ -54,3 +54,15 @@ def test_head_bias_and_complexity_report():
 def test_config_round_trip():
     cfg = UNetConfig(widths=(8, 16), groups=4, resolution=64)
     assert UNetConfig.from_dict(cfg.to_dict()) == cfg
+
+
+def test_mirror_average_is_the_mean_of_the_two_passes():
+    from training.model import MirrorAverage
+
+    torch.manual_seed(0)
+    net = build("sr", UNetConfig(resolution=32, widths=(4, 8, 8), groups=2)).eval()
+    m, ao, elm = torch.rand(2, 1, 32, 32), torch.rand(2, 1, 32, 32), torch.rand(2, 16, 32)
+    with torch.no_grad():
+        got = MirrorAverage(net)(m, ao, elm)
+        want = 0.5 * (net(m, ao, elm) + net(m.flip(-1), ao.flip(-1), elm.flip(-1)).flip(-1))
+    torch.testing.assert_close(got, want, atol=1e-6, rtol=1e-5)

@@ -1,5 +1,6 @@
 """The SSN networks: AOP (mask -> AO) and SR (mask + AO + ELM -> shadow)."""
 
+from .mirror import MirrorAverage
 from .unet import AOPNet, SRNet, UNetConfig, build
 
-__all__ = ["AOPNet", "SRNet", "UNetConfig", "build"]
+__all__ = ["AOPNet", "MirrorAverage", "SRNet", "UNetConfig", "build"]
