@@ -61,8 +61,8 @@ def parse_args(argv: list[str] | None = None) -> argparse.Namespace:
     p.add_argument("--cache-views", type=int, default=300, help="views kept in memory (rotating)")
     p.add_argument("--elms-per-view", type=int, default=4, help="SR: ELMs per view in a batch (AOP: 1)")
     p.add_argument("--no-perturb", action="store_true", help="SR: feed the ground-truth AO unperturbed")
-    p.add_argument("--no-flip", action="store_true",
-                   help="do not mirror half of the samples left to right (frames in x, light maps in azimuth)")
+    p.add_argument("--flip", action="store_true",
+                   help="mirror half of the samples left to right (frames in x, light maps in azimuth)")
     p.add_argument("--ao-from", help="SR: an AOP checkpoint whose predicted AO replaces the (perturbed) ground-truth "
                                       "AO in a fraction --ao-from-prob of the samples (the AO SR gets in use)")
     p.add_argument("--ao-from-prob", type=float, default=0.5)
@@ -272,7 +272,7 @@ def main(argv: list[str] | None = None, store=None) -> int:
     cache = ViewCache(store, "train", args.resolution, max_views=100000 if aop else args.cache_views, with_occ=not aop)
     # AOP ignores the light, so repeating a view under several ELMs would only shrink its batch.
     sampler = BatchSampler(cache, args.batch, None if aop else args.target, 1 if aop else args.elms_per_view,
-                           flip=not args.no_flip)
+                           flip=args.flip)
     rows = store.meta["elm_rows"]
     val_batch, val_split = build_val(store, args, rows, run) if main_proc else (None, None)
     val = to_tensors(val_batch, device) if val_batch is not None else None

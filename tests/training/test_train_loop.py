@@ -25,7 +25,8 @@ def _run(tmp_path, module, steps, extra=()):
     return run
 
 
-@pytest.mark.parametrize("module,extra", [("aop", []), ("sr", []), ("sr", ["--target", "irradiance"])])
+@pytest.mark.parametrize("module,extra", [("aop", []), ("sr", []), ("sr", ["--target", "irradiance"]),
+                                          ("aop", ["--flip"]), ("sr", ["--flip"])])
 def test_training_writes_checkpoints_logs_and_figures(tmp_path, module, extra):
     run = _run(tmp_path, module, 4, extra)
     for name in ("last.pt", "best.pt", "log.csv", "loss.png", "samples_latest.png", "config.json"):
@@ -81,6 +82,12 @@ def test_evaluate_on_the_standin(tmp_path):
                                   "--no-geometric", "--floor", "0.5", "--out", str(tmp_path / "e2"), "--threads", "1"]),
                        store=FakeStore(res=32))
     assert floored["floor"] == 0.5 and set(floored["methods"]) == {"SSN", "GT-AO-SSN"}
+    common = ["--aop", str(aop), "--sr", str(sr), "--n-elms", "4", "--per-view", "2", "--no-geometric",
+              "--threads", "1"]
+    plain, mirrored = (evaluate(eval_args([*common, "--out", str(tmp_path / f"e{i}"), *extra]), store=FakeStore(res=32))
+                       for i, extra in enumerate([[], ["--mirror-average"]]))
+    assert mirrored["networks"]["mirror_average"] and not plain["networks"]["mirror_average"]
+    assert mirrored["groups"]["objects"]["metrics"]["SSN"] != plain["groups"]["objects"]["metrics"]["SSN"]
 
 
 def test_geometric_cache_reproduces_the_baseline(tmp_path):
