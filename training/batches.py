@@ -143,9 +143,9 @@ class Batch:
 def mirror(batch: Batch, which: np.ndarray) -> Batch:
     """Mirror the samples ``which`` (bool, (B,)) left to right: frames flip in x and the light maps in azimuth.
 
-    The camera's vertical plane is a mirror of the scene (no roll, horizontal-only framing symmetric), and the
-    conventions' azimuth a -> -a maps ELM column j to W - 1 - j (u -> 1 - u), so a mirrored sample is exactly the
-    mirrored scene under the mirrored light: a second, equally valid training sample.
+    The camera's vertical plane is a mirror plane of the scene (no roll; the framing shifts only vertically), and
+    the conventions' azimuth a -> -a maps ELM column j to W - 1 - j (u -> 1 - u), so a mirrored sample is exactly
+    the mirrored scene under the mirrored light: a second, equally valid training sample.
     """
     def flip(x: np.ndarray) -> np.ndarray:
         return np.where(which.reshape((-1,) + (1,) * (x.ndim - 1)), x[..., ::-1], x)
