@@ -24,8 +24,8 @@ from .batches import irradiance_to_shadow, view_key
 from .checkpoint import load_model
 from .elm import render_lights, sample_lights
 from .frames import resize_frames
-from .model import MirrorAverage
 from .metrics import NAMES, all_metrics, mean_metrics
+from .model import MirrorAverage
 from .plots import image_grid
 from .progress import Progress
 
