@@ -78,14 +78,14 @@ def test_evaluate_on_the_standin(tmp_path):
             assert 0 <= m["RMSE"] <= 1 and -1 <= m["ZNCC"] <= 1
     assert (tmp_path / "eval" / "tables.md").read_text().count("| SSN |") == 2
     assert (tmp_path / "eval" / "grid.png").is_file()
-    floored = evaluate(eval_args(["--aop", str(aop), "--sr", str(sr), "--n-elms", "4", "--per-view", "2",
-                                  "--no-geometric", "--floor", "0.5", "--out", str(tmp_path / "e2"), "--threads", "1"]),
-                       store=FakeStore(res=32))
-    assert floored["floor"] == 0.5 and set(floored["methods"]) == {"SSN", "GT-AO-SSN"}
     common = ["--aop", str(aop), "--sr", str(sr), "--n-elms", "4", "--per-view", "2", "--no-geometric",
               "--threads", "1"]
-    plain, mirrored = (evaluate(eval_args([*common, "--out", str(tmp_path / f"e{i}"), *extra]), store=FakeStore(res=32))
-                       for i, extra in enumerate([[], ["--mirror-average"]]))
+
+    def run(name: str, *extra: str) -> dict:
+        return evaluate(eval_args([*common, "--out", str(tmp_path / name), *extra]), store=FakeStore(res=32))
+
+    floored, plain, mirrored = run("floored", "--floor", "0.5"), run("plain"), run("mirrored", "--mirror-average")
+    assert floored["floor"] == 0.5 and set(floored["methods"]) == {"SSN", "GT-AO-SSN"}
     assert mirrored["networks"]["mirror_average"] and not plain["networks"]["mirror_average"]
     assert mirrored["groups"]["objects"]["metrics"]["SSN"] != plain["groups"]["objects"]["metrics"]["SSN"]
 
