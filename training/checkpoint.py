@@ -4,6 +4,7 @@ from __future__ import annotations
 
 import os
 from pathlib import Path
+from collections.abc import Sequence
 from typing import Any
 
 import torch
@@ -40,3 +41,19 @@ def load_model(path: str | Path):
     model.load_state_dict(ckpt["model"])
     model.eval()
     return model, ckpt
+
+
+def load_models(paths: Sequence[str | Path]):
+    """Rebuild one network, or the :class:`~training.model.Ensemble` of several (same module and resolution);
+    returns (model, checkpoint dicts)."""
+    from .model import Ensemble
+
+    loaded = [load_model(p) for p in paths]
+    if not loaded:
+        raise ValueError("no checkpoint given")
+    ckpts = [ck for _, ck in loaded]
+    kinds = {(ck["module"], ck["unet"]["resolution"]) for ck in ckpts}
+    if len(kinds) > 1:
+        raise ValueError(f"checkpoints of different modules or resolutions cannot be averaged: {sorted(kinds)}")
+    nets = [net for net, _ in loaded]
+    return (nets[0] if len(nets) == 1 else Ensemble(nets).eval()), ckpts

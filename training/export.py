@@ -23,7 +23,7 @@ import numpy as np
 import torch
 from torch import nn
 
-from .checkpoint import load_model
+from .checkpoint import load_models
 from .model import MirrorAverage
 
 TOL = 1e-4
@@ -226,9 +226,11 @@ def model_card(card: dict, attribution: list[dict], command: str) -> str:
     ]
     for m in ("aop", "sr"):
         r = ex[m]
-        lines.append(f"- {m.upper()}: U-Net widths {r['widths']}, {r['step']} steps ({r['samples']} samples), "
-                     f"{r['weights']} weights, {r['bytes'] / 1e6:.2f} MB, "
-                     f"max abs diff to torch {r['max_abs_diff']:.1e}")
+        runs = " and ".join(f"{st} steps ({n} samples, `{p}`)" for p, st, n in zip(r["checkpoints"], r["steps"],
+                                                                                 r["samples"], strict=True))
+        mean = f"the mean of {len(r['checkpoints'])} networks, " if len(r["checkpoints"]) > 1 else ""
+        lines.append(f"- {m.upper()}: {mean}U-Net widths {r['widths']}, {runs}, {r['weights']} weights, "
+                     f"{r['bytes'] / 1e6:.2f} MB, max abs diff to torch {r['max_abs_diff']:.1e}")
     if card.get("output_floor"):
         lines.append(f"- Output floor {card['output_floor']}: the engine maps s to (s - floor) / (1 - floor), clipped "
                      "(removes the network's faint noise; chosen on the validation split, docs/benchmark.md).")
@@ -255,7 +257,7 @@ def model_card(card: dict, attribution: list[dict], command: str) -> str:
 
 def parse_args(argv: list[str] | None = None) -> argparse.Namespace:
     p = argparse.ArgumentParser(prog="python -m training.export", description=__doc__.split("\n")[0])
-    p.add_argument("--aop", required=True)
+    p.add_argument("--aop", nargs="+", required=True, help="AOP checkpoint(s); several: one graph of their mean")
     p.add_argument("--sr", required=True)
     p.add_argument("--out", default="runs/export")
     p.add_argument("--data", default="data/ssn128", help="dataset for test inputs and the card's attribution")
@@ -283,10 +285,10 @@ def main(argv: list[str] | None = None) -> int:
     card: dict = {"format": "ssn-shadow-model", "version": 1, "aop": "aop.onnx", "sr": "sr.onnx", "elm_shape": [16, 32],
                   "output_floor": args.floor, "mirror_average": args.mirror_average}
     report = {}
-    for module, ck_path in (("aop", args.aop), ("sr", args.sr)):
-        net, ck = load_model(ck_path)
+    for module, ck_paths in (("aop", args.aop), ("sr", [args.sr])):
+        net, cks = load_models(ck_paths)
         net = MirrorAverage(net).eval() if args.mirror_average else net
-        r = ck["unet"]["resolution"]
+        r = cks[0]["unet"]["resolution"]
         card["resolution"] = r
         x = test_inputs(args.data, r)
         fp32 = out / f"{module}.fp32.onnx"
@@ -309,9 +311,9 @@ def main(argv: list[str] | None = None) -> int:
                 final, diff, dtype = fp16, diff16, "float16"
         shutil.copy(final, out / f"{module}.onnx")
         report[f"{module}_parity_fp32"] = diff32
-        report[module] = {"checkpoint": str(ck_path), "step": ck["step"], "samples": ck["samples"],
-                          "widths": ck["unet"]["widths"], "weights": dtype, "max_abs_diff": diff,
-                          "bytes": (out / f"{module}.onnx").stat().st_size}
+        report[module] = {"checkpoints": [str(p) for p in ck_paths], "steps": [ck["step"] for ck in cks],
+                          "samples": [ck["samples"] for ck in cks], "widths": cks[0]["unet"]["widths"],
+                          "weights": dtype, "max_abs_diff": diff, "bytes": (out / f"{module}.onnx").stat().st_size}
         if diff > args.tol:
             print(f"{module}: parity FAILED: max abs diff {diff:.2e} > {args.tol:.0e}", file=sys.stderr)
             return 1

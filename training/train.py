@@ -63,8 +63,9 @@ def parse_args(argv: list[str] | None = None) -> argparse.Namespace:
     p.add_argument("--no-perturb", action="store_true", help="SR: feed the ground-truth AO unperturbed")
     p.add_argument("--flip", action="store_true",
                    help="mirror half of the samples left to right (frames in x, light maps in azimuth)")
-    p.add_argument("--ao-from", help="SR: an AOP checkpoint whose predicted AO replaces the (perturbed) ground-truth "
-                                      "AO in a fraction --ao-from-prob of the samples (the AO SR gets in use)")
+    p.add_argument("--ao-from", nargs="+", help="SR: AOP checkpoint(s) whose predicted AO (several: their mean, as "
+                   "export --aop) replaces the (perturbed) ground-truth AO in a fraction --ao-from-prob of the samples "
+                   "(the AO SR gets in use)")
     p.add_argument("--ao-from-prob", type=float, default=0.5)
     p.add_argument("--ckpt-minutes", type=float, default=4.0)
     p.add_argument("--refresh-minutes", type=float, default=10.0, help="re-open the store (growing dataset)")
@@ -74,6 +75,8 @@ def parse_args(argv: list[str] | None = None) -> argparse.Namespace:
     p.add_argument("--max-minutes", type=float, default=0.0,
                    help="stop (with a checkpoint) after this long; 0: no limit")
     p.add_argument("--fresh", action="store_true", help="ignore an existing checkpoint in --run")
+    p.add_argument("--init-from", help="fine-tune: start a new run from this checkpoint's weights (same module, "
+                                       "target and U-Net) with a fresh optimizer and schedule")
     args = p.parse_args(argv)
     args.widths = tuple(int(w) for w in str(args.widths).split(","))
     return args
@@ -264,6 +267,14 @@ def main(argv: list[str] | None = None, store=None) -> int:
         step, samples, best = ckpt["step"], ckpt["samples"], ckpt.get("best_val", float("inf"))
         if main_proc:
             print(f"resumed from {ckpt_path} at step {step}", flush=True)
+    elif args.init_from:
+        init = checkpoint.load(args.init_from)
+        if init["module"] != args.module or init.get("target") != args.target or init["unet"] != config.to_dict():
+            raise SystemExit(f"--init-from {args.init_from} is a {init['module']}/{init.get('target')} {init['unet']} "
+                             "checkpoint; it does not match this run")
+        model.load_state_dict(init["model"])
+        if main_proc:
+            print(f"initialised from {args.init_from} (step {init['step']})", flush=True)
     if main_proc:
         (run / "config.json").write_text(json.dumps({**vars(args), "widths": list(args.widths)}, indent=1))
     ddp = torch.nn.parallel.DistributedDataParallel(model) if world > 1 else model
@@ -280,7 +291,7 @@ def main(argv: list[str] | None = None, store=None) -> int:
         print(f"train views: {len(cache)} (cache {args.cache_views}), val: {args.val_samples} samples from the "
               f"{val_split} split, batch {args.batch} x {world} process(es), device {device}", flush=True)
     gen = torch.Generator().manual_seed(args.seed * 1000 + rank + step)
-    aop_net = checkpoint.load_model(args.ao_from)[0].to(device) if args.module == "sr" and args.ao_from else None
+    aop_net = checkpoint.load_models(args.ao_from)[0].to(device) if args.module == "sr" and args.ao_from else None
     pre = Prefetcher(sampler, np.random.default_rng([args.seed, rank, step]))
 
     stop = {"flag": False}

@@ -104,3 +104,25 @@ def test_mirror_averaged_export_is_mirror_symmetric(exported):
     assert "Mirror-averaged" in (out / "MODEL_CARD.md").read_text()
     assert _sr_mirror_gap(exported) > 1e-3  # the plain network is not symmetric ...
     assert _sr_mirror_gap(out) < 1e-5  # ... its mirror average is
+
+
+def test_two_aops_export_as_one_graph_of_their_mean(exported):
+    from training.checkpoint import load_model
+
+    runs = exported.parent
+    assert train_main(["--module", "aop", "--run", str(runs / "aop2"), *TINY, "--seed", "1"],
+                      store=FakeStore(res=32)) == 0
+    members = [runs / "aop" / "last.pt", runs / "aop2" / "last.pt"]
+    out = runs / "ensemble"
+    code = export_main(["--aop", *map(str, members), "--sr", str(runs / "sr" / "last.pt"), "--out", str(out),
+                        "--data", str(runs / "no-data")])
+    assert code == 0
+    m = np.random.default_rng(3).random((2, 1, 32, 32), dtype=np.float32)
+    got = ort.InferenceSession(str(out / "aop.onnx"), providers=["CPUExecutionProvider"]).run(None, {"mask": m})[0]
+    with torch.no_grad():
+        a, b = (load_model(p)[0](torch.from_numpy(m)).numpy() for p in members)
+    assert np.abs(a - b).max() > 1e-3  # two different networks ...
+    assert np.abs(got - np.clip(0.5 * (a + b), 0, 1)).max() < 1e-4  # ... and the graph is their mean
+    report = json.loads((out / "model.json").read_text())["export"]["aop"]
+    assert report["checkpoints"] == list(map(str, members)) and report["max_abs_diff"] <= 1e-4
+    assert "the mean of 2 networks" in (out / "MODEL_CARD.md").read_text()

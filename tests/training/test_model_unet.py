@@ -66,3 +66,26 @@ def test_mirror_average_is_the_mean_of_the_two_passes():
         got = MirrorAverage(net)(m, ao, elm)
         want = 0.5 * (net(m, ao, elm) + net(m.flip(-1), ao.flip(-1), elm.flip(-1)).flip(-1))
     torch.testing.assert_close(got, want, atol=1e-6, rtol=1e-5)
+
+
+def test_ensemble_is_the_mean_of_its_members(tmp_path):
+    from training import checkpoint
+    from training.model import Ensemble
+
+    torch.manual_seed(0)
+    cfg = UNetConfig(resolution=32, widths=(4, 8, 8), groups=2)
+    nets = [build("aop", cfg).eval() for _ in range(2)]
+    m = torch.rand(2, 1, 32, 32)
+    with torch.no_grad():
+        torch.testing.assert_close(Ensemble(nets)(m), 0.5 * (nets[0](m) + nets[1](m)), atol=1e-6, rtol=1e-5)
+    paths = []
+    for k, (module, net) in enumerate([("aop", nets[0]), ("aop", nets[1]), ("sr", build("sr", cfg))]):
+        paths.append(tmp_path / f"{k}.pt")
+        checkpoint.save(paths[-1], {"module": module, "unet": cfg.to_dict(), "model": net.state_dict()})
+    loaded, cks = checkpoint.load_models(paths[:2])
+    assert isinstance(loaded, Ensemble) and len(cks) == 2
+    with torch.no_grad():
+        torch.testing.assert_close(loaded(m), Ensemble(nets)(m), atol=1e-6, rtol=1e-5)
+    assert not isinstance(checkpoint.load_models(paths[:1])[0], Ensemble)  # one checkpoint: the network itself
+    with pytest.raises(ValueError, match="different modules"):
+        checkpoint.load_models(paths)

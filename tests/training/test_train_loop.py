@@ -124,4 +124,18 @@ def test_predicted_ao_replaces_the_chosen_samples():
 def test_sr_trains_on_predicted_ao(tmp_path):
     aop = _run(tmp_path / "a", "aop", 2) / "last.pt"
     run = _run(tmp_path, "sr", 3, ["--ao-from", str(aop), "--ao-from-prob", "1"])
-    assert checkpoint.load(run / "last.pt")["args"]["ao_from"] == str(aop)
+    assert checkpoint.load(run / "last.pt")["args"]["ao_from"] == [str(aop)]
+    aop2 = _run(tmp_path / "b", "aop", 2, ["--seed", "1"]) / "last.pt"
+    run = _run(tmp_path / "c", "sr", 2, ["--ao-from", str(aop), str(aop2), "--ao-from-prob", "1"])
+    assert checkpoint.load(run / "last.pt")["args"]["ao_from"] == [str(aop), str(aop2)]
+
+
+def test_fine_tuning_starts_from_the_weights_with_a_fresh_schedule(tmp_path):
+    base = _run(tmp_path / "base", "sr", 3)
+    tuned = _run(tmp_path / "ft", "sr", 2, ["--init-from", str(base / "last.pt"), "--lr", "0", "--lr-min", "0"])
+    before, after = checkpoint.load(base / "last.pt"), checkpoint.load(tuned / "last.pt")
+    assert after["step"] == 2  # its own steps, not the base run's
+    for k, v in before["model"].items():  # learning rate 0: the weights are the base run's
+        torch.testing.assert_close(after["model"][k], v)
+    with pytest.raises(SystemExit):  # an AOP cannot start an SR run
+        _run(tmp_path / "bad", "aop", 1, ["--init-from", str(base / "last.pt")])
