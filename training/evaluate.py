@@ -21,7 +21,7 @@ import numpy as np
 import torch
 
 from .batches import irradiance_to_shadow, view_key
-from .checkpoint import load_model
+from .checkpoint import load_models
 from .elm import render_lights, sample_lights
 from .frames import resize_frames
 from .metrics import NAMES, all_metrics, mean_metrics
@@ -41,7 +41,8 @@ def parse_args(argv: list[str] | None = None) -> argparse.Namespace:
     p = argparse.ArgumentParser(prog="python -m training.evaluate", description=__doc__.split("\n")[0])
     p.add_argument("--data", default="data/ssn128")
     p.add_argument("--split", default="test")
-    p.add_argument("--aop", help="AOP checkpoint (without --aop and --sr: the geometric baseline alone)")
+    p.add_argument("--aop", nargs="+", help="AOP checkpoint(s), several: the mean of their AO maps (without --aop "
+                                         "and --sr: the geometric baseline alone)")
     p.add_argument("--sr", help="SR checkpoint (shadow target)")
     p.add_argument("--noninv", help="SR checkpoint trained on irradiance (Non-inv-SSN)")
     p.add_argument("--no-geometric", action="store_true")
@@ -75,17 +76,19 @@ def pick_views(ids: list[int], max_views: int) -> list[int]:
 class Networks:
     """AOP and SR (and optionally Non-inv SR) checkpoints, run at their resolution R on N x N frames."""
 
-    def __init__(self, aop: str, sr: str, noninv: str | None, floor: float = 0.0, mirror_average: bool = False):
-        def load(path: str):
-            net, ck = load_model(path)
-            return (MirrorAverage(net) if mirror_average else net), ck
+    def __init__(self, aop: list[str], sr: str, noninv: str | None, floor: float = 0.0,
+                 mirror_average: bool = False):
+        def load(paths: list[str]):
+            net, cks = load_models(paths)
+            return (MirrorAverage(net) if mirror_average else net), cks
 
         self.floor = floor
-        self.aop, ck = load(aop)
-        self.sr, ck_sr = load(sr)
-        self.noninv = load(noninv)[0] if noninv else None
-        self.r = ck["unet"]["resolution"]
-        self.info = {"aop": {"path": aop, "step": ck["step"], "samples": ck["samples"]},
+        self.aop, cks = load(aop)
+        self.sr, (ck_sr,) = load([sr])
+        self.noninv = load([noninv])[0] if noninv else None
+        self.r = cks[0]["unet"]["resolution"]
+        self.info = {"aop": [{"path": p, "step": ck["step"], "samples": ck["samples"]} for p, ck in zip(aop, cks,
+                                                                                                        strict=True)],
                      "sr": {"path": sr, "step": ck_sr["step"], "samples": ck_sr["samples"]},
                      "mirror_average": mirror_average}
 
@@ -133,11 +136,13 @@ def evaluate(args: argparse.Namespace, store=None) -> dict:
     cache_path = Path(args.geo_cache) if args.geo_cache else None
     geo_cache = dict(np.load(cache_path)) if cache_path and cache_path.is_file() else {}
     grid_rows = []
+    failures = AOFailures() if nets else None
     t0 = time.perf_counter()
     for group, kinds in GROUPS.items():
         ids = [i for k in kinds for i in store.view_ids(args.split, k)]
         ids = pick_views(sorted(ids), args.max_views)
         per = {m: [] for m in methods}
+        pitches: list[float] = []
         prog = Progress(len(ids), every=max(1, len(ids) // 10))
         for j, i in enumerate(ids):
             v = store.load(i)
@@ -162,14 +167,24 @@ def evaluate(args: argparse.Namespace, store=None) -> dict:
                 preds["GT-AO-SSN"] = nets.render(masks, gt_ao, elm16[pick])
             for m in methods:
                 per[m].extend(all_metrics(preds[m][b], gt[b]) for b in range(len(pick)))
+            pitches += [float(store.info(i).get("pitch", 0.0))] * len(pick)
+            if failures:
+                gap = [per["SSN"][-k]["DSSIM"] - per["GT-AO-SSN"][-k]["DSSIM"] for k in range(len(pick), 0, -1)]
+                b = int(np.argmax(gap))
+                failures.offer(gap[b], [v.mask, v.ao, ao_pred[b], gt[b], preds["SSN"][b], preds["GT-AO-SSN"][b]])
             if j % max(1, len(ids) // 3) == 0 and len(grid_rows) < 6:
                 elm_img = np.kron(elm16[pick[0]] / max(elm16[pick[0]].max(), 1e-9), np.ones((n_px // 32, n_px // 32)))
                 elm_img = np.pad(elm_img, ((0, n_px - elm_img.shape[0]), (0, 0)))
                 grid_rows.append([v.mask, elm_img, gt[0]] + [preds[m][0] for m in methods])
             prog.update(j + 1, group)
         prog.close()
+        by_pitch = {}
+        for q in sorted(set(pitches)):
+            rows = [b for b, x in enumerate(pitches) if x == q]
+            by_pitch[f"{q:g}"] = {"images": len(rows),
+                                  "metrics": {m: mean_metrics([per[m][b] for b in rows]) for m in methods}}
         results["groups"][group] = {"views": len(ids), "images": len(ids) * args.per_view,
-                                    "metrics": {m: mean_metrics(per[m]) for m in methods}}
+                                    "metrics": {m: mean_metrics(per[m]) for m in methods}, "by_pitch": by_pitch}
     results["seconds"] = time.perf_counter() - t0
     if cache_path:
         cache_path.parent.mkdir(parents=True, exist_ok=True)
@@ -180,7 +195,38 @@ def evaluate(args: argparse.Namespace, store=None) -> dict:
     (out / "tables.md").write_text(tables_markdown(results))
     if grid_rows:
         image_grid(grid_rows, out / "grid.png", ["mask", "ELM", "ground truth"] + methods, cell=128)
+    if failures and failures.rows:
+        image_grid(failures.images(), out / "ao_failures.png", list(AOFailures.COLUMNS), cell=128)
     return results
+
+
+class AOFailures:
+    """The images where the predicted AO costs most: largest DSSIM of SSN minus that of GT-AO-SSN."""
+
+    COLUMNS = ("mask", "ground-truth AO", "predicted AO", "ground truth", "SSN", "GT-AO-SSN")
+
+    def __init__(self, keep: int = 6):
+        self.keep = keep
+        self.rows: list[tuple[float, int, list[np.ndarray]]] = []
+
+    def offer(self, gap: float, images: list[np.ndarray]) -> None:
+        self.rows.append((gap, len(self.rows), [np.asarray(x, np.float32) for x in images]))
+        self.rows = sorted(self.rows, key=lambda r: -r[0])[: self.keep]
+
+    def images(self) -> list[list[np.ndarray]]:
+        return [r[2] for r in self.rows]
+
+
+def pitch_table(results: dict) -> list[str]:
+    """ZNCC and DSSIM per camera pitch (the views' pitch: 0, 15, 30 degrees)."""
+    methods = results["methods"]
+    lines = ["### By camera pitch (ZNCC / DSSIM)\n", "| group | pitch | images | " + " | ".join(methods) + " |",
+             "|---" * (3 + len(methods)) + "|"]
+    for group, r in results["groups"].items():
+        for q, row in r.get("by_pitch", {}).items():
+            cells = " | ".join(f"{row['metrics'][m]['ZNCC']:.3f} / {row['metrics'][m]['DSSIM']:.3f}" for m in methods)
+            lines.append(f"| {group} | {q} | {row['images']} | {cells} |")
+    return lines + [""]
 
 
 def tables_markdown(results: dict) -> str:
@@ -197,7 +243,7 @@ def tables_markdown(results: dict) -> str:
             theirs = " | ".join(f"{x:.4f}" for x in paper) if paper else " | ".join("-" for _ in NAMES)
             lines.append(f"| {m} | {ours} | {theirs} |")
         lines.append("")
-    return "\n".join(lines)
+    return "\n".join(lines + pitch_table(results))
 
 
 def main(argv: list[str] | None = None) -> int:

@@ -76,8 +76,13 @@ def test_evaluate_on_the_standin(tmp_path):
         assert set(group["metrics"]) == {"geometric", "Non-inv-SSN", "SSN", "GT-AO-SSN"}
         for m in group["metrics"].values():
             assert 0 <= m["RMSE"] <= 1 and -1 <= m["ZNCC"] <= 1
-    assert (tmp_path / "eval" / "tables.md").read_text().count("| SSN |") == 2
-    assert (tmp_path / "eval" / "grid.png").is_file()
+    tables = (tmp_path / "eval" / "tables.md").read_text().splitlines()
+    assert sum(line.startswith("| SSN |") for line in tables) == 2
+    assert (tmp_path / "eval" / "grid.png").is_file() and (tmp_path / "eval" / "ao_failures.png").is_file()
+    for group in res["groups"].values():  # per pitch: the stand-in's views are at 0 and 15 degrees
+        assert set(group["by_pitch"]) == {"0", "15"}
+        assert sum(row["images"] for row in group["by_pitch"].values()) == group["images"]
+    assert "### By camera pitch" in (tmp_path / "eval" / "tables.md").read_text()
     common = ["--aop", str(aop), "--sr", str(sr), "--n-elms", "4", "--per-view", "2", "--no-geometric",
               "--threads", "1"]
 
