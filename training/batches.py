@@ -84,12 +84,13 @@ def irradiance_to_shadow(e: np.ndarray, elm_hb: np.ndarray, elm16: np.ndarray) -
 
 
 class ViewCache:
-    """Views of one split at resolution R, loaded lazily, at most ``max_views`` kept."""
+    """Views of one split at resolution R, loaded lazily, at most ``max_views`` kept; ``balance_kinds``: loaded and
+    drawn so that every kind (object, human, animal) is equally likely, however many views it has."""
 
     def __init__(self, store, split: str, resolution: int, max_views: int = 300, kind: str | None = None,
-                 with_occ: bool = True):
+                 with_occ: bool = True, balance_kinds: bool = False):
         self.resolution, self.max_views, self.split, self.kind = resolution, max_views, split, kind
-        self.with_occ = with_occ
+        self.with_occ, self.balance_kinds = with_occ, balance_kinds
         self.views: dict[tuple, CachedView] = {}
         self.open(store)
 
@@ -98,11 +99,22 @@ class ViewCache:
         self.store = store
         self.ids = store.view_ids(self.split, self.kind)
         self.keys = {view_key(store, i): i for i in self.ids}
+        self.kinds = {k: store.info(i)["kind"] for k, i in self.keys.items()}
         self.weights = texel_weights(store.meta["elm_rows"])
         self.views = {k: v for k, v in self.views.items() if k in self.keys}
 
     def __len__(self) -> int:
         return len(self.ids)
+
+    def draw(self, rng: np.random.Generator, keys: list[tuple], size: int, replace: bool) -> list[tuple]:
+        """``size`` of ``keys`` at random: uniformly, or with every kind equally likely (``balance_kinds``)."""
+        p = None
+        if self.balance_kinds:
+            kinds = [self.kinds[k] for k in keys]
+            count = {c: kinds.count(c) for c in set(kinds)}
+            p = np.array([1.0 / count[c] for c in kinds])
+            p /= p.sum()
+        return [keys[j] for j in rng.choice(len(keys), size=size, replace=replace, p=p)]
 
     def fill(self, rng: np.random.Generator, swap: int = 1, per_call: int = 4, minimum: int = 16) -> None:
         """Load up to ``per_call`` uncached views (at least ``minimum`` cached after the call) while there is
@@ -118,8 +130,7 @@ class ViewCache:
             room = swap
         else:
             room = min(room, max(per_call, minimum - len(self.views)))
-        for j in rng.permutation(len(missing))[:room]:
-            k = missing[j]
+        for k in self.draw(rng, missing, min(room, len(missing)), replace=False):
             self.views[k] = load_view(self.store, self.keys[k], self.resolution, self.with_occ)
 
     def get(self, key: tuple) -> CachedView:
@@ -191,7 +202,7 @@ class BatchSampler:
         self.cache.fill(rng, self.swap)
         keys = list(self.cache.views)
         n_views = max(1, self.batch // self.elms_per_view)
-        chosen = [keys[j] for j in rng.choice(len(keys), size=n_views, replace=len(keys) < n_views)]
+        chosen = self.cache.draw(rng, keys, n_views, replace=len(keys) < n_views)
         views = [self.cache.get(chosen[b % n_views]) for b in range(self.batch)]
         lights = sample_lights(rng, self.batch, self.max_lights)
         batch = make_batch(views, lights, self.cache.store.meta["elm_rows"], self.cache.weights, self.target)

@@ -61,6 +61,8 @@ def parse_args(argv: list[str] | None = None) -> argparse.Namespace:
     p.add_argument("--cache-views", type=int, default=300, help="views kept in memory (rotating)")
     p.add_argument("--elms-per-view", type=int, default=4, help="SR: ELMs per view in a batch (AOP: 1)")
     p.add_argument("--no-perturb", action="store_true", help="SR: feed the ground-truth AO unperturbed")
+    p.add_argument("--balance-kinds", action="store_true",
+                   help="draw objects, humans and animals equally often (default: in proportion to their views)")
     p.add_argument("--flip", action="store_true",
                    help="mirror half of the samples left to right (frames in x, light maps in azimuth)")
     p.add_argument("--ao-from", nargs="+", help="SR: AOP checkpoint(s) whose predicted AO (several: their mean, as "
@@ -280,7 +282,8 @@ def main(argv: list[str] | None = None, store=None) -> int:
     ddp = torch.nn.parallel.DistributedDataParallel(model) if world > 1 else model
 
     aop = args.module == "aop"
-    cache = ViewCache(store, "train", args.resolution, max_views=100000 if aop else args.cache_views, with_occ=not aop)
+    cache = ViewCache(store, "train", args.resolution, max_views=100000 if aop else args.cache_views, with_occ=not aop,
+                      balance_kinds=args.balance_kinds)
     # AOP ignores the light, so repeating a view under several ELMs would only shrink its batch.
     sampler = BatchSampler(cache, args.batch, None if aop else args.target, 1 if aop else args.elms_per_view,
                            flip=args.flip)

@@ -75,6 +75,25 @@ def test_cache_rotates_within_its_limit():
     assert len(seen) == len(cache.ids)
 
 
+def test_balanced_kinds_are_drawn_equally_often():
+    store = FakeStore(res=16, n_meshes=12, views=2)
+    for v in store._views:  # train: one human mesh (2 views) against five object meshes (10 views)
+        v.info["kind"] = "human" if v.info["mesh_id"] == "fake_00" else "object"
+    rng = np.random.default_rng(0)
+
+    def human_share(balance: bool) -> float:
+        cache = ViewCache(store, "train", 16, with_occ=False, balance_kinds=balance)
+        keys = list(cache.keys)
+        drawn = cache.draw(rng, keys, 4000, replace=True)
+        batch = BatchSampler(cache, 400, None, elms_per_view=1)(rng)
+        assert abs(np.mean([cache.kinds[k] == "human" for k in batch.keys]) - np.mean(
+            [cache.kinds[k] == "human" for k in drawn])) < 0.1  # the sampler draws the same way
+        return float(np.mean([cache.kinds[k] == "human" for k in drawn]))
+
+    assert abs(human_share(False) - 2 / 12) < 0.03
+    assert abs(human_share(True) - 0.5) < 0.03
+
+
 def test_aop_batches_skip_the_target():
     store = FakeStore(res=16)
     cache = ViewCache(store, "train", 16, with_occ=False)

@@ -26,7 +26,8 @@ def _run(tmp_path, module, steps, extra=()):
 
 
 @pytest.mark.parametrize("module,extra", [("aop", []), ("sr", []), ("sr", ["--target", "irradiance"]),
-                                          ("aop", ["--flip"]), ("sr", ["--flip"])])
+                                          ("aop", ["--flip"]), ("sr", ["--flip"]),
+                                          ("sr", ["--balance-kinds"])])
 def test_training_writes_checkpoints_logs_and_figures(tmp_path, module, extra):
     run = _run(tmp_path, module, 4, extra)
     for name in ("last.pt", "best.pt", "log.csv", "loss.png", "samples_latest.png", "config.json"):
