@@ -207,14 +207,14 @@ class AOFailures:
 
     def __init__(self, keep: int = 6):
         self.keep = keep
-        self.rows: list[tuple[float, int, list[np.ndarray]]] = []
+        self.rows: list[tuple[float, list[np.ndarray]]] = []
 
     def offer(self, gap: float, images: list[np.ndarray]) -> None:
-        self.rows.append((gap, len(self.rows), [np.asarray(x, np.float32) for x in images]))
+        self.rows.append((gap, [np.asarray(x, np.float32) for x in images]))
         self.rows = sorted(self.rows, key=lambda r: -r[0])[: self.keep]
 
     def images(self) -> list[list[np.ndarray]]:
-        return [r[2] for r in self.rows]
+        return [r[1] for r in self.rows]
 
 
 def pitch_table(results: dict) -> list[str]:

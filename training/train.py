@@ -259,21 +259,23 @@ def main(argv: list[str] | None = None, store=None) -> int:
     opt = torch.optim.Adam(model.parameters(), lr=args.lr)
     step, samples, best = 0, 0, float("inf")
     ckpt_path = None if args.fresh else checkpoint.resume_path(run)
+
+    def load_matching(path, advice: str) -> dict:
+        """The checkpoint at ``path``, refused unless it holds this run's module, target and U-Net."""
+        ck = checkpoint.load(path)
+        if ck["module"] != args.module or ck.get("target") != args.target or ck["unet"] != config.to_dict():
+            raise SystemExit(f"{path} is a {ck['module']}/{ck.get('target')} {ck['unet']} run; {advice}")
+        return ck
+
     if ckpt_path is not None:
-        ckpt = checkpoint.load(ckpt_path)
-        if ckpt["module"] != args.module or ckpt.get("target") != args.target or ckpt["unet"] != config.to_dict():
-            raise SystemExit(f"{ckpt_path} is a {ckpt['module']}/{ckpt.get('target')} {ckpt['unet']} run; "
-                             "use another --run or --fresh")
+        ckpt = load_matching(ckpt_path, "use another --run or --fresh")
         model.load_state_dict(ckpt["model"])
         opt.load_state_dict(ckpt["optimizer"])
         step, samples, best = ckpt["step"], ckpt["samples"], ckpt.get("best_val", float("inf"))
         if main_proc:
             print(f"resumed from {ckpt_path} at step {step}", flush=True)
     elif args.init_from:
-        init = checkpoint.load(args.init_from)
-        if init["module"] != args.module or init.get("target") != args.target or init["unet"] != config.to_dict():
-            raise SystemExit(f"--init-from {args.init_from} is a {init['module']}/{init.get('target')} {init['unet']} "
-                             "checkpoint; it does not match this run")
+        init = load_matching(args.init_from, "it cannot initialise this run (--init-from)")
         model.load_state_dict(init["model"])
         if main_proc:
             print(f"initialised from {args.init_from} (step {init['step']})", flush=True)

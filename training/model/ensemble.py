@@ -1,7 +1,7 @@
 """Ensembles: the mean of several networks' outputs on the same inputs.
 
 The shipped AO map is the mean of two AOPs trained with different recipes: their errors differ by kind of
-object (docs/training.md, "AOP ensemble"), so the mean is better than either on every kind.
+object (docs/training.md, "AOP ensemble"), and the mean is close to the better of the two on every kind.
 """
 
 from __future__ import annotations
