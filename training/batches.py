@@ -16,6 +16,7 @@ Targets, for a light map rendered to ``L`` on the dataset's Hb x 2Hb grid and
 
 from __future__ import annotations
 
+from collections import Counter
 from dataclasses import dataclass, replace
 
 import numpy as np
@@ -111,7 +112,7 @@ class ViewCache:
         p = None
         if self.balance_kinds:
             kinds = [self.kinds[k] for k in keys]
-            count = {c: kinds.count(c) for c in set(kinds)}
+            count = Counter(kinds)
             p = np.array([1.0 / count[c] for c in kinds])
             p /= p.sum()
         return [keys[j] for j in rng.choice(len(keys), size=size, replace=replace, p=p)]
