@@ -69,6 +69,9 @@ def parse_args(argv: list[str] | None = None) -> argparse.Namespace:
                    "export --aop) replaces the (perturbed) ground-truth AO in a fraction --ao-from-prob of the samples "
                    "(the AO SR gets in use)")
     p.add_argument("--ao-from-prob", type=float, default=0.5)
+    p.add_argument("--through-sr", help="AOP: train through this frozen SR checkpoint too: the loss adds "
+                   "--shadow-weight x the L2 of the shadow it renders from the predicted AO under random ELMs")
+    p.add_argument("--shadow-weight", type=float, default=1.0)
     p.add_argument("--ckpt-minutes", type=float, default=4.0)
     p.add_argument("--refresh-minutes", type=float, default=10.0, help="re-open the store (growing dataset)")
     p.add_argument("--val-every", type=int, default=250)
@@ -167,6 +170,38 @@ def target_of(module: str, x: dict[str, torch.Tensor]) -> torch.Tensor:
     return x["ao"] if module == "aop" else x["target"]
 
 
+class Objective:
+    """The loss: per-pixel L2 to the module's target; for AOP with a frozen SR network (``--through-sr``), plus
+    ``shadow_weight`` x the L2 of the shadow SR renders from the predicted AO, so the AO errors that cost most in
+    the shadow cost most in training."""
+
+    def __init__(self, module: str, sr_net: torch.nn.Module | None = None, shadow_weight: float = 1.0):
+        self.module, self.sr, self.shadow_weight = module, sr_net, shadow_weight
+
+    def __call__(self, pred: torch.Tensor, x: dict[str, torch.Tensor]) -> torch.Tensor:
+        loss = F.mse_loss(pred, target_of(self.module, x))
+        if self.sr is not None:
+            shadow = self.sr(x["mask"], pred.clamp(0.0, 1.0), x["elm"])
+            loss = loss + self.shadow_weight * F.mse_loss(shadow, x["target"])
+        return loss
+
+
+def frozen_sr(path: str, device: torch.device) -> torch.nn.Module:
+    """The SR network of checkpoint ``path`` (shadow target), without gradients for its weights."""
+    net, ck = checkpoint.load_model(path)
+    if ck["module"] != "sr" or ck.get("target") != "shadow":
+        raise SystemExit(f"--through-sr needs an SR checkpoint with the shadow target; {path} is "
+                         f"{ck['module']}/{ck.get('target')}")
+    return net.requires_grad_(False).to(device)
+
+
+def shadow_target(args: argparse.Namespace) -> str | None:
+    """The light-dependent target the batches carry: SR's, or the shadow for AOP trained through SR."""
+    if args.module == "sr":
+        return args.target
+    return "shadow" if args.through_sr else None
+
+
 def build_val(store, args, weights_rows: int, run: Path | None = None):
     """A fixed validation batch (val split; the train split if val is empty). The chosen views are saved in
     ``run/val_views.json`` and reused on resume, so validation losses stay comparable while the store grows."""
@@ -189,23 +224,24 @@ def build_val(store, args, weights_rows: int, run: Path | None = None):
     for i in chosen:
         k = view_key(store, i)
         if k not in views:
-            views[k] = load_view(store, i, args.resolution, with_occ=args.module != "aop")
+            views[k] = load_view(store, i, args.resolution, with_occ=shadow_target(args) is not None)
     vs = [views[view_key(store, i)] for i in chosen]
     lights = sample_lights(np.random.default_rng([args.seed, 104729]), len(vs))
-    target = None if args.module == "aop" else args.target
-    return make_batch(vs, lights, weights_rows, texel_weights(weights_rows), target), split
+    return make_batch(vs, lights, weights_rows, texel_weights(weights_rows), shadow_target(args)), split
 
 
 @torch.no_grad()
-def validate(model, module: str, val: dict[str, torch.Tensor], chunk: int = 16) -> tuple[float, torch.Tensor]:
+def validate(model, module: str, val: dict[str, torch.Tensor], objective: Objective,
+             chunk: int = 16) -> tuple[float, torch.Tensor]:
+    """The objective on the validation batch (chunks weighted by size) and the predictions."""
     model.eval()
-    preds = []
+    preds, total = [], 0.0
     for i in range(0, val["mask"].shape[0], chunk):
         part = {k: v[i : i + chunk] for k, v in val.items()}
         preds.append(forward(model, module, part))
+        total += float(objective(preds[-1], part)) * preds[-1].shape[0]
     model.train()
-    pred = torch.cat(preds)
-    return float(F.mse_loss(pred, target_of(module, val))), pred
+    return total / val["mask"].shape[0], torch.cat(preds)
 
 
 def write_samples(path: Path, module: str, val: dict[str, torch.Tensor], pred: torch.Tensor, n: int = 6) -> None:
@@ -283,12 +319,13 @@ def main(argv: list[str] | None = None, store=None) -> int:
         (run / "config.json").write_text(json.dumps({**vars(args), "widths": list(args.widths)}, indent=1))
     ddp = torch.nn.parallel.DistributedDataParallel(model) if world > 1 else model
 
-    aop = args.module == "aop"
-    cache = ViewCache(store, "train", args.resolution, max_views=100000 if aop else args.cache_views, with_occ=not aop,
-                      balance_kinds=args.balance_kinds)
-    # AOP ignores the light, so repeating a view under several ELMs would only shrink its batch.
-    sampler = BatchSampler(cache, args.batch, None if aop else args.target, 1 if aop else args.elms_per_view,
-                           flip=args.flip)
+    if args.through_sr and args.module != "aop":
+        raise SystemExit("--through-sr trains an AOP (--module aop)")
+    lit = shadow_target(args)
+    cache = ViewCache(store, "train", args.resolution, max_views=100000 if lit is None else args.cache_views,
+                      with_occ=lit is not None, balance_kinds=args.balance_kinds)
+    # A plain AOP ignores the light, so repeating a view under several ELMs would only shrink its batch.
+    sampler = BatchSampler(cache, args.batch, lit, 1 if lit is None else args.elms_per_view, flip=args.flip)
     rows = store.meta["elm_rows"]
     val_batch, val_split = build_val(store, args, rows, run) if main_proc else (None, None)
     val = to_tensors(val_batch, device) if val_batch is not None else None
@@ -297,6 +334,8 @@ def main(argv: list[str] | None = None, store=None) -> int:
               f"{val_split} split, batch {args.batch} x {world} process(es), device {device}", flush=True)
     gen = torch.Generator().manual_seed(args.seed * 1000 + rank + step)
     aop_net = checkpoint.load_models(args.ao_from)[0].to(device) if args.module == "sr" and args.ao_from else None
+    objective = Objective(args.module, frozen_sr(args.through_sr, device) if args.through_sr else None,
+                          args.shadow_weight)
     pre = Prefetcher(sampler, np.random.default_rng([args.seed, rank, step]))
 
     stop = {"flag": False}
@@ -337,7 +376,7 @@ def main(argv: list[str] | None = None, store=None) -> int:
         if aop_net is not None:
             ao_in = mix_predicted_ao(aop_net, x, x["ao"] if ao_in is None else ao_in, args.ao_from_prob, gen)
         pred = forward(ddp, args.module, x, ao_in)
-        loss = F.mse_loss(pred, target_of(args.module, x))
+        loss = objective(pred, x)
         opt.zero_grad(set_to_none=True)
         loss.backward()
         opt.step()
@@ -354,7 +393,7 @@ def main(argv: list[str] | None = None, store=None) -> int:
                    "samples_per_s": f"{n_running * args.batch * world / (time.perf_counter() - t_log):.2f}"}
             running, n_running, t_log = 0.0, 0, time.perf_counter()
             if do_val:
-                v, vpred = validate(model, args.module, val)
+                v, vpred = validate(model, args.module, val, objective)
                 row["val_loss"] = f"{v:.6f}"
                 write_samples(run / "samples_latest.png", args.module, val, vpred)
                 if v < best:

@@ -145,3 +145,34 @@ def test_fine_tuning_starts_from_the_weights_with_a_fresh_schedule(tmp_path):
         torch.testing.assert_close(after["model"][k], v)
     with pytest.raises(SystemExit):  # an AOP cannot start an SR run
         _run(tmp_path / "bad", "aop", 1, ["--init-from", str(base / "last.pt")])
+
+
+def test_aop_through_sr_adds_the_shadow_error_of_the_predicted_ao():
+    from training.train import Objective
+
+    class InverseSR(torch.nn.Module):  # the shadow is 1 - AO, so the shadow error follows the AO error
+        def forward(self, mask, ao, elm):
+            return 1.0 - ao
+
+    full = lambda v: torch.full((2, 1, 4, 4), v)  # noqa: E731
+    x = {"mask": full(1.0), "ao": full(0.5), "elm": torch.zeros(2, 512), "target": full(0.2)}
+    pred = full(0.7).requires_grad_(True)
+    assert Objective("aop")(pred, x).item() == pytest.approx(0.04)  # (0.7 - 0.5)^2
+    loss = Objective("aop", InverseSR(), shadow_weight=2.0)(pred, x)
+    assert loss.item() == pytest.approx(0.04 + 2.0 * 0.01)  # + 2 x ((1 - 0.7) - 0.2)^2
+    loss.backward()
+    assert float(pred.grad.abs().min()) > 0
+
+
+def test_aop_trains_through_a_frozen_sr(tmp_path):
+    from training.train import frozen_sr
+
+    sr = _run(tmp_path / "s", "sr", 2) / "last.pt"
+    run = _run(tmp_path, "aop", 3, ["--through-sr", str(sr), "--shadow-weight", "3"])
+    ck = checkpoint.load(run / "last.pt")
+    assert ck["module"] == "aop" and ck["step"] == 3 and ck["args"]["through_sr"] == str(sr)
+    assert not any(w.requires_grad for w in frozen_sr(str(sr), torch.device("cpu")).parameters())
+    with pytest.raises(SystemExit):  # it needs an SR with the shadow target
+        _run(tmp_path / "bad", "aop", 1, ["--through-sr", str(run / "last.pt")])
+    with pytest.raises(SystemExit):  # and trains AOPs only
+        _run(tmp_path / "bad2", "sr", 1, ["--through-sr", str(sr)])
