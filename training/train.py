@@ -83,6 +83,8 @@ def parse_args(argv: list[str] | None = None) -> argparse.Namespace:
     p.add_argument("--init-from", help="fine-tune: start a new run from this checkpoint's weights (same module, "
                                        "target and U-Net) with a fresh optimizer and schedule")
     args = p.parse_args(argv)
+    if args.through_sr and args.module != "aop":
+        p.error("--through-sr trains an AOP (--module aop)")
     args.widths = tuple(int(w) for w in str(args.widths).split(","))
     return args
 
@@ -278,6 +280,8 @@ def main(argv: list[str] | None = None, store=None) -> int:
         args.target = "ao"
     torch.set_num_threads(args.threads)
     rank, world, device = setup_distributed()
+    objective = Objective(args.module, frozen_sr(args.through_sr, device) if args.through_sr else None,
+                          args.shadow_weight)
     main_proc = rank == 0
     run = Path(args.run)
     run.mkdir(parents=True, exist_ok=True)
@@ -319,8 +323,6 @@ def main(argv: list[str] | None = None, store=None) -> int:
         (run / "config.json").write_text(json.dumps({**vars(args), "widths": list(args.widths)}, indent=1))
     ddp = torch.nn.parallel.DistributedDataParallel(model) if world > 1 else model
 
-    if args.through_sr and args.module != "aop":
-        raise SystemExit("--through-sr trains an AOP (--module aop)")
     lit = shadow_target(args)
     cache = ViewCache(store, "train", args.resolution, max_views=100000 if lit is None else args.cache_views,
                       with_occ=lit is not None, balance_kinds=args.balance_kinds)
@@ -334,8 +336,6 @@ def main(argv: list[str] | None = None, store=None) -> int:
               f"{val_split} split, batch {args.batch} x {world} process(es), device {device}", flush=True)
     gen = torch.Generator().manual_seed(args.seed * 1000 + rank + step)
     aop_net = checkpoint.load_models(args.ao_from)[0].to(device) if args.module == "sr" and args.ao_from else None
-    objective = Objective(args.module, frozen_sr(args.through_sr, device) if args.through_sr else None,
-                          args.shadow_weight)
     pre = Prefetcher(sampler, np.random.default_rng([args.seed, rank, step]))
 
     stop = {"flag": False}

@@ -176,3 +176,4 @@ def test_aop_trains_through_a_frozen_sr(tmp_path):
         _run(tmp_path / "bad", "aop", 1, ["--through-sr", str(run / "last.pt")])
     with pytest.raises(SystemExit):  # and trains AOPs only
         _run(tmp_path / "bad2", "sr", 1, ["--through-sr", str(sr)])
+    assert not (tmp_path / "bad").exists() and not (tmp_path / "bad2").exists()  # refused before any file
