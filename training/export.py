@@ -226,10 +226,10 @@ def model_card(card: dict, attribution: list[dict], command: str) -> str:
     ]
     for m in ("aop", "sr"):
         r = ex[m]
-        runs = " and ".join(f"{st} steps ({n} samples, `{p}`)" for p, st, n in zip(r["checkpoints"], r["steps"],
-                                                                                 r["samples"], strict=True))
+        runs = " and ".join(f"U-Net widths {w}, {st} steps ({n} samples, `{p}`)" for p, w, st, n in
+                            zip(r["checkpoints"], r["widths"], r["steps"], r["samples"], strict=True))
         mean = f"the mean of {len(r['checkpoints'])} networks, " if len(r["checkpoints"]) > 1 else ""
-        lines.append(f"- {m.upper()}: {mean}U-Net widths {r['widths']}, {runs}, {r['weights']} weights, "
+        lines.append(f"- {m.upper()}: {mean}{runs}, {r['weights']} weights, "
                      f"{r['bytes'] / 1e6:.2f} MB, max abs diff to torch {r['max_abs_diff']:.1e}")
     if card.get("output_floor"):
         lines.append(f"- Output floor {card['output_floor']}: the engine maps s to (s - floor) / (1 - floor), clipped "
@@ -312,7 +312,7 @@ def main(argv: list[str] | None = None) -> int:
         shutil.copy(final, out / f"{module}.onnx")
         report[f"{module}_parity_fp32"] = diff32
         report[module] = {"checkpoints": [str(p) for p in ck_paths], "steps": [ck["step"] for ck in cks],
-                          "samples": [ck["samples"] for ck in cks], "widths": cks[0]["unet"]["widths"],
+                          "samples": [ck["samples"] for ck in cks], "widths": [ck["unet"]["widths"] for ck in cks],
                           "weights": dtype, "max_abs_diff": diff, "bytes": (out / f"{module}.onnx").stat().st_size}
         if diff > args.tol:
             print(f"{module}: parity FAILED: max abs diff {diff:.2e} > {args.tol:.0e}", file=sys.stderr)

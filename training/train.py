@@ -210,6 +210,7 @@ def build_val(store, args, weights_rows: int, run: Path | None = None):
     from .batches import load_view, view_key
 
     saved = run / "val_views.json" if run is not None else None
+    lit = shadow_target(args)
     split = "val" if store.view_ids("val") else "train"
     rng = np.random.default_rng([args.seed, 7919])
     ids_by_key = {view_key(store, i): i for i in store.view_ids(None)}
@@ -226,10 +227,10 @@ def build_val(store, args, weights_rows: int, run: Path | None = None):
     for i in chosen:
         k = view_key(store, i)
         if k not in views:
-            views[k] = load_view(store, i, args.resolution, with_occ=shadow_target(args) is not None)
+            views[k] = load_view(store, i, args.resolution, with_occ=lit is not None)
     vs = [views[view_key(store, i)] for i in chosen]
     lights = sample_lights(np.random.default_rng([args.seed, 104729]), len(vs))
-    return make_batch(vs, lights, weights_rows, texel_weights(weights_rows), shadow_target(args)), split
+    return make_batch(vs, lights, weights_rows, texel_weights(weights_rows), lit), split
 
 
 @torch.no_grad()

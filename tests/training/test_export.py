@@ -107,8 +107,9 @@ def test_mirror_averaged_export_is_mirror_symmetric(exported):
 
 
 def test_two_aops_export_as_one_graph_of_their_mean(exported):
-    from training.checkpoint import load_model
+    from training.checkpoint import load, load_model
 
+    checkpoint_widths = lambda p: load(p)["unet"]["widths"]  # noqa: E731
     runs = exported.parent
     assert train_main(["--module", "aop", "--run", str(runs / "aop2"), *TINY, "--seed", "1"],
                       store=FakeStore(res=32)) == 0
@@ -125,4 +126,5 @@ def test_two_aops_export_as_one_graph_of_their_mean(exported):
     assert np.abs(got - np.clip(0.5 * (a + b), 0, 1)).max() < 1e-4  # ... and the graph is their mean
     report = json.loads((out / "model.json").read_text())["export"]["aop"]
     assert report["checkpoints"] == list(map(str, members)) and report["max_abs_diff"] <= 1e-4
+    assert report["widths"] == [checkpoint_widths(p) for p in members]  # each member's own U-Net
     assert "the mean of 2 networks" in (out / "MODEL_CARD.md").read_text()
