@@ -7,6 +7,7 @@ import functools
 import numpy as np
 
 from .methods import LoadedMethod, load_method
+from .methods.base import check_cameras
 
 BATCH = 16
 
@@ -26,12 +27,16 @@ def _frames(name: str, array: np.ndarray, n: int | None = None) -> np.ndarray:
     return np.ascontiguousarray(a, np.float32)
 
 
-def predict_frames(masks: np.ndarray, elms: np.ndarray, ao: np.ndarray | None = None) -> np.ndarray:
+def predict_frames(masks: np.ndarray, elms: np.ndarray, ao: np.ndarray | None = None,
+                   cameras: np.ndarray | None = None) -> np.ndarray:
     """Shadow maps s (n, N, N), float32 in [0, 1], from masks (n, N, N) and ELMs (n, 16, 32).
 
     Optional ``ao`` (n, N, N) replaces the predicted AO maps (e.g. ground
-    truth or user-edited). Uses the default shipped model, or the geometric
-    card method while no trained model is installed.
+    truth or user-edited). Optional ``cameras`` (n, 2) gives each frame's
+    horizon row and focal length in frame pixels (conventions, "Camera
+    input"); without it the conventions' default camera is assumed (45
+    degree field of view, 15 degree pitch). Uses the default shipped model,
+    or the geometric card method while no trained model is installed.
     """
     method = default_method().method
     masks = _frames("masks", masks, method.resolution)
@@ -45,9 +50,13 @@ def predict_frames(masks: np.ndarray, elms: np.ndarray, ao: np.ndarray | None = 
         ao = _frames("ao", ao, method.resolution)
         if ao.shape != masks.shape:
             raise ValueError(f"ao: expected shape {masks.shape}, got {ao.shape}")
+    if cameras is not None:
+        cameras = np.asarray(cameras, np.float64)
+        check_cameras(cameras, len(masks))
     out = np.empty(masks.shape, np.float32)
     for i in range(0, len(masks), BATCH):
         m = np.clip(masks[i : i + BATCH], 0.0, 1.0)
-        a = method.predict_ao(m) if ao is None else np.clip(ao[i : i + BATCH], 0.0, 1.0)
-        out[i : i + BATCH] = method.render(m, a, elms[i : i + BATCH])
+        cam = None if cameras is None else cameras[i : i + BATCH]
+        a = method.predict_ao(m, cam) if ao is None else np.clip(ao[i : i + BATCH], 0.0, 1.0)
+        out[i : i + BATCH] = method.render(m, a, elms[i : i + BATCH], cam)
     return np.clip(out, 0.0, 1.0)

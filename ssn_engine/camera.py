@@ -18,6 +18,7 @@ DISTANCE = 2.0
 TOP_MARGIN = 0.03
 DEFAULT_FOV = 45.0
 DEFAULT_PITCH = 15.0
+PITCH_RANGE = (-10.0, 80.0)  # pitches :func:`camera_for_span` searches; a horizon beyond them is clamped
 
 RIGHT = np.array([1.0, 0.0, 0.0])
 UP = np.array([0.0, 1.0, 0.0])
@@ -85,6 +86,59 @@ class Camera:
         t = np.where(down, -self.centre[1] / np.where(down, rays[..., 1], -1.0), 0.0)
         return self.centre + t[..., None] * rays, down
 
+    @property
+    def horizon(self) -> float:
+        """The horizon row h (conventions, "Camera input"): where a level ray lands, shift included."""
+        return 0.5 * self.n - self.focal * float(np.tan(np.radians(self.pitch))) + self.shift
+
     def to_world(self, camera_basis: np.ndarray) -> np.ndarray:
         """Directions from the ELM's camera basis (right, up, forward) to world coordinates."""
         return camera_basis[..., :1] * RIGHT + camera_basis[..., 1:2] * UP + camera_basis[..., 2:] * FORWARD
+
+
+def focal_from_fov(n: float, fov: float) -> float:
+    """Focal length in pixels of a vertical field of view ``fov`` (degrees) over ``n`` rows."""
+    return 0.5 * n / float(np.tan(np.radians(fov) / 2))
+
+
+def fov_from_focal(n: float, focal: float) -> float:
+    """Vertical field of view (degrees) of a focal length ``focal`` (pixels) over ``n`` rows."""
+    return float(np.degrees(2 * np.arctan(0.5 * n / focal)))
+
+
+def _fit_span(n: int, fov: float, pitch: float, top: float, base: float) -> Camera:
+    """The camera of a vertical card standing at the origin whose projection spans rows [top, base):
+    its height found by fixed-point iteration, the lens shift putting its foot on row ``base``."""
+    height = 0.5
+    for _ in range(12):
+        cam = Camera(n, height / 2, fov=fov, pitch=pitch)
+        span = cam.project(np.array([0.0, 0.0, 0.0]))[1] - cam.project(np.array([0.0, height, 0.0]))[1]
+        height *= (base - top) / span
+    cam = Camera(n, height / 2, fov=fov, pitch=pitch)
+    cam.shift = base - cam.project(np.array([0.0, 0.0, 0.0]))[1]
+    return cam
+
+
+def camera_for_span(n: int, top: float, base: float, horizon: float | None = None,
+                    focal: float | None = None) -> tuple[Camera, float]:
+    """The conventions' camera for an upright card spanning frame rows [top, base), and its height.
+
+    Without a camera input it uses the default field of view and pitch. With the horizon row ``horizon`` and
+    the focal length ``focal`` (frame pixels, conventions "Camera input") the field of view follows from the
+    focal length and the pitch is searched (bisection; the horizon rises monotonically with the pitch) so that
+    the card's horizon lands on ``horizon``. A horizon the pitches of ``PITCH_RANGE`` cannot reach (at or
+    below the card's foot: a camera under the ground) gets the nearest pitch of that range.
+    """
+    if horizon is None or focal is None:
+        cam = _fit_span(n, DEFAULT_FOV, DEFAULT_PITCH, top, base)
+        return cam, 2 * cam.target_height
+    fov = fov_from_focal(n, focal)
+    lo, hi = PITCH_RANGE  # horizon(lo) > horizon(hi)
+    for _ in range(40):
+        mid = 0.5 * (lo + hi)
+        if _fit_span(n, fov, mid, top, base).horizon > horizon:
+            lo = mid
+        else:
+            hi = mid
+    cam = _fit_span(n, fov, 0.5 * (lo + hi), top, base)
+    return cam, 2 * cam.target_height

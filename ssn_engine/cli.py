@@ -72,7 +72,7 @@ def _make_shadow(cutout_rgba, args: argparse.Namespace):
     from .session import ShadowSession
 
     loaded = load_method(args.method)
-    session = ShadowSession(cutout_rgba[..., 3], loaded.method)
+    session = ShadowSession(cutout_rgba[..., 3], loaded.method, args.horizon, args.fov)
     session.set_ao_edits(_ao_edits(args))
     return session.render(_light_map(args)), loaded
 
@@ -199,6 +199,11 @@ def _add_shadow_options(p: argparse.ArgumentParser) -> None:
     p.add_argument(
         "--method", default="auto", choices=METHOD_NAMES, help="auto: SSN if a model is installed, else geometric"
     )
+    p.add_argument("--horizon", type=float, metavar="ROW",
+                   help="the image's horizon: canvas row (pixels from the top; may be negative or past the bottom) "
+                        "where the ground plane meets the sky; default: a camera pitched 15 degrees down")
+    p.add_argument("--fov", type=_number_in(1.0, 170.0), metavar="DEG",
+                   help="with --horizon: the image's vertical field of view in degrees (default 45)")
 
 
 def build_parser() -> argparse.ArgumentParser:

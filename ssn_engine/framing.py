@@ -20,7 +20,7 @@ from dataclasses import dataclass
 import numpy as np
 from PIL import Image
 
-from .camera import top_row
+from .camera import DEFAULT_FOV, focal_from_fov, top_row
 
 OBJECT_EXTENT = 0.5
 ALPHA_THRESHOLD = 0.01  # alpha at or below this is background for the bounding box
@@ -51,6 +51,14 @@ class Framing:
     def to_canvas(self, x: float, y: float) -> tuple[float, float]:
         """Frame point to canvas point."""
         return (x - self.offset_x) / self.scale, (y - self.offset_y) / self.scale
+
+    def camera_input(self, horizon: float, fov: float = DEFAULT_FOV) -> tuple[float, float]:
+        """The frame's camera input (horizon row h, focal length f; conventions "Camera input") for a canvas
+        horizon row ``horizon`` (canvas pixels from the top edge; may lie outside the canvas) and the canvas's
+        vertical field of view ``fov`` in degrees: h = k H + d, f = k F with F the canvas's focal length."""
+        if not 1.0 <= fov <= 170.0:
+            raise ValueError(f"field of view: expected 1 to 170 degrees, got {fov:g}")
+        return horizon * self.scale + self.offset_y, focal_from_fov(self.canvas_height, fov) * self.scale
 
 
 @dataclass(frozen=True)
@@ -132,21 +140,25 @@ def edge_fade(n: int) -> np.ndarray:
     return np.minimum.outer(across, across).astype(np.float32)
 
 
-def shadow_to_canvas(shadow: np.ndarray, framing: Framing) -> CanvasShadow:
-    """Resample a frame shadow (n, n) to the canvas, cropped to its visible part.
+def shadow_to_canvas(shadow: np.ndarray, framing: Framing, origin: float | None = None) -> CanvasShadow:
+    """Resample a frame shadow to the canvas, cropped to its visible part.
 
     The result covers the canvas pixels whose shadow can be visible (the
     frame's shadow above ``SHADOW_FLOOR``), clipped to the canvas; it may
-    reach well beyond the alpha's bounding box. A shadow that runs out of
-    the frame fades out (:func:`edge_fade`) instead of ending in a hard edge.
+    reach well beyond the alpha's bounding box. A frame shadow (n, n) that
+    runs out of the frame fades out (:func:`edge_fade`) instead of ending in
+    a hard edge. With ``origin``, ``shadow`` is a larger array whose top-left
+    corner lies at frame coordinates (origin, origin) and that fades out by
+    itself (:func:`ssn_engine.long_shadow.extend`).
     """
-    shadow = shadow * edge_fade(shadow.shape[0])
+    if origin is None:
+        shadow, origin = shadow * edge_fade(shadow.shape[0]), 0.0
     visible = shadow > SHADOW_FLOOR
     rows, cols = np.flatnonzero(visible.any(axis=1)), np.flatnonzero(visible.any(axis=0))
     if rows.size == 0:
         return CanvasShadow(np.zeros((0, 0), np.float32), 0, 0)
-    cx0, cy0 = framing.to_canvas(cols[0], rows[0])
-    cx1, cy1 = framing.to_canvas(cols[-1] + 1, rows[-1] + 1)
+    cx0, cy0 = framing.to_canvas(cols[0] + origin, rows[0] + origin)
+    cx1, cy1 = framing.to_canvas(cols[-1] + 1 + origin, rows[-1] + 1 + origin)
     x0, y0 = max(0, math.floor(cx0)), max(0, math.floor(cy0))
     x1 = min(framing.canvas_width, math.ceil(cx1))
     y1 = min(framing.canvas_height, math.ceil(cy1))
@@ -158,10 +170,10 @@ def shadow_to_canvas(shadow: np.ndarray, framing: Framing) -> CanvasShadow:
     pad = math.ceil(s) + 1  # zero margin so the box never leaves the padded frame
     image = Image.fromarray(np.pad(np.asarray(shadow, np.float32), pad), "F")
     box = (
-        x0 * s + framing.offset_x + pad,
-        y0 * s + framing.offset_y + pad,
-        x1 * s + framing.offset_x + pad,
-        y1 * s + framing.offset_y + pad,
+        x0 * s + framing.offset_x + pad - origin,
+        y0 * s + framing.offset_y + pad - origin,
+        x1 * s + framing.offset_x + pad - origin,
+        y1 * s + framing.offset_y + pad - origin,
     )
     out = image.resize((x1 - x0, y1 - y0), Image.Resampling.BILINEAR, box=box)
     return CanvasShadow(np.clip(np.asarray(out), 0.0, 1.0), x0, y0)

@@ -1,7 +1,8 @@
 """One cutout's shadow session: frame once, predict AO once, re-render per light map.
 
 Moving a light re-runs only the shadow renderer (SR); the AO map, and the
-user's edits of it, are kept.
+user's edits of it, are kept. A shadow that reaches the frame's border is
+continued beyond it by the geometric card (:mod:`ssn_engine.long_shadow`).
 """
 
 from __future__ import annotations
@@ -11,25 +12,32 @@ from typing import Any
 import numpy as np
 
 from .ao_edit import apply_edits
-from .framing import CanvasShadow, Framing, frame_alpha, shadow_to_canvas
+from . import long_shadow
+from .framing import CanvasShadow, frame_alpha, shadow_to_canvas
 from .hemisphere import NETWORK_SHAPE, render_light_map
 from .light_map import LightMap
-from .methods import ShadowMethod
+from .methods import GeometricCard, ShadowMethod
+from .methods.geometric import camera_at
 
 
 class ShadowSession:
-    """Shadow rendering for one canvas alpha with one method."""
+    """Shadow rendering for one canvas alpha with one method; ``horizon`` (a canvas row) and ``fov`` (the
+    canvas's vertical field of view, degrees) give the camera, else the method assumes the default one."""
 
-    def __init__(self, alpha: np.ndarray, method: ShadowMethod) -> None:
+    def __init__(self, alpha: np.ndarray, method: ShadowMethod, horizon: float | None = None,
+                 fov: float | None = None) -> None:
         self.method = method
         self.mask, self.framing = frame_alpha(alpha, method.resolution)
-        self.predicted_ao = method.predict_ao(self.mask[None])[0]
+        self.cameras = None
+        if horizon is not None:
+            args = (horizon,) if fov is None else (horizon, fov)
+            self.cameras = np.array([self.framing.camera_input(*args)])
+        elif fov is not None:
+            raise ValueError("field of view: give the horizon row too (the camera input needs both)")
+        self.predicted_ao = method.predict_ao(self.mask[None], self.cameras)[0]
         self.edits: list[dict[str, Any]] = []
         self.ao = self.predicted_ao
-
-    @property
-    def frame(self) -> Framing:
-        return self.framing
+        self._card: GeometricCard | None = None  # traces long shadows for methods without a card of their own
 
     def set_ao_edits(self, edits: list[dict[str, Any]]) -> np.ndarray:
         """Replace the list of AO edits; returns the edited AO map."""
@@ -40,8 +48,22 @@ class ShadowSession:
     def render_frame(self, light_map: LightMap) -> np.ndarray:
         """The frame shadow (N, N) for a light map."""
         elm = render_light_map(light_map, NETWORK_SHAPE[0])
-        return self.method.render(self.mask[None], self.ao[None], elm[None])[0]
+        return self.method.render(self.mask[None], self.ao[None], elm[None], self.cameras)[0]
+
+    def to_canvas(self, frame: np.ndarray, light_map: LightMap) -> CanvasShadow:
+        """A frame shadow of ``light_map`` at canvas resolution, cropped to its visible part; a shadow that
+        reaches the frame's border continues beyond it (the geometric card's, :mod:`ssn_engine.long_shadow`)."""
+        if not long_shadow.reaches_border(frame):
+            return shadow_to_canvas(frame, self.framing)
+        card = self.method if isinstance(self.method, GeometricCard) else getattr(self.method, "card", None)
+        if card is None:
+            self._card = self._card or GeometricCard(self.method.resolution)
+            card = self._card
+        elm = render_light_map(light_map, NETWORK_SHAPE[0])
+        wide = card.extended_shadow(self.mask, elm, camera_at(self.cameras, 0), long_shadow.MARGIN, long_shadow.CELL)
+        values, origin = long_shadow.extend(frame, wide)
+        return shadow_to_canvas(values, self.framing, origin)
 
     def render(self, light_map: LightMap) -> CanvasShadow:
-        """The shadow at canvas resolution, cropped to its visible part."""
-        return shadow_to_canvas(self.render_frame(light_map), self.framing)
+        """The shadow at canvas resolution (:meth:`render_frame`, then :meth:`to_canvas`)."""
+        return self.to_canvas(self.render_frame(light_map), light_map)

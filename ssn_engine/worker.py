@@ -18,8 +18,9 @@ import numpy as np
 
 from . import __version__
 from .ao_edit import AOEditError
+from .camera import DEFAULT_FOV
 from .compositing import shadow_layer
-from .framing import EmptyAlphaError, shadow_to_canvas
+from .framing import EmptyAlphaError
 from .hemisphere import render_light_map
 from .light_map import PRESETS, LightMap, LightMapError, preset
 from .methods import LoadedMethod, ModelError
@@ -50,6 +51,18 @@ def to_buffer(array: np.ndarray) -> Buffer:
 
 def _u8(image: np.ndarray) -> Buffer:
     return to_buffer(np.rint(np.clip(image, 0, 1) * 255).astype(np.uint8))
+
+
+def _camera(camera: Any) -> tuple[float, float]:
+    """set_cutout's optional ``camera``: {"horizon": canvas row, "fov": degrees (default 45)}."""
+    if not isinstance(camera, dict) or not isinstance(camera.get("horizon"), (int, float)):
+        raise RequestError("BadRequest", "camera: expected {\"horizon\": ROW, \"fov\": DEGREES}")
+    fov = camera.get("fov", DEFAULT_FOV)
+    if not isinstance(fov, (int, float)) or not 1.0 <= fov <= 170.0:
+        raise RequestError("BadRequest", f"camera.fov: expected 1 to 170 degrees, got {fov!r}")
+    if not np.isfinite(camera["horizon"]):
+        raise RequestError("BadRequest", "camera.horizon: expected a finite canvas row")
+    return float(camera["horizon"]), float(fov)
 
 
 def elm_display_image(light_map: LightMap, width: int) -> np.ndarray:
@@ -103,7 +116,8 @@ class Worker:
         alpha = to_array(buffers["alpha"])
         if alpha.ndim != 2:
             raise RequestError("BadRequest", f"alpha: expected a 2D buffer, got shape {list(alpha.shape)}")
-        session = ShadowSession(alpha, self.loaded.method)
+        horizon, fov = _camera(header["camera"]) if header.get("camera") is not None else (None, None)
+        session = ShadowSession(alpha, self.loaded.method, horizon, fov)
         key = f"c{next(self._ids)}"
         self.sessions[key] = session
         while len(self.sessions) > MAX_SESSIONS:
@@ -130,7 +144,7 @@ class Worker:
         t0 = time.perf_counter()
         frame = s.render_frame(light_map)
         t1 = time.perf_counter()
-        shadow = shadow_to_canvas(frame, s.framing)
+        shadow = s.to_canvas(frame, light_map)
         t2 = time.perf_counter()
         reply = {"x": shadow.x, "y": shadow.y, "width": 0, "height": 0, "method": s.method.name}
         out: dict[str, Buffer] = {}

@@ -7,6 +7,12 @@ is the ground truth at R up to 0.5/255 per texel). When the dataset is larger
 than the cache, the cache rotates: every batch replaces a few cached views
 with uncached ones.
 
+A geometry-guided SR also gets the geometric card's shadow for the same light map
+(:class:`ssn_engine.methods.geometric.GeometricCard`, traced at R exactly as the
+engine traces it): each cached view holds the card's 512 hard-shadow bases twice,
+for the conventions' default camera (what the engine assumes blind) and for the
+view's true camera input (horizon row, focal length).
+
 Targets, for a light map rendered to ``L`` on the dataset's Hb x 2Hb grid and
 ``L16`` on the network's 16 x 32 grid (``peak = max L16``):
 - "shadow": s = sum_t L_t W_t occ_t / sum_t L_t W_t (the conventions' s), via the store's algebra.
@@ -22,8 +28,9 @@ from dataclasses import dataclass, replace
 import numpy as np
 
 from ssn_engine.hemisphere import network_elm, texel_weights
+from ssn_engine.methods.geometric import GeometricCard
 
-from .elm import LightBatch, render_lights, sample_lights
+from .elm import LightBatch, render_lights, sample_lights, sample_mixture
 from .frames import area_downsample, resize_frames
 
 TARGETS = ("shadow", "irradiance")
@@ -37,6 +44,24 @@ class CachedView:
     mask: np.ndarray  # (R, R) float32
     ao: np.ndarray  # (R, R) float32
     occ: np.ndarray  # (T, R*R) uint8, occ * 255
+    cards: tuple[np.ndarray, np.ndarray] | None = None  # card bases (T, R*R) uint8: default camera, true camera
+    ao_pred: np.ndarray | None = None  # (R, R) float32: an AOP's prediction from the mask (train --ao-from)
+
+
+def camera_input(info: dict, n: int) -> tuple[float, float]:
+    """A view's camera input (conventions, "Camera input"): horizon row h = N/2 - f tan(pitch) + shift and
+    focal length f, in pixels of the dataset's N x N frame."""
+    horizon = 0.5 * n - info["focal"] * np.tan(np.radians(info["pitch"])) + info["shift"]
+    return float(horizon), float(info["focal"])
+
+
+def card_bases(card: GeometricCard, mask: np.ndarray, camera: tuple[float, float] | None) -> np.ndarray:
+    """The card's hard-shadow bases of a frame mask on the full R x R grid, (T, R*R) uint8 (x 255)."""
+    traced, _ = card.card(mask, camera)
+    out = np.zeros((texel_weights(16).size, card.internal**2), np.uint8)
+    if not traced.empty:
+        out[:, traced.valid.ravel()] = np.rint(traced.bases * 255)
+    return out
 
 
 def view_key(store, i: int) -> tuple:
@@ -45,8 +70,11 @@ def view_key(store, i: int) -> tuple:
     return (info["mesh_id"], float(info["yaw"]), float(info["pitch"]))
 
 
-def load_view(store, i: int, resolution: int, with_occ: bool = True) -> CachedView:
-    """Load view ``i`` of ``store`` and bring it to ``resolution`` (``with_occ`` False: no bases, for AOP)."""
+def load_view(store, i: int, resolution: int, with_occ: bool = True, with_card: bool = False,
+              predict_ao=None) -> CachedView:
+    """Load view ``i`` of ``store`` and bring it to ``resolution`` (``with_occ`` False: no bases, for AOP;
+    ``with_card``: the card's bases for the default and the true camera; ``predict_ao``: a function of masks
+    (B, R, R) -> AO maps whose prediction the view keeps)."""
     v = store.load(i)
     t = v.occlusion.shape[0] * v.occlusion.shape[1]
     if with_occ:
@@ -56,7 +84,13 @@ def load_view(store, i: int, resolution: int, with_occ: bool = True) -> CachedVi
         occ = np.zeros((0, resolution * resolution), np.uint8)
     mask = resize_frames(v.mask[None], resolution)[0]
     ao = resize_frames(v.ao[None], resolution)[0]
-    return CachedView(view_key(store, i), mask, np.clip(ao, 0.0, 1.0), occ)
+    cards = None
+    if with_card:
+        card = GeometricCard(internal=resolution)
+        n = v.mask.shape[-1]
+        cards = (card_bases(card, v.mask, None), card_bases(card, v.mask, camera_input(v.info, n)))
+    ao_pred = None if predict_ao is None else predict_ao(mask[None])[0]
+    return CachedView(view_key(store, i), mask, np.clip(ao, 0.0, 1.0), occ, cards, ao_pred)
 
 
 def targets_for(occ: np.ndarray, elm_hb: np.ndarray, peak: np.ndarray, weights: np.ndarray, target: str) -> np.ndarray:
@@ -89,9 +123,10 @@ class ViewCache:
     drawn so that every kind (object, human, animal) is equally likely, however many views it has."""
 
     def __init__(self, store, split: str, resolution: int, max_views: int = 300, kind: str | None = None,
-                 with_occ: bool = True, balance_kinds: bool = False):
+                 with_occ: bool = True, balance_kinds: bool = False, with_card: bool = False, predict_ao=None):
         self.resolution, self.max_views, self.split, self.kind = resolution, max_views, split, kind
-        self.with_occ, self.balance_kinds = with_occ, balance_kinds
+        self.with_occ, self.balance_kinds, self.with_card = with_occ, balance_kinds, with_card
+        self.predict_ao = predict_ao
         self.views: dict[tuple, CachedView] = {}
         self.open(store)
 
@@ -132,17 +167,22 @@ class ViewCache:
         else:
             room = min(room, max(per_call, minimum - len(self.views)))
         for k in self.draw(rng, missing, min(room, len(missing)), replace=False):
-            self.views[k] = load_view(self.store, self.keys[k], self.resolution, self.with_occ)
+            self.views[k] = self._load(k)
+
+    def _load(self, key: tuple) -> CachedView:
+        return load_view(self.store, self.keys[key], self.resolution, self.with_occ, self.with_card, self.predict_ao)
 
     def get(self, key: tuple) -> CachedView:
         if key not in self.views:
-            self.views[key] = load_view(self.store, self.keys[key], self.resolution, self.with_occ)
+            self.views[key] = self._load(key)
         return self.views[key]
 
 
 @dataclass
 class Batch:
-    """Numpy arrays: mask, ao, target (B, R, R); elm (B, 16, 32) network-normalised; lights; view keys."""
+    """Numpy arrays: mask, ao, target (B, R, R); elm (B, 16, 32) network-normalised; lights; view keys; card
+    (B, R, R), the card's shadow (geometry-guided SR only), and which samples' card used the true camera; ao_pred
+    (B, R, R), the AOP's predicted AO (train --ao-from)."""
 
     mask: np.ndarray
     ao: np.ndarray
@@ -150,6 +190,9 @@ class Batch:
     target: np.ndarray
     lights: LightBatch
     keys: list
+    card: np.ndarray | None = None
+    true_camera: np.ndarray | None = None
+    ao_pred: np.ndarray | None = None
 
 
 def mirror(batch: Batch, which: np.ndarray) -> Batch:
@@ -163,13 +206,15 @@ def mirror(batch: Batch, which: np.ndarray) -> Batch:
         return np.where(which.reshape((-1,) + (1,) * (x.ndim - 1)), x[..., ::-1], x)
 
     lights = replace(batch.lights, u=np.where(which[:, None], 1.0 - batch.lights.u, batch.lights.u))
-    return Batch(mask=flip(batch.mask), ao=flip(batch.ao), elm=flip(batch.elm), target=flip(batch.target),
-                 lights=lights, keys=batch.keys)
+    maybe = lambda x: None if x is None else flip(x)
+    return replace(batch, mask=flip(batch.mask), ao=flip(batch.ao), elm=flip(batch.elm), target=flip(batch.target),
+                   lights=lights, card=maybe(batch.card), ao_pred=maybe(batch.ao_pred))
 
 
 def make_batch(views: list[CachedView], lights: LightBatch, elm_rows: int, weights: np.ndarray,
-               target: str | None = "shadow") -> Batch:
-    """Ground truth for ``views[b]`` under light map ``b`` (``target`` None: no shadow target, for AOP)."""
+               target: str | None = "shadow", true_camera: np.ndarray | None = None) -> Batch:
+    """Ground truth for ``views[b]`` under light map ``b`` (``target`` None: no shadow target, for AOP). Views
+    with card bases also get the card's shadow, traced with the true camera where ``true_camera[b]``."""
     elm_hb = render_lights(lights, elm_rows)
     elm16 = render_lights(lights, 16)
     peak = elm16.reshape(len(elm16), -1).max(axis=1)
@@ -180,6 +225,14 @@ def make_batch(views: list[CachedView], lights: LightBatch, elm_rows: int, weigh
         by_view.setdefault(id(v), []).append(b)
     for idx in by_view.values() if target is not None else []:
         out[idx] = targets_for(views[idx[0]].occ, elm_hb[idx], peak[idx], weights, target)
+    card = None
+    if views[0].cards is not None:
+        true_camera = np.zeros(len(views), bool) if true_camera is None else true_camera
+        card = np.zeros((len(views), r * r), np.float32)
+        w16 = texel_weights(16)
+        for b, v in enumerate(views):
+            card[b] = targets_for(v.cards[int(true_camera[b])], elm16[b : b + 1], peak[b : b + 1], w16, "shadow")[0]
+        card = card.reshape(len(views), r, r)
     return Batch(
         mask=np.stack([v.mask for v in views]),
         ao=np.stack([v.ao for v in views]),
@@ -187,24 +240,39 @@ def make_batch(views: list[CachedView], lights: LightBatch, elm_rows: int, weigh
         target=out.reshape(len(views), r, r),
         lights=lights,
         keys=[v.key for v in views],
+        card=card,
+        true_camera=true_camera if card is not None else None,
+        ao_pred=np.stack([v.ao_pred for v in views]) if views[0].ao_pred is not None else None,
     )
 
 
 class BatchSampler:
-    """Random training batches: ``batch // elms_per_view`` cached views, each under ``elms_per_view`` random ELMs;
-    ``flip``: each sample mirrored left to right with probability 1/2 (:func:`mirror`)."""
+    """Random training batches: ``batch // elms_per_view`` cached views, each under ``elms_per_view`` random ELMs
+    (Table 1, or a mixture of light families ``lights``); ``flip``: each sample mirrored left to right with
+    probability 1/2 (:func:`mirror`); with card bases, a card traced with the true camera with probability
+    ``true_camera``. The cache rotates ``swap`` views every ``swap_every`` batches (loading a view with its card
+    bases costs about a second)."""
 
     def __init__(self, cache: ViewCache, batch: int, target: str | None = "shadow", elms_per_view: int = 2,
-                 swap: int = 1, max_lights: int = 50, flip: bool = False):
+                 swap: int = 1, max_lights: int = 50, flip: bool = False, lights: dict[str, float] | None = None,
+                 true_camera: float = 0.5, swap_every: int = 1):
         self.cache, self.batch, self.target = cache, batch, target
         self.elms_per_view, self.swap, self.max_lights, self.flip = elms_per_view, swap, max_lights, flip
+        self.lights, self.true_camera, self.swap_every, self.calls = lights, true_camera, max(1, swap_every), 0
 
     def __call__(self, rng: np.random.Generator) -> Batch:
-        self.cache.fill(rng, self.swap)
+        if self.calls % self.swap_every == 0 or len(self.cache.views) < 16:
+            self.cache.fill(rng, self.swap)
+        self.calls += 1
         keys = list(self.cache.views)
         n_views = max(1, self.batch // self.elms_per_view)
         chosen = self.cache.draw(rng, keys, n_views, replace=len(keys) < n_views)
         views = [self.cache.get(chosen[b % n_views]) for b in range(self.batch)]
-        lights = sample_lights(rng, self.batch, self.max_lights)
-        batch = make_batch(views, lights, self.cache.store.meta["elm_rows"], self.cache.weights, self.target)
+        if self.lights:
+            lights = sample_mixture(rng, self.batch, self.lights, self.max_lights)
+        else:
+            lights = sample_lights(rng, self.batch, self.max_lights)
+        true_camera = rng.random(self.batch) < self.true_camera
+        batch = make_batch(views, lights, self.cache.store.meta["elm_rows"], self.cache.weights, self.target,
+                           true_camera)
         return mirror(batch, rng.random(self.batch) < 0.5) if self.flip else batch

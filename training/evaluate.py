@@ -7,6 +7,9 @@ Non-inv-SSN (SR trained on raw irradiance, converted to s = 1 - E / E0), SSN
 (AOP -> SR), GT-AO-SSN (ground-truth AO into SR). Metrics on s at the
 dataset's resolution N; networks at R see frames resampled N -> R -> N as in
 the engine.
+
+``--families``: the evaluation by light family of installed model folders
+(:mod:`training.evaluate_families`).
 """
 
 from __future__ import annotations
@@ -23,6 +26,8 @@ import torch
 from .batches import irradiance_to_shadow, view_key
 from .checkpoint import load_models
 from .elm import render_lights, sample_lights
+from .evaluate_families import add_arguments as add_family_arguments
+from .evaluate_families import evaluate_families, families_markdown
 from .frames import resize_frames
 from .metrics import NAMES, all_metrics, mean_metrics
 from .model import MirrorAverage
@@ -57,6 +62,7 @@ def parse_args(argv: list[str] | None = None) -> argparse.Namespace:
     p.add_argument("--seed", type=int, default=2021)
     p.add_argument("--threads", type=int, default=2)
     p.add_argument("--out", default="runs/eval")
+    add_family_arguments(p)
     args = p.parse_args(argv)
     return args
 
@@ -248,6 +254,11 @@ def tables_markdown(results: dict) -> str:
 
 def main(argv: list[str] | None = None) -> int:
     args = parse_args(argv)
+    if args.families:
+        results = evaluate_families(args)
+        print(families_markdown(results))
+        print(f"{results['seconds']:.0f} s; written to {args.out}")
+        return 0
     results = evaluate(args)
     print(tables_markdown(results))
     print(f"{results['seconds']:.0f} s; written to {args.out}")

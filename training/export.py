@@ -3,7 +3,10 @@
 ``python -m training.export --aop runs/aop/last.pt --sr runs/sr/last.pt --out runs/export``
 writes aop.onnx, sr.onnx and model.json (the contract of ssn_engine/methods/onnx_ssn.py):
 - aop.onnx: "mask" [batch, 1, R, R] -> "ao" [batch, 1, R, R], clamped to [0, 1]
-- sr.onnx: "mask", "ao" [batch, 1, R, R], "elm" [batch, 16, 32] (network_elm-normalised) -> "shadow" [batch, 1, R, R]
+- sr.onnx: "mask", "ao" [batch, 1, R, R], "elm" [batch, 16, 32] (network_elm-normalised) -> "shadow" [batch, 1, R, R];
+  a geometry-guided SR (train --card) also takes "card" [batch, 1, R, R], the geometric card's shadow
+``--aop`` may name an installed aop.onnx instead of checkpoints: that graph is reused as it is (its record is read
+from the model.json beside it), so a new SR can ship with the AOP of an earlier release.
 Weights are stored as float32 unless float16 keeps the parity bound: the float16 graph (exported from the
 torch model with float16-rounded weights, cast back to float32 inside the graph) must stay within ``--tol``
 of that model and within ``--max-shift`` (default: ``--tol`` as well) of the checkpoint itself.
@@ -85,9 +88,18 @@ def export_graph(net: nn.Module, module: str, resolution: int, path: Path, opset
     else:
         args, names, out = (mask, torch.rand(2, 1, resolution, resolution), torch.rand(2, 16, 32)), \
             ["mask", "ao", "elm"], ["shadow"]
+        if takes_card(net):
+            args, names = args + (torch.rand(2, 1, resolution, resolution),), names + ["card"]
     axes = {n: {0: "batch"} for n in names + out}
     torch.onnx.export(Clamped(net, export_form=True).eval(), args, str(path), input_names=names, output_names=out,
                       dynamic_axes=axes, opset_version=opset, dynamo=False)
+
+
+def takes_card(net: nn.Module) -> bool:
+    """Whether an SR network (possibly wrapped in MirrorAverage / Ensemble) is geometry-guided."""
+    while not hasattr(net, "config"):
+        net = net.net if hasattr(net, "net") else net.nets[0]
+    return bool(net.config.card)
 
 
 def to_fp16_weights(src: Path, dst: Path) -> None:
@@ -157,12 +169,13 @@ def test_inputs(data: str | None, resolution: int, n: int = 8, seed: int = 0) ->
         mask = (rng.random((n, resolution, resolution)) > 0.5).astype(np.float32)
         ao = rng.random((n, resolution, resolution)).astype(np.float32)
     elm = network_elm(render_lights(sample_lights(rng, n), 16))
-    return {"mask": mask[:, None], "ao": ao[:, None], "elm": elm}
+    card = rng.random((n, 1, resolution, resolution)).astype(np.float32) * mask[:, None]
+    return {"mask": mask[:, None], "ao": ao[:, None], "elm": elm, "card": card}
 
 
 def parity(path: Path, net: nn.Module, module: str, x: dict[str, np.ndarray]) -> float:
     """Max abs difference between onnxruntime and torch (clamped) outputs."""
-    names = ["mask"] if module == "aop" else ["mask", "ao", "elm"]
+    names = ["mask"] if module == "aop" else ["mask", "ao", "elm"] + (["card"] if takes_card(net) else [])
     feeds = {k: x[k] for k in names}
     got = session(path).run(None, feeds)[0]
     with torch.no_grad():
@@ -175,13 +188,15 @@ def time_sr(path: Path, resolution: int, repeats: int = 30) -> dict[str, float]:
     from ssn_engine.methods.onnx_ssn import _resample
 
     s = session(path)
+    card = "card" in {i.name for i in s.get_inputs()}
     mask = np.random.default_rng(0).random((1, 1, resolution, resolution), dtype=np.float32)
     feeds = {"mask": mask, "ao": mask, "elm": np.random.default_rng(1).random((1, 16, 32), dtype=np.float32)}
+    feeds.update({"card": mask} if card else {})
     frame = np.random.default_rng(2).random((1, 256, 256), dtype=np.float32)
 
     def engine_path():
         m = _resample(frame, resolution)[:, None]
-        out = s.run(None, {"mask": m, "ao": m, "elm": feeds["elm"]})[0][:, 0]
+        out = s.run(None, {"mask": m, "ao": m, "elm": feeds["elm"], **({"card": m} if card else {})})[0][:, 0]
         return _resample(out, 256)
 
     out = {}
@@ -255,9 +270,20 @@ def model_card(card: dict, attribution: list[dict], command: str) -> str:
     return "\n".join(lines) + "\n"
 
 
+def reuse_aop(graph: Path, out: Path) -> dict:
+    """Copy an installed aop.onnx into ``out``; its record from the model.json beside it (or a bare one)."""
+    if graph.resolve() != (out / "aop.onnx").resolve():
+        shutil.copy(graph, out / "aop.onnx")
+    meta = graph.with_name("model.json")
+    record = json.loads(meta.read_text())["export"]["aop"] if meta.is_file() else {}
+    return {"checkpoints": [], "steps": [], "samples": [], "widths": [], "weights": "float32", "max_abs_diff": 0.0,
+            **record, "bytes": (out / "aop.onnx").stat().st_size, "reused_from": str(graph)}
+
+
 def parse_args(argv: list[str] | None = None) -> argparse.Namespace:
     p = argparse.ArgumentParser(prog="python -m training.export", description=__doc__.split("\n")[0])
-    p.add_argument("--aop", nargs="+", required=True, help="AOP checkpoint(s); several: one graph of their mean")
+    p.add_argument("--aop", nargs="+", required=True, help="AOP checkpoint(s); several: one graph of their mean; "
+                                                         "or an installed aop.onnx, reused as it is")
     p.add_argument("--sr", required=True)
     p.add_argument("--out", default="runs/export")
     p.add_argument("--data", default="data/ssn128", help="dataset for test inputs and the card's attribution")
@@ -286,6 +312,10 @@ def main(argv: list[str] | None = None) -> int:
                   "output_floor": args.floor, "mirror_average": args.mirror_average}
     report = {}
     for module, ck_paths in (("aop", args.aop), ("sr", [args.sr])):
+        if module == "aop" and len(ck_paths) == 1 and ck_paths[0].endswith(".onnx"):
+            report["aop"] = reuse_aop(Path(ck_paths[0]), out)
+            print(f"aop: reused {ck_paths[0]}", flush=True)
+            continue
         net, cks = load_models(ck_paths)
         net = MirrorAverage(net).eval() if args.mirror_average else net
         r = cks[0]["unet"]["resolution"]

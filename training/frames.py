@@ -24,6 +24,10 @@ def area_downsample(stack: np.ndarray, size: int) -> np.ndarray:
     f = n // size
     if f * size != n:
         raise ValueError(f"frame size {n} is not a multiple of {size}")
+    stack = np.asarray(stack)
+    if stack.dtype == np.uint8 and f * f <= 256:  # exact integer sums, 4x less memory traffic than float
+        rows = sum(stack[..., k::f, :].astype(np.uint16) for k in range(f))
+        return (sum(rows[..., k::f] for k in range(f)) / np.float32(f * f)).astype(np.float32)
     lead = stack.shape[:-2]
-    blocks = np.asarray(stack).reshape(lead + (size, f, size, f))
+    blocks = stack.reshape(lead + (size, f, size, f))
     return blocks.astype(np.float32).mean(axis=(-3, -1))

@@ -31,7 +31,7 @@ from . import checkpoint
 from ssn_engine.hemisphere import texel_weights
 
 from .batches import BatchSampler, ViewCache, make_batch
-from .elm import sample_lights
+from .elm import TRAIN_MIX, sample_lights, sample_mixture
 from .model import UNetConfig, build
 from .model.complexity import describe
 from .perturb import perturb_ao
@@ -60,14 +60,24 @@ def parse_args(argv: list[str] | None = None) -> argparse.Namespace:
     p.add_argument("--threads", type=int, default=2, help="torch CPU threads")
     p.add_argument("--cache-views", type=int, default=300, help="views kept in memory (rotating)")
     p.add_argument("--elms-per-view", type=int, default=4, help="SR: ELMs per view in a batch (AOP: 1)")
+    p.add_argument("--swap-every", type=int, default=1, help="replace a cached view every this many batches")
     p.add_argument("--no-perturb", action="store_true", help="SR: feed the ground-truth AO unperturbed")
     p.add_argument("--balance-kinds", action="store_true",
                    help="draw objects, humans and animals equally often (default: in proportion to their views)")
     p.add_argument("--flip", action="store_true",
                    help="mirror half of the samples left to right (frames in x, light maps in azimuth)")
     p.add_argument("--ao-from", nargs="+", help="SR: AOP checkpoint(s) whose predicted AO (several: their mean, as "
-                   "export --aop) replaces the (perturbed) ground-truth AO in a fraction --ao-from-prob of the samples "
+                   "export --aop), or an exported aop.onnx graph (such as the shipped ssn_engine/models/aop.onnx), "
+                   "replaces the (perturbed) ground-truth AO in a fraction --ao-from-prob of the samples "
                    "(the AO SR gets in use)")
+    p.add_argument("--card", action="store_true", help="SR: geometry-guided; the geometric card's shadow for the "
+                   "same light map is an input and the base of the output (training.model.SRNet)")
+    p.add_argument("--true-camera", type=float, default=0.5,
+                   help="SR --card: share of samples whose card is traced with the view's true camera input "
+                        "(the others: the conventions' default camera, as the engine assumes blind)")
+    p.add_argument("--lights", choices=["table1", "mix"], default="table1",
+                   help="SR: light maps from the paper's Table 1, or the mixture of light families "
+                        f"{TRAIN_MIX} (training.elm)")
     p.add_argument("--ao-from-prob", type=float, default=0.5)
     p.add_argument("--through-sr", help="AOP: train through this frozen SR checkpoint too: the loss adds "
                    "--shadow-weight x the L2 of the shadow it renders from the predicted AO under random ELMs")
@@ -85,6 +95,8 @@ def parse_args(argv: list[str] | None = None) -> argparse.Namespace:
     args = p.parse_args(argv)
     if args.through_sr and args.module != "aop":
         p.error("--through-sr trains an AOP (--module aop)")
+    if (args.card or args.lights != "table1") and args.module != "sr":
+        p.error("--card and --lights apply to SR (--module sr)")
     args.widths = tuple(int(w) for w in str(args.widths).split(","))
     return args
 
@@ -146,25 +158,54 @@ class Prefetcher:
 
 def to_tensors(batch, device: torch.device) -> dict[str, torch.Tensor]:
     t = lambda a: torch.from_numpy(np.ascontiguousarray(a)).to(device)
-    return {"mask": t(batch.mask[:, None]), "ao": t(batch.ao[:, None]), "elm": t(batch.elm),
-            "target": t(batch.target[:, None])}
+    out = {"mask": t(batch.mask[:, None]), "ao": t(batch.ao[:, None]), "elm": t(batch.elm),
+           "target": t(batch.target[:, None])}
+    if batch.card is not None:
+        out["card"] = t(batch.card[:, None])
+    if batch.ao_pred is not None:
+        out["ao_pred"] = t(batch.ao_pred[:, None])
+    return out
 
 
 def forward(model, module: str, x: dict[str, torch.Tensor], ao: torch.Tensor | None = None) -> torch.Tensor:
     if module == "aop":
         return model(x["mask"])
-    return model(x["mask"], x["ao"] if ao is None else ao, x["elm"])
+    extra = (x["card"],) if "card" in x else ()
+    return model(x["mask"], x["ao"] if ao is None else ao, x["elm"], *extra)
 
 
-@torch.no_grad()
-def mix_predicted_ao(aop_net, x: dict[str, torch.Tensor], ao: torch.Tensor, prob: float,
+class OnnxAOP:
+    """An exported AOP graph (aop.onnx) called like the torch AOP: mask tensor (B, 1, R, R) -> AO tensor."""
+
+    def __init__(self, path: str):
+        from ssn_engine.methods.onnx_ssn import _session
+
+        self.session = _session(Path(path), "aop")
+
+    def __call__(self, mask: torch.Tensor) -> torch.Tensor:
+        return torch.from_numpy(self.session.run(["ao"], {"mask": mask.numpy().astype(np.float32)})[0])
+
+
+def load_aop(paths: list[str]):
+    """The AO predictor --ao-from names, checkpoints (their ensemble) or one exported aop.onnx graph, as a
+    function of masks (B, R, R) -> AO maps (B, R, R) for the view cache (each view's AO is predicted once)."""
+    net = OnnxAOP(paths[0]) if len(paths) == 1 and paths[0].endswith(".onnx") else checkpoint.load_models(paths)[0]
+
+    @torch.no_grad()
+    def predict(masks: np.ndarray) -> np.ndarray:
+        return net(torch.from_numpy(np.ascontiguousarray(masks[:, None], np.float32)))[:, 0].clamp(0, 1).numpy()
+
+    return predict
+
+
+def mix_predicted_ao(x: dict[str, torch.Tensor], ao: torch.Tensor, prob: float,
                      gen: torch.Generator) -> torch.Tensor:
-    """``ao`` with each sample replaced, with probability ``prob``, by the AOP network's prediction."""
+    """``ao`` with each sample replaced, with probability ``prob``, by the AOP's prediction ``x["ao_pred"]``."""
     use = (torch.rand(ao.shape[0], generator=gen) < prob).to(ao.device)
     if not use.any():
         return ao
     out = ao.clone()
-    out[use] = aop_net(x["mask"][use]).clamp(0.0, 1.0)
+    out[use] = x["ao_pred"][use]
     return out
 
 
@@ -191,9 +232,9 @@ class Objective:
 def frozen_sr(path: str, device: torch.device) -> torch.nn.Module:
     """The SR network of checkpoint ``path`` (shadow target), without gradients for its weights."""
     net, ck = checkpoint.load_model(path)
-    if ck["module"] != "sr" or ck.get("target") != "shadow":
-        raise SystemExit(f"--through-sr needs an SR checkpoint with the shadow target; {path} is "
-                         f"{ck['module']}/{ck.get('target')}")
+    if ck["module"] != "sr" or ck.get("target") != "shadow" or ck["unet"].get("card"):
+        raise SystemExit(f"--through-sr needs an SR checkpoint with the shadow target and no card input; {path} is "
+                         f"{ck['module']}/{ck.get('target')}{' (card)' if ck['unet'].get('card') else ''}")
     return net.requires_grad_(False).to(device)
 
 
@@ -227,10 +268,12 @@ def build_val(store, args, weights_rows: int, run: Path | None = None):
     for i in chosen:
         k = view_key(store, i)
         if k not in views:
-            views[k] = load_view(store, i, args.resolution, with_occ=lit is not None)
+            views[k] = load_view(store, i, args.resolution, with_occ=lit is not None, with_card=args.card)
     vs = [views[view_key(store, i)] for i in chosen]
-    lights = sample_lights(np.random.default_rng([args.seed, 104729]), len(vs))
-    return make_batch(vs, lights, weights_rows, texel_weights(weights_rows), lit), split
+    rng = np.random.default_rng([args.seed, 104729])
+    lights = sample_mixture(rng, len(vs), TRAIN_MIX) if args.lights == "mix" else sample_lights(rng, len(vs))
+    true_camera = np.arange(len(vs)) % 2 == 1  # half of the cards with the true camera
+    return make_batch(vs, lights, weights_rows, texel_weights(weights_rows), lit, true_camera), split
 
 
 @torch.no_grad()
@@ -255,8 +298,10 @@ def write_samples(path: Path, module: str, val: dict[str, torch.Tensor], pred: t
         scale = max(float(g.max()), 1e-6) if module == "sr" and g.max() > 1 else 1.0
         elm = np.kron(val["elm"][b].cpu().numpy(), np.ones((4, 4))) if module == "sr" else None
         row = [m, a] if module == "aop" else [m, a, elm]
-        rows.append(row + [p / scale, g / scale, np.abs(p - g) / scale * 4])
-    labels = (["mask", "gt ao"] if module == "aop" else ["mask", "gt ao", "elm"]) + ["pred", "gt", "|err|x4"]
+        card = [val["card"][b, 0].cpu().numpy()] if "card" in val else []
+        rows.append(row + card + [p / scale, g / scale, np.abs(p - g) / scale * 4])
+    labels = (["mask", "gt ao"] if module == "aop" else ["mask", "gt ao", "elm"]) + (["card"] if "card" in val else [])
+    labels += ["pred", "gt", "|err|x4"]
     image_grid(rows, path, labels, cell=112)
 
 
@@ -292,7 +337,7 @@ def main(argv: list[str] | None = None, store=None) -> int:
 
     fixed_store = store is not None
     store = store if fixed_store else ViewStore(args.data)
-    config = UNetConfig(widths=args.widths, groups=args.groups, resolution=args.resolution)
+    config = UNetConfig(widths=args.widths, groups=args.groups, resolution=args.resolution, card=args.card)
     head_bias = {"ao": 1.0, "shadow": 0.0, "irradiance": 1.0}[args.target]
     model = build(args.module, config, head_bias).to(device)
     if main_proc:
@@ -325,10 +370,14 @@ def main(argv: list[str] | None = None, store=None) -> int:
     ddp = torch.nn.parallel.DistributedDataParallel(model) if world > 1 else model
 
     lit = shadow_target(args)
+    predict_ao = load_aop(args.ao_from) if args.module == "sr" and args.ao_from else None
     cache = ViewCache(store, "train", args.resolution, max_views=100000 if lit is None else args.cache_views,
-                      with_occ=lit is not None, balance_kinds=args.balance_kinds)
+                      with_occ=lit is not None, balance_kinds=args.balance_kinds, with_card=args.card,
+                      predict_ao=predict_ao)
     # A plain AOP ignores the light, so repeating a view under several ELMs would only shrink its batch.
-    sampler = BatchSampler(cache, args.batch, lit, 1 if lit is None else args.elms_per_view, flip=args.flip)
+    sampler = BatchSampler(cache, args.batch, lit, 1 if lit is None else args.elms_per_view, flip=args.flip,
+                           lights=TRAIN_MIX if args.lights == "mix" else None, true_camera=args.true_camera,
+                           swap_every=args.swap_every)
     rows = store.meta["elm_rows"]
     val_batch, val_split = build_val(store, args, rows, run) if main_proc else (None, None)
     val = to_tensors(val_batch, device) if val_batch is not None else None
@@ -336,7 +385,6 @@ def main(argv: list[str] | None = None, store=None) -> int:
         print(f"train views: {len(cache)} (cache {args.cache_views}), val: {args.val_samples} samples from the "
               f"{val_split} split, batch {args.batch} x {world} process(es), device {device}", flush=True)
     gen = torch.Generator().manual_seed(args.seed * 1000 + rank + step)
-    aop_net = checkpoint.load_models(args.ao_from)[0].to(device) if args.module == "sr" and args.ao_from else None
     pre = Prefetcher(sampler, np.random.default_rng([args.seed, rank, step]))
 
     stop = {"flag": False}
@@ -374,8 +422,8 @@ def main(argv: list[str] | None = None, store=None) -> int:
         ao_in = None
         if args.module == "sr" and not args.no_perturb:
             ao_in = perturb_ao(x["ao"].cpu(), gen).to(device)
-        if aop_net is not None:
-            ao_in = mix_predicted_ao(aop_net, x, x["ao"] if ao_in is None else ao_in, args.ao_from_prob, gen)
+        if "ao_pred" in x:
+            ao_in = mix_predicted_ao(x, x["ao"] if ao_in is None else ao_in, args.ao_from_prob, gen)
         pred = forward(ddp, args.module, x, ao_in)
         loss = objective(pred, x)
         opt.zero_grad(set_to_none=True)

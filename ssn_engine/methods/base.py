@@ -10,6 +10,9 @@ import numpy as np
 class ShadowMethod(Protocol):
     """Mask -> AO map, then (mask, AO, ELM) -> shadow, on N x N frames.
 
+    ``cameras`` (n, 2), optional: the camera input of the conventions (horizon
+    row and focal length in frame pixels); None: the method's default camera.
+
     ``masks`` and ``ao`` have shape (n, N, N), ``elms`` (n, 16, 32), all
     float32; results are float32 in [0, 1]. AO maps follow the conventions
     (A^(1/3), 1 fully exposed). ``render`` is the interactive path: it must
@@ -19,16 +22,28 @@ class ShadowMethod(Protocol):
     name: str
     resolution: int
 
-    def predict_ao(self, masks: np.ndarray) -> np.ndarray: ...
+    def predict_ao(self, masks: np.ndarray, cameras: np.ndarray | None = None) -> np.ndarray: ...
 
-    def render(self, masks: np.ndarray, ao: np.ndarray, elms: np.ndarray) -> np.ndarray: ...
+    def render(self, masks: np.ndarray, ao: np.ndarray, elms: np.ndarray,
+               cameras: np.ndarray | None = None) -> np.ndarray: ...
 
 
-def check_batch(masks: np.ndarray, elms: np.ndarray | None, n: int, ao: np.ndarray | None = None) -> None:
-    """Raise ValueError with the offending argument's name when shapes are off."""
+def check_batch(masks: np.ndarray, elms: np.ndarray | None, n: int, ao: np.ndarray | None = None,
+                cameras: np.ndarray | None = None) -> None:
+    """Raise ValueError with the offending argument's name when shapes or values are off."""
     if masks.ndim != 3 or masks.shape[1:] != (n, n):
         raise ValueError(f"masks: expected shape (n, {n}, {n}), got {masks.shape}")
     if elms is not None and (elms.ndim != 3 or elms.shape[1:] != (16, 32) or len(elms) != len(masks)):
         raise ValueError(f"elms: expected shape ({len(masks)}, 16, 32), got {elms.shape}")
     if ao is not None and ao.shape != masks.shape:
         raise ValueError(f"ao: expected shape {masks.shape}, got {ao.shape}")
+    if cameras is not None:
+        check_cameras(cameras, len(masks))
+
+
+def check_cameras(cameras: np.ndarray, count: int) -> None:
+    """Camera inputs: shape (count, 2), finite horizon rows, positive finite focal lengths (frame pixels)."""
+    if cameras.shape != (count, 2):
+        raise ValueError(f"cameras: expected shape ({count}, 2) (horizon row, focal length), got {cameras.shape}")
+    if not np.all(np.isfinite(cameras)) or np.any(cameras[:, 1] <= 0):
+        raise ValueError("cameras: horizon rows must be finite and focal lengths finite and positive")

@@ -1,8 +1,10 @@
 """The non-learned baseline: the cutout as a flat vertical card.
 
 The mask is taken to be a card standing upright on the ground, facing the
-camera of the conventions (45 degree field of view, 15 degree pitch), its
-lowest mask row touching the ground. Every texel of the 16 x 32 ELM casts
+camera of the conventions, its lowest mask row touching the ground. The
+camera is the conventions' default (45 degree field of view, 15 degree
+pitch) or, given the camera input (horizon row and focal length), the one
+whose horizon lies on that row (:func:`ssn_engine.camera.camera_for_span`). Every texel of the 16 x 32 ELM casts
 one hard shadow of the card along its centre direction; the shadow is their
 sum with the conventions' weights L_t W_t. The AO map is the card's own
 ambient occlusion (the same sum under a uniform sky). The hard shadows are
@@ -20,9 +22,8 @@ import hashlib
 
 import numpy as np
 from PIL import Image
-from scipy.ndimage import map_coordinates
 
-from ..camera import Camera
+from ..camera import Camera, camera_for_span, fov_from_focal
 from ..hemisphere import texel_centres, texel_weights
 from .base import check_batch
 
@@ -30,6 +31,7 @@ INTERNAL = 128  # the card is traced at this resolution, then upsampled
 TURN = 0.5  # share of the way the card turns towards each light
 CHUNK = 64  # directions traced at once (bounds memory)
 CACHED_CARDS = 4
+EXTENDED_TEXELS = 64  # at most this many texels traced beyond the frame per light map
 
 
 def _resize(image: np.ndarray, size: int) -> np.ndarray:
@@ -41,7 +43,7 @@ def _resize(image: np.ndarray, size: int) -> np.ndarray:
 class _Card:
     """The card and camera for one mask at the internal resolution."""
 
-    def __init__(self, mask: np.ndarray) -> None:
+    def __init__(self, mask: np.ndarray, camera: tuple[float, float] | None = None) -> None:
         m = mask.shape[0]
         self.mask = mask
         rows = np.flatnonzero((mask > 0.05).any(axis=1))
@@ -54,20 +56,41 @@ class _Card:
         # The card reaches the ground: below its lowest solid row it continues that row,
         # so the antialiased bottom edge does not leave a lit seam at the contact line.
         self.lowest_centre = float(solid[-1] if solid.size else rows[-1]) + 0.5
-        # Find the card height whose projection spans the mask's rows.
-        height = 0.5
-        for _ in range(12):
-            cam = Camera(m, height / 2)
-            span = cam.project(np.array([0.0, 0.0, 0.0]))[1] - cam.project(np.array([0.0, height, 0.0]))[1]
-            height *= (base - top) / span
-        cam = Camera(m, height / 2)
-        cam.shift = base - cam.project(np.array([0.0, 0.0, 0.0]))[1]
-        self.camera, self.height = cam, height
-        ground, self.valid = cam.ground_points()
+        horizon, focal = camera if camera is not None else (None, None)
+        self.camera, self.height = camera_for_span(m, top, base, horizon, focal)
+        ground, self.valid = self.camera.ground_points()
         self.ground = ground[self.valid].astype(np.float32)  # (P, 3)
+        self._padded = np.pad(mask.astype(np.float32), 1)  # bilinear taps never leave it
 
-    def occlusion(self, directions: np.ndarray) -> np.ndarray:
-        """Hard-shadow occlusion (T, P) of the card turned towards each world direction (T, 3).
+    def _sample(self, col: np.ndarray, row: np.ndarray) -> np.ndarray:
+        """The mask bilinearly interpolated at continuous (col, row) points (pixel centres at k + 0.5); 0 outside."""
+        m = self.mask.shape[0]
+        x = np.clip(col - 0.5, -1.0, m) + 1.0  # padded coordinates
+        y = np.clip(row - 0.5, -1.0, m) + 1.0
+        x0 = np.minimum(np.floor(x), m).astype(np.intp)
+        y0 = np.minimum(np.floor(y), m).astype(np.intp)
+        fx, fy = (x - x0).astype(np.float32), (y - y0).astype(np.float32)
+        flat, w = self._padded.ravel(), m + 2
+        i = y0 * w + x0
+        top = flat[i] * (1 - fx) + flat[i + 1] * fx
+        bottom = flat[i + w] * (1 - fx) + flat[i + w + 1] * fx
+        return top * (1 - fy) + bottom * fy
+
+    def ground_grid(self, margin: float, cell: float) -> tuple[np.ndarray, np.ndarray]:
+        """Ground points (P, 3) of a grid reaching ``margin`` frames beyond each side of the frame, with cells of
+        ``cell`` internal pixels, and where its rays reach the ground: the same camera with a wider field."""
+        if getattr(self, "_grid", (None,))[0] != (margin, cell):
+            n = int(round(self.mask.shape[0] * (1 + 2 * margin) / cell))
+            cam = self.camera
+            wide = Camera(n, cam.target_height, fov=fov_from_focal(n, cam.focal / cell), pitch=cam.pitch,
+                          shift=cam.shift / cell)
+            ground, valid = wide.ground_points()
+            self._grid = ((margin, cell), ground[valid].astype(np.float32), valid)
+        return self._grid[1], self._grid[2]
+
+    def occlusion(self, directions: np.ndarray, ground: np.ndarray | None = None) -> np.ndarray:
+        """Hard-shadow occlusion (T, P) of the card turned towards each world direction (T, 3), on the frame's
+        ground points or on ``ground`` (P, 3).
 
         For each light the card turns about its vertical axis part of the way
         (``TURN``) towards facing the light's horizontal direction, never
@@ -76,7 +99,7 @@ class _Card:
         its base off its contact shadow. Its point (x, h) casts onto the
         ground at x * axis - h * w_h / w_y.
         """
-        g = self.ground
+        g = self.ground if ground is None else ground
         w = directions.astype(np.float32)
         azimuth = np.arctan2(w[:, 0], -w[:, 2])  # from the horizontal forward (0, 0, -1)
         facing = np.where(azimuth > np.pi / 2, azimuth - np.pi, azimuth)
@@ -91,11 +114,10 @@ class _Card:
         x = (gx * dz[:, None] - gz * dx[:, None]) / det[:, None]
         h = (ax[:, None] * gz - az[:, None] * gx) / det[:, None]
         hit = (h >= 0) & (h <= self.height * 1.001)
-        col, row = self.camera.project_xyz(x, np.where(hit, h, 0.0), 0.0)
-        row = np.minimum(row, self.lowest_centre)
-        values = map_coordinates(self.mask, [row.ravel() - 0.5, col.ravel() - 0.5], order=1, cval=0.0)
-        values = values.reshape(hit.shape)
-        return np.where(hit, values, 0.0)
+        out = np.zeros(hit.shape, np.float32)
+        col, row = self.camera.project_xyz(x[hit], h[hit], np.zeros(1, np.float32))
+        out[hit] = self._sample(col, np.minimum(row, self.lowest_centre))
+        return out
 
     def trace(self, directions: np.ndarray) -> None:
         """Trace the hard shadow of every direction (T, 3) once: ``self.bases`` (T, P) float32."""
@@ -116,22 +138,35 @@ class _Card:
         return np.clip(out, 0.0, 1.0)
 
 
+def camera_at(cameras: np.ndarray | None, b: int) -> tuple[float, float] | None:
+    """Frame ``b``'s camera input (horizon row, focal length), or None."""
+    if cameras is None:
+        return None
+    h, f = cameras[b]
+    return float(h), float(f)
+
+
 class GeometricCard:
-    """Flat-card hard-shadow sum: the baseline and the fallback without a model."""
+    """Flat-card hard-shadow sum: the baseline, the fallback without a model, and the network's proxy geometry."""
 
     name = "geometric"
 
-    def __init__(self, resolution: int = 256) -> None:
-        self.resolution = resolution
-        self._dirs = Camera(INTERNAL, 0.5).to_world(texel_centres(16)).reshape(-1, 3)
+    def __init__(self, resolution: int = 256, internal: int = INTERNAL) -> None:
+        self.resolution, self.internal = resolution, internal
+        self._dirs = Camera(internal, 0.5).to_world(texel_centres(16)).reshape(-1, 3)
         self._weights = texel_weights(16).ravel()
         self._cache: collections.OrderedDict[bytes, tuple[_Card, np.ndarray]] = collections.OrderedDict()
 
-    def _card(self, mask: np.ndarray) -> tuple[_Card, np.ndarray]:
-        """The traced card for a mask and its AO at the internal resolution (recent masks cached)."""
-        key = hashlib.blake2b(np.ascontiguousarray(mask, np.float32).tobytes(), digest_size=16).digest()
+    def card(self, mask: np.ndarray, camera: tuple[float, float] | None = None) -> tuple[_Card, np.ndarray]:
+        """The traced card for a frame mask (camera input in frame pixels, or None: the default camera) and its
+        AO at the internal resolution; recent cards are cached. ``card.bases`` (T, P) are the hard shadows of
+        the T = 512 texel directions on the P ground pixels ``card.valid`` of the internal grid."""
+        key = hashlib.blake2b(np.ascontiguousarray(mask, np.float32).tobytes() + repr(camera).encode(),
+                              digest_size=16).digest()
         if key not in self._cache:
-            card = _Card(_resize(mask, INTERNAL))
+            scale = self.internal / mask.shape[0]
+            card = _Card(_resize(mask, self.internal),
+                         None if camera is None else (camera[0] * scale, camera[1] * scale))
             card.trace(self._dirs)
             ao = (1.0 - card.shadow(self._weights)) ** (1.0 / 3.0)
             self._cache[key] = (card, ao)
@@ -140,21 +175,51 @@ class GeometricCard:
         self._cache.move_to_end(key)
         return self._cache[key]
 
-    def predict_ao(self, masks: np.ndarray) -> np.ndarray:
-        check_batch(masks, None, self.resolution)
-        return np.stack([_resize(self._card(m)[1], self.resolution) for m in masks]).clip(0, 1)
+    def card_shadows(self, masks: np.ndarray, elms: np.ndarray, cameras: np.ndarray | None = None) -> np.ndarray:
+        """The card's shadows (n, internal, internal) for frame masks (n, N, N) and ELMs (n, 16, 32)."""
+        out = np.zeros((len(masks), self.internal, self.internal), np.float32)
+        for b, (mask, elm) in enumerate(zip(masks, elms, strict=True)):
+            if elm.max() > 0:
+                out[b] = self.card(mask, camera_at(cameras, b))[0].shadow(np.maximum(elm, 0).ravel()
+                                                                                * self._weights)
+        return out
 
-    def render(self, masks: np.ndarray, ao: np.ndarray, elms: np.ndarray) -> np.ndarray:
-        check_batch(masks, elms, self.resolution, ao)
+    def extended_shadow(self, mask: np.ndarray, elm: np.ndarray, camera: tuple[float, float] | None = None,
+                        margin: float = 1.0, cell: float = 4.0) -> np.ndarray:
+        """The card's shadow on a grid reaching ``margin`` frames beyond every side of the frame, in cells of
+        ``cell`` frame pixels: (M, M) covering frame coordinates [-margin N, (1 + margin) N) on both axes.
+
+        Only the brightest texels, those that hold 99.5 % of the light (at most ``EXTENDED_TEXELS``), are
+        traced, when the light changes: long shadows come from small lights, which cover few texels."""
+        card, _ = self.card(mask, camera)
+        ground, valid = card.ground_grid(margin, cell * self.internal / mask.shape[0]) if not card.empty \
+            else (None, np.zeros((1, 1), bool))
+        out = np.zeros(valid.shape, np.float32)
+        w = np.maximum(elm, 0).ravel() * self._weights
+        if card.empty or w.sum() <= 0:
+            return out
+        order = np.argsort(-w)
+        keep = order[: min(EXTENDED_TEXELS, int(np.searchsorted(np.cumsum(w[order]), 0.995 * w.sum())) + 1)]
+        out[valid] = (w[keep] / w[keep].sum()).astype(np.float32) @ card.occlusion(self._dirs[keep], ground)
+        return out
+
+    def predict_ao(self, masks: np.ndarray, cameras: np.ndarray | None = None) -> np.ndarray:
+        check_batch(masks, None, self.resolution, cameras=cameras)
+        return np.stack([_resize(self.card(m, camera_at(cameras, b))[1], self.resolution)
+                         for b, m in enumerate(masks)]).clip(0, 1)
+
+    def render(self, masks: np.ndarray, ao: np.ndarray, elms: np.ndarray,
+               cameras: np.ndarray | None = None) -> np.ndarray:
+        check_batch(masks, elms, self.resolution, ao, cameras)
+        shadows = self.card_shadows(masks, elms, cameras)
         out = []
-        for mask, edited, elm in zip(masks, ao, elms, strict=True):
-            card, card_ao = self._card(mask)
-            if elm.max() <= 0:
-                out.append(np.zeros(mask.shape, np.float32))
-                continue
-            s = _resize(card.shadow(np.maximum(elm, 0).ravel() * self._weights), self.resolution)
+        for b, (mask, edited) in enumerate(zip(masks, ao, strict=True)):
+            card_ao = self.card(mask, camera_at(cameras, b))[1]
+            s = _resize(shadows[b], self.resolution)
             # Both visibilities at frame resolution, so an unedited AO map changes nothing.
             card_visibility = np.maximum(_resize(card_ao, self.resolution), 1e-3) ** 3
             edited_visibility = np.clip(edited, 0, 1) ** 3
             out.append(1.0 - np.clip((1.0 - s) * edited_visibility / card_visibility, 0.0, 1.0))
-        return np.clip(np.stack(out), 0.0, 1.0).astype(np.float32)
+        out = np.stack(out)
+        out[np.asarray(elms).max(axis=(1, 2)) <= 0] = 0.0  # no light, no shadow (conventions)
+        return np.clip(out, 0.0, 1.0).astype(np.float32)

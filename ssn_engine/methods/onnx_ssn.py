@@ -2,7 +2,9 @@
 
 A model folder holds ``model.json`` and the two graphs (docs/engine.md, "Model files"):
 - aop.onnx: "mask" [b, 1, R, R] -> "ao" [b, 1, R, R]
-- sr.onnx: "mask" [b, 1, R, R], "ao" [b, 1, R, R], "elm" [b, 16, 32] -> "shadow" [b, 1, R, R]
+- sr.onnx: "mask" [b, 1, R, R], "ao" [b, 1, R, R], "elm" [b, 16, 32] -> "shadow" [b, 1, R, R]; a
+  geometry-guided SR also takes "card" [b, 1, R, R], the geometric card's shadow for the same ELM
+  (:meth:`ssn_engine.methods.geometric.GeometricCard.card_shadows`, traced with the camera input when given)
 The ELM goes in normalised by :func:`ssn_engine.hemisphere.network_elm`.
 ``model.json`` may set ``output_floor``: shadow values below it are the network's
 residual noise and are removed by :func:`apply_floor` (chosen on the validation split).
@@ -19,6 +21,7 @@ from PIL import Image
 
 from ..hemisphere import NETWORK_SHAPE, network_elm
 from .base import check_batch
+from .geometric import GeometricCard, camera_at
 
 MODEL_FORMAT = "ssn-shadow-model"
 MODEL_VERSION = 1
@@ -30,8 +33,8 @@ class ModelError(RuntimeError):
 
 
 _EXPECTED = {
-    "aop": ({"mask": 4}, {"ao": 4}),
-    "sr": ({"mask": 4, "ao": 4, "elm": 3}, {"shadow": 4}),
+    "aop": [({"mask": 4}, {"ao": 4})],
+    "sr": [({"mask": 4, "ao": 4, "elm": 3}, {"shadow": 4}), ({"mask": 4, "ao": 4, "elm": 3, "card": 4}, {"shadow": 4})],
 }
 
 
@@ -64,14 +67,12 @@ def _session(path: Path, role: str):
         session = ort.InferenceSession(str(path), options, providers=["CPUExecutionProvider"])
     except Exception as exc:  # onnxruntime raises several types for bad files
         raise ModelError(f"cannot load {path}: {exc}") from None
-    inputs, outputs = _EXPECTED[role]
     got_in = {i.name: len(i.shape) for i in session.get_inputs()}
     got_out = {o.name: len(o.shape) for o in session.get_outputs()}
-    if got_in != inputs or got_out != outputs:
-        raise ModelError(
-            f"{path} does not match the {role} contract: expected inputs {inputs} and outputs {outputs} "
-            f"(name: rank), got {got_in} and {got_out}"
-        )
+    if (got_in, got_out) not in _EXPECTED[role]:
+        expected = " or ".join(f"inputs {i} and outputs {o}" for i, o in _EXPECTED[role])
+        raise ModelError(f"{path} does not match the {role} contract: expected {expected} (name: rank), "
+                         f"got {got_in} and {got_out}")
     return session
 
 
@@ -103,6 +104,8 @@ class OnnxSSN:
         self.meta, self.model_resolution, self.output_floor = meta, r, float(floor)
         self._aop = _session(model_dir / meta.get("aop", "aop.onnx"), "aop")
         self._sr = _session(model_dir / meta.get("sr", "sr.onnx"), "sr")
+        takes_card = "card" in {i.name for i in self._sr.get_inputs()}
+        self.card = GeometricCard(FRAME, internal=r) if takes_card else None
         self._check_run()
 
     def _check_run(self) -> None:
@@ -110,7 +113,10 @@ class OnnxSSN:
         mask = np.zeros((1, 1, self.model_resolution, self.model_resolution), np.float32)
         try:
             ao = self._aop.run(["ao"], {"mask": mask})[0]
-            s = self._sr.run(["shadow"], {"mask": mask, "ao": ao, "elm": np.zeros((1, 16, 32), np.float32)})[0]
+            feeds = {"mask": mask, "ao": ao, "elm": np.zeros((1, 16, 32), np.float32)}
+            if self.card is not None:
+                feeds["card"] = mask
+            s = self._sr.run(["shadow"], feeds)[0]
         except Exception as exc:
             raise ModelError(
                 f"model in {self.meta.get('aop')} / {self.meta.get('sr')} failed a test run: {exc}"
@@ -118,19 +124,26 @@ class OnnxSSN:
         if s.shape != mask.shape:
             raise ModelError(f"sr output has shape {s.shape}, expected {mask.shape}")
 
-    def predict_ao(self, masks: np.ndarray) -> np.ndarray:
-        check_batch(masks, None, self.resolution)
+    def predict_ao(self, masks: np.ndarray, cameras: np.ndarray | None = None) -> np.ndarray:
+        """The AO maps; a geometry-guided model also traces each mask's card here, so moving a light does not."""
+        check_batch(masks, None, self.resolution, cameras=cameras)
         m = _resample(masks, self.model_resolution)[:, None]
         ao = self._aop.run(["ao"], {"mask": m})[0][:, 0]
+        if self.card is not None:
+            for b, mask in enumerate(masks):
+                self.card.card(mask, camera_at(cameras, b))
         return np.clip(_resample(ao, self.resolution), 0.0, 1.0)
 
-    def render(self, masks: np.ndarray, ao: np.ndarray, elms: np.ndarray) -> np.ndarray:
-        check_batch(masks, elms, self.resolution, ao)
+    def render(self, masks: np.ndarray, ao: np.ndarray, elms: np.ndarray,
+               cameras: np.ndarray | None = None) -> np.ndarray:
+        check_batch(masks, elms, self.resolution, ao, cameras)
         feeds = {
             "mask": _resample(masks, self.model_resolution)[:, None],
             "ao": _resample(ao, self.model_resolution)[:, None],
             "elm": network_elm(elms),
         }
+        if self.card is not None:
+            feeds["card"] = self.card.card_shadows(masks, elms, cameras)[:, None]
         s = self._sr.run(["shadow"], feeds)[0][:, 0]
         s = apply_floor(_resample(s, self.resolution), self.output_floor)
         s[np.asarray(elms).max(axis=(1, 2)) <= 0] = 0.0  # no light, no shadow (conventions)

@@ -202,3 +202,40 @@ def test_property_scaling_the_elm_does_not_change_the_shadow(data):
     e = _elms(light_lists)
     k = data.draw(st.floats(1e-3, 1e3))
     assert np.allclose(api.predict_frames(m, k * e), api.predict_frames(m, e), atol=1e-4)
+
+
+# -- camera input (conventions, "Camera input") ----------------------------------
+
+
+def _default_camera(mask: np.ndarray) -> np.ndarray:
+    """The camera input of the conventions' default camera (45 degrees, pitch 15) fitted to a mask."""
+    from ssn_engine.camera import camera_for_span
+
+    rows = np.flatnonzero((mask > 0.05).any(axis=1))
+    cam, _ = camera_for_span(N, float(rows[0]), float(rows[-1] + 1))
+    return np.array([cam.horizon, cam.focal])
+
+
+def test_cameras_change_the_geometric_shadow_as_the_horizon_says(masks, monkeypatch):
+    """Lower horizon = camera looking down less: the same sun's shadow on the ground looks shorter."""
+    monkeypatch.setenv("SSN_SHADOW_MODEL_DIR", "/nonexistent")  # the geometric card: camera-aware by design
+    elm = elm_for(0.0, 0.75)[None]  # behind the camera: the shadow falls away from the viewer
+    m = masks[1:]
+    level = api.predict_frames(m, elm, cameras=np.array([[60.0, 300.0]]))
+    steep = api.predict_frames(m, elm, cameras=np.array([[-150.0, 300.0]]))
+    _, base, _ = object_geometry(m[0])
+    reach = [int(np.flatnonzero((s[0] * (1 - m[0]) > 0.2).any(axis=1)).min()) for s in (level, steep)]
+    assert reach[0] > reach[1] + 3  # the shadow climbs higher up the frame when seen from above
+    blind = api.predict_frames(m, elm)
+    assert np.allclose(blind, api.predict_frames(m, elm, cameras=_default_camera(m[0])[None]), atol=0.02)
+
+
+@pytest.mark.parametrize("cameras, match", [
+    (np.zeros((1, 2)), "cameras: expected shape"),
+    (np.zeros((2, 3)), "cameras: expected shape"),
+    (np.array([[10.0, 0.0], [10.0, 200.0]]), "focal"),
+    (np.array([[np.nan, 200.0], [10.0, 200.0]]), "finite"),
+])
+def test_bad_cameras(masks, cameras, match):
+    with pytest.raises(ValueError, match=match):
+        api.predict_frames(masks, np.stack([elm_for(0.3, 0.6)] * 2), cameras=cameras)

@@ -5,7 +5,7 @@ from __future__ import annotations
 import numpy as np
 import pytest
 
-from ssn_engine.camera import Camera, top_row
+from ssn_engine.camera import PITCH_RANGE, Camera, camera_for_span, focal_from_fov, fov_from_focal, top_row
 
 
 @pytest.mark.parametrize("n", [256, 128, 100, 33])
@@ -76,3 +76,36 @@ def test_to_world_maps_the_elm_basis():
     basis = np.eye(3)  # right, up, forward
     world = cam.to_world(basis)
     assert np.allclose(world, [[1, 0, 0], [0, 1, 0], [0, 0, -1]])
+
+
+@pytest.mark.parametrize("horizon", [-60.0, 0.0, 20.0, 50.0])
+@pytest.mark.parametrize("fov", [35.0, 55.0])
+def test_camera_for_span_puts_the_horizon_on_the_given_row(horizon, fov):
+    n, top, base = 128, 4.0, 70.0
+    cam, height = camera_for_span(n, top, base, horizon, focal_from_fov(n, fov))
+    assert cam.horizon == pytest.approx(horizon, abs=0.05)
+    assert cam.fov == pytest.approx(fov)
+    # the card it fits stands on the base row and reaches the top row
+    assert cam.project(np.array([0.0, 0.0, 0.0]))[1] == pytest.approx(base, abs=1e-6)
+    assert cam.project(np.array([0.0, height, 0.0]))[1] == pytest.approx(top, abs=0.05)
+
+
+def test_a_higher_horizon_means_a_camera_looking_further_down():
+    pitches = [camera_for_span(128, 4.0, 70.0, h, 150.0)[0].pitch for h in (50.0, 10.0, -40.0)]
+    assert pitches[0] < pitches[1] < pitches[2]
+
+
+def test_camera_for_span_without_input_is_the_default_camera():
+    cam, _ = camera_for_span(128, 4.0, 70.0)
+    assert cam.pitch == 15.0 and cam.fov == 45.0
+
+
+def test_an_unreachable_horizon_gets_the_nearest_pitch():
+    """A horizon below the card's foot would put the camera under the ground: the lowest pitch is used."""
+    cam, _ = camera_for_span(128, 4.0, 70.0, 500.0, 150.0)
+    assert cam.pitch == pytest.approx(PITCH_RANGE[0], abs=1e-6)
+
+
+def test_focal_length_and_field_of_view_are_inverse():
+    assert fov_from_focal(256, focal_from_fov(256, 45.0)) == pytest.approx(45.0)
+    assert focal_from_fov(256, 90.0) == pytest.approx(128.0)

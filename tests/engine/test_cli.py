@@ -221,7 +221,34 @@ def test_nothing_to_write(cutout_png, capsys):
     assert code == 2 and "--layer" in err
 
 
-@pytest.mark.parametrize("args", [["--color", "red"], ["--opacity", "1.5"], ["--opacity", "x"]])
+def test_horizon_and_fov_reach_the_method(tmp_path, cutout_png):
+    """The image's horizon: seen from above (horizon far above the canvas), a shadow cast away from the viewer
+    climbs further up the canvas than seen from a level camera (horizon at the cutout's foot)."""
+    tops = []
+    for horizon in ("150", "-600"):
+        out = tmp_path / f"h{horizon}.png"
+        argv = ["render", str(cutout_png), "--layer", str(out), "--method", "geometric", "--horizon", horizon,
+                "--fov", "40", "--light-map", str(_light_file(tmp_path, 0.0, 0.75))]
+        assert main(argv) == 0
+        alpha = _read(out)[..., 3]
+        tops.append(int(np.flatnonzero((alpha > 40).any(axis=1)).min()))
+    assert tops[1] < tops[0] - 3
+
+
+def _light_file(tmp_path, u, v):
+    path = tmp_path / f"light_{u}_{v}.json"
+    path.write_text(json.dumps({"format": "ssn-shadow-elm", "version": 1,
+                                "lights": [{"u": u, "v": v, "softness": 0.002, "intensity": 1.0}]}))
+    return path
+
+
+def test_fov_without_horizon_is_refused(cutout_png, tmp_path, capsys):
+    code, err = _error(capsys, "render", str(cutout_png), "--layer", str(tmp_path / "l.png"), "--fov", "40")
+    assert code == 2 and "horizon" in err and not (tmp_path / "l.png").exists()
+
+
+@pytest.mark.parametrize("args", [["--color", "red"], ["--opacity", "1.5"], ["--opacity", "x"], ["--fov", "0"],
+                                  ["--horizon", "low"]])
 def test_bad_option_values(cutout_png, tmp_path, capsys, args):
     with pytest.raises(SystemExit) as info:
         main(["render", str(cutout_png), "--layer", str(tmp_path / "l.png"), *args])

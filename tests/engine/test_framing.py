@@ -228,3 +228,15 @@ def test_huge_canvas_frames_and_maps_back_within_memory():
     assert back.values.dtype == np.float32 and 0 < back.values.shape[0] <= h and 0 < back.values.shape[1] <= w
     assert back.y > framing.bbox[1]  # the ground shadow lies below the object's top
     assert peak < 3 * 2**30, f"peak traced memory {peak / 2**30:.2f} GiB"
+
+
+def test_camera_input_follows_the_framing():
+    """Conventions: h = k H + d and f = k F for the canvas horizon H and focal length F."""
+    alpha = np.zeros((300, 400), np.uint8)
+    alpha[100:200, 150:220] = 255
+    _, framing = frame_alpha(alpha, 256)
+    h, f = framing.camera_input(250.0, 50.0)
+    assert h == pytest.approx(framing.to_frame(0.0, 250.0)[1])
+    assert f == pytest.approx(framing.scale * 150.0 / np.tan(np.radians(25.0)))
+    with pytest.raises(ValueError, match="field of view"):
+        framing.camera_input(250.0, 0.0)

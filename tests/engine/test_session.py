@@ -19,13 +19,13 @@ class CountingMethod:
         self.inner, self.name, self.resolution = inner, inner.name, inner.resolution
         self.ao_calls = self.render_calls = 0
 
-    def predict_ao(self, masks):
+    def predict_ao(self, masks, cameras=None):
         self.ao_calls += 1
-        return self.inner.predict_ao(masks)
+        return self.inner.predict_ao(masks, cameras)
 
-    def render(self, masks, ao, elms):
+    def render(self, masks, ao, elms, cameras=None):
         self.render_calls += 1
-        return self.inner.render(masks, ao, elms)
+        return self.inner.render(masks, ao, elms, cameras)
 
 
 @pytest.fixture
@@ -90,10 +90,29 @@ def test_render_frame_and_canvas_shadow(counting):
     full = shadow.full_canvas(200, 150)
     ys, xs = np.nonzero(alpha > 127)
     assert full[ys.max() + 3 :].sum() > 0.8 * full[alpha < 128].sum()  # below the object: towards the viewer
-    assert session.frame is session.framing and session.framing.bbox[2] <= 200
+    assert session.framing.bbox[2] <= 200
 
 
 def test_empty_alpha(counting):
     with pytest.raises(EmptyAlphaError):
         ShadowSession(np.zeros((20, 20), np.uint8), counting)
     assert counting.ao_calls == 0
+
+
+def test_a_long_shadow_continues_beyond_the_frame():
+    """A low sun's shadow runs out of the network's frame; on the canvas it goes on, fading, never cut."""
+    alpha = np.zeros((600, 1600), np.uint8)
+    alpha[300:460, 700:820] = drawn_alpha(120, 160)
+    session = ShadowSession(alpha, GeometricCard())
+    frame_right = session.framing.to_canvas(256, 0)[0]  # the frame's right edge on the canvas
+    sun = one_light(0.25, 0.92)  # left of the camera's forward direction, 7 degrees up: a long shadow to the right
+    shadow = session.render(sun)
+    full = shadow.full_canvas(1600, 600)
+    cols = np.flatnonzero((full > 0.05).any(axis=0))
+    assert cols.max() > frame_right + 50  # it reaches well past the frame
+    # and fades out without a hard edge: no column-to-column jump anywhere along it
+    profile = full.max(axis=0)
+    assert np.abs(np.diff(profile[int(frame_right) - 40 : int(frame_right) + 40])).max() < 0.08
+    # a high sun's short shadow stays inside the frame and is not extended
+    short = session.render(one_light(0.25, 0.2)).full_canvas(1600, 600)
+    assert np.flatnonzero((short > 0.02).any(axis=0)).max() < frame_right

@@ -386,3 +386,27 @@ def test_stdio_protocol_error_ends_the_conversation_cleanly(worker_env):
     reply = json.loads(result.stdout.splitlines()[0])
     assert reply["ok"] is False and reply["error"]["type"] == "BadRequest"
     assert result.returncode == 0
+
+
+def test_set_cutout_with_a_camera_changes_the_geometric_shadow():
+    """The horizon the artist sets reaches the method: a geometric worker casts a different shadow."""
+    from ssn_engine.methods import load_method
+    from ssn_engine.worker import Worker
+
+    worker = Worker(load_method("geometric"))
+    layers = []
+    for camera in (None, {"horizon": -400.0, "fov": 40.0}):
+        header = {} if camera is None else {"camera": camera}
+        reply, _ = worker.set_cutout(header, {"alpha": buf(canvas_alpha())})
+        _, out = worker.render({"cutout": reply["cutout"], "light_map": _light(0.0, 0.7)}, {})
+        layers.append(arr(out["layer"])[..., 3].astype(float))
+    assert layers[0].shape != layers[1].shape or np.abs(layers[0] - layers[1]).mean() > 1.0
+
+
+@pytest.mark.parametrize("camera, fragment", [
+    ({"fov": 40.0}, "camera"), ("low", "camera"), ({"horizon": 10.0, "fov": 0.0}, "camera.fov"),
+])
+def test_bad_camera_is_a_bad_request(client, camera, fragment):
+    with pytest.raises(EngineError) as info:
+        client.request("set_cutout", {"alpha": buf(canvas_alpha())}, camera=camera)
+    assert info.value.kind == "BadRequest" and fragment in str(info.value)

@@ -44,3 +44,33 @@ def test_all_and_mean():
     m = mean_metrics(rows)
     assert m["RMSE"] == pytest.approx(rows[1]["RMSE"] / 2)
     assert m["ZNCC"] == pytest.approx(0.5)
+
+
+def _streak(angle_deg: float, length: float, n: int = 128) -> tuple[np.ndarray, np.ndarray]:
+    """A box standing on row 80 and a shadow streak of ``length`` px from its foot at ``angle_deg``."""
+    from training.metrics import contact_point
+
+    mask = np.zeros((n, n), np.float32)
+    mask[40:80, 60:68] = 1.0
+    x0, y0 = contact_point(mask)
+    s = np.zeros((n, n), np.float32)
+    a = np.radians(angle_deg)
+    for t in np.linspace(0, length, 400):
+        x, y = int(x0 + t * np.cos(a)), int(y0 + t * np.sin(a))
+        if 0 <= x < n and 0 <= y < n:
+            s[max(y - 1, 0) : y + 2, max(x - 1, 0) : x + 2] = 1.0
+    return s * (1 - mask), mask
+
+
+def test_sun_geometry_measures_direction_and_length():
+    from training.metrics import sun_geometry
+
+    g, mask = _streak(160.0, 40.0)
+    same = sun_geometry(g, g, mask)
+    assert same["direction_error"] < 1e-6 and same["length_ratio"] == pytest.approx(1.0)
+    longer, _ = _streak(160.0, 60.0)
+    assert sun_geometry(longer, g, mask)["length_ratio"] == pytest.approx(1.5, rel=0.1)
+    turned, _ = _streak(130.0, 40.0)
+    assert sun_geometry(turned, g, mask)["direction_error"] == pytest.approx(30.0, abs=4.0)
+    assert sun_geometry(np.zeros_like(g), g, mask) == {"direction_error": 180.0, "length_ratio": 0.0}
+    assert sun_geometry(g, np.zeros_like(g), mask) is None  # no true cast shadow: nothing to measure

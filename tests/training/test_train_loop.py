@@ -27,7 +27,7 @@ def _run(tmp_path, module, steps, extra=()):
 
 @pytest.mark.parametrize("module,extra", [("aop", []), ("sr", []), ("sr", ["--target", "irradiance"]),
                                           ("aop", ["--flip"]), ("sr", ["--flip"]),
-                                          ("sr", ["--balance-kinds"])])
+                                          ("sr", ["--balance-kinds"]), ("sr", ["--card", "--lights", "mix"])])
 def test_training_writes_checkpoints_logs_and_figures(tmp_path, module, extra):
     run = _run(tmp_path, module, 4, extra)
     for name in ("last.pt", "best.pt", "log.csv", "loss.png", "samples_latest.png", "config.json"):
@@ -112,19 +112,15 @@ def test_geometric_cache_reproduces_the_baseline(tmp_path):
 def test_predicted_ao_replaces_the_chosen_samples():
     from training.train import mix_predicted_ao
 
-    class ConstantAOP(torch.nn.Module):
-        def forward(self, mask):
-            return torch.full_like(mask, 0.25)
-
-    x = {"mask": torch.rand(64, 1, 8, 8)}
+    x = {"mask": torch.rand(64, 1, 8, 8), "ao_pred": torch.full((64, 1, 8, 8), 0.25)}
     ao = torch.ones(64, 1, 8, 8)
     gen = torch.Generator().manual_seed(0)
-    mixed = mix_predicted_ao(ConstantAOP(), x, ao, 0.5, gen)
+    mixed = mix_predicted_ao(x, ao, 0.5, gen)
     replaced = (mixed == 0.25).flatten(1).all(1)
     kept = (mixed == 1.0).flatten(1).all(1)
     assert bool((replaced | kept).all()) and 16 < int(replaced.sum()) < 48  # whole samples, about half
     assert bool((ao == 1).all())  # the input is not modified
-    assert torch.equal(mix_predicted_ao(ConstantAOP(), x, ao, 0.0, gen), ao)
+    assert torch.equal(mix_predicted_ao(x, ao, 0.0, gen), ao)
 
 
 def test_sr_trains_on_predicted_ao(tmp_path):

@@ -42,6 +42,8 @@ def describe(module: str, model: nn.Module, resolution: int) -> str:
     """One line: parameters and multiply-adds per image at ``resolution``."""
     mask = torch.zeros(1, 1, resolution, resolution)
     inputs = (mask,) if module == "aop" else (mask, mask, torch.zeros(1, 16, 32))
+    if module == "sr" and getattr(model, "config", None) is not None and model.config.card:
+        inputs += (mask,)
     was_training = model.training
     model.eval()
     macs = count_macs(model, *inputs)

@@ -11,7 +11,7 @@ conv - GroupNorm - ReLU.
 
 from __future__ import annotations
 
-from dataclasses import asdict, dataclass, field
+from dataclasses import asdict, dataclass
 
 import torch
 from torch import nn
@@ -27,6 +27,7 @@ class UNetConfig:
     widths: tuple[int, ...] = (8, 16, 32, 64, 96, 128)
     groups: int = 8
     resolution: int = 128
+    card: bool = False  # SR only: geometry-guided, takes the geometric card's shadow (SRNet)
 
     @property
     def depth(self) -> int:
@@ -39,7 +40,8 @@ class UNetConfig:
 
     @classmethod
     def from_dict(cls, d: dict) -> UNetConfig:
-        return cls(widths=tuple(d["widths"]), groups=d["groups"], resolution=d["resolution"])
+        return cls(widths=tuple(d["widths"]), groups=d["groups"], resolution=d["resolution"],
+                   card=d.get("card", False))
 
 
 def _norm(channels: int, groups: int) -> nn.GroupNorm:
@@ -121,23 +123,24 @@ class AOPNet(nn.Module):
 
 
 class SRNet(nn.Module):
-    """Shadow rendering: mask, AO (B, 1, R, R) and ELM (B, 16, 32) -> target map (B, 1, R, R), linear output."""
+    """Shadow rendering: mask, AO (B, 1, R, R) and ELM (B, 16, 32) -> target map (B, 1, R, R), linear output.
+
+    Geometry-guided (``config.card``): the geometric card's shadow for the same ELM (B, 1, R, R) is a third
+    input channel and the base of the output, so the network learns a correction of the card's shadow
+    (contact, softness, the shape's true silhouette on the ground) while direction and length come from
+    the card's geometry.
+    """
 
     def __init__(self, config: UNetConfig):
         super().__init__()
         self.config = config
-        self.unet = UNet(2, config, bottleneck_extra=ELM_SHAPE[0] * ELM_SHAPE[1])
+        self.unet = UNet(3 if config.card else 2, config, bottleneck_extra=ELM_SHAPE[0] * ELM_SHAPE[1])
 
-    def forward(self, mask: torch.Tensor, ao: torch.Tensor, elm: torch.Tensor) -> torch.Tensor:
-        return self.unet(torch.cat([mask, ao], dim=1), elm.flatten(1))
-
-
-@dataclass
-class ModelSpec:
-    """What a checkpoint needs to rebuild its network."""
-
-    module: str  # "aop" or "sr"
-    config: UNetConfig = field(default_factory=UNetConfig)
+    def forward(self, mask: torch.Tensor, ao: torch.Tensor, elm: torch.Tensor,
+                card: torch.Tensor | None = None) -> torch.Tensor:
+        if not self.config.card:
+            return self.unet(torch.cat([mask, ao], dim=1), elm.flatten(1))
+        return card + self.unet(torch.cat([mask, ao, card], dim=1), elm.flatten(1))
 
 
 def build(module: str, config: UNetConfig, head_bias: float | None = None) -> nn.Module:
