@@ -57,7 +57,8 @@ def camera_input(info: dict, n: int) -> tuple[float, float]:
 
 def card_bases(card: GeometricCard, mask: np.ndarray, camera: tuple[float, float] | None) -> np.ndarray:
     """The card's hard-shadow bases of a frame mask on the full R x R grid, (T, R*R) uint8 (x 255)."""
-    traced, _ = card.card(mask, camera)
+    traced = card.card(mask, camera)
+    traced.trace()
     out = np.zeros((texel_weights(16).size, card.internal**2), np.uint8)
     if not traced.empty:
         out[:, traced.valid.ravel()] = np.rint(traced.bases * 255)
@@ -230,8 +231,11 @@ def make_batch(views: list[CachedView], lights: LightBatch, elm_rows: int, weigh
         true_camera = np.zeros(len(views), bool) if true_camera is None else true_camera
         card = np.zeros((len(views), r * r), np.float32)
         w16 = texel_weights(16)
-        for b, v in enumerate(views):
-            card[b] = targets_for(v.cards[int(true_camera[b])], elm16[b : b + 1], peak[b : b + 1], w16, "shadow")[0]
+        groups: dict[tuple[int, bool], list[int]] = {}
+        for b, v in enumerate(views):  # one conversion of the uint8 bases per view and camera
+            groups.setdefault((id(v), bool(true_camera[b])), []).append(b)
+        for (_, true), idx in groups.items():
+            card[idx] = targets_for(views[idx[0]].cards[int(true)], elm16[idx], peak[idx], w16, "shadow")
         card = card.reshape(len(views), r, r)
     return Batch(
         mask=np.stack([v.mask for v in views]),

@@ -81,12 +81,12 @@ def family_lights(seed: int, view: int, family: str, count: int, rows_hb: int) -
 def evaluate_families(args: argparse.Namespace, store=None) -> dict:
     from .data.store import ViewStore
 
-    store = store if store is not None else ViewStore(args.data)
-    n, rows_hb = store.meta["res"], store.meta["elm_rows"]
     families = [f for f in args.families.split(",") if f]
     unknown = set(families) - set(FAMILIES)
     if unknown:
         raise SystemExit(f"--families: unknown {sorted(unknown)}; choose from {', '.join(FAMILIES)}")
+    store = store if store is not None else ViewStore(args.data)
+    n, rows_hb = store.meta["res"], store.meta["elm_rows"]
     rows = build_rows(args, n)
     labels = [r.label for r in rows]
     ids = sorted(i for k in KINDS for i in store.view_ids(args.split, k))

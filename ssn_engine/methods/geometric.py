@@ -31,6 +31,7 @@ INTERNAL = 128  # the card is traced at this resolution, then upsampled
 TURN = 0.5  # share of the way the card turns towards each light
 CHUNK = 64  # directions traced at once (bounds memory)
 CACHED_CARDS = 4
+NEGLIGIBLE = 1e-4  # share of a light map's weight whose texels a card shadow may leave out
 EXTENDED_TEXELS = 64  # at most this many texels traced beyond the frame per light map
 
 
@@ -43,12 +44,15 @@ def _resize(image: np.ndarray, size: int) -> np.ndarray:
 class _Card:
     """The card and camera for one mask at the internal resolution."""
 
-    def __init__(self, mask: np.ndarray, camera: tuple[float, float] | None = None) -> None:
+    def __init__(self, mask: np.ndarray, directions: np.ndarray, weights: np.ndarray,
+                 camera: tuple[float, float] | None = None) -> None:
         m = mask.shape[0]
-        self.mask = mask
+        self.mask, self.directions, self.weights = mask, directions, weights
+        self._ao: np.ndarray | None = None
         rows = np.flatnonzero((mask > 0.05).any(axis=1))
         if rows.size == 0:
             self.empty = True
+            self._ao = np.ones((m, m), np.float32)
             return
         self.empty = False
         top, base = float(rows[0]), float(rows[-1] + 1)
@@ -61,6 +65,8 @@ class _Card:
         ground, self.valid = self.camera.ground_points()
         self.ground = ground[self.valid].astype(np.float32)  # (P, 3)
         self._padded = np.pad(mask.astype(np.float32), 1)  # bilinear taps never leave it
+        self.bases = np.zeros((len(directions), len(self.ground)), np.float32)
+        self.traced = np.zeros(len(directions), bool)
 
     def _sample(self, col: np.ndarray, row: np.ndarray) -> np.ndarray:
         """The mask bilinearly interpolated at continuous (col, row) points (pixel centres at k + 0.5); 0 outside."""
@@ -119,23 +125,37 @@ class _Card:
         out[hit] = self._sample(col, np.minimum(row, self.lowest_centre))
         return out
 
-    def trace(self, directions: np.ndarray) -> None:
-        """Trace the hard shadow of every direction (T, 3) once: ``self.bases`` (T, P) float32."""
-        self.bases = np.zeros((len(directions), len(self.ground) if not self.empty else 0), np.float32)
+    def trace(self, texels: np.ndarray | None = None) -> None:
+        """Trace the hard shadows of ``texels`` (indices; None: all) not traced yet into ``self.bases`` (T, P)."""
         if self.empty:
             return
-        for i in range(0, len(directions), CHUNK):
-            self.bases[i : i + CHUNK] = self.occlusion(directions[i : i + CHUNK])
+        todo = np.flatnonzero(~self.traced) if texels is None else texels[~self.traced[texels]]
+        for i in range(0, len(todo), CHUNK):
+            part = todo[i : i + CHUNK]
+            self.bases[part] = self.occlusion(self.directions[part])
+        self.traced[todo] = True
 
     def shadow(self, weights: np.ndarray) -> np.ndarray:
-        """The weighted mean (m, m) of the traced hard shadows, weights (T,) >= 0."""
+        """The weighted mean (m, m) of the hard shadows, weights (T,) >= 0. Only the texels that hold all but
+        ``NEGLIGIBLE`` of the weight count; those not traced yet are traced now (a light drag traces a few)."""
         m = self.mask.shape[0]
         out = np.zeros((m, m), np.float32)
-        total = float(weights.sum())
-        if self.empty or total <= 0:
+        if self.empty or float(weights.sum()) <= 0:
             return out
-        out[self.valid] = (weights / total).astype(np.float32) @ self.bases
+        order = np.argsort(-weights)
+        cum = np.cumsum(weights[order])
+        used = np.sort(order[: int(np.searchsorted(cum, (1.0 - NEGLIGIBLE) * cum[-1])) + 1])
+        self.trace(used)
+        w = weights[used]
+        out[self.valid] = (w / w.sum()).astype(np.float32) @ self.bases[used]
         return np.clip(out, 0.0, 1.0)
+
+    @property
+    def ao(self) -> np.ndarray:
+        """The card's own AO map (m, m), A^(1/3): its shadow under a uniform sky (traces every texel once)."""
+        if self._ao is None:
+            self._ao = (1.0 - self.shadow(self.weights)) ** (1.0 / 3.0)
+        return self._ao
 
 
 def camera_at(cameras: np.ndarray | None, b: int) -> tuple[float, float] | None:
@@ -155,21 +175,18 @@ class GeometricCard:
         self.resolution, self.internal = resolution, internal
         self._dirs = Camera(internal, 0.5).to_world(texel_centres(16)).reshape(-1, 3)
         self._weights = texel_weights(16).ravel()
-        self._cache: collections.OrderedDict[bytes, tuple[_Card, np.ndarray]] = collections.OrderedDict()
+        self._cache: collections.OrderedDict[bytes, _Card] = collections.OrderedDict()
 
-    def card(self, mask: np.ndarray, camera: tuple[float, float] | None = None) -> tuple[_Card, np.ndarray]:
-        """The traced card for a frame mask (camera input in frame pixels, or None: the default camera) and its
-        AO at the internal resolution; recent cards are cached. ``card.bases`` (T, P) are the hard shadows of
-        the T = 512 texel directions on the P ground pixels ``card.valid`` of the internal grid."""
+    def card(self, mask: np.ndarray, camera: tuple[float, float] | None = None) -> _Card:
+        """The card for a frame mask (camera input in frame pixels, or None: the default camera) at the internal
+        resolution; recent cards are cached. Its hard shadows (``card.bases`` (T, P), T = 512 texel directions
+        on the P ground pixels ``card.valid`` of the internal grid) are traced when first needed."""
         key = hashlib.blake2b(np.ascontiguousarray(mask, np.float32).tobytes() + repr(camera).encode(),
                               digest_size=16).digest()
         if key not in self._cache:
             scale = self.internal / mask.shape[0]
-            card = _Card(_resize(mask, self.internal),
-                         None if camera is None else (camera[0] * scale, camera[1] * scale))
-            card.trace(self._dirs)
-            ao = (1.0 - card.shadow(self._weights)) ** (1.0 / 3.0)
-            self._cache[key] = (card, ao)
+            self._cache[key] = _Card(_resize(mask, self.internal), self._dirs, self._weights,
+                                     None if camera is None else (camera[0] * scale, camera[1] * scale))
             while len(self._cache) > CACHED_CARDS:
                 self._cache.popitem(last=False)
         self._cache.move_to_end(key)
@@ -180,8 +197,7 @@ class GeometricCard:
         out = np.zeros((len(masks), self.internal, self.internal), np.float32)
         for b, (mask, elm) in enumerate(zip(masks, elms, strict=True)):
             if elm.max() > 0:
-                out[b] = self.card(mask, camera_at(cameras, b))[0].shadow(np.maximum(elm, 0).ravel()
-                                                                                * self._weights)
+                out[b] = self.card(mask, camera_at(cameras, b)).shadow(np.maximum(elm, 0).ravel() * self._weights)
         return out
 
     def extended_shadow(self, mask: np.ndarray, elm: np.ndarray, camera: tuple[float, float] | None = None,
@@ -191,7 +207,7 @@ class GeometricCard:
 
         Only the brightest texels, those that hold 99.5 % of the light (at most ``EXTENDED_TEXELS``), are
         traced, when the light changes: long shadows come from small lights, which cover few texels."""
-        card, _ = self.card(mask, camera)
+        card = self.card(mask, camera)
         ground, valid = card.ground_grid(margin, cell * self.internal / mask.shape[0]) if not card.empty \
             else (None, np.zeros((1, 1), bool))
         out = np.zeros(valid.shape, np.float32)
@@ -205,7 +221,7 @@ class GeometricCard:
 
     def predict_ao(self, masks: np.ndarray, cameras: np.ndarray | None = None) -> np.ndarray:
         check_batch(masks, None, self.resolution, cameras=cameras)
-        return np.stack([_resize(self.card(m, camera_at(cameras, b))[1], self.resolution)
+        return np.stack([_resize(self.card(m, camera_at(cameras, b)).ao, self.resolution)
                          for b, m in enumerate(masks)]).clip(0, 1)
 
     def render(self, masks: np.ndarray, ao: np.ndarray, elms: np.ndarray,
@@ -214,7 +230,7 @@ class GeometricCard:
         shadows = self.card_shadows(masks, elms, cameras)
         out = []
         for b, (mask, edited) in enumerate(zip(masks, ao, strict=True)):
-            card_ao = self.card(mask, camera_at(cameras, b))[1]
+            card_ao = self.card(mask, camera_at(cameras, b)).ao
             s = _resize(shadows[b], self.resolution)
             # Both visibilities at frame resolution, so an unedited AO map changes nothing.
             card_visibility = np.maximum(_resize(card_ao, self.resolution), 1e-3) ** 3

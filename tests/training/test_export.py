@@ -128,3 +128,31 @@ def test_two_aops_export_as_one_graph_of_their_mean(exported):
     assert report["checkpoints"] == list(map(str, members)) and report["max_abs_diff"] <= 1e-4
     assert report["widths"] == [checkpoint_widths(p) for p in members]  # each member's own U-Net
     assert "the mean of 2 networks" in (out / "MODEL_CARD.md").read_text()
+
+
+def test_geometry_guided_sr_exports_with_the_card_input_and_the_engine_feeds_it(exported, tmp_path):
+    """A --card SR ships beside a reused AOP graph; the engine traces the card (with the camera when given)."""
+    from ssn_engine.methods import OnnxSSN
+
+    run = tmp_path / "sr_card"
+    assert train_main(["--module", "sr", "--card", "--lights", "mix", "--run", str(run), *TINY],
+                      store=FakeStore(res=32)) == 0
+    out = tmp_path / "model"
+    assert export_main(["--aop", str(exported / "aop.onnx"), "--sr", str(run / "last.pt"), "--out", str(out),
+                        "--data", str(tmp_path / "no-data")]) == 0
+    card = json.loads((out / "model.json").read_text())
+    assert card["export"]["sr"]["max_abs_diff"] <= 1e-4
+    assert card["export"]["aop"]["reused_from"] == str(exported / "aop.onnx")
+    sr_inputs = {i.name for i in ort.InferenceSession(str(out / "sr.onnx")).get_inputs()}
+    assert sr_inputs == {"mask", "ao", "elm", "card"}
+    method = OnnxSSN(out)
+    assert method.card is not None and method.card.internal == 32
+    mask = np.zeros((1, 256, 256), np.float32)
+    mask[0, 8:136, 100:156] = 1.0
+    elm = np.zeros((1, 16, 32), np.float32)
+    elm[0, 13, 4] = 1.0  # a low light behind the camera, to the left
+    ao = method.predict_ao(mask)
+    blind = method.render(mask, ao, elm)
+    seen = method.render(mask, ao, elm, np.array([[-300.0, 300.0]]))
+    assert blind.shape == (1, 256, 256) and 0 <= blind.min() and blind.max() <= 1
+    assert np.abs(blind - seen).max() > 0.05  # the camera input reaches the network through the card

@@ -173,3 +173,23 @@ def test_aop_trains_through_a_frozen_sr(tmp_path):
     with pytest.raises(SystemExit):  # and trains AOPs only
         _run(tmp_path / "bad2", "sr", 1, ["--through-sr", str(sr)])
     assert not (tmp_path / "bad").exists() and not (tmp_path / "bad2").exists()  # refused before any file
+
+
+def test_evaluation_by_light_family_on_the_standin(tmp_path):
+    from training.evaluate import main as eval_main
+    from training.evaluate import parse_args as eval_args
+    from training.evaluate_families import evaluate_families
+
+    args = eval_args(["--families", "sun,sky", "--per-view", "2", "--with-camera", "geometric",
+                      "--out", str(tmp_path / "fam")])
+    res = evaluate_families(args, store=FakeStore(res=32))
+    assert set(res["families"]) == {"sun", "sky"} and res["rows"] == ["geometric", "geometric + camera"]
+    sun = res["families"]["sun"]
+    assert sun["images"] == 2 * res["views"] and set(sun["kinds"]) <= {"object", "human", "animal"}
+    assert set(sun["pitches"]) == {"0", "15"}
+    assert set(sun["geometry"]) == set(res["rows"]) and "geometry" not in res["families"]["sky"]
+    text = (tmp_path / "fam" / "families.md").read_text()
+    assert "### sun" in text and "median direction error" in text and "### sky" in text
+    assert (tmp_path / "fam" / "sun_grid.png").is_file()
+    with pytest.raises(SystemExit, match="moon"):
+        eval_main(["--families", "sun,moon", "--out", str(tmp_path / "x")])
