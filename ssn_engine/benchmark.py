@@ -14,13 +14,14 @@ from PIL import Image
 from .compositing import shadow_layer
 from .framing import frame_alpha
 from .hemisphere import render_light_map
-from .light_map import preset
+from .light_map import GaussianLight, LightMap, preset
 from .methods import GeometricCard, load_method
 from .samples import pawn_cutout
 from .session import ShadowSession
 
 
 VARIANTS = 6  # distinct inputs cycled through when timing uncached work
+DRAG = 64  # sun positions of the dragged-light row, each rendered once
 
 
 def _time(fn: Callable[[], object], repeats: int, warmup: int = 2) -> np.ndarray:
@@ -78,9 +79,15 @@ def run_benchmark(repeats: int = 20, method: str = "auto") -> dict[str, np.ndarr
     ao = m.predict_ao(masks)
     geometric = GeometricCard(m.resolution)
     geo_ao = geometric.predict_ao(masks)
+    # A light dragged across the sky: every render a new sun position (a geometry-guided model traces the card's
+    # hard shadows of texels it has not needed before, then keeps them).
+    drag = _alternating([render_light_map(LightMap([GaussianLight(0.2 + 0.6 * k / DRAG, 0.7, 0.002, 1.0)]))[None]
+                         for k in range(DRAG)])
     results = {
         f"AOP ({m.name}, N={m.resolution})": _time(lambda: m.predict_ao(shifted_masks()), repeats),
         f"SR ({m.name}, N={m.resolution})": _time(lambda: m.render(masks, ao, elm), repeats),
+        f"SR, sun dragged ({m.name}, N={m.resolution})": _time(lambda: m.render(masks, ao, drag()),
+                                                              min(repeats, DRAG - 2)),
         "geometric card (render, 2 lights)": _time(lambda: geometric.render(masks, geo_ao, elm), repeats),
     }
     cutout = big_cutout()

@@ -106,16 +106,23 @@ def fov_from_focal(n: float, focal: float) -> float:
     return float(np.degrees(2 * np.arctan(0.5 * n / focal)))
 
 
+def _axis_row(cam: Camera, y: float) -> float:
+    """The unshifted image row of the point (0, y, 0) (scalar arithmetic: the fit below calls it often)."""
+    ry, rz = y - float(cam.centre[1]), -float(cam.centre[2])
+    depth = ry * float(cam.view[1]) + rz * float(cam.view[2])
+    up = ry * float(cam.up[1]) + rz * float(cam.up[2])
+    return 0.5 * cam.n - float(cam.focal) * up / depth
+
+
 def _fit_span(n: int, fov: float, pitch: float, top: float, base: float) -> Camera:
     """The camera of a vertical card standing at the origin whose projection spans rows [top, base):
     its height found by fixed-point iteration, the lens shift putting its foot on row ``base``."""
     height = 0.5
     for _ in range(12):
         cam = Camera(n, height / 2, fov=fov, pitch=pitch)
-        span = cam.project(np.array([0.0, 0.0, 0.0]))[1] - cam.project(np.array([0.0, height, 0.0]))[1]
-        height *= (base - top) / span
+        height *= (base - top) / (_axis_row(cam, 0.0) - _axis_row(cam, height))
     cam = Camera(n, height / 2, fov=fov, pitch=pitch)
-    cam.shift = base - cam.project(np.array([0.0, 0.0, 0.0]))[1]
+    cam.shift = base - _axis_row(cam, 0.0)
     return cam
 
 
@@ -134,7 +141,7 @@ def camera_for_span(n: int, top: float, base: float, horizon: float | None = Non
         return cam, 2 * cam.target_height
     fov = fov_from_focal(n, focal)
     lo, hi = PITCH_RANGE  # horizon(lo) > horizon(hi)
-    for _ in range(40):
+    for _ in range(24):  # 90 degrees / 2^24: well below a pixel
         mid = 0.5 * (lo + hi)
         if _fit_span(n, fov, mid, top, base).horizon > horizon:
             lo = mid

@@ -113,6 +113,9 @@ def cmd_render(args: argparse.Namespace) -> int:
     return EXIT_OK
 
 
+DEMO_PRESET = "low-sun-left"  # the demo's light: a low sun, so the shadow it casts shows
+
+
 def cmd_demo(args: argparse.Namespace) -> int:
     from .samples import pawn_cutout, save_samples, studio_background
 
@@ -226,7 +229,7 @@ def build_parser() -> argparse.ArgumentParser:
     p.add_argument("--layer", metavar="OUT.png", help="also write the shadow layer")
     p.add_argument("--save-samples", metavar="DIR", help="also write the sample cutout and background PNGs")
     _add_shadow_options(p)
-    p.set_defaults(func=cmd_demo)
+    p.set_defaults(func=cmd_demo, preset=DEMO_PRESET)
 
     p = sub.add_parser("presets", help="list light presets, or print one as light-map JSON")
     p.add_argument("name", nargs="?", help="preset to print as JSON")

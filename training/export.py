@@ -27,6 +27,7 @@ import torch
 from torch import nn
 
 from .checkpoint import load_models
+from .elm import TRAIN_MIX
 from .model import MirrorAverage
 
 TOL = 1e-4
@@ -244,8 +245,14 @@ def model_card(card: dict, attribution: list[dict], command: str) -> str:
         runs = " and ".join(f"U-Net widths {w}, {st} steps ({n} samples, `{p}`)" for p, w, st, n in
                             zip(r["checkpoints"], r["widths"], r["steps"], r["samples"], strict=True))
         mean = f"the mean of {len(r['checkpoints'])} networks, " if len(r["checkpoints"]) > 1 else ""
-        lines.append(f"- {m.upper()}: {mean}{runs}, {r['weights']} weights, "
+        reused = f" (the graph of `{r['reused_from']}`, reused as it is)" if r.get("reused_from") else ""
+        lines.append(f"- {m.upper()}: {mean}{runs}{reused}, {r['weights']} weights, "
                      f"{r['bytes'] / 1e6:.2f} MB, max abs diff to torch {r['max_abs_diff']:.1e}")
+    if card.get("card_input"):
+        lines.append("- Geometry-guided SR: it also takes the engine's geometric card shadow for the same light map "
+                     "(traced with the camera input when given, else the conventions' default camera) and outputs a "
+                     "correction of it, so the shadow's direction and length come from the card's geometry and the "
+                     f"network refines contact, softness and shape. Light maps in training: {card['lights']}.")
     if card.get("output_floor"):
         lines.append(f"- Output floor {card['output_floor']}: the engine maps s to (s - floor) / (1 - floor), clipped "
                      "(removes the network's faint noise; chosen on the validation split, docs/benchmark.md).")
@@ -257,7 +264,8 @@ def model_card(card: dict, attribution: list[dict], command: str) -> str:
               f"{t['sr_engine_256_ms']:.1f} ms for a 256 frame including resampling.", "",
               "## Training data", "",
               f"Shadow bases of `{card.get('training_data')}` (training/data, `python -m training.make_dataset`), "
-              "train split; soft shadows from random Table 1 light maps on the fly, exact linear algebra on the bases.",
+              "train split; soft shadows from random light maps on the fly (Table 1, or the mixture of light families "
+              "of `training.elm`), exact linear algebra on the bases.",
               ""]
     if "metrics" in card:
         from .evaluate import tables_markdown
@@ -349,6 +357,10 @@ def main(argv: list[str] | None = None) -> int:
             return 1
         print(f"{module}: {dtype} weights, max abs diff to torch {diff:.2e} (fp32 graph {diff32:.2e}), "
               f"{report[module]['bytes'] / 1e6:.2f} MB", flush=True)
+    sr_ck = load_models([args.sr])[1][0]
+    card["card_input"] = bool(sr_ck["unet"].get("card"))
+    lights = sr_ck["args"].get("lights", "table1")
+    card["lights"] = f"the family mixture {TRAIN_MIX}" if lights == "mix" else "the paper's Table 1"
     report["timing"] = time_sr(out / "sr.onnx", card["resolution"])
     print(f"SR median latency (onnxruntime, this CPU): {report['timing']['sr_at_R_ms']:.1f} ms at R = "
           f"{card['resolution']}, {report['timing']['sr_engine_256_ms']:.1f} ms on a 256 frame incl. resampling")

@@ -4,12 +4,13 @@ The mask is taken to be a card standing upright on the ground, facing the
 camera of the conventions, its lowest mask row touching the ground. The
 camera is the conventions' default (45 degree field of view, 15 degree
 pitch) or, given the camera input (horizon row and focal length), the one
-whose horizon lies on that row (:func:`ssn_engine.camera.camera_for_span`). Every texel of the 16 x 32 ELM casts
-one hard shadow of the card along its centre direction; the shadow is their
-sum with the conventions' weights L_t W_t. The AO map is the card's own
-ambient occlusion (the same sum under a uniform sky). The hard shadows are
-traced once per mask (like the training data's bases), so moving a light
-costs one weighted sum.
+whose horizon lies on that row (:func:`ssn_engine.camera.camera_for_span`).
+Every texel of the 16 x 32 ELM casts one hard shadow of the card along its
+centre direction; the shadow is their sum with the conventions' weights
+L_t W_t. The AO map is the card's own ambient occlusion (the same sum under
+a uniform sky). Each texel's hard shadow is traced the first time a light
+needs it and kept (like the training data's bases), so moving a light costs
+one weighted sum plus the texels it newly reaches.
 
 Edited AO maps steer the result near contact points: the received light is
 scaled by the edited over the card's ambient visibility (A = AO^3).
@@ -49,6 +50,7 @@ class _Card:
         m = mask.shape[0]
         self.mask, self.directions, self.weights = mask, directions, weights
         self._ao: np.ndarray | None = None
+        self._grid: tuple | None = None  # (margin, cell), ground points, valid: the wider grid of ground_grid
         rows = np.flatnonzero((mask > 0.05).any(axis=1))
         if rows.size == 0:
             self.empty = True
@@ -85,7 +87,7 @@ class _Card:
     def ground_grid(self, margin: float, cell: float) -> tuple[np.ndarray, np.ndarray]:
         """Ground points (P, 3) of a grid reaching ``margin`` frames beyond each side of the frame, with cells of
         ``cell`` internal pixels, and where its rays reach the ground: the same camera with a wider field."""
-        if getattr(self, "_grid", (None,))[0] != (margin, cell):
+        if self._grid is None or self._grid[0] != (margin, cell):
             n = int(round(self.mask.shape[0] * (1 + 2 * margin) / cell))
             cam = self.camera
             wide = Camera(n, cam.target_height, fov=fov_from_focal(n, cam.focal / cell), pitch=cam.pitch,

@@ -11,21 +11,21 @@ from pathlib import Path
 
 import numpy as np
 import pytest
-from engine_helpers import drawn_alpha, elm_for
+from engine_helpers import drawn_alpha
 
 from ssn_engine import api
 from ssn_engine.framing import frame_alpha
 from ssn_engine.hemisphere import render_light_map
 from ssn_engine.light_map import GaussianLight, LightMap
+from ssn_engine.session import ShadowSession
 from training.metrics import shadow_direction, shadow_extent, sun_geometry
 
 FIXTURE = Path(__file__).resolve().parents[1] / "data" / "sun_views.npz"
 
 
 @pytest.fixture(autouse=True)
-def _shipped_model(monkeypatch):
-    monkeypatch.delenv("SSN_SHADOW_MODEL_DIR", raising=False)
-    api.default_method.cache_clear()
+def _shipped_model():
+    api.default_method.cache_clear()  # the shipped model (conftest clears SSN_SHADOW_MODEL_DIR)
     yield
     api.default_method.cache_clear()
 
@@ -36,19 +36,38 @@ def fixed_masks(pawn_frame):
     return {"pawn": pawn_frame, "post": post}
 
 
+@pytest.fixture(scope="module")
+def wide_canvases(pawn_rgba):
+    """The pawn and the drawn post standing on a wide canvas, room for a low sun's shadow on either side."""
+    out = {}
+    for name, alpha in (("pawn", pawn_rgba[..., 3]), ("post", drawn_alpha(120, 160))):
+        canvas = np.zeros((alpha.shape[0] + 200, 6 * max(alpha.shape)), np.uint8)
+        x0 = (canvas.shape[1] - alpha.shape[1]) // 2
+        canvas[100 : 100 + alpha.shape[0], x0 : x0 + alpha.shape[1]] = alpha
+        out[name] = canvas
+    return out
+
+
 def sun(u: float, elevation: float) -> np.ndarray:
-    return render_light_map(LightMap([GaussianLight(u, 1.0 - elevation / 90.0, 0.002, 1.0)]), 16)
+    return render_light_map(sun_map(u, elevation), 16)
+
+
+def sun_map(u: float, elevation: float) -> LightMap:
+    return LightMap([GaussianLight(u, 1.0 - elevation / 90.0, 0.002, 1.0)])
 
 
 @pytest.mark.parametrize("name", ["pawn", "post"])
 @pytest.mark.parametrize("u", [0.25, 0.75])
-def test_a_lower_sun_casts_a_longer_shadow(fixed_masks, name, u):
-    mask = fixed_masks[name]
-    s = api.predict_frames(np.repeat(mask[None], 3, 0), np.stack([sun(u, e) for e in (60.0, 35.0, 15.0)]))
-    direction = shadow_direction(s[-1], mask)
+def test_a_lower_sun_casts_a_longer_shadow(wide_canvases, name, u):
+    """On the canvas (the network's frame, continued past its border): 60, 35 and 15 degrees of elevation."""
+    alpha = wide_canvases[name]
+    session = ShadowSession(alpha, api.default_method().method)
+    mask = (alpha > 127).astype(np.float32)
+    shadows = [session.render(sun_map(u, e)).full_canvas(alpha.shape[1], alpha.shape[0]) for e in (60.0, 35.0, 15.0)]
+    direction = shadow_direction(shadows[-1], mask)
     assert direction is not None
     assert (direction[0] > 0) == (u < 0.5)  # a light left of forward casts to the right, and vice versa
-    reach = [shadow_extent(x, mask, direction) for x in s]
+    reach = [shadow_extent(s, mask, direction) for s in shadows]
     assert reach[0] * 1.15 < reach[1] and reach[1] * 1.15 < reach[2], reach
 
 
@@ -75,7 +94,3 @@ def test_sun_shadow_length_on_held_out_shapes():
     error = float(np.median([g["direction_error"] for g in geometry]))
     assert 0.7 <= ratio <= 1.4, ratio
     assert error <= 20.0, error
-
-
-def test_elm_for_helper_is_a_single_small_light():
-    assert elm_for(0.5, 0.5).max() > 0 and (elm_for(0.5, 0.5) > 0.01 * elm_for(0.5, 0.5).max()).sum() < 40

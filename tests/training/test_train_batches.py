@@ -3,6 +3,7 @@
 from __future__ import annotations
 
 import numpy as np
+import pytest
 from test_train_standin import FakeStore
 
 from ssn_engine.hemisphere import network_elm, texel_weights
@@ -23,7 +24,19 @@ from training.frames import area_downsample, resize_frames
 def test_area_downsample_is_a_block_mean():
     x = np.arange(16, dtype=np.float32).reshape(1, 4, 4)
     np.testing.assert_allclose(area_downsample(x, 2)[0], [[2.5, 4.5], [10.5, 12.5]])
-    assert area_downsample(x, 4) is not None
+    np.testing.assert_array_equal(area_downsample(x, 4), x)  # the same size: unchanged
+    with pytest.raises(ValueError, match="multiple"):
+        area_downsample(x, 3)
+
+
+@pytest.mark.parametrize("factor", [2, 4])
+def test_area_downsample_of_uint8_bases_is_exact(factor):
+    """The bases are uint8: their block means come from exact integer sums, equal to the float mean."""
+    occ = np.random.default_rng(0).integers(0, 256, (3, 8 * factor, 8 * factor), dtype=np.uint8)
+    got = area_downsample(occ, 8)
+    ref = occ.astype(np.float64).reshape(3, 8, factor, 8, factor).mean(axis=(2, 4))
+    assert got.dtype == np.float32
+    np.testing.assert_allclose(got, ref, rtol=0, atol=1e-5)
 
 
 def test_shadow_target_is_the_downsampled_store_shadow():
@@ -126,3 +139,22 @@ def test_mirrored_sample_is_the_mirrored_scene_under_the_mirrored_light():
     np.testing.assert_array_equal(m.target[1], b.target[1])
     np.testing.assert_array_equal(m.mask[0], b.mask[0][:, ::-1])
     np.testing.assert_allclose(mirror(m, which).elm, b.elm)
+
+
+def test_the_card_channel_is_the_engines_card_shadow():
+    """What the geometry-guided SR learns from is what the engine feeds it: the card at R, default or true camera."""
+    from ssn_engine.methods import GeometricCard
+    from training.batches import camera_input, make_batch
+
+    store = FakeStore(res=32)
+    view = load_view(store, 0, 16, with_card=True)
+    lights = sample_lights(np.random.default_rng(3), 2)
+    batch = make_batch([view, view], lights, 4, store._weights, "shadow", np.array([False, True]))
+    elm16 = render_lights(lights, 16)
+    mask = store.load(0).mask
+    engine = GeometricCard(internal=16)
+    blind = engine.card_shadows(mask[None], elm16[:1])[0]
+    seen = engine.card_shadows(mask[None], elm16[1:], np.array([camera_input(store.info(0), 32)]))[0]
+    np.testing.assert_allclose(batch.card[0], blind, atol=2 / 255)
+    np.testing.assert_allclose(batch.card[1], seen, atol=2 / 255)
+    assert np.abs(seen - engine.card_shadows(mask[None], elm16[1:])[0]).max() > 0.05  # the camera matters
