@@ -4,7 +4,6 @@ from __future__ import annotations
 
 import os
 import platform
-import resource
 import time
 from collections.abc import Callable
 
@@ -108,6 +107,10 @@ def run_benchmark(repeats: int = 20, method: str = "auto") -> dict[str, np.ndarr
     print(f"{'stage':44s} {'median ms':>9s} {'p95 ms':>9s}")
     for name, ms in results.items():
         print(_row(name, ms))
-    peak = resource.getrusage(resource.RUSAGE_SELF).ru_maxrss / 1024
-    print(f"peak resident memory: {peak:.0f} MiB")
+    try:
+        import resource  # POSIX only
+    except ImportError:
+        print("peak resident memory: not measured on this platform")
+    else:
+        print(f"peak resident memory: {resource.getrusage(resource.RUSAGE_SELF).ru_maxrss / 1024:.0f} MiB")
     return results

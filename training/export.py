@@ -259,6 +259,8 @@ def model_card(card: dict, attribution: list[dict], command: str) -> str:
     if card.get("mirror_average"):
         lines.append("- Mirror-averaged graphs: each runs its network on the input and on its mirror image (frames "
                      "in x, the ELM in azimuth) and averages (training.model.MirrorAverage).")
+    if card.get("sr_training"):
+        lines.append(f"- SR training: {card['sr_training']}.")
     t = ex["timing"]
     lines += [f"- SR latency (onnxruntime, median, 2-core CPU): {t['sr_at_R_ms']:.1f} ms at R, "
               f"{t['sr_engine_256_ms']:.1f} ms for a 256 frame including resampling.", "",
@@ -307,6 +309,7 @@ def parse_args(argv: list[str] | None = None) -> argparse.Namespace:
     p.add_argument("--install", help="copy the model here (e.g. ssn_engine/models)")
     p.add_argument("--command", default="training/pipeline.sh data/ssn128 runs",
                    help="the reproducing command recorded in the card")
+    p.add_argument("--trained-on", default="", help="the machine the SR was trained on, for the card")
     return p.parse_args(argv)
 
 
@@ -359,6 +362,11 @@ def main(argv: list[str] | None = None) -> int:
               f"{report[module]['bytes'] / 1e6:.2f} MB", flush=True)
     sr_ck = load_models([args.sr])[1][0]
     card["card_input"] = bool(sr_ck["unet"].get("card"))
+    log = Path(args.sr).with_name("log.csv")
+    rows = log.read_text().splitlines()[1:] if log.is_file() else []
+    minutes = f"{float(rows[-1].split(',')[5]) / 60:.0f} min of training time, " if rows else ""
+    card["sr_training"] = f"{minutes}{sr_ck['step']} steps, {sr_ck['samples']} samples" + (
+        f", on {args.trained_on}" if args.trained_on else "")
     lights = sr_ck["args"].get("lights", "table1")
     card["lights"] = f"the family mixture {TRAIN_MIX}" if lights == "mix" else "the paper's Table 1"
     report["timing"] = time_sr(out / "sr.onnx", card["resolution"])

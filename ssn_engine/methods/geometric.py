@@ -51,6 +51,7 @@ class _Card:
         self.mask, self.directions, self.weights = mask, directions, weights
         self._ao: np.ndarray | None = None
         self._grid: tuple | None = None  # (margin, cell), ground points, valid: the wider grid of ground_grid
+        self._wide: dict[int, np.ndarray] = {}  # texel -> its hard shadow on the wider grid
         rows = np.flatnonzero((mask > 0.05).any(axis=1))
         if rows.size == 0:
             self.empty = True
@@ -88,6 +89,7 @@ class _Card:
         """Ground points (P, 3) of a grid reaching ``margin`` frames beyond each side of the frame, with cells of
         ``cell`` internal pixels, and where its rays reach the ground: the same camera with a wider field."""
         if self._grid is None or self._grid[0] != (margin, cell):
+            self._wide = {}
             n = int(round(self.mask.shape[0] * (1 + 2 * margin) / cell))
             cam = self.camera
             wide = Camera(n, cam.target_height, fov=fov_from_focal(n, cam.focal / cell), pitch=cam.pitch,
@@ -95,6 +97,14 @@ class _Card:
             ground, valid = wide.ground_points()
             self._grid = ((margin, cell), ground[valid].astype(np.float32), valid)
         return self._grid[1], self._grid[2]
+
+    def wide_bases(self, texels: np.ndarray, ground: np.ndarray) -> np.ndarray:
+        """The hard shadows (k, P) of ``texels`` on the wider grid's ``ground``, each traced once and kept."""
+        todo = [t for t in texels if t not in self._wide]
+        if todo:
+            for t, row in zip(todo, self.occlusion(self.directions[todo], ground), strict=True):
+                self._wide[t] = row
+        return np.stack([self._wide[t] for t in texels])
 
     def occlusion(self, directions: np.ndarray, ground: np.ndarray | None = None) -> np.ndarray:
         """Hard-shadow occlusion (T, P) of the card turned towards each world direction (T, 3), on the frame's
@@ -148,8 +158,12 @@ class _Card:
         cum = np.cumsum(weights[order])
         used = np.sort(order[: int(np.searchsorted(cum, (1.0 - NEGLIGIBLE) * cum[-1])) + 1])
         self.trace(used)
-        w = weights[used]
-        out[self.valid] = (w / w.sum()).astype(np.float32) @ self.bases[used]
+        w = np.zeros(len(weights), np.float32)
+        w[used] = weights[used] / weights[used].sum()
+        # einsum, not a BLAS product: BLAS threads left spinning after the call slow the network run that follows
+        # by more than the product costs. Few texels: just their rows; many: the whole matrix (no row copy).
+        rows = used if len(used) <= len(weights) // 8 else slice(None)
+        out[self.valid] = np.einsum("t,tp->p", w[rows], self.bases[rows])
         return np.clip(out, 0.0, 1.0)
 
     @property
@@ -218,7 +232,7 @@ class GeometricCard:
             return out
         order = np.argsort(-w)
         keep = order[: min(EXTENDED_TEXELS, int(np.searchsorted(np.cumsum(w[order]), 0.995 * w.sum())) + 1)]
-        out[valid] = (w[keep] / w[keep].sum()).astype(np.float32) @ card.occlusion(self._dirs[keep], ground)
+        out[valid] = (w[keep] / w[keep].sum()).astype(np.float32) @ card.wide_bases(keep, ground)
         return out
 
     def predict_ao(self, masks: np.ndarray, cameras: np.ndarray | None = None) -> np.ndarray:

@@ -18,7 +18,7 @@ from ssn_engine.framing import frame_alpha
 from ssn_engine.hemisphere import render_light_map
 from ssn_engine.light_map import GaussianLight, LightMap
 from ssn_engine.session import ShadowSession
-from training.metrics import shadow_direction, shadow_extent, sun_geometry
+from training.metrics import shadow_direction, shadow_extent, sun_geometry, zncc
 
 FIXTURE = Path(__file__).resolve().parents[1] / "data" / "sun_views.npz"
 
@@ -73,10 +73,16 @@ def test_a_lower_sun_casts_a_longer_shadow(wide_canvases, name, u):
 
 @pytest.mark.parametrize("name", ["pawn", "post"])
 def test_a_mirrored_light_gives_the_mirrored_shadow(fixed_masks, name):
+    """The mirrored scene (mask and light mirrored left to right) casts the mirrored shadow: the same pattern
+    (the shipped SR is one network pass, not a mirror average, so equal up to its small asymmetry)."""
     mask = fixed_masks[name]
     elm = sun(0.7, 30.0)
     s = api.predict_frames(np.stack([mask, mask[:, ::-1]]), np.stack([elm, elm[:, ::-1]]))
-    assert np.abs(s[1] - s[0][:, ::-1]).max() < 0.02
+    mirrored = s[0][:, ::-1]
+    assert zncc(s[1], mirrored) > 0.98
+    assert np.abs(s[1] - mirrored).mean() < 0.015
+    a, b = shadow_direction(s[0], mask), shadow_direction(s[1], mask[:, ::-1])
+    assert a[0] < -20 and b[0] == pytest.approx(-a[0], rel=0.1) and b[1] == pytest.approx(a[1], abs=3.0)
 
 
 def test_sun_shadow_length_on_held_out_shapes():
