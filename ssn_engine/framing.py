@@ -26,6 +26,7 @@ OBJECT_EXTENT = 0.5
 ALPHA_THRESHOLD = 0.01  # alpha at or below this is background for the bounding box
 SHADOW_FLOOR = 0.5 / 255  # shadow below this is invisible in 8 bits: the layer is cropped to the rest
 EDGE_FADE = 0.04  # share of the frame over which a shadow fades out at the frame's edges
+HAZE, HAZE_BAND = 0.04, 0.12  # faint values removed near the frame's edges, and over what share of the frame
 
 
 class EmptyAlphaError(ValueError):
@@ -133,11 +134,22 @@ def frame_alpha(alpha: np.ndarray, n: int = 256) -> tuple[np.ndarray, Framing]:
     return mask, framing
 
 
-def edge_fade(n: int) -> np.ndarray:
-    """(n, n) weights that fall linearly to 0 at the frame's four edges."""
-    ramp = np.clip((np.arange(n) + 0.5) / max(EDGE_FADE * n, 1.0), 0.0, 1.0)
+def edge_fade(n: int, share: float = EDGE_FADE) -> np.ndarray:
+    """(n, n) weights that fall linearly to 0 at the frame's four edges over ``share`` of the frame."""
+    ramp = np.clip((np.arange(n) + 0.5) / max(share * n, 1.0), 0.0, 1.0)
     across = np.minimum(ramp, ramp[::-1])
     return np.minimum.outer(across, across).astype(np.float32)
+
+
+def without_edge_haze(shadow: np.ndarray) -> np.ndarray:
+    """A frame shadow (n, n) whose faint values are removed near the frame's edges: up to ``HAZE``, more and more
+    over the outer ``HAZE_BAND`` (a network's faint haze would otherwise end in a visible rectangle there)."""
+    return np.maximum(shadow - HAZE * (1.0 - edge_fade(shadow.shape[0], HAZE_BAND)), 0.0)
+
+
+def fade_at_edges(shadow: np.ndarray) -> np.ndarray:
+    """A frame shadow (n, n) without edge haze, faded to 0 over the frame's outer ``EDGE_FADE``."""
+    return without_edge_haze(shadow) * edge_fade(shadow.shape[0])
 
 
 def shadow_to_canvas(shadow: np.ndarray, framing: Framing, origin: float | None = None) -> CanvasShadow:
@@ -146,13 +158,13 @@ def shadow_to_canvas(shadow: np.ndarray, framing: Framing, origin: float | None 
     The result covers the canvas pixels whose shadow can be visible (the
     frame's shadow above ``SHADOW_FLOOR``), clipped to the canvas; it may
     reach well beyond the alpha's bounding box. A frame shadow (n, n) that
-    runs out of the frame fades out (:func:`edge_fade`) instead of ending in
-    a hard edge. With ``origin``, ``shadow`` is a larger array whose top-left
+    runs out of the frame fades out (:func:`fade_at_edges`) instead of
+    ending in a hard edge. With ``origin``, ``shadow`` is a larger array whose top-left
     corner lies at frame coordinates (origin, origin) and that fades out by
     itself (:func:`ssn_engine.long_shadow.extend`).
     """
     if origin is None:
-        shadow, origin = shadow * edge_fade(shadow.shape[0]), 0.0
+        shadow, origin = fade_at_edges(shadow), 0.0
     visible = shadow > SHADOW_FLOOR
     rows, cols = np.flatnonzero(visible.any(axis=1)), np.flatnonzero(visible.any(axis=0))
     if rows.size == 0:

@@ -4,7 +4,8 @@ The network sees an N x N frame in which the object fills about half the height,
 or more object heights long) runs out of it. When the frame's shadow reaches the frame's border, the card
 (:meth:`ssn_engine.methods.geometric.GeometricCard.extended_shadow`, the same proxy geometry a geometry-guided
 network refines) is traced on a grid ``MARGIN`` frames wider on every side; the frame's shadow is kept inside
-the frame and cross-fades into the card's over the frame's outer ``EDGE_FADE`` band, and the extended shadow
+the frame (its faint edge haze removed) and cross-fades into the card's over the frame's outer ``EDGE_FADE``
+band, and the extended shadow
 fades out over the outer band of the wider grid.
 """
 
@@ -13,7 +14,7 @@ from __future__ import annotations
 import numpy as np
 from PIL import Image
 
-from .framing import EDGE_FADE, edge_fade
+from .framing import EDGE_FADE, edge_fade, without_edge_haze
 
 MARGIN = 1.0  # frames added on each side: from the frame's centre a shadow may reach 1.5 frames (3 object heights)
 CELL = 4.0  # frame pixels per cell of the card's wider grid
@@ -38,5 +39,6 @@ def extend(shadow: np.ndarray, wide: np.ndarray, margin: float = MARGIN) -> tupl
     out = np.asarray(Image.fromarray(wide.astype(np.float32), "F").resize((size, size), Image.Resampling.BILINEAR))
     out = np.clip(out, 0.0, 1.0) * edge_fade(size)
     ramp = edge_fade(n)
-    out[pad : pad + n, pad : pad + n] = ramp * shadow + (1.0 - ramp) * out[pad : pad + n, pad : pad + n]
+    inner = without_edge_haze(shadow)
+    out[pad : pad + n, pad : pad + n] = ramp * inner + (1.0 - ramp) * out[pad : pad + n, pad : pad + n]
     return out.astype(np.float32), -float(pad)
