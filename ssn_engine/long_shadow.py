@@ -5,8 +5,7 @@ or more object heights long) runs out of it. When the frame's shadow reaches the
 (:meth:`ssn_engine.methods.geometric.GeometricCard.extended_shadow`, the same proxy geometry a geometry-guided
 network refines) is traced on a grid ``MARGIN`` frames wider on every side; the frame's shadow is kept inside
 the frame (its faint edge haze removed) and cross-fades into the card's over the frame's outer ``EDGE_FADE``
-band, and the extended shadow
-fades out over the outer band of the wider grid.
+band, and the extended shadow fades out over the outer band of the wider grid.
 """
 
 from __future__ import annotations

@@ -11,8 +11,8 @@ from typing import Any
 
 import numpy as np
 
-from .ao_edit import apply_edits
 from . import long_shadow
+from .ao_edit import apply_edits
 from .framing import CanvasShadow, frame_alpha, shadow_to_canvas
 from .hemisphere import NETWORK_SHAPE, render_light_map
 from .light_map import LightMap
