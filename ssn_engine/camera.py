@@ -89,11 +89,16 @@ class Camera:
     @property
     def horizon(self) -> float:
         """The horizon row h (conventions, "Camera input"): where a level ray lands, shift included."""
-        return 0.5 * self.n - self.focal * float(np.tan(np.radians(self.pitch))) + self.shift
+        return horizon_row(self.n, float(self.focal), self.pitch, self.shift)
 
     def to_world(self, camera_basis: np.ndarray) -> np.ndarray:
         """Directions from the ELM's camera basis (right, up, forward) to world coordinates."""
         return camera_basis[..., :1] * RIGHT + camera_basis[..., 1:2] * UP + camera_basis[..., 2:] * FORWARD
+
+
+def horizon_row(n: float, focal: float, pitch: float, shift: float) -> float:
+    """The conventions' horizon row h = N/2 - f tan(pitch) + shift (frame pixels; pitch in degrees)."""
+    return 0.5 * n - focal * float(np.tan(np.radians(pitch))) + shift
 
 
 def focal_from_fov(n: float, fov: float) -> float:

@@ -27,6 +27,7 @@ from dataclasses import dataclass, replace
 
 import numpy as np
 
+from ssn_engine.camera import horizon_row
 from ssn_engine.hemisphere import network_elm, texel_weights
 from ssn_engine.methods.geometric import GeometricCard
 
@@ -49,10 +50,9 @@ class CachedView:
 
 
 def camera_input(info: dict, n: int) -> tuple[float, float]:
-    """A view's camera input (conventions, "Camera input"): horizon row h = N/2 - f tan(pitch) + shift and
-    focal length f, in pixels of the dataset's N x N frame."""
-    horizon = 0.5 * n - info["focal"] * np.tan(np.radians(info["pitch"])) + info["shift"]
-    return float(horizon), float(info["focal"])
+    """A view's camera input (conventions, "Camera input"): horizon row and focal length, in pixels of the
+    dataset's N x N frame."""
+    return horizon_row(n, info["focal"], info["pitch"], info["shift"]), float(info["focal"])
 
 
 def card_bases(card: GeometricCard, mask: np.ndarray, camera: tuple[float, float] | None) -> np.ndarray:

@@ -46,11 +46,14 @@ class Row:
     def __init__(self, label: str, method, camera: bool = False, gt_ao: bool = False):
         self.label, self.method, self.camera, self.gt_ao = label, method, camera, gt_ao
 
-    def predict(self, mask: np.ndarray, gt_ao: np.ndarray, elms: np.ndarray, cam: np.ndarray) -> np.ndarray:
-        masks = np.repeat(mask[None], len(elms), 0)
+    def ao(self, mask: np.ndarray, gt_ao: np.ndarray, cam: np.ndarray) -> np.ndarray:
+        """The AO map (1, N, N) this row renders a view with: the ground truth, or the method's prediction."""
+        return gt_ao[None] if self.gt_ao else self.method.predict_ao(mask[None], cam[None] if self.camera else None)
+
+    def predict(self, mask: np.ndarray, ao: np.ndarray, elms: np.ndarray, cam: np.ndarray) -> np.ndarray:
+        """Shadows (k, N, N) of one view under ``elms`` (k, 16, 32), with the AO of :meth:`ao`."""
         cameras = np.repeat(cam[None], len(elms), 0) if self.camera else None
-        ao = gt_ao[None] if self.gt_ao else self.method.predict_ao(masks[:1], None if cameras is None else cameras[:1])
-        return self.method.render(masks, np.repeat(ao, len(elms), 0), elms, cameras)
+        return self.method.render(np.repeat(mask[None], len(elms), 0), np.repeat(ao, len(elms), 0), elms, cameras)
 
 
 def build_rows(args: argparse.Namespace, n: int) -> list[Row]:
@@ -99,10 +102,11 @@ def evaluate_families(args: argparse.Namespace, store=None) -> dict:
         v = store.load(i)
         info = store.info(i)
         cam = np.array(camera_input(info, n))
+        aos = {r.label: r.ao(v.mask, v.ao, cam) for r in rows}  # once per view, not per family
         for family in families:
             elm_hb, elm16 = family_lights(args.seed, j, family, args.per_view, rows_hb)
             gt = np.stack([store.shadow(v.occlusion, e) for e in elm_hb])
-            preds = {r.label: r.predict(v.mask, v.ao, elm16, cam) for r in rows}
+            preds = {r.label: r.predict(v.mask, aos[r.label], elm16, cam) for r in rows}
             for b in range(len(gt)):
                 rec = {"family": family, "kind": info["kind"], "pitch": float(info["pitch"]),
                        "metrics": {lab: all_metrics(preds[lab][b], gt[b]) for lab in labels}}
@@ -192,11 +196,12 @@ def sun_grid(store, ids: list[int], rows: list[Row], path: Path, rows_hb: int, v
     for i in [ids[int(j)] for j in np.linspace(0, len(ids) - 1, views).round()] if ids else []:
         v = store.load(i)
         cam = np.array(camera_input(store.info(i), store.meta["res"]))
+        aos = [r.ao(v.mask, v.ao, cam) for r in rows]
         for elevation in SUN_ELEVATIONS:
             light = LightMap([GaussianLight(SUN_AZIMUTH_U, 1.0 - elevation / 90.0, 0.002, 1.0)])
             gt = store.shadow(v.occlusion, render_light_map(light, rows_hb))
             elm16 = render_light_map(light, 16)[None]
-            shadows = [gt] + [r.predict(v.mask, v.ao, elm16, cam)[0] for r in rows]
+            shadows = [gt] + [r.predict(v.mask, ao, elm16, cam)[0] for r, ao in zip(rows, aos, strict=True)]
             pictures.append([on_ground(s, v.mask) for s in shadows])
     if pictures:
         labels = [f"truth (sun at {', '.join(f'{e:g}' for e in SUN_ELEVATIONS)} deg)"] + [r.label for r in rows]

@@ -154,9 +154,7 @@ class _Card:
         out = np.zeros((m, m), np.float32)
         if self.empty or float(weights.sum()) <= 0:
             return out
-        order = np.argsort(-weights)
-        cum = np.cumsum(weights[order])
-        used = np.sort(order[: int(np.searchsorted(cum, (1.0 - NEGLIGIBLE) * cum[-1])) + 1])
+        used = brightest(weights, 1.0 - NEGLIGIBLE)
         self.trace(used)
         w = np.zeros(len(weights), np.float32)
         w[used] = weights[used] / weights[used].sum()
@@ -172,6 +170,13 @@ class _Card:
         if self._ao is None:
             self._ao = (1.0 - self.shadow(self.weights)) ** (1.0 / 3.0)
         return self._ao
+
+
+def brightest(weights: np.ndarray, share: float, limit: int | None = None) -> np.ndarray:
+    """Sorted indices of the fewest texels that hold ``share`` of the total weight (at most ``limit`` of them)."""
+    order = np.argsort(-weights)
+    count = int(np.searchsorted(np.cumsum(weights[order]), share * weights.sum())) + 1
+    return np.sort(order[: count if limit is None else min(limit, count)])
 
 
 def camera_at(cameras: np.ndarray | None, b: int) -> tuple[float, float] | None:
@@ -230,9 +235,8 @@ class GeometricCard:
         w = np.maximum(elm, 0).ravel() * self._weights
         if card.empty or w.sum() <= 0:
             return out
-        order = np.argsort(-w)
-        keep = order[: min(EXTENDED_TEXELS, int(np.searchsorted(np.cumsum(w[order]), 0.995 * w.sum())) + 1)]
-        out[valid] = (w[keep] / w[keep].sum()).astype(np.float32) @ card.wide_bases(keep, ground)
+        keep = brightest(w, 0.995, EXTENDED_TEXELS)
+        out[valid] = np.einsum("t,tp->p", (w[keep] / w[keep].sum()).astype(np.float32), card.wide_bases(keep, ground))
         return out
 
     def predict_ao(self, masks: np.ndarray, cameras: np.ndarray | None = None) -> np.ndarray:
