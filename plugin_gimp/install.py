@@ -68,12 +68,12 @@ def _clear(dest: Path) -> None:
         shutil.rmtree(shared)
 
 
-def write_address_config(plugin_dir: Path, host: str, port: int) -> Path:
-    """``engine.json`` pointing at a worker listening on ``host:port``."""
+def write_address_config(plugin_dir: Path, host: str, port: int, token: str) -> Path:
+    """``engine.json`` pointing at a worker listening on ``host:port`` that printed ``token`` when it started."""
     from ssn_engine import __version__
 
     path = Path(plugin_dir) / CONFIG_NAME
-    config = {"address": [host, int(port)], "version": __version__}
+    config = {"address": [host, int(port)], "token": token, "version": __version__}
     path.write_text(json.dumps(config, indent=2) + "\n")
     return path
 
@@ -84,6 +84,7 @@ def install(
     link: bool = False,
     *,
     address: tuple[str, int] | None = None,
+    token: str = "",
 ) -> Path:
     """Install the plug-in; return its folder.
 
@@ -95,6 +96,8 @@ def install(
     link : symlink the plug-in's files instead of copying them (development).
     address : instead of spawning a worker, connect to one listening on this
         loopback ``(host, port)``.
+    token : with ``address``, the token that worker printed when it started
+        (``listening HOST:PORT token=TOKEN``).
     """
     dest = Path(dest) if dest is not None else default_dest()
     if dest.name != PLUGIN_NAME:
@@ -115,7 +118,7 @@ def install(
                 target.chmod(0o755)
     copy_shared_modules(dest)
     if address is not None:
-        write_address_config(dest, *address)
+        write_address_config(dest, *address, token)
     else:
         write_engine_config(dest, python)
     return dest

@@ -6,6 +6,7 @@ import functools
 
 import numpy as np
 
+from .framing import ALPHA_THRESHOLD
 from .methods import LoadedMethod, load_method
 from .methods.base import check_cameras
 
@@ -37,6 +38,11 @@ def predict_frames(masks: np.ndarray, elms: np.ndarray, ao: np.ndarray | None = 
     input"); without it the conventions' default camera is assumed (45
     degree field of view, 15 degree pitch). Uses the default shipped model,
     or the geometric card method while no trained model is installed.
+
+    No visible shadow is exactly zero: a frame whose mask has no pixel above
+    the framing's alpha threshold (nothing casts) or whose ELM is all zero
+    (nothing lights) gets s = 0, as the CLI and the worker report "no
+    visible shadow" for an empty cutout or a light map without light.
     """
     method = default_method().method
     masks = _frames("masks", masks, method.resolution)
@@ -59,4 +65,5 @@ def predict_frames(masks: np.ndarray, elms: np.ndarray, ao: np.ndarray | None = 
         cam = None if cameras is None else cameras[i : i + BATCH]
         a = method.predict_ao(m, cam) if ao is None else np.clip(ao[i : i + BATCH], 0.0, 1.0)
         out[i : i + BATCH] = method.render(m, a, elms[i : i + BATCH], cam)
+    out[(masks.max(axis=(1, 2)) <= ALPHA_THRESHOLD) | (elms.max(axis=(1, 2)) <= 0)] = 0.0
     return np.clip(out, 0.0, 1.0)

@@ -4,11 +4,18 @@ from __future__ import annotations
 
 import argparse
 import json
+import os
 import sys
+import threading
+import time
 from collections.abc import Sequence
 from pathlib import Path
 
+import numpy as np
+
 EXIT_OK, EXIT_ERROR, EXIT_USAGE = 0, 1, 2
+EXIT_NO_SHADOW = 3  # nothing casts a shadow or nothing lights it: nothing is written
+PROGRESS_AFTER = 1.0  # seconds: a command that runs longer prints its stages on stderr
 
 
 class CliError(Exception):
@@ -41,15 +48,92 @@ def _number_in(lo: float, hi: float):
     return parse
 
 
+class NoShadow(Exception):
+    """There is no visible shadow to write (an empty cutout, or a light map without light)."""
+
+
+class Stages:
+    """Progress on stderr for a command that runs longer than ``after`` seconds: the stage it is in then, and
+    each later one."""
+
+    def __init__(self, after: float | None = None, stream=None) -> None:
+        after = PROGRESS_AFTER if after is None else after
+        self.start, self.stream, self.current, self.shown = time.monotonic(), stream or sys.stderr, "", False
+        self._lock = threading.Lock()
+        self._timer = threading.Timer(after, self._late)
+        self._timer.daemon = True
+        self._timer.start()
+
+    def _print(self) -> None:
+        print(f"ssn-shadow: [{time.monotonic() - self.start:5.1f} s] {self.current}...", file=self.stream, flush=True)
+
+    def _late(self) -> None:
+        with self._lock:
+            self.shown = True
+            if self.current:
+                self._print()
+
+    def __call__(self, label: str) -> None:
+        with self._lock:
+            self.current = label
+            if self.shown:
+                self._print()
+
+    def close(self) -> None:
+        self._timer.cancel()
+
+
+def _same_file(a: Path, b: Path) -> bool:
+    """Whether two paths name one file: the same resolved path, or (both existing) the same inode."""
+    if a.resolve() == b.resolve():
+        return True
+    try:
+        return a.exists() and b.exists() and os.path.samefile(a, b)
+    except OSError:
+        return False
+
+
+def check_paths(outputs: dict[str, str | None], inputs: dict[str, str | None]) -> None:
+    """Before any work: every output goes to an existing, writable folder, is not a folder, differs from the
+    other outputs and from every input (by path or by inode)."""
+    outs = [(label, Path(p)) for label, p in outputs.items() if p]
+    ins = [(label, Path(p)) for label, p in inputs.items() if p]
+    for i, (label, path) in enumerate(outs):
+        folder = path.parent
+        if not folder.is_dir():
+            raise CliError(f"{label} {path}: folder {folder} does not exist")
+        if path.is_dir():
+            raise CliError(f"{label} {path}: is a folder; give a file name")
+        if not os.access(folder, os.W_OK):
+            raise CliError(f"{label} {path}: folder {folder} is not writable")
+        for other_label, other in outs[:i]:
+            if _same_file(path, other):
+                raise CliError(f"{other_label} and {label} name the same file ({path}); give two different paths")
+        for in_label, source in ins:
+            if _same_file(path, source):
+                raise CliError(f"{label} {path} is {in_label}: ssn-shadow never writes over its inputs; "
+                               "choose another output path")
+
+
+def check_folder(label: str, folder: str | None) -> None:
+    if folder and not Path(folder).is_dir():
+        raise CliError(f"{label} {folder}: no such folder")
+
+
 def _light_map(args: argparse.Namespace):
     from .light_map import LightMap, preset
+    from .session import NO_LIGHT
 
     if args.light_map:
         try:
-            return LightMap.from_json(Path(args.light_map).read_text())
+            lights = LightMap.from_json(Path(args.light_map).read_text())
         except OSError as exc:
             raise CliError(f"{args.light_map}: cannot read ({exc.strerror})") from None
-    return preset(args.preset)
+    else:
+        lights = preset(args.preset)
+    if lights.is_dark:
+        raise NoShadow(f"{args.light_map or args.preset}: {NO_LIGHT}")
+    return lights
 
 
 def _ao_edits(args: argparse.Namespace) -> list[dict]:
@@ -66,48 +150,100 @@ def _ao_edits(args: argparse.Namespace) -> list[dict]:
     return edits
 
 
-def _make_shadow(cutout_rgba, args: argparse.Namespace):
-    """Run the engine on a cutout; returns (CanvasShadow, method note)."""
+def load_cutout(args: argparse.Namespace) -> np.ndarray:
+    """The cutout as RGBA uint8. Without alpha, or opaque on its whole frame, it is not a cutout: refused
+    unless ``--whole-image``."""
+    from .imageio import load_image
+
+    rgba, has_alpha = load_image(args.cutout, args.max_megapixels)
+    if args.whole_image:
+        return rgba
+    how = ("Make a cutout first: erase the background around the subject to transparency (Krita, GIMP: add an "
+           "alpha channel, select the background, delete) and save it as PNG; or pass --whole-image to cast the "
+           "shadow of the whole rectangle.")
+    if not has_alpha:
+        raise CliError(f"{args.cutout} has no alpha channel, so it holds no cutout. {how}")
+    if rgba[..., 3].min() >= 128:
+        raise CliError(f"{args.cutout} is opaque on its whole frame, so its cutout is the whole rectangle. {how}")
+    return rgba
+
+
+def _make_shadow(cutout_rgba: np.ndarray, args: argparse.Namespace, stage: Stages):
+    """The canvas shadow of a cutout; returns (CanvasShadow, loaded method). The light map and AO edits are read
+    first, so a bad one costs no inference."""
+    from .framing import EmptyAlphaError
     from .methods import load_method
-    from .session import ShadowSession
+    from .session import ShadowSession, no_shadow_reason
 
+    lights, edits = _light_map(args), _ao_edits(args)
+    stage("loading the model")
     loaded = load_method(args.method)
-    session = ShadowSession(cutout_rgba[..., 3], loaded.method, args.horizon, args.fov)
-    session.set_ao_edits(_ao_edits(args))
-    return session.render(_light_map(args)), loaded
+    stage("analysing the cutout")
+    try:
+        session = ShadowSession(cutout_rgba[..., 3], loaded.method, args.horizon, args.fov)
+    except EmptyAlphaError:
+        raise NoShadow(f"the cutout {getattr(args, 'cutout', 'image')} is fully transparent: nothing casts a "
+                       "shadow") from None
+    session.set_ao_edits(edits)
+    stage("rendering the shadow")
+    shadow = session.render(lights)
+    reason = no_shadow_reason(lights, shadow)
+    if reason:
+        raise NoShadow(reason)
+    return shadow, loaded
 
 
-def _write_outputs(cutout, shadow, args: argparse.Namespace, background=None) -> list[Path]:
-    from .compositing import composite_shadow, over, shadow_layer
-    from .imageio import load_rgba, save_png
+def _write_outputs(write, cutout: np.ndarray, shadow, args: argparse.Namespace, background: np.ndarray | None,
+                   stage: Stages) -> list[Path]:
+    """Stage the layer and the composite through ``write`` (:func:`ssn_engine.imageio.atomic_writes`)."""
+    from .compositing import composite_image, layer_image
 
     h, w = cutout.shape[:2]
     written = []
     if args.layer:
-        full = shadow.full_canvas(w, h)
-        written.append(save_png(args.layer, shadow_layer(full, args.color, args.opacity)))
+        stage("writing the shadow layer")
+        written.append(write(args.layer, layer_image(shadow, w, h, args.color, args.opacity)))
     if args.composite:
+        stage("writing the composite")
         if background is None:
-            background = load_rgba(args.background) if args.background else None
-        if background is None:
-            background = __import__("numpy").full((h, w, 4), 255, "uint8")
-        if background.shape[:2] != (h, w):
-            raise CliError(
-                f"background is {background.shape[1]} x {background.shape[0]}, the cutout {w} x {h}: sizes must match"
-            )
-        shaded = composite_shadow(background, shadow.full_canvas(w, h), args.color, args.opacity)
-        written.append(save_png(args.composite, over(shaded, cutout)))
+            background = np.full((h, w, 4), 255, np.uint8)
+        written.append(write(args.composite, composite_image(background, cutout, shadow, args.color, args.opacity)))
     return written
 
 
+def _load_background(args: argparse.Namespace, size: tuple[int, int]) -> np.ndarray | None:
+    """The --composite background, checked against the cutout's (width, height) before any inference."""
+    from .imageio import load_image
+
+    if not (args.composite and args.background):
+        return None
+    background, _ = load_image(args.background, args.max_megapixels)
+    if (background.shape[1], background.shape[0]) != size:
+        raise CliError(f"background is {background.shape[1]} x {background.shape[0]}, the cutout {size[0]} x "
+                       f"{size[1]}: sizes must match")
+    return background
+
+
 def cmd_render(args: argparse.Namespace) -> int:
-    from .imageio import load_rgba
+    from .imageio import atomic_writes
 
     if not (args.layer or args.composite):
         raise CliError("nothing to write: give --layer and/or --composite")
-    cutout = load_rgba(args.cutout)
-    shadow, loaded = _make_shadow(cutout, args)
-    for path in _write_outputs(cutout, shadow, args):
+    check_paths({"--layer": args.layer, "--composite": args.composite},
+                {"the cutout": args.cutout, "--background": args.background, "--light-map": args.light_map,
+                 "--ao-edits": args.ao_edits})
+    stage = Stages()
+    try:
+        stage("reading the cutout")
+        cutout = load_cutout(args)
+        stage("reading the background")
+        background = _load_background(args, (cutout.shape[1], cutout.shape[0]))
+        shadow, loaded = _make_shadow(cutout, args, stage)
+        with atomic_writes() as write:
+            written = _write_outputs(write, cutout, shadow, args, background, stage)
+    finally:
+        stage.close()
+    for path in written:
         print(f"wrote {path}")
     print(f"method: {loaded.method.name} ({loaded.note})")
     return EXIT_OK
@@ -117,16 +253,28 @@ DEMO_PRESET = "low-sun-left"  # the demo's light: a low sun, so the shadow it ca
 
 
 def cmd_demo(args: argparse.Namespace) -> int:
-    from .samples import pawn_cutout, save_samples, studio_background
+    from .imageio import atomic_writes
+    from .samples import SAMPLE_FILES, pawn_cutout, studio_background
 
+    samples = [str(Path(args.save_samples) / name) for name in SAMPLE_FILES] if args.save_samples else []
+    check_folder("--save-samples", args.save_samples)
+    check_paths({"--out": args.out, "--layer": args.layer, **dict(zip(("sample cutout", "sample background"),
+                                                                       samples, strict=False))},
+                {"--light-map": args.light_map, "--ao-edits": args.ao_edits})
     cutout, background = pawn_cutout(), studio_background()
-    args.layer, args.composite, args.background = args.layer, args.out, None
-    shadow, loaded = _make_shadow(cutout, args)
-    for path in _write_outputs(cutout, shadow, args, background=background):
+    args.composite, args.cutout = args.out, "the sample pawn"
+    stage = Stages()
+    try:
+        shadow, loaded = _make_shadow(cutout, args, stage)
+        with atomic_writes() as write:
+            written = _write_outputs(write, cutout, shadow, args, background, stage)
+            # a fresh background: the composite was blended into the first one
+            written += [write(path, image) for path, image in zip(samples, (cutout, studio_background()),
+                                                                  strict=False)]
+    finally:
+        stage.close()
+    for path in written:
         print(f"wrote {path}")
-    if args.save_samples:
-        for path in save_samples(args.save_samples):
-            print(f"wrote {path}")
     print(f"method: {loaded.method.name} ({loaded.note})")
     return EXIT_OK
 
@@ -162,6 +310,13 @@ def cmd_benchmark(args: argparse.Namespace) -> int:
     return EXIT_OK
 
 
+def cmd_soak(args: argparse.Namespace) -> int:
+    from .soak import run_soak
+
+    run_soak(requests=args.requests, minutes=args.minutes, method=args.method, seed=args.seed)
+    return EXIT_OK
+
+
 def cmd_install_plugin(args: argparse.Namespace) -> int:
     try:
         if args.host == "krita":
@@ -178,7 +333,16 @@ def cmd_install_plugin(args: argparse.Namespace) -> int:
         return EXIT_OK
     path = host_install.install(dest=dest, python=args.python, link=args.link)
     print(f"installed the {args.host} plug-in in {path}")
+    print(f"next: {NEXT_STEP[args.host]}")
     return EXIT_OK
+
+
+NEXT_STEP = {
+    "krita": "start Krita, tick 'Soft Shadow (SSN)' in Settings > Configure Krita > Python Plugin Manager, "
+             "restart Krita, then show the docker with Settings > Dockers > Soft Shadow",
+    "gimp": "restart GIMP (it reads plug-ins at start), open an image with a cutout and run "
+            "Filters > Light and Shadow > Soft Shadow (SSN)...",
+}
 
 
 def _add_shadow_options(p: argparse.ArgumentParser) -> None:
@@ -211,6 +375,7 @@ def _add_shadow_options(p: argparse.ArgumentParser) -> None:
 
 def build_parser() -> argparse.ArgumentParser:
     from . import __version__
+    from .imageio import DEFAULT_MAX_MEGAPIXELS
 
     parser = argparse.ArgumentParser(prog="ssn-shadow", description="Soft shadows for 2D cutouts (SSN, CVPR 2021).")
     parser.add_argument("--version", action="version", version=f"ssn-shadow {__version__}")
@@ -221,13 +386,18 @@ def build_parser() -> argparse.ArgumentParser:
     p.add_argument("--layer", metavar="OUT.png", help="write the shadow layer (RGBA, canvas size)")
     p.add_argument("--composite", metavar="OUT.png", help="write cutout + shadow over --background")
     p.add_argument("--background", metavar="BG.png", help="background for --composite (default white)")
+    p.add_argument("--whole-image", action="store_true",
+                   help="accept an image without alpha, or opaque everywhere: the whole rectangle casts the shadow")
+    p.add_argument("--max-megapixels", type=_number_in(0.01, 10000.0), default=DEFAULT_MAX_MEGAPIXELS,
+                   metavar="MP", help="refuse larger images (default %(default)g; about 15 bytes a pixel are needed)")
     _add_shadow_options(p)
     p.set_defaults(func=cmd_render)
 
     p = sub.add_parser("demo", help="render the bundled sample cutout over the bundled background")
     p.add_argument("--out", default="ssn-shadow-demo.png", help="composite PNG (default %(default)s)")
     p.add_argument("--layer", metavar="OUT.png", help="also write the shadow layer")
-    p.add_argument("--save-samples", metavar="DIR", help="also write the sample cutout and background PNGs")
+    p.add_argument("--save-samples", metavar="DIR",
+                   help="also write the sample cutout and background PNGs into this existing folder")
     _add_shadow_options(p)
     p.set_defaults(func=cmd_demo, preset=DEMO_PRESET)
 
@@ -247,6 +417,13 @@ def build_parser() -> argparse.ArgumentParser:
     p.add_argument("--method", default="auto", choices=METHOD_NAMES)
     p.set_defaults(func=cmd_benchmark)
 
+    p = sub.add_parser("soak", help="run a worker under a long request mix and print its memory over time")
+    p.add_argument("--requests", type=int, default=2000, help="requests to send (default %(default)s)")
+    p.add_argument("--minutes", type=float, default=0.0, help="run this long instead of --requests")
+    p.add_argument("--method", default="auto", choices=METHOD_NAMES)
+    p.add_argument("--seed", type=int, default=0)
+    p.set_defaults(func=cmd_soak)
+
     p = sub.add_parser("install-plugin", help="install the Krita or GIMP plug-in for this engine")
     p.add_argument("host", choices=["krita", "gimp"])
     p.add_argument("--dest", help="plug-in folder (default: the host's user folder for this OS)")
@@ -260,17 +437,19 @@ def build_parser() -> argparse.ArgumentParser:
 def main(argv: Sequence[str] | None = None) -> int:
     """Run the CLI; returns the exit status."""
     args = build_parser().parse_args(argv)
-    from .framing import EmptyAlphaError
     from .imageio import ImageFileError
     from .light_map import LightMapError
     from .methods import ModelError
 
     try:
         return args.func(args)
+    except NoShadow as exc:
+        print(f"ssn-shadow: no visible shadow: {exc}; nothing was written", file=sys.stderr)
+        return EXIT_NO_SHADOW
     except CliError as exc:
         print(f"ssn-shadow: error: {exc}", file=sys.stderr)
         return exc.code
-    except (ImageFileError, LightMapError, EmptyAlphaError, ValueError) as exc:
+    except (ImageFileError, LightMapError, ValueError) as exc:
         print(f"ssn-shadow: error: {exc}", file=sys.stderr)
         return EXIT_USAGE
     except ModelError as exc:

@@ -37,17 +37,19 @@ class WorkerUnavailable(EngineError):
 
 
 class EngineClient:
-    """Talk to one worker: a spawned process (``command``) or a loopback ``address``."""
+    """Talk to one worker: a spawned process (``command``) or a loopback ``address`` with the ``token`` that
+    worker printed when it started (``listening HOST:PORT token=TOKEN``)."""
 
     def __init__(
         self,
         command: Sequence[str] | None = None,
         address: tuple[str, int] | None = None,
         timeout: float = 120.0,
+        token: str | None = None,
     ) -> None:
         if (command is None) == (address is None):
             raise ValueError("give exactly one of command or address")
-        self.command, self.address, self.timeout = command, address, timeout
+        self.command, self.address, self.timeout, self.token = command, address, timeout, token
         self._proc: subprocess.Popen | None = None
         self._sock: socket.socket | None = None
         self._reader = self._writer = None
@@ -86,8 +88,25 @@ class EngineClient:
             except OSError as exc:
                 host, port = self.address
                 raise WorkerUnavailable(f"no shadow engine is listening on {host}:{port}: {exc}") from None
-            self._sock.settimeout(None)
             self._reader, self._writer = self._sock.makefile("rb"), self._sock.makefile("wb")
+            self._authenticate()
+            self._sock.settimeout(None)
+
+    def _authenticate(self) -> None:
+        """A loopback worker's first request: ``auth`` with its token (under the connect timeout)."""
+        host, port = self.address
+        try:
+            write_message(self._writer, {"id": 0, "cmd": "auth", "token": self.token or ""})
+            reply, _ = read_message(self._reader)
+        except (OSError, EOFError, ProtocolError) as exc:
+            self.close()
+            raise WorkerUnavailable(f"the shadow engine on {host}:{port} did not answer: {exc}") from None
+        if not reply.get("ok"):
+            self.close()
+            raise WorkerUnavailable(
+                f"the shadow engine on {host}:{port} refused this plug-in's token: give the token it printed "
+                "when it started ('listening ... token=...') in engine.json, or restart it"
+            )
 
     def _drain(self, stream) -> None:
         for line in iter(stream.readline, b""):

@@ -8,9 +8,11 @@ black shadow is ``background * (1 - opacity * s)``.
 
 from __future__ import annotations
 
-from collections.abc import Sequence
+from collections.abc import Iterator, Sequence
 
 import numpy as np
+
+from .framing import CanvasShadow
 
 LAYER_DTYPES = ("uint8", "uint16", "float16", "float32")
 _INT_MAX = {"uint8": 255, "uint16": 65535}
@@ -92,3 +94,50 @@ def over(background: np.ndarray, cutout: np.ndarray) -> np.ndarray:
     if out.shape[2] == 4:
         out[..., 3:4] = a + bg[..., 3:4] * (1.0 - a)
     return from_unit_float(out, background.dtype)
+
+
+STRIPE_PIXELS = 1 << 18  # canvas pixels blended at once: memory follows the shadow's and cutout's boxes
+
+
+def _stripes(y0: int, y1: int, width: int) -> Iterator[slice]:
+    rows = max(1, STRIPE_PIXELS // max(1, width))
+    for top in range(y0, y1, rows):
+        yield slice(top, min(top + rows, y1))
+
+
+def layer_image(shadow: CanvasShadow, width: int, height: int, color: Sequence[float] = (0.0, 0.0, 0.0),
+                opacity: float = 1.0) -> np.ndarray:
+    """The canvas-sized uint8 RGBA shadow layer (:func:`shadow_layer` of the shadow pasted into an empty canvas),
+    built without a canvas-sized float array."""
+    out = np.empty((height, width, 4), np.uint8)
+    out[..., :3] = from_unit_float(_colour(color), "uint8")
+    out[..., 3] = 0
+    if not shadow.is_empty:
+        h, w = shadow.values.shape
+        cols = slice(shadow.x, shadow.x + w)
+        for rows in _stripes(shadow.y, shadow.y + h, w):
+            out[rows, cols] = shadow_layer(shadow.values[rows.start - shadow.y : rows.stop - shadow.y], color, opacity)
+    return out
+
+
+def composite_image(background: np.ndarray, cutout: np.ndarray, shadow: CanvasShadow,
+                    color: Sequence[float] = (0.0, 0.0, 0.0), opacity: float = 1.0) -> np.ndarray:
+    """The shadow multiplied into ``background`` (H, W, 3|4) and the RGBA ``cutout`` (H, W, 4) over it: only the
+    shadow's and the cutout's boxes are blended, in stripes. A writable ``background`` is written in place."""
+    if background.shape[:2] != cutout.shape[:2] or cutout.shape[2] != 4:
+        raise ValueError("cutout must be RGBA and the same size as the background")
+    background = np.require(background, requirements="W")
+    if not shadow.is_empty:
+        h, w = shadow.values.shape
+        cols = slice(shadow.x, shadow.x + w)
+        for rows in _stripes(shadow.y, shadow.y + h, w):
+            part = shadow.values[rows.start - shadow.y : rows.stop - shadow.y]
+            background[rows, cols] = composite_shadow(background[rows, cols], part, color, opacity)
+    visible = cutout[..., 3] > 0
+    ys, xs = np.flatnonzero(visible.any(axis=1)), np.flatnonzero(visible.any(axis=0))
+    del visible
+    if ys.size:
+        cols = slice(int(xs[0]), int(xs[-1]) + 1)
+        for rows in _stripes(int(ys[0]), int(ys[-1]) + 1, cols.stop - cols.start):
+            background[rows, cols] = over(background[rows, cols], cutout[rows, cols])
+    return background

@@ -1,39 +1,116 @@
-"""Reading and writing images with clear errors."""
+"""Reading and writing images with clear errors; every write is atomic.
+
+Reading checks an image's size before decoding it (``max_megapixels``, instead of Pillow's decompression-bomb
+error or warning). Writing goes through :func:`atomic_writes`: each image is written to a temporary file beside
+its destination, and all are renamed into place only when every one was written, so an interrupted or failed run
+leaves neither a partial file nor a damaged old one.
+"""
 
 from __future__ import annotations
 
+import contextlib
+import os
+import tempfile
+import warnings
+from collections.abc import Callable, Iterator
 from pathlib import Path
 
 import numpy as np
 from PIL import Image, UnidentifiedImageError
 
+DEFAULT_MAX_MEGAPIXELS = 200.0
+ALPHA_MODES = ("RGBA", "LA", "PA", "RGBa", "La")
+STRIPE_PIXELS = 1 << 20  # pixels converted to RGBA at once
+
 
 class ImageFileError(ValueError):
-    """An image file is missing, unreadable or of an unsupported kind."""
+    """An image file is missing, unreadable, too large or of an unsupported kind, or cannot be written."""
 
 
-def load_rgba(path: str | Path) -> np.ndarray:
-    """An image file as RGBA uint8 (H, W, 4); images without alpha get an opaque one."""
+def _rgba_array(im: Image.Image) -> np.ndarray:
+    """A writable RGBA uint8 copy of a decoded image, converted in stripes: the only canvas-sized buffers are
+    the decoded image and the array (a whole-image conversion would add two more)."""
+    w, h = im.size
+    out = np.empty((h, w, 4), np.uint8)
+    rows = max(1, STRIPE_PIXELS // max(1, w))
+    for top in range(0, h, rows):
+        part = im.crop((0, top, w, min(h, top + rows)))
+        out[top : top + rows] = np.asarray(part if part.mode == "RGBA" else part.convert("RGBA"))
+    return out
+
+
+@contextlib.contextmanager
+def _size_checked_here() -> Iterator[None]:
+    """Pillow's own decompression-bomb check off: :func:`load_image` checks the size itself."""
+    limit = Image.MAX_IMAGE_PIXELS
+    Image.MAX_IMAGE_PIXELS = None
+    try:
+        with warnings.catch_warnings():
+            warnings.simplefilter("ignore", Image.DecompressionBombWarning)
+            yield
+    finally:
+        Image.MAX_IMAGE_PIXELS = limit
+
+
+def load_image(path: str | Path, max_megapixels: float = DEFAULT_MAX_MEGAPIXELS) -> tuple[np.ndarray, bool]:
+    """An image file as a writable RGBA uint8 array (H, W, 4) and whether the file has an alpha channel (without
+    one, the alpha is opaque). Images above ``max_megapixels`` are refused before they are decoded."""
     path = Path(path)
     try:
-        with Image.open(path) as im:
+        with _size_checked_here(), Image.open(path) as im:
+            w, h = im.size
+            if w * h > max_megapixels * 1e6:
+                raise ImageFileError(
+                    f"{path}: {w} x {h} is {w * h / 1e6:.0f} megapixels, above the limit of {max_megapixels:g}; "
+                    f"pass --max-megapixels {int(np.ceil(w * h / 1e6))} to allow it (it needs about "
+                    f"{w * h * 15 / 2**30:.1f} GiB of memory)")
             im.load()
+            has_alpha = im.mode in ALPHA_MODES or "transparency" in im.info
             if im.mode in ("I;16", "I;16B", "I"):
                 im = im.point(lambda v: v / 257).convert("L")
-            return np.asarray(im.convert("RGBA"))
+            return _rgba_array(im), has_alpha
     except FileNotFoundError:
         raise ImageFileError(f"{path}: no such file") from None
+    except IsADirectoryError:
+        raise ImageFileError(f"{path}: is a folder, not an image") from None
     except (UnidentifiedImageError, OSError, SyntaxError, ValueError) as exc:
+        if isinstance(exc, ImageFileError):
+            raise
         raise ImageFileError(f"{path}: not a readable image ({exc})") from None
 
 
-def save_png(path: str | Path, image: np.ndarray) -> Path:
-    """Write uint8 or uint16 RGB(A)/grey data as PNG (16-bit only for grey)."""
-    path = Path(path)
-    if path.parent and not path.parent.exists():
-        raise ImageFileError(f"{path}: folder {path.parent} does not exist")
+def _umask() -> int:
+    mask = os.umask(0)
+    os.umask(mask)
+    return mask
+
+
+@contextlib.contextmanager
+def atomic_writes() -> Iterator[Callable[[str | Path, np.ndarray], Path]]:
+    """Yield ``write(path, image)``, which writes a PNG (uint8 RGB(A)/grey, or uint16 grey) to a temporary file
+    beside ``path``. When the block ends normally all of them are renamed into place; when it raises (a failed
+    write, a full disk, Ctrl+C) every temporary file is removed and no destination is touched."""
+    staged: list[tuple[Path, Path]] = []
+
+    def write(path: str | Path, image: np.ndarray) -> Path:
+        path = Path(path)
+        try:
+            fd, tmp = tempfile.mkstemp(prefix=f".{path.name}.", suffix=".part", dir=path.parent)
+        except OSError as exc:
+            raise ImageFileError(f"{path}: cannot write ({exc.strerror or exc})") from None
+        staged.append((Path(tmp), path))
+        try:
+            with os.fdopen(fd, "wb") as stream:
+                Image.fromarray(image).save(stream, format="PNG")
+            os.chmod(tmp, 0o666 & ~_umask())  # mkstemp's files are private; an output gets the usual mode
+        except OSError as exc:
+            raise ImageFileError(f"{path}: cannot write ({exc.strerror or exc}); nothing was written") from None
+        return path
+
     try:
-        Image.fromarray(image).save(path, format="PNG")
-    except OSError as exc:
-        raise ImageFileError(f"{path}: cannot write ({exc})") from None
-    return path
+        yield write
+        for tmp, path in staged:
+            os.replace(tmp, path)
+    finally:
+        for tmp, _ in staged:
+            tmp.unlink(missing_ok=True)

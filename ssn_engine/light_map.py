@@ -136,6 +136,11 @@ class LightMap:
     def __len__(self) -> int:
         return len(self.lights)
 
+    @property
+    def is_dark(self) -> bool:
+        """No light at all: no lights, or all at intensity 0 (so no shadow either)."""
+        return not any(light.intensity > 0 for light in self.lights)
+
     def copy(self) -> LightMap:
         return LightMap(list(self.lights))
 

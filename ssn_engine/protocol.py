@@ -10,15 +10,22 @@ See ``docs/protocol.md`` for the commands. The plug-ins import this module
 from __future__ import annotations
 
 import json
-from typing import BinaryIO
+from typing import BinaryIO, NamedTuple
 
 PROTOCOL_VERSION = 1
 DTYPES = {"uint8": 1, "uint16": 2, "float16": 2, "float32": 4}
 MAX_HEADER = 1 << 20
+MAX_DIMS = 4
+CHUNK = 1 << 20  # bytes read at once
 
 
 class ProtocolError(RuntimeError):
-    """The stream does not hold a well-formed message."""
+    """The stream does not hold a well-formed message. ``skip``: the buffer bytes that follow a refused header,
+    where it declares them consistently enough to step over (None: unknown)."""
+
+    def __init__(self, message: str, skip: int | None = None) -> None:
+        super().__init__(message)
+        self.skip = skip
 
 
 class Buffer:
@@ -53,7 +60,7 @@ def write_message(stream: BinaryIO, header: dict, buffers: dict[str, Buffer] | N
 def _read_exact(stream: BinaryIO, n: int) -> bytes:
     chunks, left = [], n
     while left:
-        chunk = stream.read(left)
+        chunk = stream.read(min(left, CHUNK))
         if not chunk:
             raise EOFError(f"stream ended with {left} of {n} bytes unread")
         chunks.append(chunk)
@@ -61,8 +68,51 @@ def _read_exact(stream: BinaryIO, n: int) -> bytes:
     return b"".join(chunks)
 
 
-def read_message(stream: BinaryIO) -> tuple[dict, dict[str, Buffer]]:
-    """Read one message; EOFError at a clean end of stream."""
+def skip(stream: BinaryIO, n: int) -> None:
+    """Read and drop ``n`` bytes (a refused request's buffers) in bounded chunks."""
+    left = n
+    while left:
+        chunk = stream.read(min(left, CHUNK))
+        if not chunk:
+            raise EOFError(f"stream ended with {left} of {n} bytes unread")
+        left -= len(chunk)
+
+
+class BufferSpec(NamedTuple):
+    """One buffer as a header declares it, checked for consistency but not yet read."""
+
+    name: str
+    dtype: str
+    shape: tuple[int, ...]
+    nbytes: int
+
+
+def _spec(entry: object) -> BufferSpec:
+    """A header's buffer entry, checked: known dtype, at most MAX_DIMS sizes >= 0, ``nbytes`` that they need."""
+    if not isinstance(entry, dict):
+        raise ProtocolError(f"malformed buffer entry {entry!r}")
+    name, dtype, shape, nbytes = (entry.get(k) for k in ("name", "dtype", "shape", "nbytes"))
+    if not isinstance(name, str) or not isinstance(nbytes, int) or isinstance(nbytes, bool) or nbytes < 0:
+        raise ProtocolError(f"malformed buffer entry {entry!r}: needs a name and nbytes >= 0")
+    if dtype not in DTYPES:
+        raise ProtocolError(f"buffer {name!r}: unsupported dtype {dtype!r}; use one of {sorted(DTYPES)}", nbytes)
+    if (not isinstance(shape, list) or len(shape) > MAX_DIMS
+            or not all(isinstance(s, int) and not isinstance(s, bool) and s >= 0 for s in shape)):
+        raise ProtocolError(f"buffer {name!r}: shape must be a list of at most {MAX_DIMS} sizes >= 0", nbytes)
+    expected = DTYPES[dtype]
+    for s in shape:
+        expected *= s
+    if expected != nbytes:
+        raise ProtocolError(f"buffer {name!r} of shape {shape} {dtype} needs {expected} bytes, "
+                            f"the header declares {nbytes}", nbytes)
+    return BufferSpec(name, dtype, tuple(shape), nbytes)
+
+
+def read_header(stream: BinaryIO) -> tuple[dict, list[BufferSpec]]:
+    """Read one message's header line and check its buffer entries, without reading the buffers.
+
+    EOFError at a clean end of stream. A ProtocolError's ``skip`` is the number of buffer bytes that follow
+    the header (the stream stays in step after :func:`skip`), or None where the header cannot say."""
     line = stream.readline(MAX_HEADER + 1)
     if not line:
         raise EOFError("stream closed")
@@ -70,15 +120,30 @@ def read_message(stream: BinaryIO) -> tuple[dict, dict[str, Buffer]]:
         raise ProtocolError("header line too long or truncated")
     try:
         header = json.loads(line)
-    except json.JSONDecodeError as exc:
+    except (json.JSONDecodeError, UnicodeDecodeError) as exc:
         raise ProtocolError(f"header is not JSON: {exc}") from None
     if not isinstance(header, dict):
         raise ProtocolError("header must be a JSON object")
-    buffers = {}
-    for entry in header.pop("buffers", []) or []:
-        try:
-            name, dtype, shape, nbytes = entry["name"], entry["dtype"], entry["shape"], int(entry["nbytes"])
-        except (KeyError, TypeError, ValueError):
-            raise ProtocolError(f"malformed buffer entry {entry!r}") from None
-        buffers[name] = Buffer(dtype, shape, _read_exact(stream, nbytes))
-    return header, buffers
+    entries = header.pop("buffers", None) or []
+    if not isinstance(entries, list):
+        raise ProtocolError("header: buffers must be a list")
+    sizes = [e.get("nbytes") if isinstance(e, dict) else None for e in entries]
+    declared = sum(sizes) if all(isinstance(n, int) and not isinstance(n, bool) and n >= 0 for n in sizes) else None
+    try:
+        specs = [_spec(e) for e in entries]
+    except ProtocolError as exc:
+        raise ProtocolError(str(exc), declared) from None
+    if len({s.name for s in specs}) != len(specs):
+        raise ProtocolError("buffers: each name may appear once", declared)
+    return header, specs
+
+
+def read_buffers(stream: BinaryIO, specs: list[BufferSpec]) -> dict[str, Buffer]:
+    """Read the buffers a header declared."""
+    return {s.name: Buffer(s.dtype, s.shape, _read_exact(stream, s.nbytes)) for s in specs}
+
+
+def read_message(stream: BinaryIO) -> tuple[dict, dict[str, Buffer]]:
+    """Read one message; EOFError at a clean end of stream."""
+    header, specs = read_header(stream)
+    return header, read_buffers(stream, specs)

@@ -3,9 +3,9 @@
 from __future__ import annotations
 
 import numpy as np
-from PIL import Image
 
 SAMPLE_SIZE = (1200, 900)  # width, height of the sample canvas
+SAMPLE_FILES = ("sample_cutout.png", "sample_background.png")  # what demo --save-samples writes
 
 
 def _pawn_profile(t: np.ndarray) -> np.ndarray:
@@ -59,14 +59,3 @@ def studio_background(size: tuple[int, int] = SAMPLE_SIZE, horizon_y: int = 520)
     rgb = wall * (1 - blend) + floor * blend
     vignette = 1 - 0.12 * ((x - w / 2) / (w / 2)) ** 2
     return np.rint(np.clip(rgb * vignette, 0, 1) * 255).astype(np.uint8)
-
-
-def save_samples(folder) -> tuple[str, str]:
-    """Write the sample cutout and background as PNGs; returns their paths."""
-    from pathlib import Path
-
-    folder = Path(folder)
-    cut, bg = folder / "sample_cutout.png", folder / "sample_background.png"
-    Image.fromarray(pawn_cutout()).save(cut)
-    Image.fromarray(studio_background()).save(bg)
-    return str(cut), str(bg)

@@ -20,6 +20,17 @@ from .methods import GeometricCard, ShadowMethod
 from .methods.geometric import camera_at
 
 
+NO_LIGHT = "the light map has no light (no lights, or all at intensity 0)"
+HIDDEN = "this light casts no shadow visible in the image (it falls behind the cutout)"
+
+
+def no_shadow_reason(light_map: LightMap, shadow: CanvasShadow) -> str | None:
+    """Why a rendered shadow shows nothing (:data:`NO_LIGHT` or :data:`HIDDEN`), or None when it shows."""
+    if light_map.is_dark:
+        return NO_LIGHT
+    return HIDDEN if shadow.is_empty else None
+
+
 class ShadowSession:
     """Shadow rendering for one canvas alpha with one method; ``horizon`` (a canvas row) and ``fov`` (the
     canvas's vertical field of view, degrees) give the camera, else the method assumes the default one."""

@@ -1,13 +1,20 @@
 """The engine worker behind ``ssn-shadow serve`` (protocol: docs/protocol.md).
 
 It keeps one method (model) loaded and one :class:`ShadowSession` per cutout,
-and answers requests over stdin/stdout or a loopback TCP socket.
+and answers requests over stdin/stdout or a loopback TCP socket. Every
+request header is checked before its buffers are read (known command, sizes
+that add up, at most ``MAX_REQUEST_BYTES`` of buffers, a bounded canvas); a
+refused request gets a ``BadRequest`` reply and the worker goes on serving.
+A loopback connection must first send ``auth`` with the worker's per-start
+token.
 """
 
 from __future__ import annotations
 
 import collections
+import hmac
 import itertools
+import secrets
 import socket
 import sys
 import time
@@ -24,11 +31,16 @@ from .framing import EmptyAlphaError
 from .hemisphere import render_light_map
 from .light_map import PRESETS, LightMap, LightMapError, preset
 from .methods import LoadedMethod, ModelError
-from .protocol import PROTOCOL_VERSION, Buffer, ProtocolError, read_message, write_message
-from .session import ShadowSession
+from .protocol import (PROTOCOL_VERSION, Buffer, BufferSpec, ProtocolError, read_buffers, read_header, skip,
+                       write_message)
+from .session import ShadowSession, no_shadow_reason
 
 MAX_SESSIONS = 8
 MAX_ELM_IMAGE_WIDTH = 2048
+MAX_REQUEST_BYTES = 1 << 30  # buffers of one request
+MAX_CANVAS_SIDE = 32768  # pixels, either side of a set_cutout alpha
+MAX_CANVAS_PIXELS = 1 << 28  # 268 megapixels
+REQUEST_BUFFERS = {"set_cutout": ("alpha",)}  # the buffers each command takes; the others take none
 
 
 class RequestError(Exception):
@@ -113,9 +125,7 @@ class Worker:
     def set_cutout(self, header: dict, buffers: dict) -> tuple[dict, dict]:
         if "alpha" not in buffers:
             raise RequestError("BadRequest", "alpha: buffer missing")
-        alpha = to_array(buffers["alpha"])
-        if alpha.ndim != 2:
-            raise RequestError("BadRequest", f"alpha: expected a 2D buffer, got shape {list(alpha.shape)}")
+        alpha = to_array(buffers["alpha"])  # 2D and bounded: check_request
         horizon, fov = _camera(header["camera"]) if header.get("camera") is not None else (None, None)
         session = ShadowSession(alpha, self.loaded.method, horizon, fov)
         key = f"c{next(self._ids)}"
@@ -148,7 +158,10 @@ class Worker:
         t2 = time.perf_counter()
         reply = {"x": shadow.x, "y": shadow.y, "width": 0, "height": 0, "method": s.method.name}
         out: dict[str, Buffer] = {}
-        if not shadow.is_empty:
+        reason = no_shadow_reason(light_map, shadow)
+        if reason:
+            reply["no_shadow"] = reason
+        else:
             layer = shadow_layer(
                 shadow.values,
                 header.get("color", (0.0, 0.0, 0.0)),
@@ -204,21 +217,86 @@ class Worker:
             kind, message = "Internal", f"internal engine error ({type(exc).__name__}: {exc}); please report it"
         return {**base, "ok": False, "error": {"type": kind, "message": message}}, {}
 
-    def serve(self, reader: BinaryIO, writer: BinaryIO) -> bool:
-        """Answer requests until the stream ends (False) or a shutdown (True)."""
+    def check_request(self, header: dict, specs: list[BufferSpec]) -> None:
+        """Refuse a request from its header alone (RequestError), before any of its buffers is read."""
+        cmd = header.get("cmd")
+        if cmd not in self.COMMANDS and cmd not in ("shutdown", "auth"):
+            raise RequestError("BadRequest", f"cmd: unknown command {cmd!r}")
+        total = sum(s.nbytes for s in specs)
+        if total > MAX_REQUEST_BYTES:
+            raise RequestError("BadRequest", f"request: {total} bytes of buffers, above the worker's limit of "
+                                             f"{MAX_REQUEST_BYTES} ({MAX_REQUEST_BYTES >> 20} MiB)")
+        allowed = REQUEST_BUFFERS.get(cmd, ())
+        extra = [s.name for s in specs if s.name not in allowed]
+        if extra:
+            raise RequestError("BadRequest", f"{cmd}: unexpected buffer {extra[0]!r}"
+                               + (f"; it takes {', '.join(allowed)}" if allowed else "; it takes none"))
+        for spec in specs:
+            if spec.name == "alpha":
+                if len(spec.shape) != 2:
+                    raise RequestError("BadRequest", f"alpha: expected a 2D buffer, got shape {list(spec.shape)}")
+                h, w = spec.shape
+                if max(h, w) > MAX_CANVAS_SIDE or h * w > MAX_CANVAS_PIXELS:
+                    raise RequestError("BadRequest", f"alpha: a {w} x {h} canvas is above the worker's limit of "
+                                       f"{MAX_CANVAS_SIDE} pixels a side and {MAX_CANVAS_PIXELS >> 20} megapixels")
+
+    def serve(self, reader: BinaryIO, writer: BinaryIO, token: str | None = None) -> bool:
+        """Answer requests until the stream ends (False) or a shutdown (True). With a ``token``, the first
+        request must be ``auth`` carrying it, or the conversation ends (False) after an Unauthorized reply."""
+        authorised, lost = token is None, False
         while True:
             try:
-                header, buffers = read_message(reader)
+                header, specs = read_header(reader)
             except EOFError:
                 return False
             except ProtocolError as exc:
-                write_message(writer, {"id": None, "ok": False, "error": {"type": "BadRequest", "message": str(exc)}})
+                # Reply once, step over the buffers the header declared when that is safe, else drop lines
+                # until one is a header again (a refused header's bytes may still arrive).
+                if not lost:
+                    _refuse(writer, None, "BadRequest", str(exc))
+                lost = not _step_over(reader, exc.skip)
+                continue
+            lost = False
+            rid = header.get("id")
+            if not authorised:
+                given = header.get("token")
+                if header.get("cmd") != "auth" or not isinstance(given, str) or \
+                        not hmac.compare_digest(given.encode(), token.encode()):
+                    _refuse(writer, rid, "Unauthorized", "this worker needs its token: send auth first")
+                    return False
+                authorised = True
+            try:
+                self.check_request(header, specs)
+            except RequestError as exc:
+                _refuse(writer, rid, exc.kind, str(exc))
+                lost = not _step_over(reader, sum(s.nbytes for s in specs))
+                continue
+            try:
+                buffers = read_buffers(reader, specs)
+            except EOFError:
                 return False
-            if header.get("cmd") == "shutdown":
-                write_message(writer, {"id": header.get("id"), "ok": True})
-                return True
+            if header.get("cmd") in ("shutdown", "auth"):
+                write_message(writer, {"id": rid, "ok": True})
+                if header["cmd"] == "shutdown":
+                    return True
+                continue
             reply, out = self.handle(header, buffers)
             write_message(writer, reply, out)
+
+
+def _refuse(writer: BinaryIO, rid: Any, kind: str, message: str) -> None:
+    write_message(writer, {"id": rid, "ok": False, "error": {"type": kind, "message": message}})
+
+
+def _step_over(reader: BinaryIO, nbytes: int | None) -> bool:
+    """Drop a refused request's buffers; False where their size is unknown or unbounded (not read)."""
+    if nbytes is None or nbytes > MAX_REQUEST_BYTES:
+        return False
+    try:
+        skip(reader, nbytes)
+    except EOFError:
+        return False
+    return True
 
 
 def serve_stdio(loaded: LoadedMethod) -> None:
@@ -229,17 +307,19 @@ def serve_stdio(loaded: LoadedMethod) -> None:
     Worker(loaded).serve(reader, writer)
 
 
-def serve_tcp(loaded: LoadedMethod, port: int = 0, host: str = "127.0.0.1", announce: Any = None) -> None:
-    """Serve one connection at a time on a loopback port; the first stdout line names it."""
+def serve_tcp(loaded: LoadedMethod, port: int = 0, announce: Any = None, token: str | None = None) -> None:
+    """Serve one connection at a time on 127.0.0.1:``port``. The first line on ``announce`` (stdout) names the
+    port and the per-start token (random unless given) that each connection's ``auth`` must carry."""
     worker = Worker(loaded)
-    with socket.create_server((host, port)) as server:
+    token = token or secrets.token_urlsafe(24)
+    with socket.create_server(("127.0.0.1", port)) as server:
         bound = server.getsockname()
-        print(f"listening {bound[0]}:{bound[1]}", file=announce or sys.stdout, flush=True)
+        print(f"listening {bound[0]}:{bound[1]} token={token}", file=announce or sys.stdout, flush=True)
         while True:
             conn, _ = server.accept()
             with conn, conn.makefile("rb") as reader, conn.makefile("wb") as writer:
                 try:
-                    if worker.serve(reader, writer):
+                    if worker.serve(reader, writer, token):
                         return
                 except (ConnectionError, OSError) as exc:
                     print(f"connection dropped: {exc}", file=sys.stderr, flush=True)

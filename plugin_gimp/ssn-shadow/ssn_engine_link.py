@@ -3,7 +3,8 @@
 The installed plug-in carries copies of ``light_map``, ``protocol`` and
 ``client`` in ``engine_shared/`` and an ``engine.json`` that either names the
 Python that runs ``python -m ssn_engine serve`` (``{"python", "args"}``) or the
-loopback address of a running worker (``{"address": ["127.0.0.1", port]}``).
+loopback address of a running worker and the token it printed when it started
+(``{"address": ["127.0.0.1", port], "token": "..."}``).
 In a source checkout (tests) the modules come from ``ssn_engine`` itself.
 GIMP-free and stdlib-only.
 """
@@ -31,20 +32,22 @@ class EngineConfigError(RuntimeError):
     """engine.json is missing or malformed; the message tells the user what to do."""
 
 
-def parse_address(text: str) -> tuple[str, int]:
-    """Parse ``host:port`` (IPv4 or a name) into a socket address."""
-    host, sep, port = text.strip().rpartition(":")
+def parse_address(text: str) -> tuple[str, int, str]:
+    """Parse ``[TOKEN@]host:port`` (IPv4 or a name) into a socket address and the worker's token ("" if none)."""
+    token, _, address = text.strip().rpartition("@")
+    host, sep, port = address.rpartition(":")
     if not sep or not host or not port.isdigit() or not 0 < int(port) < 65536:
-        raise EngineConfigError(f"expected an engine address as host:port, got {text!r}")
-    return host, int(port)
+        raise EngineConfigError(f"expected an engine address as TOKEN@host:port, got {text!r}")
+    return host, int(port), token
 
 
 def load_engine_config(plugin_dir: Path | None = None) -> dict[str, Any]:
-    """Read ``engine.json``; the environment variable SSN_SHADOW_ENGINE_ADDRESS overrides it."""
+    """Read ``engine.json``; the environment variable SSN_SHADOW_ENGINE_ADDRESS (``TOKEN@host:port``)
+    overrides it."""
     override = os.environ.get(ADDRESS_ENV)
     if override:
-        host, port = parse_address(override)
-        return {"address": [host, port]}
+        host, port, token = parse_address(override)
+        return {"address": [host, port], "token": token}
     path = Path(plugin_dir or PLUGIN_DIR) / CONFIG_NAME
     try:
         config = json.loads(path.read_text(encoding="utf-8"))
@@ -66,7 +69,10 @@ def load_engine_config(plugin_dir: Path | None = None) -> dict[str, Any]:
             or not isinstance(address[1], int)
         ):
             raise EngineConfigError(f'{path}: "address" must be ["host", port], got {address!r}')
-        return {"address": [address[0], address[1]]}
+        token = config.get("token", "")
+        if not isinstance(token, str):
+            raise EngineConfigError(f'{path}: "token" must be the string the worker printed when it started')
+        return {"address": [address[0], address[1]], "token": token}
     python, args = config.get("python"), config.get("args", ["-m", "ssn_engine", "serve"])
     if not isinstance(python, str) or not python:
         raise EngineConfigError(f'{path}: "python" must name the Python that has ssn-shadow installed')
@@ -79,5 +85,5 @@ def connect(config: dict[str, Any], timeout: float = 120.0) -> client.EngineClie
     """An engine client for a config from :func:`load_engine_config` (connects lazily)."""
     if "address" in config:
         host, port = config["address"]
-        return client.EngineClient(address=(host, int(port)), timeout=timeout)
+        return client.EngineClient(address=(host, int(port)), timeout=timeout, token=config.get("token"))
     return client.EngineClient(command=list(config["command"]), timeout=timeout)

@@ -63,6 +63,7 @@ def _session(path: Path, role: str):
         raise ModelError(f"model file missing: {path}")
     options = ort.SessionOptions()
     options.graph_optimization_level = ort.GraphOptimizationLevel.ORT_ENABLE_ALL
+    options.enable_cpu_mem_arena = False  # the arena kept ~80 MB after the first AOP run; no measurable speed cost
     try:
         session = ort.InferenceSession(str(path), options, providers=["CPUExecutionProvider"])
     except Exception as exc:  # onnxruntime raises several types for bad files

@@ -195,6 +195,16 @@ def test_property_all_zero_elm_gives_no_shadow(m):
     assert s.shape == m.shape and not s.any()
 
 
+def test_an_empty_mask_casts_no_shadow():
+    """Nothing to cast, no shadow: exactly zero (the network alone left a faint haze, up to 0.2)."""
+    masks = np.zeros((2, N, N), np.float32)
+    masks[1, 100:200, 120:136] = 1.0
+    elms = np.zeros((2, 16, 32), np.float32)
+    elms[:, 4, 10] = 3.0
+    s = api.predict_frames(masks, elms)
+    assert not s[0].any() and s[1].max() > 0.3
+
+
 @PROPERTY
 @given(data=st.data())
 def test_property_scaling_the_elm_does_not_change_the_shadow(data):

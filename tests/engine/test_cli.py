@@ -161,11 +161,18 @@ def test_corrupt_png(tmp_path, capsys):
     assert code == 2 and "bad.png" in err and "not a readable image" in err
 
 
-def test_fully_transparent_cutout(tmp_path, capsys):
+def test_fully_transparent_cutout_and_a_light_map_without_light(cutout_png, tmp_path, capsys):
+    """Nothing casts, or nothing lights: the same "no visible shadow" answer (exit 3), and nothing written."""
     empty = tmp_path / "empty.png"
     Image.fromarray(np.zeros((20, 30, 4), np.uint8), "RGBA").save(empty)
     code, err = _error(capsys, "render", str(empty), "--layer", str(tmp_path / "l.png"))
-    assert code == 2 and "empty" in err
+    assert code == 3 and "no visible shadow" in err and "fully transparent" in err
+    dark = tmp_path / "dark.json"
+    for lights in ([], [{"u": 0.3, "v": 0.5, "softness": 0.01, "intensity": 0.0}]):
+        dark.write_text(json.dumps({"format": "ssn-shadow-elm", "version": 1, "lights": lights}))
+        code, err = _error(capsys, "render", str(cutout_png), "--layer", str(tmp_path / "l.png"), "--light-map",
+                           str(dark))
+        assert code == 3 and "no visible shadow" in err and "no light" in err
     assert not (tmp_path / "l.png").exists()
 
 
@@ -210,11 +217,10 @@ def test_missing_light_map_file(cutout_png, tmp_path, capsys):
 def test_background_size_mismatch(cutout_png, tmp_path, capsys):
     bg = tmp_path / "bg.png"
     Image.fromarray(np.zeros((10, 10, 3), np.uint8)).save(bg)
-    code, err = _error(
-        capsys, "render", str(cutout_png), "--composite", str(tmp_path / "c.png"), "--background", str(bg)
-    )
+    code, err = _error(capsys, "render", str(cutout_png), "--layer", str(tmp_path / "l.png"),
+                       "--composite", str(tmp_path / "c.png"), "--background", str(bg))
     assert code == 2 and "10 x 10" in err and f"{W} x {H}" in err
-    assert not (tmp_path / "c.png").exists()
+    assert not (tmp_path / "c.png").exists() and not (tmp_path / "l.png").exists()  # checked before any write
 
 
 def test_nothing_to_write(cutout_png, capsys):

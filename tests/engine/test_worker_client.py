@@ -4,6 +4,7 @@ from __future__ import annotations
 
 import json
 import os
+import socket
 import subprocess
 import sys
 
@@ -170,6 +171,9 @@ def test_no_light_gives_an_empty_layer(client, cutout):
     empty = {"format": "ssn-shadow-elm", "version": 1, "lights": []}
     reply, buffers = client.request("render", cutout=cutout["cutout"], light_map=empty)
     assert (reply["width"], reply["height"]) == (0, 0) and "layer" not in buffers
+    assert "no light" in reply["no_shadow"]
+    reply, _ = client.request("render", cutout=cutout["cutout"], preset="softbox")
+    assert "no_shadow" not in reply
 
 
 def test_edit_ao(client):
@@ -354,10 +358,16 @@ def test_shutdown_then_a_fresh_worker(worker_env):
 def test_tcp_mode(worker_env):
     proc = subprocess.Popen(SERVE + ["--port", "0"], stdout=subprocess.PIPE, stderr=subprocess.DEVNULL, text=True)
     try:
-        line = proc.stdout.readline().strip()
-        assert line.startswith("listening 127.0.0.1:")
-        port = int(line.rsplit(":", 1)[1])
-        c = EngineClient(address=("127.0.0.1", port), timeout=60)
+        _, address, token = proc.stdout.readline().split()
+        assert address.startswith("127.0.0.1:") and token.startswith("token=")
+        port, token = int(address.rsplit(":", 1)[1]), token.removeprefix("token=")
+        with pytest.raises(WorkerUnavailable, match="refused this plug-in's token"):
+            EngineClient(address=("127.0.0.1", port), timeout=60, token="guess").request("hello")
+        with socket.create_connection(("127.0.0.1", port)) as raw:  # no auth: refused before any work
+            raw.sendall(b'{"id": 1, "cmd": "set_cutout"}\n')
+            reply = json.loads(raw.makefile("rb").readline())
+            assert reply["error"]["type"] == "Unauthorized" and raw.recv(1) == b""  # and the connection ends
+        c = EngineClient(address=("127.0.0.1", port), timeout=60, token=token)
         reply, _ = c.request("hello")
         assert reply["protocol"] == 1
         key = c.request("set_cutout", {"alpha": buf(canvas_alpha(np.uint16))})[0]["cutout"]
@@ -367,7 +377,7 @@ def test_tcp_mode(worker_env):
         assert arr(buffers["layer"]).shape == (reply["height"], reply["width"], 4)
         c.close()
         # each connection is a fresh conversation with the same worker
-        c2 = EngineClient(address=("127.0.0.1", port), timeout=60)
+        c2 = EngineClient(address=("127.0.0.1", port), timeout=60, token=token)
         assert c2.request("hello")[0]["protocol"] == 1
         c2.request("shutdown")
         assert proc.wait(timeout=10) == 0
@@ -380,11 +390,18 @@ def test_tcp_mode(worker_env):
         proc.stdout.close()
 
 
-def test_stdio_protocol_error_ends_the_conversation_cleanly(worker_env):
-    """A stream that is not the protocol gets a BadRequest reply, not a hang."""
-    result = subprocess.run(SERVE, input=b"this is not json\n", capture_output=True, timeout=60)
-    reply = json.loads(result.stdout.splitlines()[0])
-    assert reply["ok"] is False and reply["error"]["type"] == "BadRequest"
+def test_stdio_bad_headers_get_replies_and_the_worker_goes_on(worker_env):
+    """Garbage, then a header declaring a 10 GB buffer that never comes, then hello: two refusals at once (the
+    10 GB are never waited for) and an answer; the worker ends cleanly with its input."""
+    lines = [b"this is not json\n",
+             json.dumps({"id": 2, "cmd": "set_cutout", "buffers": [
+                 {"name": "alpha", "dtype": "uint8", "shape": [100000, 100000], "nbytes": 10**10}]}).encode() + b"\n",
+             b'{"id": 3, "cmd": "hello"}\n']
+    result = subprocess.run(SERVE, input=b"".join(lines), capture_output=True, timeout=60)
+    replies = [json.loads(line) for line in result.stdout.splitlines()]
+    assert [r["ok"] for r in replies] == [False, False, True], replies
+    assert replies[0]["error"]["type"] == replies[1]["error"]["type"] == "BadRequest"
+    assert "limit" in replies[1]["error"]["message"] and replies[2]["id"] == 3
     assert result.returncode == 0
 
 

@@ -3,15 +3,23 @@
 The spawned-worker test installs the plug-in with an engine.json whose
 command runs this script: it relays the plug-in's stdin/stdout to the
 worker listening on the host's loopback port, so GIMP exercises the
-plug-in's own spawn path (subprocess pipes) against the real worker.
-usage: python3 stdio_relay.py HOST PORT
+plug-in's own spawn path (subprocess pipes) against the real worker. It
+first authenticates with the worker's token, as a loopback client must.
+usage: python3 stdio_relay.py HOST PORT TOKEN
 """
 
+import json
 import socket
 import sys
 import threading
 
 sock = socket.create_connection((sys.argv[1], int(sys.argv[2])))
+sock.sendall(json.dumps({"id": 0, "cmd": "auth", "token": sys.argv[3]}).encode() + b"\n")
+reply = b""
+while not reply.endswith(b"\n"):  # the auth reply has no buffers: one line, not relayed
+    reply += sock.recv(1)
+if not json.loads(reply)["ok"]:
+    sys.exit(f"relay: the worker refused the token: {reply!r}")
 
 
 def upstream() -> None:

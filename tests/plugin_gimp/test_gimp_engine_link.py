@@ -22,11 +22,12 @@ def test_command_config(tmp_path, monkeypatch):
 
 def test_address_config_and_override(tmp_path, monkeypatch):
     monkeypatch.delenv(link.ADDRESS_ENV, raising=False)
-    cfg = link.load_engine_config(write(tmp_path, {"address": ["127.0.0.1", 5123]}))
-    assert cfg == {"address": ["127.0.0.1", 5123]}
-    assert link.connect(cfg).address == ("127.0.0.1", 5123)
-    monkeypatch.setenv(link.ADDRESS_ENV, "localhost:7000")
-    assert link.load_engine_config(tmp_path / "nowhere") == {"address": ["localhost", 7000]}
+    cfg = link.load_engine_config(write(tmp_path, {"address": ["127.0.0.1", 5123], "token": "s3cret"}))
+    assert cfg == {"address": ["127.0.0.1", 5123], "token": "s3cret"}
+    client = link.connect(cfg)
+    assert client.address == ("127.0.0.1", 5123) and client.token == "s3cret"
+    monkeypatch.setenv(link.ADDRESS_ENV, "t0k@localhost:7000")
+    assert link.load_engine_config(tmp_path / "nowhere") == {"address": ["localhost", 7000], "token": "t0k"}
 
 
 @pytest.mark.parametrize(
@@ -36,6 +37,7 @@ def test_address_config_and_override(tmp_path, monkeypatch):
         ("{oops", "Cannot read"),
         ([1, 2], "JSON object"),
         ({"address": ["127.0.0.1"]}, '"address"'),
+        ({"address": ["127.0.0.1", 5123], "token": 7}, '"token"'),
         ({"python": ""}, '"python"'),
         ({"python": "py", "args": "serve"}, '"args"'),
     ],

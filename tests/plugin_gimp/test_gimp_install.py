@@ -65,9 +65,9 @@ def test_link_install_and_reinstall(tmp_path):
 
 
 def test_address_install(tmp_path):
-    dest = inst.install(tmp_path / "ssn-shadow", address=("127.0.0.1", 4567))
+    dest = inst.install(tmp_path / "ssn-shadow", address=("127.0.0.1", 4567), token="abc")
     config = json.loads((dest / "engine.json").read_text())
-    assert config["address"] == ["127.0.0.1", 4567] and "python" not in config
+    assert config["address"] == ["127.0.0.1", 4567] and config["token"] == "abc" and "python" not in config
 
 
 def test_installed_plugin_imports_shared_copies(tmp_path):

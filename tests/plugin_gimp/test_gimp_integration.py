@@ -164,7 +164,7 @@ def chroot() -> Path:
 
 @pytest.fixture(scope="module")
 def worker():
-    """A host engine worker on a loopback port: yields (port, client)."""
+    """A host engine worker on a loopback port: yields (port, token)."""
     proc = subprocess.Popen(
         [sys.executable, "-m", "ssn_engine", "serve", "--port", "0"],
         cwd=ROOT,
@@ -175,8 +175,8 @@ def worker():
     try:
         line = proc.stdout.readline()
         assert line.startswith("listening 127.0.0.1:"), f"worker said {line!r}; stderr: {proc.stderr.read()[-2000:]}"
-        port = int(line.rsplit(":", 1)[1])
-        yield port, proc
+        _, address, token = line.split()
+        yield int(address.rsplit(":", 1)[1]), token.removeprefix("token=")
     finally:
         proc.kill()
         proc.wait(timeout=10)
@@ -185,10 +185,10 @@ def worker():
 @pytest.fixture(scope="module")
 def workdir(chroot, worker):
     """A throwaway folder inside the chroot's /tmp with a GIMP profile holding the plug-in: (host path, inner path)."""
-    port, _ = worker
+    port, token = worker
     work = Path(tempfile.mkdtemp(prefix="ssn-gimp-test-", dir=chroot / "tmp"))
     try:
-        install(work / "profile" / "plug-ins" / "ssn-shadow", address=("127.0.0.1", port))
+        install(work / "profile" / "plug-ins" / "ssn-shadow", address=("127.0.0.1", port), token=token)
         (work / "out").mkdir()
         yield work, "/tmp/" + work.name  # the same folder seen from inside the chroot
     finally:
@@ -222,12 +222,12 @@ def gimp_results(workdir):
     return results, arrays, log
 
 
-def _expected(worker_port: int, case: dict, cutout: np.ndarray) -> tuple[dict, np.ndarray]:
+def _expected(worker: tuple[int, str], case: dict, cutout: np.ndarray) -> tuple[dict, np.ndarray]:
     """What the engine renders for this cutout and these settings (as the plug-in would ask)."""
     u8 = case["precision"].startswith("U8")
     alpha = np.round(cutout * (255 if u8 else 65535)).astype("uint8" if u8 else "uint16").reshape(H, W)
     args = case["args"]
-    client = EngineClient(address=("127.0.0.1", worker_port))
+    client = EngineClient(address=("127.0.0.1", worker[0]), token=worker[1])
     try:
         reply, _ = client.request("set_cutout", {"alpha": Buffer(str(alpha.dtype), alpha.shape, alpha.tobytes())})
         cid = reply["cutout"]
@@ -272,7 +272,7 @@ def test_shadow_layer(gimp_results, worker, case):
     assert r["undo_enabled"]
     # the layer sits where the engine places the shadow of this cutout, with its pixels
     cutout = arrays[(case["id"], "cutout_pixels")]
-    reply, want = _expected(worker[0], case, cutout)
+    reply, want = _expected(worker, case, cutout)
     assert r["shadow_offsets"] == [reply["x"], reply["y"]]
     assert r["shadow_size"] == [reply["width"], reply["height"]]
     got = arrays[(case["id"], "shadow_pixels")].reshape(reply["height"], reply["width"], 4)
@@ -369,11 +369,11 @@ def test_spawned_worker(workdir, worker):
     The chroot has no ssn-shadow, so the command is a stdlib relay to the host worker: the plug-in's
     own subprocess path runs, and the worker is the real one."""
     work, inner = workdir
-    port, _ = worker
+    port, token = worker
     dest = install(work / "profile-spawn" / "plug-ins" / "ssn-shadow", python="/usr/bin/python3")
     shutil.copy(RELAY_SCRIPT, work / "relay.py")
     config = json.loads((dest / "engine.json").read_text())
-    config["args"] = [inner + "/relay.py", "127.0.0.1", str(port)]
+    config["args"] = [inner + "/relay.py", "127.0.0.1", str(port), token]
     (dest / "engine.json").write_text(json.dumps(config))
     out = work / "out-spawn"
     out.mkdir()

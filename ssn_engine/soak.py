@@ -1,0 +1,107 @@
+"""``ssn-shadow soak``: a worker under a long mix of requests, and whether its memory stays flat.
+
+It starts ``ssn-shadow serve`` as the plug-ins do and sends what an artist's session sends (new cutouts of
+varied sizes, light drags, AO edits, light-map pictures, releases) mixed with refused requests, then prints the
+worker's resident memory over time and its growth after warm-up.
+"""
+
+from __future__ import annotations
+
+import random
+import sys
+import time
+from pathlib import Path
+
+import numpy as np
+
+from .client import EngineClient, EngineError
+from .light_map import LightMap
+from .protocol import Buffer
+
+WARMUP_SHARE = 0.2  # the first share of requests (model and caches filling up) before the reference RSS
+WINDOW = 0.2  # RSS compared as medians over windows of this share of the run (sessions come and go)
+
+
+def rss_mib(pid: int) -> float:
+    """Resident memory of process ``pid`` in MiB (Linux /proc; NaN elsewhere)."""
+    try:
+        for line in Path(f"/proc/{pid}/status").read_text().splitlines():
+            if line.startswith("VmRSS:"):
+                return int(line.split()[1]) / 1024
+    except OSError:
+        pass
+    return float("nan")
+
+
+def _alpha(rng: random.Random) -> Buffer:
+    """A random blob cutout on a canvas of random size and alpha depth."""
+    w, h = rng.randint(64, 1600), rng.randint(64, 1200)
+    yy, xx = np.mgrid[:h, :w]
+    cx, cy, rx, ry = w * rng.uniform(0.3, 0.7), h * rng.uniform(0.3, 0.6), w * rng.uniform(0.1, 0.3), h * 0.25
+    alpha = np.clip(1.5 - ((xx - cx) / rx) ** 2 - ((yy - cy) / ry) ** 2, 0, 1)
+    dtype = rng.choice(["uint8", "uint16", "float32"])
+    data = (alpha * np.iinfo(dtype).max).astype(dtype) if dtype != "float32" else alpha.astype(np.float32)
+    return Buffer(dtype, data.shape, data.tobytes())
+
+
+def _step(client: EngineClient, rng: random.Random, cutouts: list[str]) -> None:
+    """One request of the mix."""
+    roll = rng.random()
+    if roll < 0.08 or not cutouts:
+        cutouts.append(client.request("set_cutout", {"alpha": _alpha(rng)})[0]["cutout"])
+        return
+    key = rng.choice(cutouts)
+    light = LightMap.random(rng, max_lights=rng.choice([1, 2, 8])).to_dict()
+    try:
+        if roll < 0.7:
+            client.request("render", cutout=key, light_map=light,
+                           format={"dtype": rng.choice(["uint8", "uint16", "float32"])})
+        elif roll < 0.8:
+            client.request("edit_ao", cutout=key, edits=[{"op": "brush", "x": rng.random(), "y": rng.random(),
+                                                          "radius": 0.05, "strength": -0.5}])
+        elif roll < 0.85:
+            client.request("get_ao", cutout=key)
+        elif roll < 0.9:
+            client.request("elm_image", light_map=light, width=256)
+        elif roll < 0.95:
+            client.request("release", cutout=cutouts.pop(cutouts.index(key)))
+        else:
+            client.request("render", cutout=key, light_map={"lights": "none"})  # refused: LightMapError
+    except EngineError as exc:
+        if exc.kind in ("Internal", "WorkerUnavailable"):
+            raise
+        if exc.kind == "UnknownCutout":  # the worker keeps at most MAX_SESSIONS; older ones are gone
+            cutouts.remove(key)
+
+
+def run_soak(requests: int = 2000, minutes: float = 0.0, method: str = "auto", seed: int = 0,
+             out=sys.stdout) -> dict:
+    """Send ``requests`` requests (or run ``minutes``, if given); print RSS over time; return the figures."""
+    rng = random.Random(seed)
+    client = EngineClient(command=[sys.executable, "-m", "ssn_engine", "serve", "--method", method], timeout=300)
+    try:
+        client.request("hello")
+        pid = client._proc.pid
+        start, cutouts, samples, done = time.monotonic(), [], [], 0
+        deadline = start + 60 * minutes if minutes else None
+        every = max(1, requests // 20) if deadline is None else 200
+        print(f"{'requests':>9} {'seconds':>8} {'RSS MiB':>8}", file=out, flush=True)
+        while (done < requests) if deadline is None else (time.monotonic() < deadline):
+            _step(client, rng, cutouts)
+            done += 1
+            if done % every == 0:
+                samples.append((done, time.monotonic() - start, rss_mib(pid)))
+                print(f"{done:9d} {samples[-1][1]:8.1f} {samples[-1][2]:8.1f}", file=out, flush=True)
+        client.request("shutdown")
+    finally:
+        client.close()
+    def window_median(lo: float) -> float:
+        return float(np.median([s[2] for s in samples if lo * done < s[0] <= (lo + WINDOW) * done + 1e-9]))
+
+    figures = {"requests": done, "seconds": samples[-1][1], "rss_warm_mib": window_median(WARMUP_SHARE),
+               "rss_end_mib": window_median(1.0 - WINDOW), "rss_peak_mib": max(s[2] for s in samples)}
+    figures["growth_mib"] = figures["rss_end_mib"] - figures["rss_warm_mib"]
+    print(f"median RSS just after warm-up {figures['rss_warm_mib']:.1f} MiB, at the end {figures['rss_end_mib']:.1f} "
+          f"MiB (growth {figures['growth_mib']:+.1f} MiB), peak {figures['rss_peak_mib']:.1f} MiB; "
+          f"{done} requests in {figures['seconds']:.0f} s", file=out, flush=True)
+    return figures

@@ -1,0 +1,148 @@
+"""The worker against bad and random input: every header is checked before its buffers are read, every request
+gets a reply, and the worker stays usable (in-process, over byte streams)."""
+
+from __future__ import annotations
+
+import io
+import json
+
+import numpy as np
+import pytest
+from hypothesis import HealthCheck, given, settings
+from hypothesis import strategies as st
+
+from ssn_engine.methods import load_method
+from ssn_engine.protocol import ProtocolError, read_message
+from ssn_engine.worker import MAX_REQUEST_BYTES, Worker
+
+HELLO = b'{"id": 99, "cmd": "hello"}\n'
+ERROR_TYPES = {"BadRequest", "EmptyAlpha", "LightMapError", "UnknownCutout", "ModelError", "Unauthorized"}
+
+
+@pytest.fixture(scope="module")
+def worker() -> Worker:
+    return Worker(load_method("geometric"))
+
+
+def message(header: dict, payload: bytes = b"") -> bytes:
+    return json.dumps(header).encode() + b"\n" + payload
+
+
+def converse(worker: Worker, data: bytes, token: str | None = None) -> tuple[list[dict], bool]:
+    """Feed ``data`` to the worker; its reply headers (buffers checked to be complete) and serve's result."""
+    writer = io.BytesIO()
+    ended = worker.serve(io.BytesIO(data), writer, token)
+    writer.seek(0)
+    replies = []
+    while True:
+        try:
+            header, _ = read_message(writer)
+        except EOFError:
+            return replies, ended
+        replies.append(header)
+
+
+def alpha_entry(shape, dtype="uint8", nbytes=None, name="alpha") -> dict:
+    size = int(np.prod(shape)) * np.dtype(dtype).itemsize if nbytes is None else nbytes
+    return {"name": name, "dtype": dtype, "shape": list(shape), "nbytes": size}
+
+
+@pytest.mark.parametrize("header, payload, fragment", [
+    ({"cmd": "launch", "buffers": [alpha_entry((4, 4))]}, bytes(16), "unknown command 'launch'"),
+    ({"cmd": "set_cutout", "buffers": [alpha_entry((4, 4), "int64", 16)]}, bytes(16), "unsupported dtype"),
+    ({"cmd": "set_cutout", "buffers": [alpha_entry((4, 4), nbytes=20)]}, bytes(20), "needs 16 bytes"),
+    ({"cmd": "set_cutout", "buffers": [alpha_entry((1, 1, 1, 1, 4), nbytes=4)]}, bytes(4), "at most 4"),
+    ({"cmd": "set_cutout", "buffers": [alpha_entry((4,))]}, bytes(4), "2D"),
+    ({"cmd": "set_cutout", "buffers": [alpha_entry((2, 2)), alpha_entry((2, 2))]}, bytes(8), "once"),
+    ({"cmd": "set_cutout", "buffers": [alpha_entry((1, 40000))]}, bytes(40000), "canvas is above"),
+    ({"cmd": "render", "buffers": [alpha_entry((2, 2), name="layer")]}, bytes(4), "unexpected buffer 'layer'"),
+    ({"cmd": "set_cutout", "buffers": [alpha_entry((2, 2), name="mask")]}, bytes(4), "it takes alpha"),
+    ({"cmd": "set_cutout", "buffers": [alpha_entry((65536, 65536))]}, b"", "limit of 1073741824"),
+    ({"cmd": "set_cutout", "buffers": [{"name": "alpha", "dtype": "uint8", "shape": [2], "nbytes": -2}]}, b"",
+     "nbytes >= 0"),
+    ({"cmd": "set_cutout", "buffers": "alpha"}, b"", "must be a list"),
+    ({"cmd": "set_cutout", "buffers": [alpha_entry((2, 2), "float32", 16) | {"shape": [2, "2"]}]}, bytes(16),
+     "shape must be"),
+])
+def test_bad_header_is_refused_and_the_next_request_answered(worker, header, payload, fragment):
+    replies, ended = converse(worker, message({"id": 1, **header}, payload) + HELLO)
+    assert not ended and len(replies) == 2, replies
+    assert replies[0]["ok"] is False and replies[0]["error"]["type"] == "BadRequest"
+    assert fragment in replies[0]["error"]["message"]
+    assert replies[1] == {**replies[1], "id": 99, "ok": True}  # the stream is still in step
+
+
+def test_a_refused_declared_size_is_never_read(worker):
+    """A header declaring more than the limit is refused at once; bytes that arrive after it anyway (here 3 MiB
+    of binary) are dropped until the next header."""
+    declared = message({"id": 1, "cmd": "set_cutout", "buffers": [alpha_entry((1, MAX_REQUEST_BYTES + 1))]})
+    junk = np.random.default_rng(0).integers(0, 256, 3 << 20, dtype=np.uint8).tobytes().replace(b"\n", b" ")
+    replies, _ = converse(worker, declared + junk + b"\n" + HELLO)
+    assert [r["ok"] for r in replies] == [False, True] and "limit" in replies[0]["error"]["message"]
+
+
+def test_token_is_required_first(worker):
+    replies, ended = converse(worker, HELLO + HELLO, token="right")
+    assert not ended and len(replies) == 1 and replies[0]["error"]["type"] == "Unauthorized"
+    replies, _ = converse(worker, message({"id": 1, "cmd": "auth", "token": "wrong"}) + HELLO, token="right")
+    assert len(replies) == 1 and replies[0]["error"]["type"] == "Unauthorized"
+    replies, _ = converse(worker, message({"id": 1, "cmd": "auth", "token": "right"}) + HELLO, token="right")
+    assert [r["ok"] for r in replies] == [True, True]
+
+
+def test_a_real_cutout_after_refusals(worker):
+    """Refusals leave no state behind: a real set_cutout and render still work on the same stream."""
+    alpha = np.zeros((60, 80), np.uint8)
+    alpha[20:50, 30:45] = 255
+    stream = (message({"id": 1, "cmd": "set_cutout", "buffers": [alpha_entry((3, 3), nbytes=5)]}, bytes(5))
+              + message({"id": 2, "cmd": "set_cutout", "buffers": [alpha_entry(alpha.shape)]}, alpha.tobytes()))
+    replies, _ = converse(worker, stream)
+    assert replies[0]["ok"] is False and replies[1]["ok"] is True
+    render = message({"id": 3, "cmd": "render", "cutout": replies[1]["cutout"], "preset": "softbox"})
+    replies, _ = converse(worker, render)
+    assert replies[0]["ok"] is True and replies[0]["width"] > 0
+
+
+json_values = st.recursive(
+    st.none() | st.booleans() | st.integers(-10**12, 10**12) | st.floats(allow_nan=True) | st.text(max_size=12),
+    lambda inner: st.lists(inner, max_size=4) | st.dictionaries(st.text(max_size=8), inner, max_size=4),
+    max_leaves=12,
+)
+fields = st.sampled_from(["cutout", "light_map", "preset", "color", "opacity", "format", "edits", "width", "camera",
+                          "token", "id"])
+
+
+@st.composite
+def requests(draw) -> bytes:
+    """A request that is well framed but may say anything: random command, fields, buffers and payloads."""
+    cmd = draw(st.sampled_from(list(Worker.COMMANDS) + ["shutdown", "auth", "", "x" * 40]) | json_values)
+    header = {"id": draw(st.integers(0, 1000)), "cmd": cmd}
+    header.update(draw(st.dictionaries(fields, json_values | st.sampled_from(["softbox", "c1", "uint16"]),
+                                       max_size=4)))
+    if draw(st.booleans()):
+        shape = draw(st.lists(st.integers(0, 40), min_size=1, max_size=3))
+        dtype = draw(st.sampled_from(["uint8", "uint16", "float16", "float32"]))
+        values = draw(st.binary(min_size=0, max_size=64))
+        payload = (values * (1 + int(np.prod(shape)) * 4 // max(1, len(values))))[: int(np.prod(shape))
+                                                                                   * np.dtype(dtype).itemsize]
+        payload = payload.ljust(int(np.prod(shape)) * np.dtype(dtype).itemsize, b"\x7f")
+        header["buffers"] = [{"name": draw(st.sampled_from(["alpha", "layer"])), "dtype": dtype, "shape": shape,
+                              "nbytes": len(payload)}]
+    else:
+        payload = b""
+    return message(header, payload)
+
+
+@settings(max_examples=150, deadline=None, suppress_health_check=[HealthCheck.function_scoped_fixture,
+                                                                     HealthCheck.too_slow])
+@given(stream=st.lists(requests() | st.binary(max_size=80).map(lambda b: b + b"\n"), min_size=1, max_size=4))
+def test_fuzzed_requests_always_get_well_formed_replies(worker, stream):
+    data = b"".join(stream)
+    try:
+        replies, ended = converse(worker, data + HELLO)
+    except ProtocolError as exc:  # a reply the client could not parse
+        pytest.fail(f"malformed reply: {exc}")
+    for reply in replies:
+        assert reply["ok"] is True or reply["error"]["type"] in ERROR_TYPES - {"Unauthorized"}, reply
+    if not ended:  # a fuzzed 'shutdown' ends the conversation; otherwise the last request is answered
+        assert replies[-1].get("id") == 99 and replies[-1]["ok"] is True
