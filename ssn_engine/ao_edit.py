@@ -8,7 +8,6 @@ fractions of the N x N frame (x right, y down); AO follows the conventions
 
 from __future__ import annotations
 
-from collections.abc import Iterable
 from typing import Any
 
 import numpy as np
@@ -55,8 +54,10 @@ def _field(edit: dict, key: str, where: str, lo: float, hi: float) -> float:
     return float(value)
 
 
-def apply_edits(ao: np.ndarray, edits: Iterable[dict[str, Any]]) -> np.ndarray:
+def apply_edits(ao: np.ndarray, edits: list[dict[str, Any]]) -> np.ndarray:
     """Apply a list of edits in order; returns a new AO map clipped to [0, 1]."""
+    if not isinstance(edits, (list, tuple)):
+        raise AOEditError(f"edits: expected a list of edits, got {type(edits).__name__}")
     out = np.asarray(ao, np.float32).copy()
     for i, edit in enumerate(edits):
         where = f"edits[{i}]"

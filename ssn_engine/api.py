@@ -58,7 +58,7 @@ def predict_frames(masks: np.ndarray, elms: np.ndarray, ao: np.ndarray | None = 
             raise ValueError(f"ao: expected shape {masks.shape}, got {ao.shape}")
     if cameras is not None:
         cameras = np.asarray(cameras, np.float64)
-        check_cameras(cameras, len(masks))
+        check_cameras(cameras, len(masks), method.resolution)
     out = np.empty(masks.shape, np.float32)
     for i in range(0, len(masks), BATCH):
         m = np.clip(masks[i : i + BATCH], 0.0, 1.0)

@@ -181,9 +181,8 @@ def _make_shadow(cutout_rgba: np.ndarray, args: argparse.Namespace, stage: Stage
     stage("analysing the cutout")
     try:
         session = ShadowSession(cutout_rgba[..., 3], loaded.method, args.horizon, args.fov)
-    except EmptyAlphaError:
-        raise NoShadow(f"the cutout {getattr(args, 'cutout', 'image')} is fully transparent: nothing casts a "
-                       "shadow") from None
+    except EmptyAlphaError as exc:
+        raise NoShadow(f"{args.cutout}: {exc}") from None
     session.set_ao_edits(edits)
     stage("rendering the shadow")
     shadow = session.render(lights)
@@ -418,7 +417,7 @@ def build_parser() -> argparse.ArgumentParser:
     p.set_defaults(func=cmd_benchmark)
 
     p = sub.add_parser("soak", help="run a worker under a long request mix and print its memory over time")
-    p.add_argument("--requests", type=int, default=2000, help="requests to send (default %(default)s)")
+    p.add_argument("--requests", type=int, default=10000, help="requests to send (default %(default)s)")
     p.add_argument("--minutes", type=float, default=0.0, help="run this long instead of --requests")
     p.add_argument("--method", default="auto", choices=METHOD_NAMES)
     p.add_argument("--seed", type=int, default=0)

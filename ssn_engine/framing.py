@@ -24,6 +24,7 @@ from .camera import DEFAULT_FOV, focal_from_fov, top_row
 
 OBJECT_EXTENT = 0.5
 ALPHA_THRESHOLD = 0.01  # alpha at or below this is background for the bounding box
+MIN_CUTOUT = 3  # pixels on the cutout's longer side; a smaller one casts no visible shadow
 SHADOW_FLOOR = 0.5 / 255  # shadow below this is invisible in 8 bits: the layer is cropped to the rest
 EDGE_FADE = 0.04  # share of the frame over which a shadow fades out at the frame's edges
 HAZE, HAZE_BAND = 0.04, 0.12  # faint values removed near the frame's edges, and over what share of the frame
@@ -106,8 +107,12 @@ def alpha_bbox(alpha: np.ndarray) -> tuple[int, int, int, int]:
     visible = alpha > _threshold(alpha.dtype)
     rows = np.flatnonzero(visible.any(axis=1))
     if rows.size == 0:
-        raise EmptyAlphaError("the selection or layer alpha is empty: nothing to cast a shadow")
+        raise EmptyAlphaError("the selection or layer alpha is empty (fully transparent): nothing to cast a shadow")
     cols = np.flatnonzero(visible[rows[0] : rows[-1] + 1].any(axis=0))
+    w, h = int(cols[-1] - cols[0]) + 1, int(rows[-1] - rows[0]) + 1
+    if max(w, h) < MIN_CUTOUT:
+        raise EmptyAlphaError(f"the cutout is only {w} x {h} pixels: too small to cast a visible shadow (it needs "
+                              f"{MIN_CUTOUT} pixels on its longer side)")
     return int(cols[0]), int(rows[0]), int(cols[-1]) + 1, int(rows[-1]) + 1
 
 

@@ -225,7 +225,7 @@ class Worker:
         total = sum(s.nbytes for s in specs)
         if total > MAX_REQUEST_BYTES:
             raise RequestError("BadRequest", f"request: {total} bytes of buffers, above the worker's limit of "
-                                             f"{MAX_REQUEST_BYTES} ({MAX_REQUEST_BYTES >> 20} MiB)")
+                                             f"{MAX_REQUEST_BYTES / 2**30:g} GiB ({MAX_REQUEST_BYTES} bytes)")
         allowed = REQUEST_BUFFERS.get(cmd, ())
         extra = [s.name for s in specs if s.name not in allowed]
         if extra:
@@ -238,7 +238,7 @@ class Worker:
                 h, w = spec.shape
                 if max(h, w) > MAX_CANVAS_SIDE or h * w > MAX_CANVAS_PIXELS:
                     raise RequestError("BadRequest", f"alpha: a {w} x {h} canvas is above the worker's limit of "
-                                       f"{MAX_CANVAS_SIDE} pixels a side and {MAX_CANVAS_PIXELS >> 20} megapixels")
+                                       f"{MAX_CANVAS_SIDE} pixels a side and {MAX_CANVAS_PIXELS / 1e6:.0f} megapixels")
 
     def serve(self, reader: BinaryIO, writer: BinaryIO, token: str | None = None) -> bool:
         """Answer requests until the stream ends (False) or a shutdown (True). With a ``token``, the first

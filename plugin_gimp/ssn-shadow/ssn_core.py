@@ -122,6 +122,8 @@ def release(engine: Engine, cutout_id: str) -> None:
 
 def compute_shadow(host: Host, engine: Engine, settings: ShadowSettings) -> tuple[ShadowLayerData, PixelPlan]:
     """Read the cutout and render its shadow; touches nothing in the image."""
+    if settings.opacity <= 0:
+        raise ShadowError("The opacity is 0, so the shadow layer would show nothing. Raise the opacity.")
     plan = host.pixel_plan()
     cutout = host.read_cutout(plan)
     cutout_id = upload_cutout(engine, cutout)

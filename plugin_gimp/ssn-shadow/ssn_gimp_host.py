@@ -17,7 +17,7 @@ gi.require_version("Babl", "0.1")
 from gi.repository import Babl, Gegl, Gimp  # noqa: E402
 
 from ssn_core import Cutout, ShadowError, ShadowLayerData  # noqa: E402
-from ssn_pixels import PixelPlan, layer_image_type, plan_for_precision  # noqa: E402
+from ssn_pixels import PixelFormatError, PixelPlan, layer_image_type, plan_for_precision  # noqa: E402
 from ssn_settings import ARGUMENTS  # noqa: E402
 
 
@@ -49,10 +49,22 @@ class GimpHost:
         if not isinstance(drawable, Gimp.Layer) or isinstance(drawable, Gimp.LayerMask):
             raise ShadowError("Soft Shadow works on a layer: select a layer, not a channel or a mask.")
         self.image, self.drawable = image, drawable
+        group = drawable.get_parent()
+        while group is not None:  # the shadow layer goes beside the drawable: its group must take it
+            if group.get_lock_content():
+                raise ShadowError(
+                    f'The layer is inside the group "{group.get_name()}", whose contents are locked, so the '
+                    "shadow layer cannot be added beside it. Unlock the group's contents (Layers dialog, the "
+                    "lock icon) or move the layer out of the group."
+                )
+            group = group.get_parent()
 
     def pixel_plan(self) -> PixelPlan:
-        layer_image_type(self.image.get_base_type().value_nick)  # rejects indexed images with a message
-        return plan_for_precision(self.image.get_precision().value_nick)
+        try:
+            layer_image_type(self.image.get_base_type().value_nick)  # rejects indexed images with a message
+            return plan_for_precision(self.image.get_precision().value_nick)
+        except PixelFormatError as exc:
+            raise ShadowError(str(exc)) from None
 
     def source_name(self) -> str:
         return self.drawable.get_name()
@@ -76,15 +88,49 @@ class GimpHost:
         if not self.drawable.has_alpha():
             raise ShadowError(no_cutout_message(self.drawable.get_name()))
         _, off_x, off_y = self.drawable.get_offsets()
-        buffer = self.drawable.get_buffer()
         # The canvas rectangle in the layer's coordinates; outside the layer the abyss is transparent.
         rect = Gegl.Rectangle.new(round(-off_x * scale), round(-off_y * scale), width, height)
-        data = buffer.get(rect, scale, plan.layer_alpha_format, Gegl.AbyssPolicy.NONE)
+        data = self._visible_alpha().get(rect, scale, plan.layer_alpha_format, Gegl.AbyssPolicy.NONE)
         return Cutout(width, height, plan.alpha_dtype, bytes(data), f'the layer "{self.drawable.get_name()}"')
+
+    def _visible_alpha(self) -> Gegl.Buffer:
+        """The layer's pixels as they show: with an active layer mask, multiplied by it (a GEGL graph, so the
+        user's layer and mask are only read)."""
+        buffer = self.drawable.get_buffer()
+        mask = self.drawable.get_mask()
+        if mask is None or not self.drawable.get_apply_mask():
+            return buffer
+        graph = Gegl.Node()
+        source = graph.create_child("gegl:buffer-source")
+        source.set_property("buffer", buffer)
+        aux = graph.create_child("gegl:buffer-source")
+        aux.set_property("buffer", mask.get_buffer())
+        masked = graph.create_child("gegl:opacity")
+        source.connect_to("output", masked, "input")
+        aux.connect_to("output", masked, "aux")
+        extent = buffer.get_extent()
+        out = Gegl.Buffer.new("RGBA float", extent.x, extent.y, extent.width, extent.height)
+        sink = graph.create_child("gegl:write-buffer")
+        sink.set_property("buffer", out)
+        masked.connect_to("output", sink, "input")
+        sink.process()
+        return out
 
     def thumbnail(self, width: int, height: int) -> tuple[bytes, int, int, int, int]:
         """The image's composite as (pixels, width, height, rowstride, channels), 8-bit sRGB."""
         pixbuf = self.image.get_thumbnail(width, height, Gimp.PixbufTransparency.SMALL_CHECKS)
+        if pixbuf is None:
+            # GIMP makes no thumbnail at some precisions (16/32-bit integer, half, float, double): take it
+            # from a small 8-bit copy of the image, deleted at once (the user's image is only read).
+            copy = self.image.duplicate()
+            try:
+                copy.scale(width, height)
+                copy.convert_precision(Gimp.Precision.U8_NON_LINEAR)
+                pixbuf = copy.get_thumbnail(width, height, Gimp.PixbufTransparency.SMALL_CHECKS)
+            finally:
+                copy.delete()
+            if pixbuf is None:
+                raise ShadowError("GIMP could not make a preview of this image; run the filter without the dialog.")
         return (
             bytes(pixbuf.get_pixels()),
             pixbuf.get_width(),

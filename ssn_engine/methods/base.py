@@ -6,6 +6,8 @@ from typing import Protocol
 
 import numpy as np
 
+from ..camera import focal_from_fov
+
 
 class ShadowMethod(Protocol):
     """Mask -> AO map, then (mask, AO, ELM) -> shadow, on N x N frames.
@@ -38,12 +40,19 @@ def check_batch(masks: np.ndarray, elms: np.ndarray | None, n: int, ao: np.ndarr
     if ao is not None and ao.shape != masks.shape:
         raise ValueError(f"ao: expected shape {masks.shape}, got {ao.shape}")
     if cameras is not None:
-        check_cameras(cameras, len(masks))
+        check_cameras(cameras, len(masks), n)
 
 
-def check_cameras(cameras: np.ndarray, count: int) -> None:
-    """Camera inputs: shape (count, 2), finite horizon rows, positive finite focal lengths (frame pixels)."""
+HORIZON_REACH = 100  # camera input: horizon rows within this many frames above or below the frame
+
+
+def check_cameras(cameras: np.ndarray, count: int, n: int) -> None:
+    """Camera inputs for frames of ``n`` pixels: shape (count, 2); horizon rows within ``HORIZON_REACH`` frames
+    of the frame; focal lengths of a field of view from 1 to 170 degrees."""
     if cameras.shape != (count, 2):
         raise ValueError(f"cameras: expected shape ({count}, 2) (horizon row, focal length), got {cameras.shape}")
-    if not np.all(np.isfinite(cameras)) or np.any(cameras[:, 1] <= 0):
-        raise ValueError("cameras: horizon rows must be finite and focal lengths finite and positive")
+    lo, hi = focal_from_fov(n, 170.0), focal_from_fov(n, 1.0)
+    if not np.all(np.isfinite(cameras)) or np.any(np.abs(cameras[:, 0] - n / 2) > HORIZON_REACH * n) \
+            or np.any(cameras[:, 1] < lo) or np.any(cameras[:, 1] > hi):
+        raise ValueError(f"cameras: horizon rows must lie within {HORIZON_REACH} frames of the frame and focal "
+                         f"lengths in [{lo:.1f}, {hi:.0f}] pixels (a field of view from 1 to 170 degrees)")

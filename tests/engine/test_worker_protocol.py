@@ -1,5 +1,5 @@
-"""The worker against bad and random input: every header is checked before its buffers are read, every request
-gets a reply, and the worker stays usable (in-process, over byte streams)."""
+"""The worker against bad input: every header is checked before its buffers are read, every request gets a
+reply, and the worker stays usable (in-process, over byte streams; random streams: tests/fuzz)."""
 
 from __future__ import annotations
 
@@ -8,15 +8,12 @@ import json
 
 import numpy as np
 import pytest
-from hypothesis import HealthCheck, given, settings
-from hypothesis import strategies as st
 
 from ssn_engine.methods import load_method
-from ssn_engine.protocol import ProtocolError, read_message
+from ssn_engine.protocol import read_message
 from ssn_engine.worker import MAX_REQUEST_BYTES, Worker
 
 HELLO = b'{"id": 99, "cmd": "hello"}\n'
-ERROR_TYPES = {"BadRequest", "EmptyAlpha", "LightMapError", "UnknownCutout", "ModelError", "Unauthorized"}
 
 
 @pytest.fixture(scope="module")
@@ -57,7 +54,7 @@ def alpha_entry(shape, dtype="uint8", nbytes=None, name="alpha") -> dict:
     ({"cmd": "set_cutout", "buffers": [alpha_entry((1, 40000))]}, bytes(40000), "canvas is above"),
     ({"cmd": "render", "buffers": [alpha_entry((2, 2), name="layer")]}, bytes(4), "unexpected buffer 'layer'"),
     ({"cmd": "set_cutout", "buffers": [alpha_entry((2, 2), name="mask")]}, bytes(4), "it takes alpha"),
-    ({"cmd": "set_cutout", "buffers": [alpha_entry((65536, 65536))]}, b"", "limit of 1073741824"),
+    ({"cmd": "set_cutout", "buffers": [alpha_entry((65536, 65536))]}, b"", "limit of 1 GiB"),
     ({"cmd": "set_cutout", "buffers": [{"name": "alpha", "dtype": "uint8", "shape": [2], "nbytes": -2}]}, b"",
      "nbytes >= 0"),
     ({"cmd": "set_cutout", "buffers": "alpha"}, b"", "must be a list"),
@@ -101,48 +98,3 @@ def test_a_real_cutout_after_refusals(worker):
     render = message({"id": 3, "cmd": "render", "cutout": replies[1]["cutout"], "preset": "softbox"})
     replies, _ = converse(worker, render)
     assert replies[0]["ok"] is True and replies[0]["width"] > 0
-
-
-json_values = st.recursive(
-    st.none() | st.booleans() | st.integers(-10**12, 10**12) | st.floats(allow_nan=True) | st.text(max_size=12),
-    lambda inner: st.lists(inner, max_size=4) | st.dictionaries(st.text(max_size=8), inner, max_size=4),
-    max_leaves=12,
-)
-fields = st.sampled_from(["cutout", "light_map", "preset", "color", "opacity", "format", "edits", "width", "camera",
-                          "token", "id"])
-
-
-@st.composite
-def requests(draw) -> bytes:
-    """A request that is well framed but may say anything: random command, fields, buffers and payloads."""
-    cmd = draw(st.sampled_from(list(Worker.COMMANDS) + ["shutdown", "auth", "", "x" * 40]) | json_values)
-    header = {"id": draw(st.integers(0, 1000)), "cmd": cmd}
-    header.update(draw(st.dictionaries(fields, json_values | st.sampled_from(["softbox", "c1", "uint16"]),
-                                       max_size=4)))
-    if draw(st.booleans()):
-        shape = draw(st.lists(st.integers(0, 40), min_size=1, max_size=3))
-        dtype = draw(st.sampled_from(["uint8", "uint16", "float16", "float32"]))
-        values = draw(st.binary(min_size=0, max_size=64))
-        payload = (values * (1 + int(np.prod(shape)) * 4 // max(1, len(values))))[: int(np.prod(shape))
-                                                                                   * np.dtype(dtype).itemsize]
-        payload = payload.ljust(int(np.prod(shape)) * np.dtype(dtype).itemsize, b"\x7f")
-        header["buffers"] = [{"name": draw(st.sampled_from(["alpha", "layer"])), "dtype": dtype, "shape": shape,
-                              "nbytes": len(payload)}]
-    else:
-        payload = b""
-    return message(header, payload)
-
-
-@settings(max_examples=150, deadline=None, suppress_health_check=[HealthCheck.function_scoped_fixture,
-                                                                     HealthCheck.too_slow])
-@given(stream=st.lists(requests() | st.binary(max_size=80).map(lambda b: b + b"\n"), min_size=1, max_size=4))
-def test_fuzzed_requests_always_get_well_formed_replies(worker, stream):
-    data = b"".join(stream)
-    try:
-        replies, ended = converse(worker, data + HELLO)
-    except ProtocolError as exc:  # a reply the client could not parse
-        pytest.fail(f"malformed reply: {exc}")
-    for reply in replies:
-        assert reply["ok"] is True or reply["error"]["type"] in ERROR_TYPES - {"Unauthorized"}, reply
-    if not ended:  # a fuzzed 'shutdown' ends the conversation; otherwise the last request is answered
-        assert replies[-1].get("id") == 99 and replies[-1]["ok"] is True

@@ -7,6 +7,7 @@ the source layer and selection before and after, status, error text, timing)
 as JSON for the test to check. Pixel arrays travel as files of raw float32.
 """
 
+import array
 import json
 import time
 import traceback
@@ -51,7 +52,11 @@ def build(case):
         else (Gimp.ImageType.GRAYA_IMAGE if has_alpha else Gimp.ImageType.GRAY_IMAGE)
     )
     layer = Gimp.Layer.new(image, c["name"], c["w"], c["h"], ltype, 100.0, Gimp.LayerMode.NORMAL)
-    image.insert_layer(layer, None, 0)
+    parent = None
+    if case.get("locked_group"):  # the cutout inside a group whose contents are locked
+        parent = Gimp.GroupLayer.new(image, "Locked group")
+        image.insert_layer(parent, None, 0)
+    image.insert_layer(layer, parent, 0)
     layer.set_offsets(c["x"], c["y"])
     # the cutout: an opaque red-ish block (rect in layer coordinates), transparent elsewhere
     px = bytearray(c["w"] * c["h"] * 4)
@@ -63,9 +68,23 @@ def build(case):
         layer.fill(Gimp.FillType.WHITE)
     layer.get_buffer().set(Gegl.Rectangle.new(0, 0, c["w"], c["h"]), "R'G'B'A u8", bytes(px))
     layer.get_buffer().flush()
+    if case.get("mask_right_half"):  # a layer mask hiding the right half of the layer
+        mask = layer.create_mask(Gimp.AddMaskType.WHITE)
+        layer.add_mask(mask)
+        half = c["w"] // 2
+        mask.get_buffer().set(Gegl.Rectangle.new(half, 0, c["w"] - half, c["h"]), "Y u8",
+                              bytes((c["w"] - half) * c["h"]))
+        mask.get_buffer().flush()
     if case.get("select"):
         sx, sy, sw, sh = case["select"]
-        image.select_ellipse(Gimp.ChannelOps.REPLACE, sx, sy, sw, sh)
+        if sw == sh == 1:
+            image.select_rectangle(Gimp.ChannelOps.REPLACE, sx, sy, 1, 1)
+        else:
+            image.select_ellipse(Gimp.ChannelOps.REPLACE, sx, sy, sw, sh)
+    if case.get("indexed"):
+        image.convert_indexed(Gimp.ConvertDitherType.NONE, Gimp.ConvertPaletteType.GENERATE, 16, False, False, "")
+    if parent is not None:
+        parent.set_lock_content(True)  # last: nothing may write into the group after this
     return image, layer
 
 
@@ -79,6 +98,10 @@ def run_case(case, out_dir):
         cutout = read(image.get_selection(), 0, 0, w, h, "Y float")
     else:
         cutout = read(layer, -ox, -oy, w, h, "A float")
+        if layer.get_mask() is not None:  # what shows: the alpha times the mask
+            alpha = array.array("f", cutout)
+            mask = array.array("f", read(layer.get_mask(), -ox, -oy, w, h, "Y float"))
+            cutout = array.array("f", (a * m for a, m in zip(alpha, mask, strict=True))).tobytes()
     with open(f"{out_dir}/{case['id']}.cutout.f32", "wb") as f:
         f.write(cutout)
     res["cutout_pixels"] = f"{out_dir}/{case['id']}.cutout.f32"

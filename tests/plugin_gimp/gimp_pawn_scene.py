@@ -1,7 +1,8 @@
 """Runs INSIDE GIMP 3 before gimp_dialog_check.py / gimp_undo_check.py: the scene they share.
 
 Defines ``image`` (200 x 150 RGB, white "Background") and ``layer`` ("Pawn", RGBA, a
-blue 30 x 110 px bar with transparent surroundings) in the globals of the exec'd script.
+blue 30 x 110 px bar with transparent surroundings) in the globals of the exec'd script;
+``SCENE_PRECISION`` (a Gimp.Precision name), if defined, converts the image to it.
 """
 
 import gi
@@ -21,3 +22,6 @@ px = bytearray(200 * 150 * 4)
 for y in range(20, 130):
     px[(y * 200 + 85) * 4 : (y * 200 + 115) * 4] = bytes([30, 30, 200, 255]) * 30
 layer.get_buffer().set(Gegl.Rectangle.new(0, 0, 200, 150), "R'G'B'A u8", bytes(px))
+layer.get_buffer().flush()
+if globals().get("SCENE_PRECISION"):
+    image.convert_precision(getattr(Gimp.Precision, SCENE_PRECISION))  # noqa: F821 - set by the test

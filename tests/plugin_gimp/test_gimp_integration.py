@@ -111,6 +111,16 @@ CASES = [
         "args": {"light-map": LEFT_LIGHT, "opacity": 1.0, "ao-strength": 1.0, "shadow-color": [0, 0, 0]},
         "side": "right",
     },
+    # a layer mask hides the right half of the pawn: only the visible half casts (issue #14, item 10)
+    {
+        "id": "rgb-u8-layer-mask",
+        "base": "RGB",
+        "precision": "U8_NON_LINEAR",
+        "cutout": PAWN,
+        "mask_right_half": True,
+        "args": {"light-map": "softbox", "opacity": 1.0, "ao-strength": 1.0, "shadow-color": [0, 0, 0]},
+        "side": None,
+    },
     # errors: no selection and no alpha; a malformed light map
     {
         "id": "error-no-alpha",
@@ -130,6 +140,42 @@ CASES = [
             '"softness": 0.01, "intensity": 1}]}'
         },
         "error": "lights[0].u",
+    },
+    # issue #14: an indexed image (item 13), a locked group (11), opacity 0 and a 1-pixel selection (14)
+    {
+        "id": "error-indexed",
+        "base": "RGB",
+        "precision": "U8_NON_LINEAR",
+        "cutout": PAWN,
+        "indexed": True,
+        "args": {"light-map": "softbox"},
+        "error": "Image > Mode > RGB",
+    },
+    {
+        "id": "error-locked-group",
+        "base": "RGB",
+        "precision": "U8_NON_LINEAR",
+        "cutout": PAWN,
+        "locked_group": True,
+        "args": {"light-map": "softbox"},
+        "error": "contents are locked",
+    },
+    {
+        "id": "error-opacity-zero",
+        "base": "RGB",
+        "precision": "U8_NON_LINEAR",
+        "cutout": PAWN,
+        "args": {"light-map": "softbox", "opacity": 0.0},
+        "error": "opacity is 0",
+    },
+    {
+        "id": "error-one-pixel-selection",
+        "base": "RGB",
+        "precision": "U8_NON_LINEAR",
+        "cutout": PAWN,
+        "select": [160, 100, 1, 1],
+        "args": {"light-map": "softbox"},
+        "error": "too small to cast a visible shadow",
     },
 ]
 for _case in CASES:
@@ -300,7 +346,7 @@ def test_errors_are_clear_and_change_nothing(gimp_results, case):
     results, _, _ = gimp_results
     r = results[case["id"]]
     assert r["status"] == "execution-error"
-    assert case["error"] in r["error"]
+    assert case["error"] in r["error"] and "unexpectedly" not in r["error"], r["error"]
     assert r["layers_after"] == r["layers_before"]
     assert r["source_unchanged"] and r["selection_unchanged"]
 
@@ -312,9 +358,11 @@ def test_undo_group_closed(gimp_results):
     assert "plug-in crashed" not in log.lower() and "traceback" not in log.lower(), log[-4000:]
 
 
-def _exec_scene_then(inner: str, script: str) -> str:
-    """python-fu-eval code: build the shared pawn scene, then run ``script`` in the same globals."""
-    return f'exec(open("{inner}/scene.py").read()); exec(open("{inner}/{script}").read())'
+def _exec_scene_then(inner: str, script: str, precision: str = "") -> str:
+    """python-fu-eval code: build the shared pawn scene (at ``precision``, a Gimp.Precision name, if given), then
+    run ``script`` in the same globals."""
+    return (f'SCENE_PRECISION = "{precision}"; exec(open("{inner}/scene.py").read()); '
+            f'exec(open("{inner}/{script}").read())')
 
 
 def test_one_undo_removes_the_shadow(workdir):
@@ -335,17 +383,25 @@ def test_one_undo_removes_the_shadow(workdir):
     assert result["after_undo"] == result["before"] == ["Pawn", "Background"], result
 
 
-def test_interactive_dialog(workdir):
+@pytest.mark.parametrize("precision", ["", "U16_LINEAR", "DOUBLE_PERCEPTUAL"])
+def test_interactive_dialog(workdir, worker, precision):
     """The dialog under Xvfb: built, light map edited, preview rendered, OK pressed (the plug-in's
-    SSN_SHADOW_DIALOG_SELFTEST hook), and the shadow layer made from the edited light map."""
+    SSN_SHADOW_DIALOG_SELFTEST hook), and the shadow layer made from the edited light map; at 8 bits and at
+    precisions where GIMP makes no thumbnail (issue #14, item 9: the dialog crashed there). Each run has a
+    fresh GIMP profile: GIMP remembers the last light map, which would change where the self-test's press
+    lands."""
     work, inner = workdir
+    profile = f"profile-dialog{precision}"
+    install(work / profile / "plug-ins" / "ssn-shadow", address=("127.0.0.1", worker[0]), token=worker[1])
+    (work / "out" / "dialog.json").unlink(missing_ok=True)
     shutil.copy(DIALOG_SCRIPT, work / "dialog.py")
     shutil.copy(SCENE_SCRIPT, work / "scene.py")
     env = {"SSN_GIMP_XVFB": "1", "SSN_SHADOW_DIALOG_SELFTEST": "1"}
     if os.environ.get("SSN_GIMP_DIALOG_SCREENSHOT"):
         env["SSN_SHADOW_DIALOG_SCREENSHOT"] = inner + "/out/dialog.png"
     run, seconds = run_gimp(
-        inner, f'OUT_PATH = "{inner}/out/dialog.json"; {_exec_scene_then(inner, "dialog.py")}', **env
+        inner, f'OUT_PATH = "{inner}/out/dialog.json"; {_exec_scene_then(inner, "dialog.py", precision)}',
+        profile=profile, **env,
     )
     log = run.stdout + run.stderr
     print(f"\ngimp-console dialog session: {seconds:.1f} s")

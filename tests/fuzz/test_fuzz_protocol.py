@@ -1,0 +1,83 @@
+"""The worker and the protocol reader under random streams: every request gets a well-formed reply of a
+documented kind, and the worker stays usable."""
+
+from __future__ import annotations
+
+import io
+import json
+
+import numpy as np
+import pytest
+from fuzz_settings import FUZZ
+from hypothesis import given
+from hypothesis import strategies as st
+
+from ssn_engine.methods import load_method
+from ssn_engine.protocol import ProtocolError, read_message
+from ssn_engine.worker import Worker
+
+HELLO = b'{"id": 99, "cmd": "hello"}\n'
+ERROR_TYPES = {"BadRequest", "EmptyAlpha", "LightMapError", "UnknownCutout", "ModelError"}
+WORKER = Worker(load_method("geometric"))
+
+json_values = st.recursive(
+    st.none() | st.booleans() | st.integers(-10**12, 10**12) | st.floats(allow_nan=True) | st.text(max_size=12),
+    lambda inner: st.lists(inner, max_size=4) | st.dictionaries(st.text(max_size=8), inner, max_size=4),
+    max_leaves=12,
+)
+fields = st.sampled_from(["cutout", "light_map", "preset", "color", "opacity", "format", "edits", "width", "camera",
+                          "token", "id"])
+
+
+@st.composite
+def requests(draw) -> bytes:
+    """A request that is well framed but may say anything: random command, fields, buffers and payloads."""
+    cmd = draw(st.sampled_from(list(Worker.COMMANDS) + ["shutdown", "auth", "", "x" * 40]) | json_values)
+    header = {"id": draw(st.integers(0, 1000)), "cmd": cmd}
+    header.update(draw(st.dictionaries(fields, json_values | st.sampled_from(["softbox", "c1", "uint16"]),
+                                       max_size=4)))
+    payload = b""
+    if draw(st.booleans()):
+        shape = draw(st.lists(st.integers(0, 40), min_size=1, max_size=3))
+        dtype = draw(st.sampled_from(["uint8", "uint16", "float16", "float32"]))
+        size = int(np.prod(shape)) * np.dtype(dtype).itemsize
+        nbytes = size if draw(st.integers(0, 9)) else draw(st.integers(-5, size + 5))  # sometimes inconsistent
+        payload = (draw(st.binary(min_size=1, max_size=64)) * (size + 6))[: max(0, nbytes)]  # as many as declared
+        header["buffers"] = [{"name": draw(st.sampled_from(["alpha", "layer"])), "dtype": dtype, "shape": shape,
+                              "nbytes": nbytes}]
+    return json.dumps(header).encode() + b"\n" + payload
+
+
+def converse(data: bytes) -> tuple[list[dict], bool]:
+    writer = io.BytesIO()
+    ended = WORKER.serve(io.BytesIO(data), writer)
+    writer.seek(0)
+    replies = []
+    while True:
+        try:
+            replies.append(read_message(writer)[0])
+        except EOFError:
+            return replies, ended
+
+
+@FUZZ
+@given(stream=st.lists(requests() | st.binary(max_size=80).map(lambda b: b + b"\n"), min_size=1, max_size=4))
+def test_random_requests_always_get_documented_replies(stream):
+    try:
+        replies, ended = converse(b"".join(stream) + HELLO)
+    except ProtocolError as exc:
+        pytest.fail(f"the worker wrote a malformed reply: {exc}")
+    for reply in replies:
+        assert reply["ok"] is True or reply["error"]["type"] in ERROR_TYPES, reply
+    if not ended:  # a random 'shutdown' ends the conversation; otherwise the final hello is answered
+        assert replies[-1].get("id") == 99 and replies[-1]["ok"] is True
+
+
+@FUZZ
+@given(data=st.binary(max_size=300))
+def test_the_reader_takes_any_bytes(data):
+    """read_message on arbitrary bytes: a message, EOFError or ProtocolError, nothing else."""
+    try:
+        read_message(io.BytesIO(data))
+    except (EOFError, ProtocolError):
+        pass
