@@ -24,11 +24,13 @@ from .shared import protocol
 
 @dataclass
 class RenderJob:
-    """One wanted render; ``new_step`` makes its layer write an undo step, ``reread`` re-reads the source."""
+    """One wanted render; ``new_step`` makes its layer write an undo step, ``reread`` re-reads the source;
+    ``retried``: it already sent the cutout again once (after a worker restart)."""
 
     new_step: bool
     reread: bool
     started: float = 0.0
+    retried: bool = False
 
     def merge(self, other: RenderJob) -> RenderJob:
         return RenderJob(self.new_step or other.new_step, self.reread or other.reread, self.started or other.started)
@@ -195,9 +197,10 @@ class ShadowController(QObject):
     def _on_error(self, error: EngineError, job: RenderJob) -> None:
         if error.kind in ("UnknownCutout", "WorkerUnavailable"):
             self.cutout, self._cutout_key = None, None  # the next request sends the cutout again
-        if error.kind == "UnknownCutout" and not job.reread:
+        if error.kind == "UnknownCutout" and not job.retried:
+            # The worker restarted (it died while idle, or dropped the cutout): send the cutout again, once.
             self._in_flight = False
-            self._run(RenderJob(job.new_step, True, job.started))
+            self._run(RenderJob(job.new_step, True, job.started, retried=True))
             return
         level = "warning" if error.kind == "EmptyAlpha" else "error"
         self._fail(str(error), level)

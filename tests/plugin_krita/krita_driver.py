@@ -142,12 +142,23 @@ def run_case(depth, with_window):
     wait_for(controller)
     case["first_ms"] = round(1e3 * (time.perf_counter() - t), 1)
     case["after_first"] = shadow_state(doc, depth)
+    settle = time.monotonic() + 1.0  # the view changes the active node through the event loop
+    while time.monotonic() < settle:
+        QApplication.processEvents()
+        time.sleep(0.01)
+    case["active_after_first"] = doc.activeNode().name() if doc.activeNode() is not None else None
     save()
 
+    # The worker dies while idle (crash, OOM kill): the next Generate still works, at the first click.
+    engine._proc.kill()
+    engine._proc.waitForFinished(5000)
+    QApplication.processEvents()
+    messages_before = len(messages)
     controller.light_map = lm.preset("low-sun-right")  # shadow to the left
     controller.generate()
     wait_for(controller)
     case["after_second"] = shadow_state(doc, depth)
+    case["messages_after_worker_death"] = messages[messages_before:]
     case["source_identical"] = bytes(person.pixelData(0, 0, W, H)) == source_before
     case["background_identical"] = bytes(bg.pixelData(0, 0, W, H)) == bg_before
     case["selection_after"] = doc.selection() is not None
@@ -178,6 +189,30 @@ def run_case(depth, with_window):
         now = doc.selection()
         case["selection_unchanged"] = now is not None and bytes(now.pixelData(0, 0, W, H)) == sel_before
         case["source_identical_after_selection"] = bytes(person.pixelData(0, 0, W, H)) == source_before
+
+        # Select All: no full-canvas shadow; a warning, and the layers as they were
+        everything = Selection()
+        everything.select(0, 0, W, H, 255)
+        doc.setSelection(everything)
+        before = shadow_state(doc, depth)
+        start = len(messages)
+        controller.generate()
+        wait_for(controller)
+        case["select_all_messages"] = messages[start:]
+        case["select_all_unchanged"] = shadow_state(doc, depth) == before
+
+        # The cutout is the lowest layer (issue #14, item 2): a second Generate works too
+        low_doc, low = make_document(depth, with_window)
+        low_doc.rootNode().childNodes()[0].remove()  # the background: "Person" is now the lowest layer
+        low_doc.waitForDone()
+        activate(low_doc, low)
+        host.active_document = lambda: low_doc
+        start = len(messages)
+        for _ in range(2):
+            controller.generate()
+            wait_for(controller)
+        case["lowest_layer_messages"] = messages[start:]
+        case["lowest_layer_names"] = layer_names(low_doc)
     engine.shutdown()
     save()
 

@@ -87,11 +87,16 @@ def test_generate_in_real_krita(pykrita, tmp_path, depth):
     assert not errors, errors
 
     first, second = case["after_first"], case["after_second"]
+    # the cutout's layer stays the active one (issue #14, item 1: with a window the new shadow layer took over,
+    # so the next brush stroke landed on the shadow)
+    assert case["active_after_first"] == "Person"
     _check_shadow(first, "right")  # low-sun-left: light left of centre, shadow to the right
     _check_shadow(second, "left")  # low-sun-right: shadow to the left
     # the second generate updates that layer: still one shadow layer in the same place, new pixels
     assert second["names"] == first["names"] == ["Background", "Shadow: Person", "Person"]
     assert second["left"]["sum"] > 5 * first["left"]["sum"] and second["left"]["sum"] > 100
+    # ... although the worker died before it (issue #14, item 3: that click failed with "unknown cutout")
+    assert not [m for m in case["messages_after_worker_death"] if m[0] == "error"], case["messages_after_worker_death"]
 
     assert case["source_identical"] and case["background_identical"]
     assert case["selection_before"] is False and case["selection_after"] is False
@@ -108,3 +113,9 @@ def test_generate_in_real_krita(pykrita, tmp_path, depth):
         assert sel["shadow_index"] == sel["source_index"] - 1
         assert sel["total"]["sum"] < 0.8 * first["total"]["sum"]  # half the cutout selected: a smaller shadow
         assert case["selection_unchanged"] and case["source_identical_after_selection"]
+        # Select All (issue #14, item 4): refused with a warning instead of a shadow over the whole picture
+        assert any("whole canvas" in text for level, text in case["select_all_messages"] if level == "warning")
+        assert case["select_all_unchanged"]
+        # the lowest layer of its group: the shadow goes above it (with a notice), and Generate works again
+        assert not [m for m in case["lowest_layer_messages"] if m[0] == "error"], case["lowest_layer_messages"]
+        assert case["lowest_layer_names"] == ["Person", "Shadow: Person"]

@@ -4,6 +4,8 @@ from __future__ import annotations
 
 from typing import Any
 
+from PyQt5.QtCore import QTimer
+
 from .krita_document import LayerWriter, Source, WriteResult, read_source
 
 
@@ -21,4 +23,10 @@ class KritaHost:
         return read_source(document)
 
     def write(self, source: Source, pixels: bytes, rect: tuple[int, int, int, int], new_step: bool) -> WriteResult:
-        return self.writer.write(source.document, source.node, pixels, rect, new_step)
+        result = self.writer.write(source.document, source.node, pixels, rect, new_step)
+        if result.created:
+            # With a view, Krita makes the added layer active through a queued signal, after the writer's
+            # setActiveNode: set the source active again once the event loop has delivered it, so the next
+            # brush stroke lands on the cutout, not on its shadow.
+            QTimer.singleShot(0, lambda: source.document.setActiveNode(source.node))
+        return result

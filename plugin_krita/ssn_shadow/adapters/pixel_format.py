@@ -86,6 +86,17 @@ def place_rows(
     return plane
 
 
+HALF = {"uint8": 128, "uint16": 32768, "float16": 0.5, "float32": 0.5}  # half opacity per dtype
+MEMORYVIEW_FORMAT = {"uint8": "B", "uint16": "H", "float16": "e", "float32": "f"}
+
+
+def opaque_everywhere(alpha: bytes, dtype: str) -> bool:
+    """True when no pixel of a canvas alpha plane is more than half transparent: it holds no cutout."""
+    if not alpha:
+        return False
+    return min(memoryview(alpha).cast(MEMORYVIEW_FORMAT[dtype])) >= HALF[dtype]
+
+
 def clip_rect(x: int, y: int, w: int, h: int, canvas_w: int, canvas_h: int) -> tuple[int, int, int, int]:
     """A rectangle clipped to the canvas (width or height 0 when outside)."""
     x0, y0 = max(0, x), max(0, y)
