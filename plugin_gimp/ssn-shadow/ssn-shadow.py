@@ -42,6 +42,8 @@ def add_arguments(procedure: Gimp.Procedure) -> None:
             procedure.add_string_argument(spec.name, spec.label, spec.blurb, spec.default, RW)
         elif spec.kind == "double":
             procedure.add_double_argument(spec.name, spec.label, spec.blurb, spec.lo, spec.hi, spec.default, RW)
+        elif spec.kind == "boolean":
+            procedure.add_boolean_argument(spec.name, spec.label, spec.blurb, spec.default, RW)
         elif spec.kind == "color":
             default = Gegl.Color.new("black")
             default.set_rgba_with_space(*spec.default, 1.0, Babl.space("sRGB"))

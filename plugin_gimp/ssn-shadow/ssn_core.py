@@ -79,8 +79,9 @@ def _engine_call(engine: Engine, cmd: str, buffers: dict | None = None, **params
         raise ShadowError(f"Lost contact with the shadow engine: {exc}") from None
 
 
-def upload_cutout(engine: Engine, cutout: Cutout) -> str:
-    """Send the alpha to the worker (which predicts AO now); return the cutout id."""
+def upload_cutout(engine: Engine, cutout: Cutout, camera: dict[str, float] | None = None) -> str:
+    """Send the alpha (and the image's camera, if set) to the worker, which predicts AO now; return the cutout
+    id."""
     if cutout.width <= 0 or cutout.height <= 0:
         raise ShadowError("The image is empty.")
     if is_blank(cutout.data):
@@ -89,7 +90,7 @@ def upload_cutout(engine: Engine, cutout: Cutout) -> str:
             "Select the object or paint it on a layer with a transparent background."
         )
     alpha = protocol.Buffer(cutout.dtype, (cutout.height, cutout.width), cutout.data)
-    reply, _ = _engine_call(engine, "set_cutout", {"alpha": alpha})
+    reply, _ = _engine_call(engine, "set_cutout", {"alpha": alpha}, **({"camera": camera} if camera else {}))
     return str(reply["cutout"])
 
 
@@ -126,7 +127,7 @@ def compute_shadow(host: Host, engine: Engine, settings: ShadowSettings) -> tupl
         raise ShadowError("The opacity is 0, so the shadow layer would show nothing. Raise the opacity.")
     plan = host.pixel_plan()
     cutout = host.read_cutout(plan)
-    cutout_id = upload_cutout(engine, cutout)
+    cutout_id = upload_cutout(engine, cutout, settings.camera())
     try:
         shadow = render_shadow(engine, cutout_id, settings, plan.layer_dtype)
     finally:
@@ -170,6 +171,8 @@ def settings_from_arguments(values: dict[str, Any]) -> ShadowSettings:
             color=tuple(get("shadow-color"))[:3],
             opacity=get("opacity"),
             ao_strength=get("ao-strength"),
+            horizon=get("horizon") if get("use-horizon") else None,
+            fov=get("fov"),
         )
     except SettingsError as exc:
         raise ShadowError(str(exc)) from None

@@ -25,7 +25,7 @@ from ssn_engine_link import client as engine_client  # noqa: E402
 from ssn_engine_link import light_map  # noqa: E402
 from ssn_gimp_host import config_values  # noqa: E402
 from ssn_light_area import LightMapArea  # noqa: E402
-from ssn_preview import multiply_composite, preview_size  # noqa: E402
+from ssn_preview import draw_horizon, multiply_composite, preview_size  # noqa: E402
 from ssn_settings import PROCEDURE_NAME, SettingsError, editor_light_map  # noqa: E402
 
 CUSTOM = "(custom)"
@@ -55,6 +55,8 @@ class ShadowPreview:
             if small.dtype == "uint16":
                 raw = memoryview(small.data).cast("H")
                 small = Cutout(small.width, small.height, "uint8", bytes(v >> 8 for v in raw), small.source)
+            self.small, self.scale = small, self.tw / width
+            self.camera: dict | None = None  # the camera the worker's cutout was analysed with
             self.cutout_id = upload_cutout(engine, small)
             self.cover = small.data  # the cutout hides the shadow layer below it
         except (ShadowError, engine_client.EngineError) as exc:
@@ -77,6 +79,10 @@ class ShadowPreview:
     def render(self, values: dict) -> None:
         try:
             settings = settings_from_arguments(values)
+            camera = settings.camera(self.scale)
+            if camera != self.camera:  # a new horizon: the worker analyses the cutout again
+                release(self.engine, self.cutout_id)
+                self.cutout_id, self.camera = upload_cutout(self.engine, self.small, camera), camera
             shadow = render_shadow(self.engine, self.cutout_id, settings, "uint8")
         except (ShadowError, SettingsError) as exc:
             self.status.set_text(str(exc))
@@ -85,6 +91,8 @@ class ShadowPreview:
         rgb = multiply_composite(
             pixels, w, h, stride, channels, shadow.data, shadow.x, shadow.y, shadow.width, shadow.height, self.cover
         )
+        if camera is not None:
+            rgb = draw_horizon(rgb, w, h, camera["horizon"])
         self.widget.set_from_pixbuf(
             GdkPixbuf.Pixbuf.new_from_bytes(GLib.Bytes.new(rgb), GdkPixbuf.Colorspace.RGB, False, 8, w, h, 3 * w)
         )
@@ -112,7 +120,7 @@ def run_dialog(procedure: Gimp.Procedure, config: Gimp.ProcedureConfig, host, en
     """Show the dialog; on OK store the edited light map in ``config`` and return True."""
     GimpUi.init(PROCEDURE_NAME)
     dialog = GimpUi.ProcedureDialog(procedure=procedure, config=config, title="Soft Shadow (SSN)")
-    dialog.fill(["shadow-color", "opacity", "ao-strength"])
+    dialog.fill(["shadow-color", "opacity", "ao-strength", "use-horizon", "horizon", "fov"])
 
     def values() -> dict:
         out = config_values(config)

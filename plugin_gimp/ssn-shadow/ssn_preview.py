@@ -60,3 +60,20 @@ def multiply_composite(
                 factor = 1.0 - a * (255 - layer[k + c]) / 65025.0
                 out[j + c] = min(255, max(0, math.floor(out[j + c] * factor + 0.5)))
     return bytes(out)
+
+
+HORIZON_DASH = 6  # pixels on, pixels off
+HORIZON_RGB = bytes((255, 140, 0))
+
+
+def draw_horizon(rgb: bytes, width: int, height: int, row: float) -> bytes:
+    """Packed RGB with the horizon drawn as a dashed orange line at ``row``; unchanged when it lies outside."""
+    y = math.floor(row)
+    if not 0 <= y < height:
+        return rgb
+    out = bytearray(rgb)
+    for x in range(width):
+        if (x // HORIZON_DASH) % 2 == 0:
+            j = 3 * (y * width + x)
+            out[j : j + 3] = HORIZON_RGB
+    return bytes(out)

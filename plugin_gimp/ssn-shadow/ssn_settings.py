@@ -23,7 +23,7 @@ LAYER_PREFIX = "Shadow: "
 
 @dataclass(frozen=True)
 class ArgSpec:
-    """One procedure argument: ``kind`` is "string", "double" or "color"."""
+    """One procedure argument: ``kind`` is "string", "double", "boolean" or "color"."""
 
     name: str
     kind: str
@@ -54,6 +54,13 @@ ARGUMENTS: tuple[ArgSpec, ...] = (
         0.0,
         4.0,
     ),
+    ArgSpec("use-horizon", "boolean", "Set the image's _horizon",
+            "Cast with the image's camera (horizon row and field of view); off: a camera looking 15 degrees down",
+            False),
+    ArgSpec("horizon", "double", "Hori_zon row",
+            "The image row (pixels from the top) where the ground meets the sky; it may lie outside the image",
+            0.0, -100000.0, 100000.0),
+    ArgSpec("fov", "double", "_Field of view", "The image's vertical field of view in degrees", 45.0, 10.0, 120.0),
 )
 ARG_BY_NAME = {a.name: a for a in ARGUMENTS}
 
@@ -108,6 +115,8 @@ class ShadowSettings:
     color: tuple[float, float, float] = (0.0, 0.0, 0.0)
     opacity: float = 0.8
     ao_strength: float = 1.0
+    horizon: float | None = None  # the image's horizon row, or None: the engine's default camera
+    fov: float = 45.0
 
     def __post_init__(self) -> None:
         if not isinstance(self.light_map, str):
@@ -119,7 +128,16 @@ class ShadowSettings:
         object.__setattr__(self, "opacity", _unit(self.opacity, "opacity", 0.0, 1.0))
         spec = ARG_BY_NAME["ao-strength"]
         object.__setattr__(self, "ao_strength", _unit(self.ao_strength, "ao-strength", spec.lo, spec.hi))
+        if self.horizon is not None:
+            spec = ARG_BY_NAME["horizon"]
+            object.__setattr__(self, "horizon", _unit(self.horizon, "horizon", spec.lo, spec.hi))
+        spec = ARG_BY_NAME["fov"]
+        object.__setattr__(self, "fov", _unit(self.fov, "fov", spec.lo, spec.hi))
         resolve_light_map(self.light_map)  # validate now, before any pixel is read
+
+    def camera(self, scale: float = 1.0) -> dict[str, float] | None:
+        """``set_cutout``'s camera for an image scaled by ``scale`` (the preview's thumbnail), or None."""
+        return None if self.horizon is None else {"horizon": self.horizon * scale, "fov": self.fov}
 
     def render_params(self, dtype: str) -> dict[str, Any]:
         """Parameters of the worker's ``render`` command (without the cutout id)."""

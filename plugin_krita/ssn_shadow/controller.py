@@ -22,6 +22,11 @@ from .shared import light_map as lm
 from .shared import protocol
 
 
+def document_key(document: Any) -> str:
+    """What identifies a document for remembered settings: its file, or (unsaved) the object."""
+    return document.fileName() or f"unsaved:{id(document)}"
+
+
 @dataclass
 class RenderJob:
     """One wanted render; ``new_step`` makes its layer write an undo step, ``reread`` re-reads the source;
@@ -52,6 +57,8 @@ class ShadowController(QObject):
         self.ao_edits: list[dict] = []
         self.color: tuple[float, float, float] = (0.0, 0.0, 0.0)
         self.opacity = 1.0
+        self.camera: dict | None = None  # {"horizon": canvas row, "fov": degrees}, or None: the default camera
+        self._cameras: dict[str, dict | None] = {}  # remembered per document
         self.live = True
         self.source = None
         self.cutout: str | None = None
@@ -92,6 +99,19 @@ class ShadowController(QObject):
         self._send_edits()
         self.lights_edited(dragging=True, stroke_started=stroke_started)
 
+    def set_camera(self, camera: dict | None) -> None:
+        """The image's horizon row and field of view (None: the engine's default camera), remembered for the
+        active document; the worker analyses the cutout again with it."""
+        self.camera = dict(camera) if camera is not None else None
+        document = self.host.active_document()
+        if document is not None:
+            self._cameras[document_key(document)] = self.camera
+        self.lights_edited(dragging=False, stroke_started=True)
+
+    def camera_for(self, document) -> dict | None:
+        """The camera remembered for ``document`` (None when none was set)."""
+        return self._cameras.get(document_key(document)) if document is not None else None
+
     def forget_cutout(self) -> None:
         self.cutout, self._cutout_key, self.source = None, None, None
 
@@ -129,7 +149,7 @@ class ShadowController(QObject):
 
     def _ensure_cutout(self, then: Any, job: RenderJob) -> None:
         source = self.source
-        key = source.key
+        key = f"{source.key}:{sorted(self.camera.items()) if self.camera else None}"  # the AO depends on both
         if self.cutout is not None and key == self._cutout_key:
             then()
             return
@@ -144,7 +164,8 @@ class ShadowController(QObject):
             self.engine.request("get_ao", {"cutout": self.cutout}, None, self._on_ao, None)
             then()
 
-        self.engine.request("set_cutout", {}, {"alpha": alpha}, on_cutout, lambda e: self._on_error(e, job))
+        params = {"camera": self.camera} if self.camera else {}
+        self.engine.request("set_cutout", params, {"alpha": alpha}, on_cutout, lambda e: self._on_error(e, job))
 
     def _render(self, job: RenderJob) -> None:
         source = self.source

@@ -29,8 +29,9 @@ class SoftShadowDocker(DockWidget):
             app.aboutToQuit.connect(self.engine.shutdown)
 
     def canvasChanged(self, canvas) -> None:  # noqa: N802 (Krita's API)
-        """Another document or view: the next Generate reads its source afresh."""
+        """Another document or view: the next Generate reads its source afresh, with that document's camera."""
         try:
             self.controller.forget_cutout()
+            self.panel.document_changed(Krita.instance().activeDocument())
         except Exception as exc:  # never crash the host
             self.panel.show_message("error", f"Soft Shadow: {exc}")

@@ -105,3 +105,14 @@ def test_multiply_composite():
     assert cover[:3] == bytes([200, 200, 200]) and cover[3:] == bytes([50, 50, 50])
     # a layer hanging off the image is clipped
     assert multiply_composite(bg, 2, 1, 8, 4, bytes([0, 0, 0, 255]) * 4, 1, -1, 2, 2)[3:] == bytes(3)
+
+
+def test_draw_horizon():
+    from ssn_preview import HORIZON_RGB, draw_horizon
+
+    rgb = bytes(3 * 20 * 10)
+    out = draw_horizon(rgb, 20, 10, 4.6)
+    assert out[3 * (4 * 20) : 3 * (4 * 20) + 3] == HORIZON_RGB  # row 4, first dash
+    assert out[3 * (4 * 20 + 6) : 3 * (4 * 20 + 6) + 3] == bytes(3)  # a gap
+    assert sum(out[: 3 * 4 * 20]) == 0 and sum(out[3 * 5 * 20 :]) == 0  # only that row
+    assert draw_horizon(rgb, 20, 10, -3.0) == rgb and draw_horizon(rgb, 20, 10, 10.0) == rgb

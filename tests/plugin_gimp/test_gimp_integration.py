@@ -121,6 +121,16 @@ CASES = [
         "args": {"light-map": "softbox", "opacity": 1.0, "ao-strength": 1.0, "shadow-color": [0, 0, 0]},
         "side": None,
     },
+    # the image's horizon (issue #14, horizon control): high above the canvas, a camera looking steeply down
+    {
+        "id": "rgb-u8-horizon",
+        "base": "RGB",
+        "precision": "U8_NON_LINEAR",
+        "cutout": PAWN,
+        "args": {"light-map": "low-sun-right", "opacity": 1.0, "ao-strength": 1.0, "shadow-color": [0, 0, 0],
+                 "use-horizon": True, "horizon": -300.0, "fov": 40.0},
+        "side": "left",
+    },
     # errors: no selection and no alpha; a malformed light map
     {
         "id": "error-no-alpha",
@@ -275,7 +285,9 @@ def _expected(worker: tuple[int, str], case: dict, cutout: np.ndarray) -> tuple[
     args = case["args"]
     client = EngineClient(address=("127.0.0.1", worker[0]), token=worker[1])
     try:
-        reply, _ = client.request("set_cutout", {"alpha": Buffer(str(alpha.dtype), alpha.shape, alpha.tobytes())})
+        camera = {"camera": {"horizon": args["horizon"], "fov": args["fov"]}} if args.get("use-horizon") else {}
+        reply, _ = client.request("set_cutout", {"alpha": Buffer(str(alpha.dtype), alpha.shape, alpha.tobytes())},
+                                  **camera)
         cid = reply["cutout"]
         if args["ao-strength"] != 1.0:
             client.request("edit_ao", cutout=cid, edits=[{"op": "strength", "value": args["ao-strength"]}])

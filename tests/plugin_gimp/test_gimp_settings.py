@@ -11,9 +11,9 @@ from ssn_engine import light_map
 
 def test_arguments_cover_every_setting():
     names = [a.name for a in s.ARGUMENTS]
-    assert names == ["light-map", "shadow-color", "opacity", "ao-strength"]
+    assert names == ["light-map", "shadow-color", "opacity", "ao-strength", "use-horizon", "horizon", "fov"]
     for spec in s.ARGUMENTS:
-        assert spec.kind in {"string", "double", "color"}
+        assert spec.kind in {"string", "double", "boolean", "color"}
         if spec.kind == "double":
             assert spec.lo <= spec.default <= spec.hi
     assert s.PROCEDURE_NAME == "plug-in-ssn-shadow"
@@ -97,3 +97,12 @@ def test_render_params_and_edits():
     assert st.ao_edits() == []
     assert ShadowSettings(ao_strength=0.0).ao_edits() == [{"op": "strength", "value": 0.0}]
     assert ShadowSettings(ao_strength=2).ao_edits() == [{"op": "strength", "value": 2.0}]
+
+
+def test_camera_only_with_a_horizon_and_scaled_for_the_preview():
+    assert ShadowSettings().camera() is None
+    st = ShadowSettings(horizon=300.0, fov=50.0)
+    assert st.camera() == {"horizon": 300.0, "fov": 50.0}
+    assert st.camera(0.25) == {"horizon": 75.0, "fov": 50.0}
+    with pytest.raises(SettingsError, match="fov"):
+        ShadowSettings(horizon=10.0, fov=5.0)

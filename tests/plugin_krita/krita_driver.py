@@ -213,6 +213,22 @@ def run_case(depth, with_window):
             wait_for(controller)
         case["lowest_layer_messages"] = messages[start:]
         case["lowest_layer_names"] = layer_names(low_doc)
+
+        # The horizon from a guide, through the docker's panel: the shadow is cast again with that camera
+        from ssn_shadow.ui.panel import ShadowPanel
+
+        host.active_document = lambda: doc
+        doc.setSelection(Selection())  # an empty selection: the layer's alpha again
+        activate(doc, person)
+        panel = ShadowPanel(controller)
+        controller.generate()
+        wait_for(controller)
+        case["before_camera"] = shadow_state(doc, depth)
+        doc.setHorizontalGuides([40.0])
+        panel.from_guide.click()
+        wait_for(controller)
+        case["camera_from_guide"] = controller.camera
+        case["with_camera"] = shadow_state(doc, depth)
     engine.shutdown()
     save()
 

@@ -38,6 +38,19 @@ def cutout_alpha(w: int = 200, h: int = 160, box=(80, 40, 120, 140)) -> bytes:
     return b"".join(rows)
 
 
+class FakeDocument:
+    """Stands in for a Krita document: a file name and horizontal guides."""
+
+    def __init__(self, name: str = "", guides=()):
+        self.name, self.guides = name, list(guides)
+
+    def fileName(self):  # noqa: N802 (Krita's API)
+        return self.name
+
+    def horizontalGuides(self):  # noqa: N802 (Krita's API)
+        return self.guides
+
+
 class FakeHost:
     """Stands in for Krita: a fixed source, and a record of the layer writes."""
 
@@ -47,9 +60,10 @@ class FakeHost:
         self.fail = fail
         self.writes: list[tuple] = []
         self.reads = 0
+        self.document = FakeDocument("a.kra")
 
     def active_document(self):
-        return "doc"
+        return self.document
 
     def read_source(self, document):
         self.reads += 1

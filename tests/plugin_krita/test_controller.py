@@ -103,3 +103,20 @@ def test_worker_crash_mid_session_recovers(qapp):
         assert wait_until(lambda: not c.busy and len(host.writes) == 2), messages
     finally:
         engine.shutdown()
+
+
+def test_the_camera_reaches_the_worker_and_changes_the_shadow(qapp):
+    """A horizon set in the docker: the cutout is analysed again with it, and the shadow changes."""
+    host = FakeHost()
+    c, engine, messages, _ = make(host)
+    try:
+        c.generate()
+        assert wait_until(lambda: not c.busy and host.writes), messages
+        first_cutout = c.cutout
+        c.set_camera({"horizon": -400.0, "fov": 40.0})  # seen from high above
+        assert wait_until(lambda: not c.busy and len(host.writes) == 2), messages
+        assert c.cutout != first_cutout  # a new analysis with the camera
+        assert host.writes[1][0] != host.writes[0][0]  # the shadow's rectangle moved or changed size
+        assert not [m for m in messages if m[0] == "error"]
+    finally:
+        engine.shutdown()

@@ -119,3 +119,8 @@ def test_generate_in_real_krita(pykrita, tmp_path, depth):
         # the lowest layer of its group: the shadow goes above it (with a notice), and Generate works again
         assert not [m for m in case["lowest_layer_messages"] if m[0] == "error"], case["lowest_layer_messages"]
         assert case["lowest_layer_names"] == ["Person", "Shadow: Person"]
+        # the horizon from a guide (issue #14, horizon control): a different shadow, still one layer
+        assert case["camera_from_guide"] == {"horizon": 40.0, "fov": 45.0}
+        before, after = case["before_camera"], case["with_camera"]
+        assert after["names"].count("Shadow: Person") == 1
+        assert after["total"] != before["total"], (before["total"], after["total"])

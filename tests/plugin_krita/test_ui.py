@@ -135,3 +135,30 @@ def test_ui_errors_are_shown_not_raised(qapp):
     panel.generate.clicked.connect(panel._guard(lambda *_: c.generate()))
     panel.generate.click()
     assert "kaput" in panel.message.text()
+
+
+def test_horizon_from_guide_is_remembered_per_document(qapp):
+    from krita_helpers import FakeDocument
+
+    host = FakeHost()
+    c = ShadowController(NoEngine(), host)
+    panel = ShadowPanel(c)
+    assert not panel.use_horizon.isChecked() and not panel.horizon.isEnabled() and c.camera is None
+    panel.from_guide.click()  # no guide yet: says how to add one, changes nothing
+    assert "horizontal guide" in panel.message.text() and c.camera is None
+    host.document.guides = [412.6]
+    panel.from_guide.click()
+    assert c.camera == {"horizon": 413.0, "fov": 45.0} and panel.use_horizon.isChecked()
+    panel.fov.setValue(60)
+    panel.fov.editingFinished.emit()
+    assert c.camera == {"horizon": 413.0, "fov": 60.0}
+
+    first, other = host.document, FakeDocument("b.kra")
+    host.document = other
+    panel.document_changed(other)  # another document: its own (no) camera
+    assert c.camera is None and not panel.use_horizon.isChecked()
+    host.document = first
+    panel.document_changed(first)
+    assert c.camera == {"horizon": 413.0, "fov": 60.0} and panel.horizon.value() == 413
+    panel.use_horizon.setChecked(False)
+    assert c.camera is None and c.camera_for(first) is None

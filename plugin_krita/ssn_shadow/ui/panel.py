@@ -8,6 +8,7 @@ from PyQt5.QtWidgets import (
     QCheckBox,
     QColorDialog,
     QComboBox,
+    QDoubleSpinBox,
     QFormLayout,
     QGroupBox,
     QHBoxLayout,
@@ -16,6 +17,7 @@ from PyQt5.QtWidgets import (
     QPushButton,
     QRadioButton,
     QSlider,
+    QSpinBox,
     QVBoxLayout,
     QWidget,
 )
@@ -26,6 +28,8 @@ from .ao_preview import AOPreview
 from .light_map_widget import LightMapWidget, slider_to_softness, softness_to_slider
 
 LEVEL_COLOURS = {"info": "", "warning": "color: #d08000;", "error": "color: #d03030;"}
+DEFAULT_FOV = 45.0  # degrees, the engine's default camera
+NO_GUIDE = "Add a horizontal guide on the horizon first (drag one down from the top ruler), then press From guide."
 
 
 def _slider(lo: int, hi: int, value: int) -> QSlider:
@@ -103,6 +107,33 @@ class ShadowPanel(QWidget):
         av.addLayout(arow)
         root.addWidget(ao_box)
 
+        camera_box = QGroupBox("Camera")
+        cv = QVBoxLayout(camera_box)
+        self.use_horizon = QCheckBox("The image's horizon is at")
+        self.use_horizon.setToolTip("Without it the engine assumes a camera looking 15 degrees down")
+        hrow = QHBoxLayout()
+        self.horizon = QSpinBox()
+        self.horizon.setRange(-100000, 100000)
+        self.horizon.setSuffix(" px")
+        self.horizon.setToolTip("The canvas row where the ground meets the sky (it may lie above or below the image)")
+        self.from_guide = QPushButton("From guide")
+        self.from_guide.setToolTip("Use the first horizontal guide as the horizon")
+        hrow.addWidget(self.horizon, 1)
+        hrow.addWidget(self.from_guide)
+        cform = QFormLayout()
+        self.fov = QDoubleSpinBox()
+        self.fov.setRange(10.0, 120.0)
+        self.fov.setDecimals(0)
+        self.fov.setSuffix("°")
+        self.fov.setValue(DEFAULT_FOV)
+        self.fov.setToolTip("The image's vertical field of view (a phone camera: about 50 degrees)")
+        cform.addRow("Field of view", self.fov)
+        cv.addWidget(self.use_horizon)
+        cv.addLayout(hrow)
+        cv.addLayout(cform)
+        root.addWidget(camera_box)
+        self._show_camera(None)
+
         shadow_box = QGroupBox("Shadow")
         sf = QFormLayout(shadow_box)
         self.color_button = QPushButton()
@@ -156,6 +187,10 @@ class ShadowPanel(QWidget):
         self.color_button.clicked.connect(self._guard(lambda *_: self._pick_colour()))
         self.opacity.valueChanged.connect(self._guard(self._opacity))
         self.opacity.sliderPressed.connect(self._guard(self._slider_pressed))
+        self.use_horizon.toggled.connect(self._guard(lambda *_: self._camera_edited()))
+        self.horizon.editingFinished.connect(self._guard(self._camera_edited))
+        self.fov.editingFinished.connect(self._guard(self._camera_edited))
+        self.from_guide.clicked.connect(self._guard(lambda *_: self._horizon_from_guide()))
         c.busyChanged.connect(self._guard(self._show_busy))
         c.status.connect(self._guard(self.show_message))
         c.aoChanged.connect(self._guard(self.ao_preview.set_images))
@@ -269,6 +304,46 @@ class ShadowPanel(QWidget):
         self.ao_strength.setValue(100)
         self._syncing = False
         self.controller.set_ao_edits([], True)
+
+    # -- camera ----------------------------------------------------------------------------
+    def _show_camera(self, camera: dict | None) -> None:
+        """Show a camera (None: the default) without sending it."""
+        self._syncing = True
+        self.use_horizon.setChecked(camera is not None)
+        if camera is not None:
+            self.horizon.setValue(round(camera["horizon"]))
+            self.fov.setValue(camera.get("fov", DEFAULT_FOV))
+        for w in (self.horizon, self.fov):
+            w.setEnabled(camera is not None)
+        self._syncing = False
+
+    def _camera_edited(self) -> None:
+        if self._syncing:
+            return
+        on = self.use_horizon.isChecked()
+        for w in (self.horizon, self.fov):
+            w.setEnabled(on)
+        camera = {"horizon": float(self.horizon.value()), "fov": float(self.fov.value())} if on else None
+        if camera != self.controller.camera:
+            self.controller.set_camera(camera)
+
+    def _horizon_from_guide(self) -> None:
+        document = self.controller.host.active_document()
+        guides = list(document.horizontalGuides()) if document is not None else []
+        if not guides:
+            self.show_message("warning", NO_GUIDE)
+            return
+        self._syncing = True
+        self.horizon.setValue(round(guides[0]))
+        self.use_horizon.setChecked(True)
+        self._syncing = False
+        self._camera_edited()
+
+    def document_changed(self, document) -> None:
+        """Another document is active: show (and use) the camera remembered for it."""
+        camera = self.controller.camera_for(document)
+        self.controller.camera = camera
+        self._show_camera(camera)
 
     # -- shadow ----------------------------------------------------------------------------
     def _show_colour(self) -> None:
