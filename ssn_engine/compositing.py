@@ -63,10 +63,25 @@ def shadow_layer(
     c = _colour(color)
     if channels == "bgra":
         c = c[::-1]
+    # In place on one float32 buffer: this runs on every light change, over the whole visible shadow.
+    alpha = np.clip(shadow, 0.0, 1.0, dtype=np.float32)
+    alpha *= np.float32(_opacity(opacity))
+    if dtype in _INT_MAX:
+        alpha *= np.float32(_INT_MAX[dtype])
+        np.rint(alpha, out=alpha)
+    a = alpha.astype(dtype)
+    del alpha
     out = np.empty(shadow.shape + (4,), dtype)
-    out[..., :3] = from_unit_float(c, dtype)
-    alpha = np.clip(shadow, 0.0, 1.0).astype(np.float32, copy=False) * np.float32(_opacity(opacity))
-    out[..., 3] = from_unit_float(alpha, dtype)
+    if dtype == "uint8":  # one 32-bit word per pixel: colour bytes, then alpha (little-endian RGBA in memory)
+        r, g, b = (int(v) for v in from_unit_float(c, "uint8"))
+        words = out.view(np.uint32).reshape(shadow.shape)
+        np.left_shift(a, 24, out=words, dtype=np.uint32)
+        words |= np.uint32(r | g << 8 | b << 16)
+        if not np.little_endian:  # pragma: no cover - the word order assumes little-endian memory
+            out[..., :3], out[..., 3] = from_unit_float(c, dtype), a
+    else:
+        out[..., :3] = from_unit_float(c, dtype)
+        out[..., 3] = a
     return out
 
 

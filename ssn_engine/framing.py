@@ -14,6 +14,7 @@ frame = canvas * scale + offset on both axes.
 
 from __future__ import annotations
 
+import functools
 import math
 from dataclasses import dataclass
 
@@ -139,11 +140,15 @@ def frame_alpha(alpha: np.ndarray, n: int = 256) -> tuple[np.ndarray, Framing]:
     return mask, framing
 
 
+@functools.lru_cache(maxsize=8)
 def edge_fade(n: int, share: float = EDGE_FADE) -> np.ndarray:
-    """(n, n) weights that fall linearly to 0 at the frame's four edges over ``share`` of the frame."""
+    """(n, n) weights that fall linearly to 0 at the frame's four edges over ``share`` of the frame (read-only:
+    cached, every light change uses it)."""
     ramp = np.clip((np.arange(n) + 0.5) / max(share * n, 1.0), 0.0, 1.0)
     across = np.minimum(ramp, ramp[::-1])
-    return np.minimum.outer(across, across).astype(np.float32)
+    out = np.minimum.outer(across, across).astype(np.float32)
+    out.flags.writeable = False
+    return out
 
 
 def without_edge_haze(shadow: np.ndarray) -> np.ndarray:
@@ -193,4 +198,5 @@ def shadow_to_canvas(shadow: np.ndarray, framing: Framing, origin: float | None 
         y1 * s + framing.offset_y + pad - origin,
     )
     out = image.resize((x1 - x0, y1 - y0), Image.Resampling.BILINEAR, box=box)
-    return CanvasShadow(np.clip(np.asarray(out), 0.0, 1.0), x0, y0)
+    # Bilinear and antialiasing weights are non-negative and sum to 1: values stay in [0, 1] (no clip pass).
+    return CanvasShadow(np.asarray(out), x0, y0)

@@ -130,11 +130,15 @@ def test_malformed_alpha_raises_value_error(alpha):
         frame_alpha(alpha)
 
 
-def test_one_pixel_mask():
+def test_tiny_masks():
+    """A cutout under MIN_CUTOUT pixels casts no visible shadow: refused with its size; a 3 px one is framed."""
     alpha = np.zeros((300, 200), np.uint8)
     alpha[150, 120] = 255
+    with pytest.raises(EmptyAlphaError, match="only 1 x 1 pixels"):
+        frame_alpha(alpha, 256)
+    alpha[150:153, 120] = 255
     mask, framing = frame_alpha(alpha, 256)
-    assert framing.bbox == (120, 150, 121, 151)
+    assert framing.bbox == (120, 150, 121, 153)
     rows, cols = _visible_rows_cols(mask)
     assert rows[0] == top_row(256)
     assert abs(cols[0] - (255 - cols[-1])) <= 1
