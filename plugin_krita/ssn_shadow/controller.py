@@ -112,6 +112,16 @@ class ShadowController(QObject):
         """The camera remembered for ``document`` (None when none was set)."""
         return self._cameras.get(document_key(document)) if document is not None else None
 
+    def cancel(self) -> None:
+        """Stop waiting for the engine (a hung or slow analysis): the worker is stopped and restarts with the
+        next request; the image is left as it is."""
+        if not self._busy:
+            return
+        self.engine.cancel()
+        self.cutout, self._cutout_key = None, None
+        self._edit_in_flight = self._edit_dirty = False
+        self._fail("Cancelled. The shadow engine starts again with the next Generate.", "warning")
+
     def forget_cutout(self) -> None:
         self.cutout, self._cutout_key, self.source = None, None, None
 

@@ -3,7 +3,7 @@
 from __future__ import annotations
 
 from krita import DockWidget, Krita
-from PyQt5.QtWidgets import QApplication
+from PyQt5.QtWidgets import QApplication, QFrame, QScrollArea
 
 from .adapters.host import KritaHost
 from .controller import ShadowController
@@ -23,7 +23,12 @@ class SoftShadowDocker(DockWidget):
         self.engine = EngineProcess(parent=self)
         self.controller = ShadowController(self.engine, KritaHost(Krita.instance()), self)
         self.panel = ShadowPanel(self.controller)
-        self.setWidget(self.panel)
+        # Docked in a short window, the panel scrolls instead of squeezing its controls over each other.
+        scroll = QScrollArea()
+        scroll.setWidgetResizable(True)
+        scroll.setFrameShape(QFrame.NoFrame)
+        scroll.setWidget(self.panel)
+        self.setWidget(scroll)
         app = QApplication.instance()
         if app is not None:
             app.aboutToQuit.connect(self.engine.shutdown)

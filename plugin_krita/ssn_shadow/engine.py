@@ -121,6 +121,12 @@ class EngineProcess(QObject):
         self._watchdog.stop()
         self.stateChanged.emit("stopped")
 
+    def cancel(self) -> None:
+        """Give up on every pending request (their callbacks are dropped) and stop the worker; the next request
+        starts a fresh one."""
+        self._pending.clear()
+        self.stop()
+
     def shutdown(self) -> None:
         """Ask the worker to exit, then stop it."""
         if self.running:

@@ -229,6 +229,23 @@ def run_case(depth, with_window):
         wait_for(controller)
         case["camera_from_guide"] = controller.camera
         case["with_camera"] = shadow_state(doc, depth)
+
+        # The docker in a short dock area (issue #14, item 5): the panel scrolls, at its full height
+        from ssn_shadow.docker import SoftShadowDocker
+
+        docker = SoftShadowDocker()
+        docker.resize(400, 650)
+        docker.show()
+        for _ in range(20):
+            QApplication.processEvents()
+        scroll = docker.widget()
+        case["docker"] = {
+            "scrolls": type(scroll).__name__ == "QScrollArea" and scroll.widget() is docker.panel,
+            "panel_height": docker.panel.height(),
+            "panel_min_height": docker.panel.minimumSizeHint().height(),
+            "scroll_range": scroll.verticalScrollBar().maximum() if hasattr(scroll, "verticalScrollBar") else 0,
+        }
+        docker.hide()
     engine.shutdown()
     save()
 

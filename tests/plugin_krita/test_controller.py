@@ -120,3 +120,19 @@ def test_the_camera_reaches_the_worker_and_changes_the_shadow(qapp):
         assert not [m for m in messages if m[0] == "error"]
     finally:
         engine.shutdown()
+
+
+def test_cancel_stops_waiting_for_a_hung_worker(qapp):
+    """A worker that never answers: Cancel frees the docker at once, and nothing is written."""
+    host = FakeHost()
+    hung = EngineProcess(lambda: worker_command("-c", "import time; time.sleep(60)"), timeout_s=120.0)
+    c = ShadowController(hung, host)
+    messages = []
+    c.status.connect(lambda level, text: messages.append((level, text)))
+    c.generate()
+    assert c.busy
+    c.cancel()
+    assert not c.busy and not hung.running and not host.writes
+    assert messages[-1][0] == "warning" and "Cancelled" in messages[-1][1]
+    c.cancel()  # idle: nothing happens
+    assert messages[-1][1].startswith("Cancelled")

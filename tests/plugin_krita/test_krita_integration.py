@@ -124,3 +124,7 @@ def test_generate_in_real_krita(pykrita, tmp_path, depth):
         before, after = case["before_camera"], case["with_camera"]
         assert after["names"].count("Shadow: Person") == 1
         assert after["total"] != before["total"], (before["total"], after["total"])
+        # docked 650 px tall: the panel keeps its full height and scrolls, its controls do not overlap
+        docker = case["docker"]
+        assert docker["scrolls"] and docker["panel_height"] >= docker["panel_min_height"], docker
+        assert docker["scroll_range"] > 0, docker

@@ -105,9 +105,9 @@ def test_panel_state(qapp):
     panel.show()
     assert not panel.busy.isVisible()
     panel.generate.click()
-    assert panel.busy.isVisible() and engine.sent == ["set_cutout"]
+    assert panel.busy.isVisible() and panel.cancel.isVisible() and engine.sent == ["set_cutout"]
     c._fail("the shadow engine exited with code 1; it will restart on the next request.")
-    assert not panel.busy.isVisible() and "restart" in panel.message.text()
+    assert not panel.busy.isVisible() and not panel.cancel.isVisible() and "restart" in panel.message.text()
 
     panel.presets.setCurrentIndex(panel.presets.findText("two-lights"))
     panel.presets.activated.emit(panel.presets.currentIndex())

@@ -158,7 +158,13 @@ class ShadowPanel(QWidget):
         self.busy.setMaximumHeight(8)
         self.busy.setTextVisible(False)
         self.busy.setVisible(False)
-        root.addWidget(self.busy)
+        self.cancel = QPushButton("Cancel")
+        self.cancel.setToolTip("Stop waiting for the shadow engine (it restarts with the next Generate)")
+        self.cancel.setVisible(False)
+        busy_row = QHBoxLayout()
+        busy_row.addWidget(self.busy, 1)
+        busy_row.addWidget(self.cancel)
+        root.addLayout(busy_row)
         self.message = QLabel("Select the cutout's layer (or a selection) and press Generate.")
         self.message.setWordWrap(True)
         self.message.setTextInteractionFlags(Qt.TextSelectableByMouse)
@@ -191,6 +197,7 @@ class ShadowPanel(QWidget):
         self.horizon.editingFinished.connect(self._guard(self._camera_edited))
         self.fov.editingFinished.connect(self._guard(self._camera_edited))
         self.from_guide.clicked.connect(self._guard(lambda *_: self._horizon_from_guide()))
+        self.cancel.clicked.connect(self._guard(lambda *_: c.cancel()))
         c.busyChanged.connect(self._guard(self._show_busy))
         c.status.connect(self._guard(self.show_message))
         c.aoChanged.connect(self._guard(self.ao_preview.set_images))
@@ -216,6 +223,7 @@ class ShadowPanel(QWidget):
 
     def _show_busy(self, busy: bool) -> None:
         self.busy.setVisible(busy)
+        self.cancel.setVisible(busy)
 
     def _engine_ready(self, info: dict) -> None:
         note = info.get("method_note") or info.get("method", "")
