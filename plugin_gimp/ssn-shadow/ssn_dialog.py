@@ -120,6 +120,8 @@ def run_dialog(procedure: Gimp.Procedure, config: Gimp.ProcedureConfig, host, en
     """Show the dialog; on OK store the edited light map in ``config`` and return True."""
     GimpUi.init(PROCEDURE_NAME)
     dialog = GimpUi.ProcedureDialog(procedure=procedure, config=config, title="Soft Shadow (SSN)")
+    for name in ("opacity", "ao-strength", "fov"):  # GIMP's slider-with-entry widgets, not bare spin buttons
+        dialog.get_spin_scale(name, 1.0)
     dialog.fill(["shadow-color", "opacity", "ao-strength", "use-horizon", "horizon", "fov"])
 
     def values() -> dict:
@@ -161,6 +163,20 @@ def run_dialog(procedure: Gimp.Procedure, config: Gimp.ProcedureConfig, host, en
             loading[0] = False
 
     presets.connect("changed", on_preset)
+
+    def on_light_map_setting(*_) -> None:
+        # Reset to Factory Defaults, Load Saved Settings (or a script) set the argument: show that light map.
+        text = config.get_property("light-map").strip()
+        try:
+            loaded = editor_light_map(text)
+        except SettingsError:
+            return
+        loading[0] = True
+        presets.set_active(names.index(text) if text in names else len(names))
+        editor.load(loaded)
+        loading[0] = False
+
+    config.connect("notify::light-map", on_light_map_setting)
     area = LightMapArea(editor, _map_image(engine))
 
     box = Gtk.Box(orientation=Gtk.Orientation.VERTICAL, spacing=6)
@@ -177,17 +193,19 @@ def run_dialog(procedure: Gimp.Procedure, config: Gimp.ProcedureConfig, host, en
         False,
         0,
     )
-    box.pack_start(area, False, False, 0)
+    box.pack_start(_axes(area), False, False, 0)
     box.pack_start(Gtk.Label(label="Preview", xalign=0.0), False, False, 0)
     box.pack_start(preview.widget, False, False, 0)
     box.pack_start(preview.status, False, False, 0)
-    dialog.get_content_area().pack_start(box, True, True, 6)
+    content = dialog.get_content_area()
+    content.pack_start(box, True, True, 6)
+    content.reorder_child(box, 0)  # the light map, the main control, above colour, opacity, AO and camera
     config.connect("notify", lambda *_: preview.schedule(values))
     box.show_all()
     preview.schedule(values)
 
     if os.environ.get(SELFTEST_ENV):
-        GLib.timeout_add(300, _selftest, dialog, area, preview, values)
+        GLib.timeout_add(300, _selftest, dialog, area, preview, values, config)
     try:
         ok = dialog.run()
         if ok:
@@ -199,9 +217,34 @@ def run_dialog(procedure: Gimp.Procedure, config: Gimp.ProcedureConfig, host, en
         dialog.destroy()
 
 
-def _selftest(dialog, area: LightMapArea, preview: ShadowPreview, values) -> bool:
+def _axes(area: Gtk.Widget) -> Gtk.Widget:
+    """The light map with its axes labelled: where a light there sits, and where its shadow falls."""
+
+    def small(text: str, xalign: float = 0.5) -> Gtk.Label:
+        label = Gtk.Label(xalign=xalign)
+        label.set_markup(f"<small>{text}</small>")
+        return label
+
+    top = Gtk.Box(spacing=0)
+    top.pack_start(small("behind you", 0.0), True, True, 0)
+    top.pack_start(small("behind the object: shadow towards you"), True, True, 0)
+    top.pack_start(small("behind you", 1.0), True, True, 0)
+    side = Gtk.Box(orientation=Gtk.Orientation.VERTICAL)
+    side.pack_start(small("zenith", 1.0), False, False, 0)
+    side.pack_end(small("horizon", 1.0), False, False, 0)
+    grid = Gtk.Grid(column_spacing=4, row_spacing=2)  # the top labels span the map's width, not the dialog's
+    grid.attach(top, 1, 0, 1, 1)
+    grid.attach(side, 0, 1, 1, 1)
+    grid.attach(area, 1, 1, 1, 1)
+    grid.attach(small("a light right of centre casts its shadow to the left, and a low light a long one", 0.0),
+                0, 2, 2, 1)
+    return grid
+
+
+def _selftest(dialog, area: LightMapArea, preview: ShadowPreview, values, config) -> bool:
     """For the integration test (SSN_SHADOW_DIALOG_SELFTEST=1): add and drag a light through the
-    widget's event handlers, resize it, render the preview, press OK.
+    widget's event handlers, resize it, render the preview, set the light-map setting as Reset to Factory
+    Defaults does (the map must follow), then put the edited map back and press OK.
 
     With SSN_SHADOW_DIALOG_SCREENSHOT=<path.png> it also saves a picture of the dialog.
     """
@@ -227,6 +270,12 @@ def _selftest(dialog, area: LightMapArea, preview: ShadowPreview, values) -> boo
         file=sys.stderr,
         flush=True,
     )
+    edited = editor.to_json()
+    config.set_property("light-map", "high-sun")  # what Reset to Factory Defaults / Load Saved Settings do
+    shown = editor.lights.to_dict() == light_map.preset("high-sun").to_dict()
+    print(f"ssn-shadow dialog selftest: after a settings reset the map shows high-sun: {shown}", file=sys.stderr,
+          flush=True)
+    config.set_property("light-map", edited)
 
     def finish() -> bool:
         path = os.environ.get("SSN_SHADOW_DIALOG_SCREENSHOT")

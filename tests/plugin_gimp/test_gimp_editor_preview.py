@@ -89,7 +89,7 @@ def test_overlay_draws_rings_and_guides():
 
 
 def test_preview_size():
-    assert preview_size(1024, 512) == (256, 128, 0.25)
+    assert preview_size(1024, 512) == (384, 192, 0.375)
     assert preview_size(100, 50) == (100, 50, 1.0)
 
 

@@ -426,6 +426,8 @@ def test_interactive_dialog(workdir, worker, precision):
     assert "lights=2" in line and "preview=200x150" in line and "status=''" in line
     # the light added by a press at (0.85, 0.7) of the map and dragged by (-0.05, +0.02) through the widget
     assert "ssn-shadow dialog selftest: light at u=0.800 v=0.720" in log, log[-3000:]
+    # Reset to Factory Defaults / Load Saved Settings reach the light map (issue #14, item 12)
+    assert "after a settings reset the map shows high-sun: True" in log, log[-3000:]
     assert "traceback" not in log.lower(), log[-6000:]
     if os.environ.get("SSN_GIMP_DIALOG_SCREENSHOT"):
         shutil.copy(work / "out" / "dialog.png", os.environ["SSN_GIMP_DIALOG_SCREENSHOT"])
