@@ -162,3 +162,30 @@ def test_horizon_from_guide_is_remembered_per_document(qapp):
     assert c.camera == {"horizon": 413.0, "fov": 60.0} and panel.horizon.value() == 413
     panel.use_horizon.setChecked(False)
     assert c.camera is None and c.camera_for(first) is None
+
+
+def test_ao_preview_zooms_on_the_cutout_and_stretches_the_occlusion(qapp):
+    """Issue #14, item 7: the preview shows the cutout and its contact shadow, not a pale whole frame."""
+    from plugin_krita.ssn_shadow.ui.ao_preview import AOPreview, contrast_table
+
+    n = 64
+    mask = bytearray(n * n)
+    for y in range(20, 44):
+        mask[y * n + 28 : y * n + 36] = b"\xff" * 8
+    ao = bytearray(b"\xff" * (n * n))
+    ao[44 * n + 24 : 44 * n + 40] = b"\xe6" * 16  # a faint contact shadow (AO 0.9) under the cutout
+    preview = AOPreview()
+    preview.resize(200, 200)
+    preview.set_images(bytes(ao), bytes(mask), n)
+    left, top, size = preview.view
+    assert size < 0.75 and left <= 28 / n and left + size >= 36 / n and top <= 20 / n and top + size >= 44 / n
+    assert contrast_table(bytes(ao))[0xE6] < 0xA0  # AO 0.9 (a pale 230) shown mid-grey: 4 times the contrast
+    x, y = preview.to_frame(preview.frame_rect().center())
+    assert abs(x - (left + size / 2)) < 1e-6 and abs(y - (top + size / 2)) < 1e-6
+    dabs = []
+    preview.brushed.connect(lambda bx, by, started: dabs.append((bx, by)))
+    QTest.mousePress(preview, Qt.LeftButton, pos=preview.frame_rect().center().toPoint())
+    assert dabs and abs(dabs[0][0] - x) < 0.02
+    ao[44 * n + 24] = 0xC0  # an AO edit: same cutout, the view stays
+    preview.set_images(bytes(ao), bytes(mask), n)
+    assert preview.view == (left, top, size)

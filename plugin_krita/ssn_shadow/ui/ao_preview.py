@@ -1,7 +1,9 @@
 """The AO preview: the cutout's ambient-occlusion map with the framed mask, and a brush on it.
 
-Coordinates handed out are fractions of the engine's N x N frame (x right,
-y down), as the protocol's AO edits expect.
+It shows the part of the frame around the cutout (zoomed in, not the whole
+frame), with the occlusion's contrast stretched so that the contact shadow
+is plainly visible. Coordinates handed out are fractions of the engine's
+N x N frame (x right, y down), as the protocol's AO edits expect.
 """
 
 from __future__ import annotations
@@ -11,6 +13,31 @@ import math
 from PyQt5.QtCore import QPointF, QRectF, QSize, Qt, pyqtSignal
 from PyQt5.QtGui import QColor, QImage, QPainter, QPen
 from PyQt5.QtWidgets import QSizePolicy, QWidget
+
+
+VIEW_MARGIN = 0.35  # share of the cutout's larger side shown around it
+MAX_STRETCH = 4.0  # the occlusion is darkened at most this many times
+
+
+def contrast_table(ao: bytes) -> bytes:
+    """A byte translation table that stretches the occlusion (255 - AO) so its darkest value shows nearly black."""
+    occlusion = 255 - min(ao) if ao else 0
+    k = min(MAX_STRETCH, 230 / max(occlusion, 1))
+    return bytes(max(0, 255 - round((255 - v) * k)) for v in range(256))
+
+
+def view_of(mask: bytes, n: int) -> tuple[float, float, float]:
+    """The square of the frame to show (left, top, size as frame fractions): the cutout and the ground around
+    its base; the whole frame when the mask is empty."""
+    rows = [y for y in range(n) if any(mask[y * n : (y + 1) * n])]
+    if not rows:
+        return 0.0, 0.0, 1.0
+    cols = [x for x in range(n) if any(mask[x::n])]
+    x0, x1, y0, y1 = cols[0] / n, (cols[-1] + 1) / n, rows[0] / n, (rows[-1] + 1) / n
+    size = min(1.0, max(x1 - x0, y1 - y0) * (1 + 2 * VIEW_MARGIN))
+    left = min(max(0.5 * (x0 + x1) - 0.5 * size, 0.0), 1.0 - size)
+    top = min(max(y1 + VIEW_MARGIN * (y1 - y0) - size, 0.0), 1.0 - size)  # the base near the bottom edge
+    return left, top, size
 
 
 def mask_overlay(mask: bytes, n: int) -> QImage:
@@ -32,6 +59,9 @@ class AOPreview(QWidget):
         super().__init__(parent)
         self._ao: QImage | None = None
         self._mask: QImage | None = None
+        self.view = (0.0, 0.0, 1.0)  # left, top, size of the shown square, frame fractions
+        self._n = 1
+        self._mask_bytes = b""
         self.brush_radius = 0.05
         self._last: tuple[float, float] | None = None
         self._cursor: QPointF | None = None
@@ -56,12 +86,17 @@ class AOPreview(QWidget):
         return self._ao is not None
 
     def set_images(self, ao: bytes, mask: bytes, n: int) -> None:
-        self._ao = QImage(ao, n, n, n, QImage.Format_Grayscale8).copy()
+        shown = bytes(ao).translate(contrast_table(ao))
+        self._ao = QImage(shown, n, n, n, QImage.Format_Grayscale8).copy()
         self._mask = mask_overlay(mask, n)
+        if mask != self._mask_bytes:  # a new cutout: frame it (AO edits keep the view while the user paints)
+            self.view, self._mask_bytes = view_of(mask, n), bytes(mask)
+        self._n = n
         self.update()
 
     def clear(self) -> None:
         self._ao = self._mask = None
+        self.view, self._mask_bytes = (0.0, 0.0, 1.0), b""
         self.update()
 
     def frame_rect(self) -> QRectF:
@@ -70,7 +105,12 @@ class AOPreview(QWidget):
 
     def to_frame(self, pos: QPointF) -> tuple[float, float]:
         r = self.frame_rect()
-        return (pos.x() - r.left()) / r.width(), (pos.y() - r.top()) / r.height()
+        left, top, size = self.view
+        return left + size * (pos.x() - r.left()) / r.width(), top + size * (pos.y() - r.top()) / r.height()
+
+    def _source(self) -> QRectF:
+        left, top, size = self.view
+        return QRectF(left * self._n, top * self._n, size * self._n, size * self._n)
 
     def _dab(self, pos: QPointF, started: bool) -> None:
         x, y = self.to_frame(pos)
@@ -106,12 +146,12 @@ class AOPreview(QWidget):
             p.setPen(QColor(200, 200, 200))
             p.drawText(r, Qt.AlignCenter | Qt.TextWordWrap, "Generate a shadow to see\nits ambient occlusion")
         else:
-            p.drawImage(r, self._ao)
+            p.drawImage(r, self._ao, self._source())
             if self._mask is not None:
-                p.drawImage(r, self._mask)
+                p.drawImage(r, self._mask, self._source())
             if self._cursor is not None:
                 p.setPen(QPen(QColor(255, 120, 0), 1))
                 p.setBrush(Qt.NoBrush)
-                rad = self.brush_radius * r.width()
+                rad = self.brush_radius * r.width() / self.view[2]
                 p.drawEllipse(self._cursor, rad, rad)
         p.end()

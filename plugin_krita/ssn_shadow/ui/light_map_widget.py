@@ -182,10 +182,12 @@ class LightMapWidget(QWidget):
         font = p.font()
         font.setPointSizeF(max(6.0, font.pointSizeF() * 0.75))
         p.setFont(font)
-        p.drawText(QRectF(r.left(), r.bottom() - 16, r.width(), 14), Qt.AlignHCenter, "ahead")
-        p.drawText(QRectF(r.left() + 3, r.bottom() - 16, r.width(), 14), Qt.AlignLeft, "behind")
-        p.drawText(QRectF(r.left(), r.bottom() - 16, r.width() - 3, 14), Qt.AlignRight, "behind")
-        p.drawText(QRectF(r.left(), r.top() + 2, r.width(), 14), Qt.AlignHCenter, "zenith")
+        # Where a light there sits, and so where its shadow falls (the opposite way).
+        p.drawText(QRectF(r.left(), r.bottom() - 16, r.width(), 14), Qt.AlignHCenter, "behind the object")
+        p.drawText(QRectF(r.left() + 3, r.bottom() - 16, r.width(), 14), Qt.AlignLeft, "behind you")
+        p.drawText(QRectF(r.left(), r.bottom() - 16, r.width() - 3, 14), Qt.AlignRight, "behind you")
+        p.drawText(QRectF(r.left(), r.top() + 2, r.width(), 14), Qt.AlignHCenter, "zenith (short shadow)")
+        p.drawText(QRectF(r.left(), r.bottom() - 30, r.width(), 14), Qt.AlignHCenter, "horizon (long shadow)")
         for i, light in enumerate(self.light_map):
             c = self.from_uv(light.u, light.v)
             radius = max(4.0, light.radius * r.height())

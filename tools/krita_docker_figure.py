@@ -1,0 +1,69 @@
+"""docs/img/krita-docker.png: the Krita docker's panel at the width it gets docked in a 1366 x 768 Krita window
+(340 px, Krita's 8 pt UI font), all of it (docked, the lower part scrolls), with the sample pawn's AO from the
+real engine and the horizon set from a guide (offscreen Qt grab).
+
+usage: QT_QPA_PLATFORM=offscreen python tools/krita_docker_figure.py [--out docs/img/krita-docker.png]
+"""
+
+from __future__ import annotations
+
+import argparse
+import sys
+
+import numpy as np
+from PyQt5.QtWidgets import QApplication
+
+from plugin_krita.ssn_shadow.controller import ShadowController
+from plugin_krita.ssn_shadow.ui.panel import ShadowPanel
+from ssn_engine.methods import load_method
+from ssn_engine.samples import pawn_cutout
+from ssn_engine.session import ShadowSession
+
+
+class Idle:
+    """An engine that is never asked anything (the figure shows a state, not a run)."""
+
+    def request(self, *args, **kwargs):
+        return 0
+
+
+class Host:
+    class Document:
+        def fileName(self):  # noqa: N802 (Krita's API)
+            return "pawn.kra"
+
+        def horizontalGuides(self):  # noqa: N802 (Krita's API)
+            return [520.0]
+
+    def active_document(self):
+        return self.Document()
+
+
+def main(argv: list[str] | None = None) -> int:
+    p = argparse.ArgumentParser(description=__doc__.splitlines()[0])
+    p.add_argument("--out", default="docs/img/krita-docker.png")
+    args = p.parse_args(argv)
+    app = QApplication.instance() or QApplication(sys.argv)
+    font = app.font()
+    font.setPointSizeF(8.0)
+    app.setFont(font)
+    session = ShadowSession(pawn_cutout()[..., 3], load_method("auto").method)
+    u8 = lambda a: np.rint(np.clip(a, 0, 1) * 255).astype(np.uint8).tobytes()  # noqa: E731
+    controller = ShadowController(Idle(), Host())
+    panel = ShadowPanel(controller)
+    panel.ao_preview.set_images(u8(session.ao), u8(session.mask), session.mask.shape[0])
+    panel.from_guide.click()  # the horizon from the sample's guide (row 520, where its floor meets the wall)
+    panel.resize(340, panel.heightForWidth(340) if panel.hasHeightForWidth() else panel.sizeHint().height())
+    panel.show()
+    for _ in range(10):
+        app.processEvents()
+    panel.resize(340, panel.sizeHint().height())
+    for _ in range(10):
+        app.processEvents()
+    panel.grab().save(args.out)
+    print(f"wrote {args.out}", file=sys.stderr)
+    return 0
+
+
+if __name__ == "__main__":
+    raise SystemExit(main())
