@@ -56,7 +56,7 @@ def _clear(dest: Path) -> None:
         return
     if not dest.exists():
         return
-    ours = {p.name for p in plugin_files()} | {CONFIG_NAME}
+    ours = {p.name for p in plugin_files()} | {CONFIG_NAME, "worker.json"}  # worker.json: the shared worker
     for child in dest.iterdir():
         if child.name in ours or child.name == "__pycache__":
             if child.is_dir() and not child.is_symlink():

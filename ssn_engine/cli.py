@@ -298,7 +298,7 @@ def cmd_serve(args: argparse.Namespace) -> int:
     if args.port is None:
         serve_stdio(loaded)
     else:
-        serve_tcp(loaded, args.port)
+        serve_tcp(loaded, args.port, idle_timeout=args.idle_timeout)
     return EXIT_OK
 
 
@@ -408,6 +408,8 @@ def build_parser() -> argparse.ArgumentParser:
 
     p = sub.add_parser("serve", help="run the engine worker for the plug-ins (docs/protocol.md)")
     p.add_argument("--port", type=int, help="listen on 127.0.0.1:PORT (0 = any free port) instead of stdin/stdout")
+    p.add_argument("--idle-timeout", type=float, metavar="SECONDS",
+                   help="with --port: exit after this long without a connection (default: never)")
     p.add_argument("--method", default="auto", choices=METHOD_NAMES)
     p.set_defaults(func=cmd_serve)
 

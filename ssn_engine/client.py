@@ -10,10 +10,13 @@ from __future__ import annotations
 
 import collections
 import itertools
+import json
+import os
 import socket
 import subprocess
 import threading
 from collections.abc import Sequence
+from pathlib import Path
 
 try:
     from .protocol import Buffer, ProtocolError, read_message, write_message
@@ -170,3 +173,74 @@ class EngineClient:
             error = reply.get("error") or {}
             raise EngineError(error.get("type", "Internal"), error.get("message", "unknown engine error"))
         return reply, reply_buffers
+
+
+IDLE_TIMEOUT = 900.0  # seconds a shared worker waits for the next call before it exits
+START_TIMEOUT = 120.0  # seconds a new shared worker may take to announce its port
+
+
+def shared_client(command: Sequence[str], state_path: Path, timeout: float = 120.0,
+                  idle_timeout: float = IDLE_TIMEOUT) -> EngineClient:
+    """A client of a long-lived loopback worker started from ``command`` (``... ssn-shadow serve``): the one
+    recorded in ``state_path`` while it answers, else a new one started detached with ``--port 0
+    --idle-timeout`` and recorded there (readable by this user only). A plug-in that runs once per call (GIMP)
+    then pays the engine's start-up on its first call only; the worker exits after ``idle_timeout`` idle
+    seconds."""
+    state = _read_state(state_path, command)
+    if state is not None:
+        reuse = EngineClient(address=(state["host"], state["port"]), timeout=timeout, token=state["token"])
+        try:
+            reuse.request("hello", timeout=10.0)
+            return reuse
+        except EngineError:
+            reuse.close()
+    host, port, token = _start_detached(command, idle_timeout)
+    _write_state(state_path, {"command": list(command), "host": host, "port": port, "token": token})
+    return EngineClient(address=(host, port), timeout=timeout, token=token)
+
+
+def _read_state(path: Path, command: Sequence[str]) -> dict | None:
+    try:
+        if os.name == "posix":
+            info = path.stat()
+            if info.st_uid != os.getuid() or info.st_mode & 0o077:  # another user's or readable by others
+                return None
+        state = json.loads(path.read_text(encoding="utf-8"))
+    except (OSError, ValueError):
+        return None
+    ok = isinstance(state, dict) and state.get("command") == list(command) and isinstance(state.get("port"), int) \
+        and isinstance(state.get("host"), str) and isinstance(state.get("token"), str)
+    return state if ok else None
+
+
+def _write_state(path: Path, state: dict) -> None:
+    try:
+        fd = os.open(path, os.O_WRONLY | os.O_CREAT | os.O_TRUNC, 0o600)
+        with os.fdopen(fd, "w", encoding="utf-8") as f:
+            json.dump(state, f)
+    except OSError:
+        pass  # not recorded: the next call starts its own worker, nothing worse
+
+
+def _start_detached(command: Sequence[str], idle_timeout: float) -> tuple[str, int, str]:
+    """Start ``command --port 0 --idle-timeout S`` in its own session and read its ``listening`` line."""
+    args = [*command, "--port", "0", "--idle-timeout", f"{idle_timeout:g}"]
+    flags = {"start_new_session": True} if os.name == "posix" else {
+        "creationflags": getattr(subprocess, "DETACHED_PROCESS", 0) | getattr(subprocess, "CREATE_NO_WINDOW", 0)}
+    try:
+        proc = subprocess.Popen(args, stdin=subprocess.DEVNULL, stdout=subprocess.PIPE, stderr=subprocess.DEVNULL,
+                                **flags)
+    except OSError as exc:
+        raise WorkerUnavailable(f"could not start the shadow engine ({' '.join(args)}): {exc}") from None
+    line: list[bytes] = []
+    reader = threading.Thread(target=lambda: line.append(proc.stdout.readline()), daemon=True)
+    reader.start()
+    reader.join(START_TIMEOUT)
+    words = line[0].decode("utf-8", "replace").split() if line else []
+    if len(words) != 3 or words[0] != "listening" or not words[2].startswith("token="):
+        proc.kill()
+        said = f"it said {line[0][:200]!r}" if line else f"it did not announce a port within {START_TIMEOUT:g} s"
+        raise WorkerUnavailable(f"the shadow engine ({' '.join(args)}) did not start: {said}")
+    proc.stdout.close()  # the worker never writes to it again
+    host, _, port = words[1].rpartition(":")
+    return host, int(port), words[2].removeprefix("token=")

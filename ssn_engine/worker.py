@@ -14,6 +14,7 @@ from __future__ import annotations
 import collections
 import hmac
 import itertools
+import os
 import secrets
 import socket
 import sys
@@ -120,6 +121,7 @@ class Worker:
             "method_note": self.loaded.note,
             "resolution": m.resolution,
             "presets": list(PRESETS),
+            "pid": os.getpid(),
         }, {}
 
     def set_cutout(self, header: dict, buffers: dict) -> tuple[dict, dict]:
@@ -307,19 +309,28 @@ def serve_stdio(loaded: LoadedMethod) -> None:
     Worker(loaded).serve(reader, writer)
 
 
-def serve_tcp(loaded: LoadedMethod, port: int = 0, announce: Any = None, token: str | None = None) -> None:
+def serve_tcp(loaded: LoadedMethod, port: int = 0, announce: Any = None, token: str | None = None,
+              idle_timeout: float | None = None) -> None:
     """Serve one connection at a time on 127.0.0.1:``port``. The first line on ``announce`` (stdout) names the
-    port and the per-start token (random unless given) that each connection's ``auth`` must carry."""
+    port and the per-start token (random unless given) that each connection's ``auth`` must carry. With
+    ``idle_timeout`` (seconds) the worker exits when no connection comes for that long, and drops a connection
+    that sends nothing for that long."""
     worker = Worker(loaded)
     token = token or secrets.token_urlsafe(24)
     with socket.create_server(("127.0.0.1", port)) as server:
         bound = server.getsockname()
         print(f"listening {bound[0]}:{bound[1]} token={token}", file=announce or sys.stdout, flush=True)
+        server.settimeout(idle_timeout)
         while True:
-            conn, _ = server.accept()
+            try:
+                conn, _ = server.accept()
+            except TimeoutError:
+                print(f"no connection for {idle_timeout:g} s: exiting", file=sys.stderr, flush=True)
+                return
+            conn.settimeout(idle_timeout)
             with conn, conn.makefile("rb") as reader, conn.makefile("wb") as writer:
                 try:
                     if worker.serve(reader, writer, token):
                         return
-                except (ConnectionError, OSError) as exc:
+                except (ConnectionError, OSError) as exc:  # TimeoutError included: an idle client
                     print(f"connection dropped: {exc}", file=sys.stderr, flush=True)

@@ -2,7 +2,8 @@
 
 The installed plug-in carries copies of ``light_map``, ``protocol`` and
 ``client`` in ``engine_shared/`` and an ``engine.json`` that either names the
-Python that runs ``python -m ssn_engine serve`` (``{"python", "args"}``) or the
+Python that runs ``python -m ssn_engine serve`` (``{"python", "args"}``; the
+worker it starts outlives the call unless ``"shared": false``) or the
 loopback address of a running worker and the token it printed when it started
 (``{"address": ["127.0.0.1", port], "token": "..."}``).
 In a source checkout (tests) the modules come from ``ssn_engine`` itself.
@@ -26,6 +27,7 @@ __all__ = ["client", "light_map", "protocol", "EngineConfigError", "load_engine_
 PLUGIN_DIR = Path(__file__).resolve().parent
 CONFIG_NAME = "engine.json"
 ADDRESS_ENV = "SSN_SHADOW_ENGINE_ADDRESS"
+WORKER_STATE = "worker.json"  # the shared worker's address and token (this user only)
 
 
 class EngineConfigError(RuntimeError):
@@ -78,12 +80,19 @@ def load_engine_config(plugin_dir: Path | None = None) -> dict[str, Any]:
         raise EngineConfigError(f'{path}: "python" must name the Python that has ssn-shadow installed')
     if not isinstance(args, list) or not all(isinstance(a, str) for a in args):
         raise EngineConfigError(f'{path}: "args" must be a list of strings')
-    return {"command": [python, *args]}
+    shared = config.get("shared", True)
+    if not isinstance(shared, bool):
+        raise EngineConfigError(f'{path}: "shared" must be true or false')
+    return {"command": [python, *args], "shared": shared}
 
 
-def connect(config: dict[str, Any], timeout: float = 120.0) -> client.EngineClient:
-    """An engine client for a config from :func:`load_engine_config` (connects lazily)."""
+def connect(config: dict[str, Any], timeout: float = 120.0, plugin_dir: Path | None = None) -> client.EngineClient:
+    """An engine client for a config from :func:`load_engine_config`. A command config with ``shared`` (the
+    default) reuses one worker across filter calls (``client.shared_client``, recorded in ``worker.json`` beside
+    the plug-in; it exits after 15 idle minutes); without it, each call spawns its own (connects lazily)."""
     if "address" in config:
         host, port = config["address"]
         return client.EngineClient(address=(host, int(port)), timeout=timeout, token=config.get("token"))
+    if config.get("shared"):
+        return client.shared_client(config["command"], Path(plugin_dir or PLUGIN_DIR) / WORKER_STATE, timeout)
     return client.EngineClient(command=list(config["command"]), timeout=timeout)

@@ -444,6 +444,7 @@ def test_spawned_worker(workdir, worker):
     shutil.copy(RELAY_SCRIPT, work / "relay.py")
     config = json.loads((dest / "engine.json").read_text())
     config["args"] = [inner + "/relay.py", "127.0.0.1", str(port), token]
+    config["shared"] = False  # the relay speaks stdio only: this test is about the spawn path
     (dest / "engine.json").write_text(json.dumps(config))
     out = work / "out-spawn"
     out.mkdir()
