@@ -24,7 +24,18 @@ def pawn_cutout(size: tuple[int, int] = SAMPLE_SIZE, height: int = 560, base_y: 
     """A shaded terracotta pawn on a transparent canvas, RGBA uint8 (H, W, 4)."""
     w, h = size
     ss = 2  # supersampling for antialiased edges
-    ys, xs = np.mgrid[0 : h * ss, 0 : w * ss].astype(np.float64)
+    # Only the pawn's box is computed (its radius is at most 0.3 heights): the rest of the canvas is transparent.
+    x0, x1 = max(0, int(w / 2 - 0.31 * height) - 1), min(w, int(w / 2 + 0.31 * height) + 2)
+    y0, y1 = max(0, base_y - height - 1), min(h, base_y + 1)
+    out = np.zeros((h, w, 4), np.uint8)
+    out[y0:y1, x0:x1] = _shaded_pawn(x0, x1, y0, y1, ss, w, height, base_y)
+    return out
+
+
+def _shaded_pawn(x0: int, x1: int, y0: int, y1: int, ss: int, w: int, height: int, base_y: int) -> np.ndarray:
+    """The pawn's RGBA uint8 pixels on canvas rows [y0, y1) and columns [x0, x1)."""
+    h, w_box = y1 - y0, x1 - x0
+    ys, xs = np.mgrid[y0 * ss : y1 * ss, x0 * ss : x1 * ss].astype(np.float64)
     t = (base_y - (ys + 0.5) / ss) / height
     x = ((xs + 0.5) / ss - w / 2) / height
     r = _pawn_profile(t)
@@ -43,7 +54,7 @@ def pawn_cutout(size: tuple[int, int] = SAMPLE_SIZE, height: int = 560, base_y: 
     albedo = np.array([0.80, 0.36, 0.24])
     rgb = albedo * (0.22 + 0.78 * diffuse[..., None]) + 0.35 * spec[..., None]
     rgba = np.concatenate([np.clip(rgb, 0, 1), inside[..., None].astype(np.float64)], -1)
-    rgba = rgba.reshape(h, ss, w, ss, 4).mean(axis=(1, 3))
+    rgba = rgba.reshape(h, ss, w_box, ss, 4).mean(axis=(1, 3))
     rgba[..., :3] = np.where(rgba[..., 3:] > 0, rgba[..., :3] / np.maximum(rgba[..., 3:], 1e-9), 0)
     return np.rint(rgba * 255).astype(np.uint8)
 

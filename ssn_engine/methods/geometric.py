@@ -31,7 +31,7 @@ from .base import check_batch
 INTERNAL = 128  # the card is traced at this resolution, then upsampled
 TURN = 0.5  # share of the way the card turns towards each light
 CHUNK = 64  # directions traced at once (bounds memory)
-CACHED_CARDS = 4
+CACHED_CARDS = 2  # a card traced for every texel holds 512 x P float32 (about 30 MB)
 NEGLIGIBLE = 1e-4  # share of a light map's weight whose texels a card shadow may leave out
 EXTENDED_TEXELS = 64  # at most this many texels traced beyond the frame per light map
 
