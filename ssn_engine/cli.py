@@ -16,6 +16,7 @@ import numpy as np
 EXIT_OK, EXIT_ERROR, EXIT_USAGE = 0, 1, 2
 EXIT_NO_SHADOW = 3  # nothing casts a shadow or nothing lights it: nothing is written
 PROGRESS_AFTER = 1.0  # seconds: a command that runs longer prints its stages on stderr
+PLUGIN_ENTRY_POINTS = "ssn_shadow.plugins"  # the plug-ins' installers (pyproject.toml), not imported by the engine
 
 
 class CliError(Exception):
@@ -317,13 +318,14 @@ def cmd_soak(args: argparse.Namespace) -> int:
 
 
 def cmd_install_plugin(args: argparse.Namespace) -> int:
+    from importlib.metadata import entry_points
+
+    found = {ep.name: ep for ep in entry_points(group=PLUGIN_ENTRY_POINTS)}
     try:
-        if args.host == "krita":
-            from plugin_krita import install as host_install
-        else:
-            from plugin_gimp import install as host_install
-    except ImportError as exc:
-        raise CliError(f"the {args.host} plug-in is not part of this installation ({exc})", EXIT_ERROR) from None
+        host_install = found[args.host].load()
+    except (KeyError, ImportError) as exc:
+        raise CliError(f"the {args.host} plug-in is not part of this installation ({exc!r}); reinstall "
+                       "ssn-shadow with pip", EXIT_ERROR) from None
     dest = Path(args.dest) if args.dest else None
     if args.zip:
         if args.host != "krita":

@@ -28,11 +28,12 @@ from dataclasses import dataclass, replace
 import numpy as np
 
 from ssn_engine.camera import horizon_row
+from ssn_engine.frames import resample_frames
 from ssn_engine.hemisphere import network_elm, texel_weights
 from ssn_engine.methods.geometric import GeometricCard
 
 from .elm import LightBatch, render_lights, sample_lights, sample_mixture
-from .frames import area_downsample, resize_frames
+from .frames import area_downsample
 
 TARGETS = ("shadow", "irradiance")
 
@@ -83,8 +84,8 @@ def load_view(store, i: int, resolution: int, with_occ: bool = True, with_card: 
         occ = np.rint(occ).astype(np.uint8).reshape(t, -1)
     else:
         occ = np.zeros((0, resolution * resolution), np.uint8)
-    mask = resize_frames(v.mask[None], resolution)[0]
-    ao = resize_frames(v.ao[None], resolution)[0]
+    mask = resample_frames(v.mask[None], resolution)[0]
+    ao = resample_frames(v.ao[None], resolution)[0]
     cards = None
     if with_card:
         card = GeometricCard(internal=resolution)

@@ -23,12 +23,13 @@ from pathlib import Path
 import numpy as np
 import torch
 
+from ssn_engine.frames import resample_frames
+
 from .batches import irradiance_to_shadow, view_key
 from .checkpoint import load_models
 from .elm import render_lights, sample_lights
 from .evaluate_families import add_arguments as add_family_arguments
 from .evaluate_families import evaluate_families, families_markdown
-from .frames import resize_frames
 from .metrics import NAMES, all_metrics, mean_metrics
 from .model import MirrorAverage
 from .plots import image_grid
@@ -101,9 +102,9 @@ class Networks:
     @torch.no_grad()
     def predict_ao(self, masks: np.ndarray) -> np.ndarray:
         n = masks.shape[-1]
-        m = torch.from_numpy(resize_frames(masks, self.r)[:, None])
+        m = torch.from_numpy(resample_frames(masks, self.r)[:, None])
         ao = self.aop(m)[:, 0].clamp(0, 1).numpy()
-        return np.clip(resize_frames(ao, n), 0, 1)
+        return np.clip(resample_frames(ao, n), 0, 1)
 
     @torch.no_grad()
     def render(self, masks: np.ndarray, ao: np.ndarray, elm16: np.ndarray, elm_hb: np.ndarray | None = None,
@@ -112,14 +113,14 @@ class Networks:
         from ssn_engine.methods.onnx_ssn import apply_floor
 
         n = masks.shape[-1]
-        m = torch.from_numpy(resize_frames(masks, self.r)[:, None])
-        a = torch.from_numpy(resize_frames(ao, self.r)[:, None])
+        m = torch.from_numpy(resample_frames(masks, self.r)[:, None])
+        a = torch.from_numpy(resample_frames(ao, self.r)[:, None])
         e = torch.from_numpy(network_elm(elm16))
         out = (self.noninv if noninv else self.sr)(m, a, e)[:, 0].numpy()
         if noninv:
-            out = irradiance_to_shadow(resize_frames(out, n), elm_hb, elm16)
+            out = irradiance_to_shadow(resample_frames(out, n), elm_hb, elm16)
         else:
-            out = resize_frames(np.clip(out, 0, 1), n)
+            out = resample_frames(np.clip(out, 0, 1), n)
         return apply_floor(out, self.floor).astype(np.float32)
 
 

@@ -151,10 +151,10 @@ def session(path: Path, threads: int = 0):
 
 def test_inputs(data: str | None, resolution: int, n: int = 8, seed: int = 0) -> dict[str, np.ndarray]:
     """Masks and AO maps of test views (random blobs without data) and random Table 1 ELMs."""
+    from ssn_engine.frames import resample_frames
     from ssn_engine.hemisphere import network_elm
 
     from .elm import render_lights, sample_lights
-    from .frames import resize_frames
 
     rng = np.random.default_rng(seed)
     if data and Path(data, "dataset.json").is_file():
@@ -164,8 +164,8 @@ def test_inputs(data: str | None, resolution: int, n: int = 8, seed: int = 0) ->
         ids = store.view_ids("test") or store.view_ids(None)
         pick = [ids[int(j)] for j in np.linspace(0, len(ids) - 1, n).round()]
         views = [store.load(i) for i in pick]
-        mask = resize_frames(np.stack([v.mask for v in views]), resolution)
-        ao = resize_frames(np.stack([v.ao for v in views]), resolution)
+        mask = resample_frames(np.stack([v.mask for v in views]), resolution)
+        ao = resample_frames(np.stack([v.ao for v in views]), resolution)
     else:
         mask = (rng.random((n, resolution, resolution)) > 0.5).astype(np.float32)
         ao = rng.random((n, resolution, resolution)).astype(np.float32)
@@ -186,7 +186,7 @@ def parity(path: Path, net: nn.Module, module: str, x: dict[str, np.ndarray]) ->
 
 def time_sr(path: Path, resolution: int, repeats: int = 30) -> dict[str, float]:
     """Median SR latency (one image) through onnxruntime: at R alone, and the engine's N = 256 path."""
-    from ssn_engine.methods.onnx_ssn import _resample
+    from ssn_engine.frames import resample_frames
 
     s = session(path)
     card = "card" in {i.name for i in s.get_inputs()}
@@ -196,9 +196,9 @@ def time_sr(path: Path, resolution: int, repeats: int = 30) -> dict[str, float]:
     frame = np.random.default_rng(2).random((1, 256, 256), dtype=np.float32)
 
     def engine_path():
-        m = _resample(frame, resolution)[:, None]
+        m = resample_frames(frame, resolution)[:, None]
         out = s.run(None, {"mask": m, "ao": m, "elm": feeds["elm"], **({"card": m} if card else {})})[0][:, 0]
-        return _resample(out, 256)
+        return resample_frames(out, 256)
 
     out = {}
     for name, fn in (("sr_at_R_ms", lambda: s.run(None, feeds)), ("sr_engine_256_ms", engine_path)):

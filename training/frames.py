@@ -1,19 +1,8 @@
-"""Resampling frames between the dataset's N and the network's R."""
+"""Area-averaging frames from the dataset's N to the network's R (bilinear resampling: ssn_engine.frames)."""
 
 from __future__ import annotations
 
 import numpy as np
-from PIL import Image
-
-
-def resize_frames(frames: np.ndarray, size: int) -> np.ndarray:
-    """(n, H, H) float -> (n, size, size) float32 with PIL bilinear, as the engine's ONNX method resamples."""
-    frames = np.asarray(frames, np.float32)
-    if frames.shape[-1] == size:
-        return np.ascontiguousarray(frames)
-    return np.stack(
-        [np.asarray(Image.fromarray(f, "F").resize((size, size), Image.Resampling.BILINEAR)) for f in frames]
-    ).astype(np.float32)
 
 
 def area_downsample(stack: np.ndarray, size: int) -> np.ndarray:

@@ -19,7 +19,7 @@ import traceback
 from pathlib import Path
 
 from training.data import writer
-from training.data.progress import Progress
+from training.progress import Progress
 from training.data.sources import SOURCES, all_items
 from training.data.store import DATASET_JSON
 
@@ -103,7 +103,7 @@ def main(argv: list[str] | None = None) -> int:
         jobs = [(it, root, args.res, args.elm_rows, args.samples, args.seed) for it in todo]
         threads = args.threads or max(1, (os.cpu_count() or 1) // max(args.workers, 1))
         start = time.time()
-        progress = Progress(len(jobs))
+        progress, done, views = Progress(len(jobs), every=1), 0, 0
         failures = []
         if args.workers <= 1:
             _init_worker(threads)
@@ -116,7 +116,8 @@ def main(argv: list[str] | None = None) -> int:
             if "error" in r:
                 failures.append(r)
                 print(f"FAILED {r['id']}:\n{r['error']}", file=sys.stderr, flush=True)
-            progress.update(r.get("views", 0), r["id"])
+            done, views = done + 1, views + r.get("views", 0)
+            progress.update(done, f"meshes, {views} views, {r['id']}")
         progress.close()
         if pool is not None:
             pool.close()

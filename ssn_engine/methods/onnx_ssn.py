@@ -17,8 +17,8 @@ import json
 from pathlib import Path
 
 import numpy as np
-from PIL import Image
 
+from ..frames import resample_frames
 from ..hemisphere import NETWORK_SHAPE, network_elm
 from .base import check_batch
 from .geometric import GeometricCard, camera_at
@@ -43,17 +43,6 @@ def apply_floor(shadow: np.ndarray, floor: float) -> np.ndarray:
     if floor <= 0.0:
         return np.clip(shadow, 0.0, 1.0)
     return np.clip((shadow - np.float32(floor)) / np.float32(1.0 - floor), 0.0, 1.0)
-
-
-def _resample(frames: np.ndarray, size: int) -> np.ndarray:
-    if frames.shape[-1] == size:
-        return np.ascontiguousarray(frames, np.float32)
-    return np.stack(
-        [
-            np.asarray(Image.fromarray(f.astype(np.float32), "F").resize((size, size), Image.Resampling.BILINEAR))
-            for f in frames
-        ]
-    )
 
 
 def _session(path: Path, role: str):
@@ -128,24 +117,24 @@ class OnnxSSN:
     def predict_ao(self, masks: np.ndarray, cameras: np.ndarray | None = None) -> np.ndarray:
         """The AO maps; a geometry-guided model also traces each mask's card here, so moving a light does not."""
         check_batch(masks, None, self.resolution, cameras=cameras)
-        m = _resample(masks, self.model_resolution)[:, None]
+        m = resample_frames(masks, self.model_resolution)[:, None]
         ao = self._aop.run(["ao"], {"mask": m})[0][:, 0]
         if self.card is not None:
             for b, mask in enumerate(masks):
                 self.card.card(mask, camera_at(cameras, b))
-        return np.clip(_resample(ao, self.resolution), 0.0, 1.0)
+        return np.clip(resample_frames(ao, self.resolution), 0.0, 1.0)
 
     def render(self, masks: np.ndarray, ao: np.ndarray, elms: np.ndarray,
                cameras: np.ndarray | None = None) -> np.ndarray:
         check_batch(masks, elms, self.resolution, ao, cameras)
         feeds = {
-            "mask": _resample(masks, self.model_resolution)[:, None],
-            "ao": _resample(ao, self.model_resolution)[:, None],
+            "mask": resample_frames(masks, self.model_resolution)[:, None],
+            "ao": resample_frames(ao, self.model_resolution)[:, None],
             "elm": network_elm(elms),
         }
         if self.card is not None:
             feeds["card"] = self.card.card_shadows(masks, elms, cameras)[:, None]
         s = self._sr.run(["shadow"], feeds)[0][:, 0]
-        s = apply_floor(_resample(s, self.resolution), self.output_floor)
+        s = apply_floor(resample_frames(s, self.resolution), self.output_floor)
         s[np.asarray(elms).max(axis=(1, 2)) <= 0] = 0.0  # no light, no shadow (conventions)
         return s

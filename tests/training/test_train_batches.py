@@ -6,6 +6,7 @@ import numpy as np
 import pytest
 from test_train_standin import FakeStore
 
+from ssn_engine.frames import resample_frames
 from ssn_engine.hemisphere import network_elm, texel_weights
 from training.batches import (
     BatchSampler,
@@ -18,7 +19,7 @@ from training.batches import (
     targets_for,
 )
 from training.elm import render_lights, sample_lights
-from training.frames import area_downsample, resize_frames
+from training.frames import area_downsample
 
 
 def test_area_downsample_is_a_block_mean():
@@ -71,7 +72,7 @@ def test_batch_shapes_inputs_and_elm_normalisation():
     assert b.elm.shape == (6, 16, 32)
     np.testing.assert_allclose(b.elm.reshape(6, -1).max(axis=1), 1.0)
     keys = {k: i for k, i in cache.keys.items()}
-    np.testing.assert_allclose(b.mask[0], resize_frames(store.load(keys[b.keys[0]]).mask[None], 16)[0])
+    np.testing.assert_allclose(b.mask[0], resample_frames(store.load(keys[b.keys[0]]).mask[None], 16)[0])
     assert 0 <= b.target.min() and b.target.max() <= 1
     assert np.allclose(network_elm(render_lights(b.lights, 16)), b.elm)
 

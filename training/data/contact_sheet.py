@@ -10,7 +10,7 @@ from PIL import Image
 from ssn_engine.hemisphere import render_light_map
 from ssn_engine.light_map import LightMap
 
-from .sources import stable_hash
+from .items import stable_hash
 from .store import ViewStore
 
 

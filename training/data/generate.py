@@ -8,8 +8,9 @@ from pathlib import Path
 import numpy as np
 
 from . import meshes, writer
+from .items import Item, stable_hash
 from .render_bases import render_view
-from .sources import Item, build_mesh, stable_hash
+from .sources import build_mesh
 from .spans import quantise_counts
 
 YAWS = (0.0, 45.0, -45.0, 90.0, -90.0)

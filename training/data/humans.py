@@ -19,8 +19,8 @@ import math
 
 import numpy as np
 
+from .items import Item, split_for
 from .meshes import Mesh
-from .sources import Item, split_for
 
 POSES = ("standing", "walking", "arms_raised", "arms_crossed", "arm_out", "hands_on_hips")
 PHENOTYPES = ("gender", "age", "muscle", "weight", "height", "proportions")

@@ -9,8 +9,8 @@ from __future__ import annotations
 
 import numpy as np
 
+from .items import Item, split_for
 from .meshes import Mesh
-from .sources import Item, split_for
 
 KINDS = ("pole", "slab", "holes", "compound", "arch", "table")
 

@@ -8,31 +8,14 @@ order does not change when other items are added.
 
 from __future__ import annotations
 
-import zlib
-from dataclasses import asdict, dataclass, field
-
 from . import meshes
+from .humans import build as build_human
+from .humans import human_items
+from .items import Item, stable_hash
+from .procedural import build as build_procedural
+from .procedural import procedural_items
 
 SOURCES = ("mesh", "procedural", "anny")
-
-
-@dataclass
-class Item:
-    """One shape: id, split, kind, category, source and what rebuilds its mesh."""
-
-    id: str
-    split: str
-    kind: str
-    category: str
-    source: str
-    params: dict = field(default_factory=dict)
-
-    def record(self) -> dict:
-        return asdict(self)
-
-
-def stable_hash(text: str) -> int:
-    return zlib.crc32(text.encode())
 
 
 def manifest_items() -> list[Item]:
@@ -45,12 +28,6 @@ def manifest_items() -> list[Item]:
     return out
 
 
-def split_for(index: int) -> str:
-    """80/10/10 split of generated shapes by their index (split by shape, never by view)."""
-    r = index % 10
-    return "val" if r == 8 else "test" if r == 9 else "train"
-
-
 def all_items(sources: tuple[str, ...] = SOURCES, n_procedural: int = 0, n_humans: int = 0,
               seed: int = 0) -> list[Item]:
     """Items of the chosen sources, ordered by a stable hash of their id."""
@@ -58,10 +35,8 @@ def all_items(sources: tuple[str, ...] = SOURCES, n_procedural: int = 0, n_human
     if "mesh" in sources:
         items += manifest_items()
     if "procedural" in sources and n_procedural:
-        from .procedural import procedural_items
         items += procedural_items(n_procedural, seed)
     if "anny" in sources and n_humans:
-        from .humans import human_items
         items += human_items(n_humans, seed)
     return sorted(items, key=lambda it: (stable_hash(it.id), it.id))
 
@@ -71,11 +46,9 @@ def build_mesh(item: Item) -> meshes.Mesh:
     if item.source == "mesh":
         mesh = meshes.read_ply(meshes.SHARED_MESHES / item.params["file"])
     elif item.source == "procedural":
-        from .procedural import build
-        mesh = build(item.params)
+        mesh = build_procedural(item.params)
     elif item.source == "anny":
-        from .humans import build
-        mesh = build(item.params)
+        mesh = build_human(item.params)
     else:
         raise ValueError(f"unknown source {item.source!r}")
     return meshes.normalise(meshes.clean(mesh))

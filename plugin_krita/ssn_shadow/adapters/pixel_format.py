@@ -34,10 +34,6 @@ class PixelFormat:
     def pixel_size(self) -> int:
         return 4 * self.itemsize
 
-    @property
-    def is_float(self) -> bool:
-        return self.depth.startswith("F")
-
     def render_format(self) -> dict[str, str]:
         """The protocol's ``format`` field for layers in this layout."""
         return {"dtype": self.dtype, "channels": self.channels}

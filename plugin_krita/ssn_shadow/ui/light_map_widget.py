@@ -89,15 +89,17 @@ class LightMapWidget(QWidget):
             self._select(None)
             self._changed(False, True)
 
-    def set_softness(self, softness: float) -> None:
+    def set_softness(self, softness: float, stroke_started: bool = False) -> None:
+        """The selected light's softness (a slider moved); ``stroke_started``: the first move of a drag."""
         if self.selected is not None:
             self.light_map.resize(self.selected, softness)
-            self._changed(True, False)
+            self._changed(True, stroke_started)
 
-    def set_intensity(self, intensity: float) -> None:
+    def set_intensity(self, intensity: float, stroke_started: bool = False) -> None:
+        """The selected light's intensity (a slider moved)."""
         if self.selected is not None:
             self.light_map.reweight(self.selected, intensity)
-            self._changed(True, False)
+            self._changed(True, stroke_started)
 
     # -- input -------------------------------------------------------------------------
     def mousePressEvent(self, event) -> None:

@@ -270,18 +270,14 @@ class ShadowPanel(QWidget):
         return started
 
     def _softness_moved(self, value: int) -> None:
-        if not self._syncing and self.map_widget.selected is not None:
-            self.map_widget.light_map.resize(self.map_widget.selected, slider_to_softness(value))
-            self.map_widget._image = None
-            self.map_widget.update()
-            self.controller.lights_edited(True, self._take_stroke() or not self.softness.isSliderDown())
+        if not self._syncing:  # the widget's lightsChanged re-renders
+            started = self._take_stroke() or not self.softness.isSliderDown()
+            self.map_widget.set_softness(slider_to_softness(value), started)
 
     def _intensity_moved(self, value: int) -> None:
-        if not self._syncing and self.map_widget.selected is not None:
-            self.map_widget.light_map.reweight(self.map_widget.selected, value / 100.0)
-            self.map_widget._image = None
-            self.map_widget.update()
-            self.controller.lights_edited(True, self._take_stroke() or not self.intensity.isSliderDown())
+        if not self._syncing:
+            started = self._take_stroke() or not self.intensity.isSliderDown()
+            self.map_widget.set_intensity(value / 100.0, started)
 
     # -- AO ----------------------------------------------------------------------------------
     def _brush_size(self, value: int) -> None:
