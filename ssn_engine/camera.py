@@ -1,4 +1,4 @@
-"""The pinhole camera of ``shared/docs/conventions.md``.
+"""The pinhole camera of ``docs/conventions.md``.
 
 World: right-handed, y up, ground y = 0. The camera's horizontal forward
 vector is f = (0, 0, -1) and its right vector r = (1, 0, 0); it looks at

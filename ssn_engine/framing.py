@@ -1,6 +1,6 @@
 """From a canvas-sized alpha to the network's N x N frame, and back.
 
-The frame follows ``shared/docs/conventions.md``: the object's top lies on
+The frame follows ``docs/conventions.md``: the object's top lies on
 row round(0.03 N) and the object is centred horizontally. Its size in the
 frame is fixed: the larger side of the alpha's bounding box becomes
 ``OBJECT_EXTENT * N`` pixels, the typical size of a training object seen

@@ -1,6 +1,6 @@
 """The upper-hemisphere texel grid of an ELM, and light maps rendered onto it.
 
-Geometry follows ``shared/docs/conventions.md``: an ELM has shape (H, 2H);
+Geometry follows ``docs/conventions.md``: an ELM has shape (H, 2H);
 row i spans elevations 90 (1 - i/H) .. 90 (1 - (i+1)/H) degrees, column j
 azimuths -180 + 360 j/W .. -180 + 360 (j+1)/W degrees from the camera's
 horizontal forward direction, positive to its right.

@@ -3,7 +3,7 @@
 Pure Python (stdlib only) so that the Krita and GIMP plug-ins can drive the
 editor without numpy. Rendering to arrays lives in :mod:`ssn_engine.hemisphere`.
 
-Map coordinates follow ``shared/docs/conventions.md``: ``u`` in [0, 1] runs
+Map coordinates follow ``docs/conventions.md``: ``u`` in [0, 1] runs
 across the map (azimuth -180..180 degrees, 0.5 straight ahead of the camera,
 wrapping around), ``v`` in [0, 1] runs down from the zenith (0) to the
 horizon (1).

@@ -1,6 +1,6 @@
 """Triangle meshes: reading the shared PLY files, the conventions' normalisation, yaw, topology.
 
-Normalisation (``shared/docs/conventions.md``): scale uniformly so that the
+Normalisation (``docs/conventions.md``): scale uniformly so that the
 axis-aligned bounding box (AABB) diagonal is 1, then move the AABB's lowest y
 to 0 and its centre to x = z = 0. A view then turns the object about the y
 axis by its yaw (right-handed: +90 degrees takes +x to -z).
