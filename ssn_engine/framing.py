@@ -162,12 +162,15 @@ def fade_at_edges(shadow: np.ndarray) -> np.ndarray:
     return without_edge_haze(shadow) * edge_fade(shadow.shape[0])
 
 
-def shadow_to_canvas(shadow: np.ndarray, framing: Framing, origin: float | None = None) -> CanvasShadow:
+def shadow_to_canvas(shadow: np.ndarray, framing: Framing, origin: float | None = None,
+                     clip: bool = True) -> CanvasShadow:
     """Resample a frame shadow to the canvas, cropped to its visible part.
 
     The result covers the canvas pixels whose shadow can be visible (the
-    frame's shadow above ``SHADOW_FLOOR``), clipped to the canvas; it may
-    reach well beyond the alpha's bounding box. A frame shadow (n, n) that
+    frame's shadow above ``SHADOW_FLOOR``), clipped to the canvas unless
+    ``clip`` is False (then it may start at negative coordinates and reach
+    past the canvas: for hosts whose layers can); it may reach well beyond
+    the alpha's bounding box. A frame shadow (n, n) that
     runs out of the frame fades out (:func:`fade_at_edges`) instead of
     ending in a hard edge. With ``origin``, ``shadow`` is a larger array whose top-left
     corner lies at frame coordinates (origin, origin) and that fades out by
@@ -181,9 +184,10 @@ def shadow_to_canvas(shadow: np.ndarray, framing: Framing, origin: float | None 
         return CanvasShadow(np.zeros((0, 0), np.float32), 0, 0)
     cx0, cy0 = framing.to_canvas(cols[0] + origin, rows[0] + origin)
     cx1, cy1 = framing.to_canvas(cols[-1] + 1 + origin, rows[-1] + 1 + origin)
-    x0, y0 = max(0, math.floor(cx0)), max(0, math.floor(cy0))
-    x1 = min(framing.canvas_width, math.ceil(cx1))
-    y1 = min(framing.canvas_height, math.ceil(cy1))
+    x0, y0, x1, y1 = math.floor(cx0), math.floor(cy0), math.ceil(cx1), math.ceil(cy1)
+    if clip:
+        x0, y0 = max(0, x0), max(0, y0)
+        x1, y1 = min(framing.canvas_width, x1), min(framing.canvas_height, y1)
     if x1 <= x0 or y1 <= y0:
         return CanvasShadow(np.zeros((0, 0), np.float32), 0, 0)
     s = framing.scale

@@ -61,11 +61,11 @@ class ShadowSession:
         elm = render_light_map(light_map, NETWORK_SHAPE[0])
         return self.method.render(self.mask[None], self.ao[None], elm[None], self.cameras)[0]
 
-    def to_canvas(self, frame: np.ndarray, light_map: LightMap) -> CanvasShadow:
+    def to_canvas(self, frame: np.ndarray, light_map: LightMap, clip: bool = True) -> CanvasShadow:
         """A frame shadow of ``light_map`` at canvas resolution, cropped to its visible part; a shadow that
         reaches the frame's border continues beyond it (the geometric card's, :mod:`ssn_engine.long_shadow`)."""
         if not long_shadow.reaches_border(frame):
-            return shadow_to_canvas(frame, self.framing)
+            return shadow_to_canvas(frame, self.framing, clip=clip)
         card = self.method if isinstance(self.method, GeometricCard) else getattr(self.method, "card", None)
         if card is None:
             self._card = self._card or GeometricCard(self.method.resolution)
@@ -73,7 +73,7 @@ class ShadowSession:
         elm = render_light_map(light_map, NETWORK_SHAPE[0])
         wide = card.extended_shadow(self.mask, elm, camera_at(self.cameras, 0), long_shadow.MARGIN, long_shadow.CELL)
         values, origin = long_shadow.extend(frame, wide)
-        return shadow_to_canvas(values, self.framing, origin)
+        return shadow_to_canvas(values, self.framing, origin, clip)
 
     def render(self, light_map: LightMap) -> CanvasShadow:
         """The shadow at canvas resolution (:meth:`render_frame`, then :meth:`to_canvas`)."""

@@ -153,10 +153,13 @@ class Worker:
         fmt = header.get("format") or {}
         if not isinstance(fmt, dict):
             raise RequestError("BadRequest", "format: expected an object")
+        clip = header.get("clip", True)
+        if not isinstance(clip, bool):
+            raise RequestError("BadRequest", "clip: expected true (the layer stays on the canvas) or false")
         t0 = time.perf_counter()
         frame = s.render_frame(light_map)
         t1 = time.perf_counter()
-        shadow = s.to_canvas(frame, light_map)
+        shadow = s.to_canvas(frame, light_map, clip)
         t2 = time.perf_counter()
         reply = {"x": shadow.x, "y": shadow.y, "width": 0, "height": 0, "method": s.method.name}
         out: dict[str, Buffer] = {}

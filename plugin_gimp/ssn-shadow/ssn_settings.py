@@ -146,6 +146,7 @@ class ShadowSettings:
             "color": list(self.color),
             "opacity": self.opacity,
             "format": {"dtype": dtype, "channels": "rgba"},
+            "clip": False,  # a GIMP layer may reach past the canvas: a long shadow is kept whole
         }
 
     def ao_edits(self) -> list[dict[str, Any]]:

@@ -116,3 +116,18 @@ def test_a_long_shadow_continues_beyond_the_frame():
     # a high sun's short shadow stays inside the frame and is not extended
     short = session.render(one_light(0.25, 0.2)).full_canvas(1600, 600)
     assert np.flatnonzero((short > 0.02).any(axis=0)).max() < frame_right
+
+
+def test_an_unclipped_shadow_reaches_past_the_canvas():
+    """For hosts whose layers may extend past the canvas (GIMP): the same shadow, not cut at the canvas edge."""
+    alpha = np.zeros((300, 400), np.uint8)
+    alpha[100:260, 330:390] = drawn_alpha(60, 160)  # near the right edge
+    session = ShadowSession(alpha, GeometricCard())
+    sun = one_light(0.25, 0.92)  # a long shadow to the right
+    frame = session.render_frame(sun)
+    clipped, whole = session.to_canvas(frame, sun), session.to_canvas(frame, sun, clip=False)
+    assert clipped.x + clipped.values.shape[1] <= 400  # cut at the canvas
+    assert whole.x + whole.values.shape[1] > 450  # kept whole past it
+    inside = whole.values[clipped.y - whole.y : clipped.y - whole.y + clipped.values.shape[0],
+                          clipped.x - whole.x : clipped.x - whole.x + clipped.values.shape[1]]
+    np.testing.assert_allclose(inside, clipped.values, atol=1e-5)  # the same shadow where both cover it

@@ -93,6 +93,7 @@ def test_render_params_and_edits():
         "color": [0.2, 0.1, 0.0],
         "opacity": 0.5,
         "format": {"dtype": "uint16", "channels": "rgba"},
+        "clip": False,
     }
     assert st.ao_edits() == []
     assert ShadowSettings(ao_strength=0.0).ao_edits() == [{"op": "strength", "value": 0.0}]
