@@ -280,6 +280,20 @@ def model_card(card: dict, attribution: list[dict], command: str) -> str:
     return "\n".join(lines) + "\n"
 
 
+def training_summary(path: Path, ck: dict) -> str:
+    """How long a checkpoint trained (from its run's log.csv), following ``--init-from`` back to the run it was
+    fine-tuned from."""
+    log = path.with_name("log.csv")
+    rows = log.read_text().splitlines()[1:] if log.is_file() else []
+    minutes = f"{float(rows[-1].split(',')[5]) / 60:.0f} min of training time, " if rows else ""
+    text = f"{minutes}{ck['step']} steps, {ck['samples']} samples"
+    parent = (ck.get("args") or {}).get("init_from")
+    if parent and Path(parent).is_file():
+        text = (f"{training_summary(Path(parent), load_models([parent])[1][0])}, then fine-tuned for {text} "
+                f"(learning rate {ck['args']['lr']:g})")
+    return text
+
+
 def reuse_aop(graph: Path, out: Path) -> dict:
     """Copy an installed aop.onnx into ``out``; its record from the model.json beside it (or a bare one)."""
     if graph.resolve() != (out / "aop.onnx").resolve():
@@ -362,11 +376,8 @@ def main(argv: list[str] | None = None) -> int:
               f"{report[module]['bytes'] / 1e6:.2f} MB", flush=True)
     sr_ck = load_models([args.sr])[1][0]
     card["card_input"] = bool(sr_ck["unet"].get("card"))
-    log = Path(args.sr).with_name("log.csv")
-    rows = log.read_text().splitlines()[1:] if log.is_file() else []
-    minutes = f"{float(rows[-1].split(',')[5]) / 60:.0f} min of training time, " if rows else ""
-    card["sr_training"] = f"{minutes}{sr_ck['step']} steps, {sr_ck['samples']} samples" + (
-        f", on {args.trained_on}" if args.trained_on else "")
+    on = f", on {args.trained_on}" if args.trained_on else ""
+    card["sr_training"] = training_summary(Path(args.sr), sr_ck) + on
     lights = sr_ck["args"].get("lights", "table1")
     card["lights"] = f"the family mixture {TRAIN_MIX}" if lights == "mix" else "the paper's Table 1"
     report["timing"] = time_sr(out / "sr.onnx", card["resolution"])
