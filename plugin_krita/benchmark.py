@@ -39,8 +39,13 @@ def run(drag_s: float = 8.0) -> dict:
         xvfb = shutil.which("xvfb-run")  # Krita's windows need an X server (apt-get install xvfb)
         if xvfb is None:
             raise SystemExit("xvfb-run not found: apt-get install xvfb")
-        proc = subprocess.run([xvfb, "-a", kritarunner, "-s", "bench_driver", "-f", "main"], env=env,
-                              capture_output=True, text=True, timeout=600)
+        proc = subprocess.run(
+            [xvfb, "-a", kritarunner, "-s", "bench_driver", "-f", "main"],
+            env=env,
+            capture_output=True,
+            text=True,
+            timeout=600,
+        )
         if not result.exists():
             raise SystemExit(f"Krita wrote no result:\n{proc.stdout[-2000:]}\n{proc.stderr[-2000:]}")
         return json.loads(result.read_text())
@@ -52,11 +57,15 @@ def main() -> None:
         raise SystemExit(data["error"])
     live = data["live"]
     gen = data["generate_4000x3000_ms"]
-    print(f"live updates while dragging a light, 2000 x 2000 canvas: {live['updates_per_s']:.1f} per second "
-          f"({live['layer_updates']} layer updates in {live['drag_s']:g} s of 60 Hz mouse moves; "
-          f"median request-to-layer latency {live['median_latency_ms']} ms)")
-    print(f"Generate to visible layer, 4000 x 3000 canvas: median {sorted(gen)[len(gen) // 2]:.0f} ms "
-          f"(runs: {', '.join(f'{t:.0f}' for t in gen)} ms; full path: read alpha, AO, render, write)")
+    print(
+        f"live updates while dragging a light, 2000 x 2000 canvas: {live['updates_per_s']:.1f} per second "
+        f"({live['layer_updates']} layer updates in {live['drag_s']:g} s of 60 Hz mouse moves; "
+        f"median request-to-layer latency {live['median_latency_ms']} ms)"
+    )
+    print(
+        f"Generate to visible layer, 4000 x 3000 canvas: median {sorted(gen)[len(gen) // 2]:.0f} ms "
+        f"(runs: {', '.join(f'{t:.0f}' for t in gen)} ms; full path: read alpha, AO, render, write)"
+    )
     print(json.dumps(data))
 
 

@@ -28,8 +28,9 @@ def _frames(name: str, array: np.ndarray, n: int | None = None) -> np.ndarray:
     return np.ascontiguousarray(a, np.float32)
 
 
-def predict_frames(masks: np.ndarray, elms: np.ndarray, ao: np.ndarray | None = None,
-                   cameras: np.ndarray | None = None) -> np.ndarray:
+def predict_frames(
+    masks: np.ndarray, elms: np.ndarray, ao: np.ndarray | None = None, cameras: np.ndarray | None = None
+) -> np.ndarray:
     """Shadow maps s (n, N, N), float32 in [0, 1], from masks (n, N, N) and ELMs (n, 16, 32).
 
     Optional ``ao`` (n, N, N) replaces the predicted AO maps (e.g. ground

@@ -80,13 +80,15 @@ def run_benchmark(repeats: int = 20, method: str = "auto") -> dict[str, np.ndarr
     geo_ao = geometric.predict_ao(masks)
     # A light dragged across the sky: every render a new sun position (a geometry-guided model traces the card's
     # hard shadows of texels it has not needed before, then keeps them).
-    drag = _alternating([render_light_map(LightMap([GaussianLight(0.2 + 0.6 * k / DRAG, 0.7, 0.002, 1.0)]))[None]
-                         for k in range(DRAG)])
+    drag = _alternating(
+        [render_light_map(LightMap([GaussianLight(0.2 + 0.6 * k / DRAG, 0.7, 0.002, 1.0)]))[None] for k in range(DRAG)]
+    )
     results = {
         f"AOP ({m.name}, N={m.resolution})": _time(lambda: m.predict_ao(shifted_masks()), repeats),
         f"SR ({m.name}, N={m.resolution})": _time(lambda: m.render(masks, ao, elm), repeats),
-        f"SR, sun dragged ({m.name}, N={m.resolution})": _time(lambda: m.render(masks, ao, drag()),
-                                                              min(repeats, DRAG - 2)),
+        f"SR, sun dragged ({m.name}, N={m.resolution})": _time(
+            lambda: m.render(masks, ao, drag()), min(repeats, DRAG - 2)
+        ),
         "geometric card (render, 2 lights)": _time(lambda: geometric.render(masks, geo_ao, elm), repeats),
     }
     cutout = big_cutout()

@@ -131,8 +131,9 @@ def _fit_span(n: int, fov: float, pitch: float, top: float, base: float) -> Came
     return cam
 
 
-def camera_for_span(n: int, top: float, base: float, horizon: float | None = None,
-                    focal: float | None = None) -> tuple[Camera, float]:
+def camera_for_span(
+    n: int, top: float, base: float, horizon: float | None = None, focal: float | None = None
+) -> tuple[Camera, float]:
     """The conventions' camera for an upright card spanning frame rows [top, base), and its height.
 
     Without a camera input it uses the default field of view and pitch. With the horizon row ``horizon`` and

@@ -112,8 +112,9 @@ def check_paths(outputs: dict[str, str | None], inputs: dict[str, str | None]) -
                 raise CliError(f"{other_label} and {label} name the same file ({path}); give two different paths")
         for in_label, source in ins:
             if _same_file(path, source):
-                raise CliError(f"{label} {path} is {in_label}: ssn-shadow never writes over its inputs; "
-                               "choose another output path")
+                raise CliError(
+                    f"{label} {path} is {in_label}: ssn-shadow never writes over its inputs; choose another output path"
+                )
 
 
 def check_folder(label: str, folder: str | None) -> None:
@@ -159,9 +160,11 @@ def load_cutout(args: argparse.Namespace) -> np.ndarray:
     rgba, has_alpha = load_image(args.cutout, args.max_megapixels)
     if args.whole_image:
         return rgba
-    how = ("Make a cutout first: erase the background around the subject to transparency (Krita, GIMP: add an "
-           "alpha channel, select the background, delete) and save it as PNG; or pass --whole-image to cast the "
-           "shadow of the whole rectangle.")
+    how = (
+        "Make a cutout first: erase the background around the subject to transparency (Krita, GIMP: add an "
+        "alpha channel, select the background, delete) and save it as PNG; or pass --whole-image to cast the "
+        "shadow of the whole rectangle."
+    )
     if not has_alpha:
         raise CliError(f"{args.cutout} has no alpha channel, so it holds no cutout. {how}")
     if rgba[..., 3].min() >= 128:
@@ -193,8 +196,9 @@ def _make_shadow(cutout_rgba: np.ndarray, args: argparse.Namespace, stage: Stage
     return shadow, loaded
 
 
-def _write_outputs(write, cutout: np.ndarray, shadow, args: argparse.Namespace, background: np.ndarray | None,
-                   stage: Stages) -> list[Path]:
+def _write_outputs(
+    write, cutout: np.ndarray, shadow, args: argparse.Namespace, background: np.ndarray | None, stage: Stages
+) -> list[Path]:
     """Stage the layer and the composite through ``write`` (:func:`ssn_engine.imageio.atomic_writes`)."""
     from .compositing import composite_image, layer_image
 
@@ -219,8 +223,10 @@ def _load_background(args: argparse.Namespace, size: tuple[int, int]) -> np.ndar
         return None
     background, _ = load_image(args.background, args.max_megapixels)
     if (background.shape[1], background.shape[0]) != size:
-        raise CliError(f"background is {background.shape[1]} x {background.shape[0]}, the cutout {size[0]} x "
-                       f"{size[1]}: sizes must match")
+        raise CliError(
+            f"background is {background.shape[1]} x {background.shape[0]}, the cutout {size[0]} x "
+            f"{size[1]}: sizes must match"
+        )
     return background
 
 
@@ -229,9 +235,15 @@ def cmd_render(args: argparse.Namespace) -> int:
 
     if not (args.layer or args.composite):
         raise CliError("nothing to write: give --layer and/or --composite")
-    check_paths({"--layer": args.layer, "--composite": args.composite},
-                {"the cutout": args.cutout, "--background": args.background, "--light-map": args.light_map,
-                 "--ao-edits": args.ao_edits})
+    check_paths(
+        {"--layer": args.layer, "--composite": args.composite},
+        {
+            "the cutout": args.cutout,
+            "--background": args.background,
+            "--light-map": args.light_map,
+            "--ao-edits": args.ao_edits,
+        },
+    )
     stage = Stages()
     try:
         stage("reading the cutout")
@@ -258,9 +270,14 @@ def cmd_demo(args: argparse.Namespace) -> int:
 
     samples = [str(Path(args.save_samples) / name) for name in SAMPLE_FILES] if args.save_samples else []
     check_folder("--save-samples", args.save_samples)
-    check_paths({"--out": args.out, "--layer": args.layer, **dict(zip(("sample cutout", "sample background"),
-                                                                       samples, strict=False))},
-                {"--light-map": args.light_map, "--ao-edits": args.ao_edits})
+    check_paths(
+        {
+            "--out": args.out,
+            "--layer": args.layer,
+            **dict(zip(("sample cutout", "sample background"), samples, strict=False)),
+        },
+        {"--light-map": args.light_map, "--ao-edits": args.ao_edits},
+    )
     cutout, background = pawn_cutout(), studio_background()
     args.composite, args.cutout = args.out, "the sample pawn"
     stage = Stages()
@@ -269,8 +286,7 @@ def cmd_demo(args: argparse.Namespace) -> int:
         with atomic_writes() as write:
             written = _write_outputs(write, cutout, shadow, args, background, stage)
             # a fresh background: the composite was blended into the first one
-            written += [write(path, image) for path, image in zip(samples, (cutout, studio_background()),
-                                                                  strict=False)]
+            written += [write(path, image) for path, image in zip(samples, (cutout, studio_background()), strict=False)]
     finally:
         stage.close()
     for path in written:
@@ -324,8 +340,10 @@ def cmd_install_plugin(args: argparse.Namespace) -> int:
     try:
         host_install = found[args.host].load()
     except (KeyError, ImportError) as exc:
-        raise CliError(f"the {args.host} plug-in is not part of this installation ({exc!r}); reinstall "
-                       "ssn-shadow with pip", EXIT_ERROR) from None
+        raise CliError(
+            f"the {args.host} plug-in is not part of this installation ({exc!r}); reinstall ssn-shadow with pip",
+            EXIT_ERROR,
+        ) from None
     dest = Path(args.dest) if args.dest else None
     if args.zip:
         if args.host != "krita":
@@ -340,9 +358,9 @@ def cmd_install_plugin(args: argparse.Namespace) -> int:
 
 NEXT_STEP = {
     "krita": "start Krita, tick 'Soft Shadow (SSN)' in Settings > Configure Krita > Python Plugin Manager, "
-             "restart Krita, then show the docker with Settings > Dockers > Soft Shadow",
+    "restart Krita, then show the docker with Settings > Dockers > Soft Shadow",
     "gimp": "restart GIMP (it reads plug-ins at start), open an image with a cutout and run "
-            "Filters > Light and Shadow > Soft Shadow (SSN)...",
+    "Filters > Light and Shadow > Soft Shadow (SSN)...",
 }
 
 
@@ -367,11 +385,19 @@ def _add_shadow_options(p: argparse.ArgumentParser) -> None:
     p.add_argument(
         "--method", default="auto", choices=METHOD_NAMES, help="auto: SSN if a model is installed, else geometric"
     )
-    p.add_argument("--horizon", type=float, metavar="ROW",
-                   help="the image's horizon: canvas row (pixels from the top; may be negative or past the bottom) "
-                        "where the ground plane meets the sky; default: a camera pitched 15 degrees down")
-    p.add_argument("--fov", type=_number_in(1.0, 170.0), metavar="DEG",
-                   help="with --horizon: the image's vertical field of view in degrees (default 45)")
+    p.add_argument(
+        "--horizon",
+        type=float,
+        metavar="ROW",
+        help="the image's horizon: canvas row (pixels from the top; may be negative or past the bottom) "
+        "where the ground plane meets the sky; default: a camera pitched 15 degrees down",
+    )
+    p.add_argument(
+        "--fov",
+        type=_number_in(1.0, 170.0),
+        metavar="DEG",
+        help="with --horizon: the image's vertical field of view in degrees (default 45)",
+    )
 
 
 def build_parser() -> argparse.ArgumentParser:
@@ -387,18 +413,29 @@ def build_parser() -> argparse.ArgumentParser:
     p.add_argument("--layer", metavar="OUT.png", help="write the shadow layer (RGBA, canvas size)")
     p.add_argument("--composite", metavar="OUT.png", help="write cutout + shadow over --background")
     p.add_argument("--background", metavar="BG.png", help="background for --composite (default white)")
-    p.add_argument("--whole-image", action="store_true",
-                   help="accept an image without alpha, or opaque everywhere: the whole rectangle casts the shadow")
-    p.add_argument("--max-megapixels", type=_number_in(0.01, 10000.0), default=DEFAULT_MAX_MEGAPIXELS,
-                   metavar="MP", help="refuse larger images (default %(default)g; about 15 bytes a pixel are needed)")
+    p.add_argument(
+        "--whole-image",
+        action="store_true",
+        help="accept an image without alpha, or opaque everywhere: the whole rectangle casts the shadow",
+    )
+    p.add_argument(
+        "--max-megapixels",
+        type=_number_in(0.01, 10000.0),
+        default=DEFAULT_MAX_MEGAPIXELS,
+        metavar="MP",
+        help="refuse larger images (default %(default)g; about 15 bytes a pixel are needed)",
+    )
     _add_shadow_options(p)
     p.set_defaults(func=cmd_render)
 
     p = sub.add_parser("demo", help="render the bundled sample cutout over the bundled background")
     p.add_argument("--out", default="ssn-shadow-demo.png", help="composite PNG (default %(default)s)")
     p.add_argument("--layer", metavar="OUT.png", help="also write the shadow layer")
-    p.add_argument("--save-samples", metavar="DIR",
-                   help="also write the sample cutout and background PNGs into this existing folder")
+    p.add_argument(
+        "--save-samples",
+        metavar="DIR",
+        help="also write the sample cutout and background PNGs into this existing folder",
+    )
     _add_shadow_options(p)
     p.set_defaults(func=cmd_demo, preset=DEMO_PRESET)
 
@@ -410,8 +447,12 @@ def build_parser() -> argparse.ArgumentParser:
 
     p = sub.add_parser("serve", help="run the engine worker for the plug-ins (docs/protocol.md)")
     p.add_argument("--port", type=int, help="listen on 127.0.0.1:PORT (0 = any free port) instead of stdin/stdout")
-    p.add_argument("--idle-timeout", type=float, metavar="SECONDS",
-                   help="with --port: exit after this long without a connection (default: never)")
+    p.add_argument(
+        "--idle-timeout",
+        type=float,
+        metavar="SECONDS",
+        help="with --port: exit after this long without a connection (default: never)",
+    )
     p.add_argument("--method", default="auto", choices=METHOD_NAMES)
     p.set_defaults(func=cmd_serve)
 

@@ -179,8 +179,9 @@ IDLE_TIMEOUT = 900.0  # seconds a shared worker waits for the next call before i
 START_TIMEOUT = 120.0  # seconds a new shared worker may take to announce its port
 
 
-def shared_client(command: Sequence[str], state_path: Path, timeout: float = 120.0,
-                  idle_timeout: float = IDLE_TIMEOUT) -> EngineClient:
+def shared_client(
+    command: Sequence[str], state_path: Path, timeout: float = 120.0, idle_timeout: float = IDLE_TIMEOUT
+) -> EngineClient:
     """A client of a long-lived loopback worker started from ``command`` (``... ssn-shadow serve``): the one
     recorded in ``state_path`` while it answers, else a new one started detached with ``--port 0
     --idle-timeout`` and recorded there (readable by this user only). A plug-in that runs once per call (GIMP)
@@ -208,8 +209,13 @@ def _read_state(path: Path, command: Sequence[str]) -> dict | None:
         state = json.loads(path.read_text(encoding="utf-8"))
     except (OSError, ValueError):
         return None
-    ok = isinstance(state, dict) and state.get("command") == list(command) and isinstance(state.get("port"), int) \
-        and isinstance(state.get("host"), str) and isinstance(state.get("token"), str)
+    ok = (
+        isinstance(state, dict)
+        and state.get("command") == list(command)
+        and isinstance(state.get("port"), int)
+        and isinstance(state.get("host"), str)
+        and isinstance(state.get("token"), str)
+    )
     return state if ok else None
 
 
@@ -225,11 +231,15 @@ def _write_state(path: Path, state: dict) -> None:
 def _start_detached(command: Sequence[str], idle_timeout: float) -> tuple[str, int, str]:
     """Start ``command --port 0 --idle-timeout S`` in its own session and read its ``listening`` line."""
     args = [*command, "--port", "0", "--idle-timeout", f"{idle_timeout:g}"]
-    flags = {"start_new_session": True} if os.name == "posix" else {
-        "creationflags": getattr(subprocess, "DETACHED_PROCESS", 0) | getattr(subprocess, "CREATE_NO_WINDOW", 0)}
+    flags = (
+        {"start_new_session": True}
+        if os.name == "posix"
+        else {"creationflags": getattr(subprocess, "DETACHED_PROCESS", 0) | getattr(subprocess, "CREATE_NO_WINDOW", 0)}
+    )
     try:
-        proc = subprocess.Popen(args, stdin=subprocess.DEVNULL, stdout=subprocess.PIPE, stderr=subprocess.DEVNULL,
-                                **flags)
+        proc = subprocess.Popen(
+            args, stdin=subprocess.DEVNULL, stdout=subprocess.PIPE, stderr=subprocess.DEVNULL, **flags
+        )
     except OSError as exc:
         raise WorkerUnavailable(f"could not start the shadow engine ({' '.join(args)}): {exc}") from None
     line: list[bytes] = []

@@ -120,8 +120,9 @@ def _stripes(y0: int, y1: int, width: int) -> Iterator[slice]:
         yield slice(top, min(top + rows, y1))
 
 
-def layer_image(shadow: CanvasShadow, width: int, height: int, color: Sequence[float] = (0.0, 0.0, 0.0),
-                opacity: float = 1.0) -> np.ndarray:
+def layer_image(
+    shadow: CanvasShadow, width: int, height: int, color: Sequence[float] = (0.0, 0.0, 0.0), opacity: float = 1.0
+) -> np.ndarray:
     """The canvas-sized uint8 RGBA shadow layer (:func:`shadow_layer` of the shadow pasted into an empty canvas),
     built without a canvas-sized float array."""
     out = np.empty((height, width, 4), np.uint8)
@@ -135,8 +136,13 @@ def layer_image(shadow: CanvasShadow, width: int, height: int, color: Sequence[f
     return out
 
 
-def composite_image(background: np.ndarray, cutout: np.ndarray, shadow: CanvasShadow,
-                    color: Sequence[float] = (0.0, 0.0, 0.0), opacity: float = 1.0) -> np.ndarray:
+def composite_image(
+    background: np.ndarray,
+    cutout: np.ndarray,
+    shadow: CanvasShadow,
+    color: Sequence[float] = (0.0, 0.0, 0.0),
+    opacity: float = 1.0,
+) -> np.ndarray:
     """The shadow multiplied into ``background`` (H, W, 3|4) and the RGBA ``cutout`` (H, W, 4) over it: only the
     shadow's and the cutout's boxes are blended, in stripes. A writable ``background`` is written in place."""
     if background.shape[:2] != cutout.shape[:2] or cutout.shape[2] != 4:

@@ -112,8 +112,10 @@ def alpha_bbox(alpha: np.ndarray) -> tuple[int, int, int, int]:
     cols = np.flatnonzero(visible[rows[0] : rows[-1] + 1].any(axis=0))
     w, h = int(cols[-1] - cols[0]) + 1, int(rows[-1] - rows[0]) + 1
     if max(w, h) < MIN_CUTOUT:
-        raise EmptyAlphaError(f"the cutout is only {w} x {h} pixels: too small to cast a visible shadow (it needs "
-                              f"{MIN_CUTOUT} pixels on its longer side)")
+        raise EmptyAlphaError(
+            f"the cutout is only {w} x {h} pixels: too small to cast a visible shadow (it needs "
+            f"{MIN_CUTOUT} pixels on its longer side)"
+        )
     return int(cols[0]), int(rows[0]), int(cols[-1]) + 1, int(rows[-1]) + 1
 
 
@@ -162,8 +164,9 @@ def fade_at_edges(shadow: np.ndarray) -> np.ndarray:
     return without_edge_haze(shadow) * edge_fade(shadow.shape[0])
 
 
-def shadow_to_canvas(shadow: np.ndarray, framing: Framing, origin: float | None = None,
-                     clip: bool = True) -> CanvasShadow:
+def shadow_to_canvas(
+    shadow: np.ndarray, framing: Framing, origin: float | None = None, clip: bool = True
+) -> CanvasShadow:
     """Resample a frame shadow to the canvas, cropped to its visible part.
 
     The result covers the canvas pixels whose shadow can be visible (the

@@ -63,7 +63,8 @@ def load_image(path: str | Path, max_megapixels: float = DEFAULT_MAX_MEGAPIXELS)
                 raise ImageFileError(
                     f"{path}: {w} x {h} is {w * h / 1e6:.3g} megapixels, above the limit of {max_megapixels:g}; "
                     f"pass --max-megapixels {int(np.ceil(w * h / 1e6))} to allow it (it needs about "
-                    f"{max(1, round(w * h * 15 / 2**20)):,} MiB of memory)")
+                    f"{max(1, round(w * h * 15 / 2**20)):,} MiB of memory)"
+                )
             im.load()
             has_alpha = im.mode in ALPHA_MODES or "transparency" in im.info
             if im.mode in ("I;16", "I;16B", "I"):

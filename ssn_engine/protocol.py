@@ -96,15 +96,19 @@ def _spec(entry: object) -> BufferSpec:
         raise ProtocolError(f"malformed buffer entry {entry!r}: needs a name and nbytes >= 0")
     if dtype not in DTYPES:
         raise ProtocolError(f"buffer {name!r}: unsupported dtype {dtype!r}; use one of {sorted(DTYPES)}", nbytes)
-    if (not isinstance(shape, list) or len(shape) > MAX_DIMS
-            or not all(isinstance(s, int) and not isinstance(s, bool) and s >= 0 for s in shape)):
+    if (
+        not isinstance(shape, list)
+        or len(shape) > MAX_DIMS
+        or not all(isinstance(s, int) and not isinstance(s, bool) and s >= 0 for s in shape)
+    ):
         raise ProtocolError(f"buffer {name!r}: shape must be a list of at most {MAX_DIMS} sizes >= 0", nbytes)
     expected = DTYPES[dtype]
     for s in shape:
         expected *= s
     if expected != nbytes:
-        raise ProtocolError(f"buffer {name!r} of shape {shape} {dtype} needs {expected} bytes, "
-                            f"the header declares {nbytes}", nbytes)
+        raise ProtocolError(
+            f"buffer {name!r} of shape {shape} {dtype} needs {expected} bytes, the header declares {nbytes}", nbytes
+        )
     return BufferSpec(name, dtype, tuple(shape), nbytes)
 
 

@@ -35,8 +35,9 @@ class ShadowSession:
     """Shadow rendering for one canvas alpha with one method; ``horizon`` (a canvas row) and ``fov`` (the
     canvas's vertical field of view, degrees) give the camera, else the method assumes the default one."""
 
-    def __init__(self, alpha: np.ndarray, method: ShadowMethod, horizon: float | None = None,
-                 fov: float | None = None) -> None:
+    def __init__(
+        self, alpha: np.ndarray, method: ShadowMethod, horizon: float | None = None, fov: float | None = None
+    ) -> None:
         self.method = method
         self.mask, self.framing = frame_alpha(alpha, method.resolution)
         self.cameras = None

@@ -56,12 +56,16 @@ def _step(client: EngineClient, rng: random.Random, cutouts: list[str]) -> str:
     try:
         if roll < 0.7:
             kind = "render"
-            client.request("render", cutout=key, light_map=light,
-                           format={"dtype": rng.choice(["uint8", "uint16", "float32"])})
+            client.request(
+                "render", cutout=key, light_map=light, format={"dtype": rng.choice(["uint8", "uint16", "float32"])}
+            )
         elif roll < 0.8:
             kind = "edit_ao"
-            client.request("edit_ao", cutout=key, edits=[{"op": "brush", "x": rng.random(), "y": rng.random(),
-                                                          "radius": 0.05, "strength": -0.5}])
+            client.request(
+                "edit_ao",
+                cutout=key,
+                edits=[{"op": "brush", "x": rng.random(), "y": rng.random(), "radius": 0.05, "strength": -0.5}],
+            )
         elif roll < 0.85:
             kind = "get_ao"
             client.request("get_ao", cutout=key)
@@ -83,8 +87,7 @@ def _step(client: EngineClient, rng: random.Random, cutouts: list[str]) -> str:
     return kind
 
 
-def run_soak(requests: int = 10000, minutes: float = 0.0, method: str = "auto", seed: int = 0,
-             out=sys.stdout) -> dict:
+def run_soak(requests: int = 10000, minutes: float = 0.0, method: str = "auto", seed: int = 0, out=sys.stdout) -> dict:
     """Send ``requests`` requests (or run ``minutes``, if given); print RSS over time, then the memory after
     warm-up and at the end (medians over windows of the run) and the latency per kind; return the figures."""
     rng = random.Random(seed)
@@ -114,17 +117,28 @@ def run_soak(requests: int = 10000, minutes: float = 0.0, method: str = "auto", 
     def window_median(lo: float) -> float:
         return float(np.median([s[2] for s in samples if lo * done < s[0] <= (lo + WINDOW) * done + 1e-9]))
 
-    figures = {"requests": done, "seconds": samples[-1][1], "rss_warm_mib": window_median(WARMUP_SHARE),
-               "rss_end_mib": window_median(1.0 - WINDOW), "rss_peak_mib": max(s[2] for s in samples)}
+    figures = {
+        "requests": done,
+        "seconds": samples[-1][1],
+        "rss_warm_mib": window_median(WARMUP_SHARE),
+        "rss_end_mib": window_median(1.0 - WINDOW),
+        "rss_peak_mib": max(s[2] for s in samples),
+    }
     figures["growth_mib"] = figures["rss_end_mib"] - figures["rss_warm_mib"]
     figures["growth_share"] = figures["growth_mib"] / figures["rss_warm_mib"]
     every_request = [ms for values in latency.values() for ms in values]
-    figures["latency_ms"] = {kind: (float(np.percentile(v, 50)), float(np.percentile(v, 99)), len(v))
-                             for kind, v in sorted(latency.items()) + [("all", every_request)]}
+    figures["latency_ms"] = {
+        kind: (float(np.percentile(v, 50)), float(np.percentile(v, 99)), len(v))
+        for kind, v in sorted(latency.items()) + [("all", every_request)]
+    }
     print(f"\n{'request':12s} {'count':>6} {'p50 ms':>8} {'p99 ms':>8}", file=out)
     for kind, (p50, p99, count) in figures["latency_ms"].items():
         print(f"{kind:12s} {count:6d} {p50:8.1f} {p99:8.1f}", file=out)
-    print(f"\nmedian RSS just after warm-up {figures['rss_warm_mib']:.1f} MiB, at the end {figures['rss_end_mib']:.1f} "
-          f"MiB (growth {figures['growth_mib']:+.1f} MiB, {100 * figures['growth_share']:+.1f} %), peak "
-          f"{figures['rss_peak_mib']:.1f} MiB; {done} requests in {figures['seconds']:.0f} s", file=out, flush=True)
+    print(
+        f"\nmedian RSS just after warm-up {figures['rss_warm_mib']:.1f} MiB, at the end {figures['rss_end_mib']:.1f} "
+        f"MiB (growth {figures['growth_mib']:+.1f} MiB, {100 * figures['growth_share']:+.1f} %), peak "
+        f"{figures['rss_peak_mib']:.1f} MiB; {done} requests in {figures['seconds']:.0f} s",
+        file=out,
+        flush=True,
+    )
     return figures

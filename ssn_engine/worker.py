@@ -32,8 +32,16 @@ from .framing import EmptyAlphaError
 from .hemisphere import render_light_map
 from .light_map import PRESETS, LightMap, LightMapError, preset
 from .methods import LoadedMethod, ModelError
-from .protocol import (PROTOCOL_VERSION, Buffer, BufferSpec, ProtocolError, read_buffers, read_header, skip,
-                       write_message)
+from .protocol import (
+    PROTOCOL_VERSION,
+    Buffer,
+    BufferSpec,
+    ProtocolError,
+    read_buffers,
+    read_header,
+    skip,
+    write_message,
+)
 from .session import ShadowSession, no_shadow_reason
 
 MAX_SESSIONS = 8
@@ -69,7 +77,7 @@ def _u8(image: np.ndarray) -> Buffer:
 def _camera(camera: Any) -> tuple[float, float]:
     """set_cutout's optional ``camera``: {"horizon": canvas row, "fov": degrees (default 45)}."""
     if not isinstance(camera, dict) or not isinstance(camera.get("horizon"), (int, float)):
-        raise RequestError("BadRequest", "camera: expected {\"horizon\": ROW, \"fov\": DEGREES}")
+        raise RequestError("BadRequest", 'camera: expected {"horizon": ROW, "fov": DEGREES}')
     fov = camera.get("fov", DEFAULT_FOV)
     if not isinstance(fov, (int, float)) or not 1.0 <= fov <= 170.0:
         raise RequestError("BadRequest", f"camera.fov: expected 1 to 170 degrees, got {fov!r}")
@@ -229,21 +237,30 @@ class Worker:
             raise RequestError("BadRequest", f"cmd: unknown command {cmd!r}")
         total = sum(s.nbytes for s in specs)
         if total > MAX_REQUEST_BYTES:
-            raise RequestError("BadRequest", f"request: {total} bytes of buffers, above the worker's limit of "
-                                             f"{MAX_REQUEST_BYTES / 2**30:g} GiB ({MAX_REQUEST_BYTES} bytes)")
+            raise RequestError(
+                "BadRequest",
+                f"request: {total} bytes of buffers, above the worker's limit of "
+                f"{MAX_REQUEST_BYTES / 2**30:g} GiB ({MAX_REQUEST_BYTES} bytes)",
+            )
         allowed = REQUEST_BUFFERS.get(cmd, ())
         extra = [s.name for s in specs if s.name not in allowed]
         if extra:
-            raise RequestError("BadRequest", f"{cmd}: unexpected buffer {extra[0]!r}"
-                               + (f"; it takes {', '.join(allowed)}" if allowed else "; it takes none"))
+            raise RequestError(
+                "BadRequest",
+                f"{cmd}: unexpected buffer {extra[0]!r}"
+                + (f"; it takes {', '.join(allowed)}" if allowed else "; it takes none"),
+            )
         for spec in specs:
             if spec.name == "alpha":
                 if len(spec.shape) != 2:
                     raise RequestError("BadRequest", f"alpha: expected a 2D buffer, got shape {list(spec.shape)}")
                 h, w = spec.shape
                 if max(h, w) > MAX_CANVAS_SIDE or h * w > MAX_CANVAS_PIXELS:
-                    raise RequestError("BadRequest", f"alpha: a {w} x {h} canvas is above the worker's limit of "
-                                       f"{MAX_CANVAS_SIDE} pixels a side and {MAX_CANVAS_PIXELS / 1e6:.0f} megapixels")
+                    raise RequestError(
+                        "BadRequest",
+                        f"alpha: a {w} x {h} canvas is above the worker's limit of "
+                        f"{MAX_CANVAS_SIDE} pixels a side and {MAX_CANVAS_PIXELS / 1e6:.0f} megapixels",
+                    )
 
     def serve(self, reader: BinaryIO, writer: BinaryIO, token: str | None = None) -> bool:
         """Answer requests until the stream ends (False) or a shutdown (True). With a ``token``, the first
@@ -265,8 +282,11 @@ class Worker:
             rid = header.get("id")
             if not authorised:
                 given = header.get("token")
-                if header.get("cmd") != "auth" or not isinstance(given, str) or \
-                        not hmac.compare_digest(given.encode(), token.encode()):
+                if (
+                    header.get("cmd") != "auth"
+                    or not isinstance(given, str)
+                    or not hmac.compare_digest(given.encode(), token.encode())
+                ):
                     _refuse(writer, rid, "Unauthorized", "this worker needs its token: send auth first")
                     return False
                 authorised = True
@@ -312,8 +332,13 @@ def serve_stdio(loaded: LoadedMethod) -> None:
     Worker(loaded).serve(reader, writer)
 
 
-def serve_tcp(loaded: LoadedMethod, port: int = 0, announce: Any = None, token: str | None = None,
-              idle_timeout: float | None = None) -> None:
+def serve_tcp(
+    loaded: LoadedMethod,
+    port: int = 0,
+    announce: Any = None,
+    token: str | None = None,
+    idle_timeout: float | None = None,
+) -> None:
     """Serve one connection at a time on 127.0.0.1:``port``. The first line on ``announce`` (stdout) names the
     port and the per-start token (random unless given) that each connection's ``auth`` must carry. With
     ``idle_timeout`` (seconds) the worker exits when no connection comes for that long, and drops a connection

@@ -51,8 +51,11 @@ def _prepare(folder: Path) -> None:
     (folder / "notes.png").write_text("not an image")
     (folder / "truncated.png").write_bytes((folder / "cutout.png").read_bytes()[:60])
     (folder / "broken.json").write_text("{broken")
-    (folder / "far.json").write_text(json.dumps({"format": "ssn-shadow-elm", "version": 1, "lights": [
-        {"u": 2, "v": 0.5, "softness": 0.01, "intensity": 1}]}))
+    (folder / "far.json").write_text(
+        json.dumps(
+            {"format": "ssn-shadow-elm", "version": 1, "lights": [{"u": 2, "v": 0.5, "softness": 0.01, "intensity": 1}]}
+        )
+    )
     (folder / "dark.json").write_text(json.dumps({"format": "ssn-shadow-elm", "version": 1, "lights": []}))
     (folder / "edits.json").write_text(json.dumps({"op": "grow"}))
     (folder / "layer.png").write_bytes(b"the user's old layer")
@@ -71,11 +74,12 @@ CLI_CASES = [
     ("`--layer` is the cutout", ["render", "cutout.png", "--layer", "cutout.png"]),
     ("`--layer` is a hard link to the cutout", ["render", "cutout.png", "--layer", "hardlink.png"]),
     ("`--composite` is the background", ["render", "cutout.png", "--composite", "bg.png", "--background", "bg.png"]),
-    ("`--layer` and `--composite` the same path", ["render", "cutout.png", "--layer", "o.png", "--composite",
-                                                   "o.png"]),
+    ("`--layer` and `--composite` the same path", ["render", "cutout.png", "--layer", "o.png", "--composite", "o.png"]),
     ("output folder missing", ["render", "cutout.png", "--layer", "layer.png", "--composite", "no/c.png"]),
-    ("background of another size", ["render", "cutout.png", "--layer", "layer.png", "--composite", "c.png",
-                                     "--background", "small_bg.png"]),
+    (
+        "background of another size",
+        ["render", "cutout.png", "--layer", "layer.png", "--composite", "c.png", "--background", "small_bg.png"],
+    ),
     ("background not an image", ["render", "cutout.png", "--composite", "c.png", "--background", "notes.png"]),
     ("light map not JSON", ["render", "cutout.png", "--layer", "out.png", "--light-map", "broken.json"]),
     ("light outside the map", ["render", "cutout.png", "--layer", "out.png", "--light-map", "far.json"]),
@@ -117,8 +121,11 @@ def cli_rows() -> list[tuple[str, str, str, str]]:
             cwd = os.getcwd()
             os.chdir(folder)
             try:
-                with contextlib.redirect_stderr(err), contextlib.redirect_stdout(io.StringIO()), \
-                        (_full_disk() if "disk full" in label else contextlib.nullcontext()):
+                with (
+                    contextlib.redirect_stderr(err),
+                    contextlib.redirect_stdout(io.StringIO()),
+                    _full_disk() if "disk full" in label else contextlib.nullcontext(),
+                ):
                     try:
                         code = cli.main(argv + ["--method", "geometric"])
                     except SystemExit as exc:  # argparse's usage errors
@@ -149,28 +156,73 @@ def worker_rows() -> list[tuple[str, str, str, str]]:
     cases = [
         ("a line that is not JSON", b"hello world\n", None),
         ("unknown command", _message({"id": 1, "cmd": "launch"}), None),
-        ("unknown dtype", _message({"id": 1, "cmd": "set_cutout", "buffers": [entry((2, 2), "int64", 32)]},
-                                   bytes(32)), None),
-        ("`nbytes` that the shape does not need", _message({"id": 1, "cmd": "set_cutout", "buffers": [
-            entry((2, 2), nbytes=5)]}, bytes(5)), None),
-        ("a header declaring a 10 GB buffer (never sent)", _message({"id": 1, "cmd": "set_cutout", "buffers": [
-            entry((100000, 100000))]}), None),
-        ("a canvas above 32768 pixels a side", _message({"id": 1, "cmd": "set_cutout", "buffers": [
-            entry((1, 40000))]}, bytes(40000)), None),
-        ("a buffer the command does not take", _message({"id": 1, "cmd": "render", "buffers": [
-            entry((2, 2), name="layer")]}, bytes(4)), None),
+        (
+            "unknown dtype",
+            _message({"id": 1, "cmd": "set_cutout", "buffers": [entry((2, 2), "int64", 32)]}, bytes(32)),
+            None,
+        ),
+        (
+            "`nbytes` that the shape does not need",
+            _message({"id": 1, "cmd": "set_cutout", "buffers": [entry((2, 2), nbytes=5)]}, bytes(5)),
+            None,
+        ),
+        (
+            "a header declaring a 10 GB buffer (never sent)",
+            _message({"id": 1, "cmd": "set_cutout", "buffers": [entry((100000, 100000))]}),
+            None,
+        ),
+        (
+            "a canvas above 32768 pixels a side",
+            _message({"id": 1, "cmd": "set_cutout", "buffers": [entry((1, 40000))]}, bytes(40000)),
+            None,
+        ),
+        (
+            "a buffer the command does not take",
+            _message({"id": 1, "cmd": "render", "buffers": [entry((2, 2), name="layer")]}, bytes(4)),
+            None,
+        ),
         ("empty alpha", _message({"id": 1, "cmd": "set_cutout", "buffers": [entry((4, 4))]}, bytes(16)), None),
         ("unknown cutout", _message({"id": 1, "cmd": "render", "cutout": "c999", "preset": "softbox"}), None),
-        ("light map with a light outside the map", _message({"id": 1, "cmd": "render", "cutout": "c1",
-                                                             "light_map": json.loads(
-            '{"format": "ssn-shadow-elm", "version": 1, "lights": [{"u": 2, "v": 0.5, "softness": 0.01, '
-            '"intensity": 1}]}')}), "setup"),
-        ("light map without lights", _message({"id": 1, "cmd": "render", "cutout": "c1", "light_map": {
-            "format": "ssn-shadow-elm", "version": 1, "lights": []}}), "setup"),
-        ("AO edit with an unknown op", _message({"id": 1, "cmd": "edit_ao", "cutout": "c1",
-                                                 "edits": [{"op": "blur"}]}), "setup"),
-        ("camera with a field of view of 0", _message({"id": 1, "cmd": "set_cutout", "camera": {
-            "horizon": 10, "fov": 0}, "buffers": [entry(alpha.shape)]}, alpha.tobytes()), None),
+        (
+            "light map with a light outside the map",
+            _message(
+                {
+                    "id": 1,
+                    "cmd": "render",
+                    "cutout": "c1",
+                    "light_map": json.loads(
+                        '{"format": "ssn-shadow-elm", "version": 1, "lights": [{"u": 2, "v": 0.5, "softness": 0.01, '
+                        '"intensity": 1}]}'
+                    ),
+                }
+            ),
+            "setup",
+        ),
+        (
+            "light map without lights",
+            _message(
+                {
+                    "id": 1,
+                    "cmd": "render",
+                    "cutout": "c1",
+                    "light_map": {"format": "ssn-shadow-elm", "version": 1, "lights": []},
+                }
+            ),
+            "setup",
+        ),
+        (
+            "AO edit with an unknown op",
+            _message({"id": 1, "cmd": "edit_ao", "cutout": "c1", "edits": [{"op": "blur"}]}),
+            "setup",
+        ),
+        (
+            "camera with a field of view of 0",
+            _message(
+                {"id": 1, "cmd": "set_cutout", "camera": {"horizon": 10, "fov": 0}, "buffers": [entry(alpha.shape)]},
+                alpha.tobytes(),
+            ),
+            None,
+        ),
         ("loopback connection without the token", _message({"id": 1, "cmd": "hello"}), "token"),
     ]
     rows = []

@@ -48,8 +48,14 @@ def main(argv: list[str] | None = None) -> int:
             light = LightMap([GaussianLight(u, 1.0 - elevation / 90.0, 0.002, 1.0)])
             row.append(np.rint(store.shadow(v.occlusion, render_light_map(light, store.meta["elm_rows"])) * 255))
         shadows.append(np.stack(row).astype(np.uint8))
-    np.savez_compressed(args.out, masks=np.stack(masks), shadows=np.stack(shadows), cameras=np.array(cameras),
-                        suns=np.array(SUNS), names=np.array(names))
+    np.savez_compressed(
+        args.out,
+        masks=np.stack(masks),
+        shadows=np.stack(shadows),
+        cameras=np.array(cameras),
+        suns=np.array(SUNS),
+        names=np.array(names),
+    )
     print(f"wrote {args.out}: {len(picked)} views x {len(SUNS)} suns, {Path(args.out).stat().st_size / 1e3:.0f} kB")
     return 0
 

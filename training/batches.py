@@ -72,8 +72,9 @@ def view_key(store, i: int) -> tuple:
     return (info["mesh_id"], float(info["yaw"]), float(info["pitch"]))
 
 
-def load_view(store, i: int, resolution: int, with_occ: bool = True, with_card: bool = False,
-              predict_ao=None) -> CachedView:
+def load_view(
+    store, i: int, resolution: int, with_occ: bool = True, with_card: bool = False, predict_ao=None
+) -> CachedView:
     """Load view ``i`` of ``store`` and bring it to ``resolution`` (``with_occ`` False: no bases, for AOP;
     ``with_card``: the card's bases for the default and the true camera; ``predict_ao``: a function of masks
     (B, R, R) -> AO maps whose prediction the view keeps)."""
@@ -124,8 +125,18 @@ class ViewCache:
     """Views of one split at resolution R, loaded lazily, at most ``max_views`` kept; ``balance_kinds``: loaded and
     drawn so that every kind (object, human, animal) is equally likely, however many views it has."""
 
-    def __init__(self, store, split: str, resolution: int, max_views: int = 300, kind: str | None = None,
-                 with_occ: bool = True, balance_kinds: bool = False, with_card: bool = False, predict_ao=None):
+    def __init__(
+        self,
+        store,
+        split: str,
+        resolution: int,
+        max_views: int = 300,
+        kind: str | None = None,
+        with_occ: bool = True,
+        balance_kinds: bool = False,
+        with_card: bool = False,
+        predict_ao=None,
+    ):
         self.resolution, self.max_views, self.split, self.kind = resolution, max_views, split, kind
         self.with_occ, self.balance_kinds, self.with_card = with_occ, balance_kinds, with_card
         self.predict_ao = predict_ao
@@ -204,17 +215,32 @@ def mirror(batch: Batch, which: np.ndarray) -> Batch:
     the conventions' azimuth a -> -a maps ELM column j to W - 1 - j (u -> 1 - u), so a mirrored sample is exactly
     the mirrored scene under the mirrored light: a second, equally valid training sample.
     """
+
     def flip(x: np.ndarray) -> np.ndarray:
         return np.where(which.reshape((-1,) + (1,) * (x.ndim - 1)), x[..., ::-1], x)
 
     lights = replace(batch.lights, u=np.where(which[:, None], 1.0 - batch.lights.u, batch.lights.u))
     maybe = lambda x: None if x is None else flip(x)
-    return replace(batch, mask=flip(batch.mask), ao=flip(batch.ao), elm=flip(batch.elm), target=flip(batch.target),
-                   lights=lights, card=maybe(batch.card), ao_pred=maybe(batch.ao_pred))
+    return replace(
+        batch,
+        mask=flip(batch.mask),
+        ao=flip(batch.ao),
+        elm=flip(batch.elm),
+        target=flip(batch.target),
+        lights=lights,
+        card=maybe(batch.card),
+        ao_pred=maybe(batch.ao_pred),
+    )
 
 
-def make_batch(views: list[CachedView], lights: LightBatch, elm_rows: int, weights: np.ndarray,
-               target: str | None = "shadow", true_camera: np.ndarray | None = None) -> Batch:
+def make_batch(
+    views: list[CachedView],
+    lights: LightBatch,
+    elm_rows: int,
+    weights: np.ndarray,
+    target: str | None = "shadow",
+    true_camera: np.ndarray | None = None,
+) -> Batch:
     """Ground truth for ``views[b]`` under light map ``b`` (``target`` None: no shadow target, for AOP). Views
     with card bases also get the card's shadow, traced with the true camera where ``true_camera[b]``."""
     elm_hb = render_lights(lights, elm_rows)
@@ -258,9 +284,19 @@ class BatchSampler:
     ``true_camera``. The cache rotates ``swap`` views every ``swap_every`` batches (loading a view with its card
     bases costs about a second)."""
 
-    def __init__(self, cache: ViewCache, batch: int, target: str | None = "shadow", elms_per_view: int = 2,
-                 swap: int = 1, max_lights: int = 50, flip: bool = False, lights: dict[str, float] | None = None,
-                 true_camera: float = 0.5, swap_every: int = 1):
+    def __init__(
+        self,
+        cache: ViewCache,
+        batch: int,
+        target: str | None = "shadow",
+        elms_per_view: int = 2,
+        swap: int = 1,
+        max_lights: int = 50,
+        flip: bool = False,
+        lights: dict[str, float] | None = None,
+        true_camera: float = 0.5,
+        swap_every: int = 1,
+    ):
         self.cache, self.batch, self.target = cache, batch, target
         self.elms_per_view, self.swap, self.max_lights, self.flip = elms_per_view, swap, max_lights, flip
         self.lights, self.true_camera, self.swap_every, self.calls = lights, true_camera, max(1, swap_every), 0
@@ -278,6 +314,7 @@ class BatchSampler:
         else:
             lights = sample_lights(rng, self.batch, self.max_lights)
         true_camera = rng.random(self.batch) < self.true_camera
-        batch = make_batch(views, lights, self.cache.store.meta["elm_rows"], self.cache.weights, self.target,
-                           true_camera)
+        batch = make_batch(
+            views, lights, self.cache.store.meta["elm_rows"], self.cache.weights, self.target, true_camera
+        )
         return mirror(batch, rng.random(self.batch) < 0.5) if self.flip else batch

@@ -31,6 +31,7 @@ def pick_items(count: int) -> list[sources.Item]:
         import anny  # noqa: F401
 
         from training.data.humans import human_items
+
         picked.append(human_items(1, 0)[0])
     except ImportError:
         pass
@@ -47,8 +48,21 @@ def stages(mesh, topo, yaw, pitch, fov, n, hb, samples, rng) -> dict[str, float]
     dirs = np.ascontiguousarray(cam.to_world(stratified_directions(hb, samples, rng)).reshape(-1, samples, 3))
     normals = meshes.face_normals(v, mesh.faces)
     t["setup (camera, directions, normals)"] = time.perf_counter() - t0
-    args = (v, normals, topo.edges, topo.ptr, topo.inc_face, topo.inc_dir, dirs, rows.z, rows.x0, rows.dx,
-            rows.rowmap, rows.first, n)
+    args = (
+        v,
+        normals,
+        topo.edges,
+        topo.ptr,
+        topo.inc_face,
+        topo.inc_dir,
+        dirs,
+        rows.z,
+        rows.x0,
+        rows.dx,
+        rows.rowmap,
+        rows.first,
+        n,
+    )
     times = []
     for stage in (1, 2, 3):
         t0 = time.perf_counter()
@@ -118,12 +132,13 @@ def main(argv: list[str] | None = None) -> None:
     specs = view_specs()
     pick = np.linspace(0, len(specs) - 1, args.views).round().astype(int)
     # compile every specialisation once
-    rb.render_view(built[0][1], built[0][2], 0.0, 15.0, 45.0, 32, args.elm_rows, args.samples,
-                   np.random.default_rng(0))
+    rb.render_view(built[0][1], built[0][2], 0.0, 15.0, 45.0, 32, args.elm_rows, args.samples, np.random.default_rng(0))
     stages(built[0][1], built[0][2], 0.0, 15.0, 45.0, 32, args.elm_rows, args.samples, np.random.default_rng(0))
     for n in args.res:
-        print(f"\nN = {n}, grid {args.elm_rows} x {2 * args.elm_rows}, {args.samples} directions per texel, "
-              f"{args.threads} thread(s)")
+        print(
+            f"\nN = {n}, grid {args.elm_rows} x {2 * args.elm_rows}, {args.samples} directions per texel, "
+            f"{args.threads} thread(s)"
+        )
         print(f"{'mesh':34s} {'faces':>6s} {'s/view':>7s} {'MiB/view':>8s}")
         all_t, total = [], {}
         for it, mesh, topo in built:
@@ -138,8 +153,9 @@ def main(argv: list[str] | None = None) -> None:
                 size.append(s.nbytes + d.nbytes + 2 * 2 * n * n)
             all_t += per
             print(f"{it.id:34s} {len(mesh.faces):6d} {np.mean(per):7.2f} {np.mean(size) / 2**20:8.2f}")
-            for key, val in stages(mesh, topo, *specs[pick[len(pick) // 2]], 45.0, n, args.elm_rows,
-                                   args.samples, np.random.default_rng(1)).items():
+            for key, val in stages(
+                mesh, topo, *specs[pick[len(pick) // 2]], 45.0, n, args.elm_rows, args.samples, np.random.default_rng(1)
+            ).items():
                 total[key] = total.get(key, 0.0) + val
         print(f"{'mean':34s} {'':6s} {np.mean(all_t):7.2f}")
         if args.embree:

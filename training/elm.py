@@ -32,8 +32,14 @@ class LightBatch:
     def light_map(self, b: int) -> LightMap:
         """Light map ``b`` as the engine's :class:`LightMap`."""
         k = np.flatnonzero(self.active[b])
-        return LightMap([GaussianLight(float(self.u[b, i]), float(self.v[b, i]), float(self.softness[b, i]),
-                                       float(self.intensity[b, i])) for i in k])
+        return LightMap(
+            [
+                GaussianLight(
+                    float(self.u[b, i]), float(self.v[b, i]), float(self.softness[b, i]), float(self.intensity[b, i])
+                )
+                for i in k
+            ]
+        )
 
 
 def sample_lights(rng: np.random.Generator, batch: int, max_lights: int = MAX_LIGHTS) -> LightBatch:
@@ -62,9 +68,13 @@ TRAIN_MIX = {"sun": 0.35, "two": 0.2, "sky": 0.15, "table1": 0.3}  # the trainin
 def _padded(u, v, softness, intensity, active, max_lights: int) -> LightBatch:
     """(B, k) light arrays padded to ``max_lights`` absent lights (intensity 0, a valid softness)."""
     width = ((0, 0), (0, max_lights - u.shape[1]))
-    return LightBatch(u=np.pad(u, width), v=np.pad(v, width),
-                      softness=np.pad(softness, width, constant_values=SUN_SOFTNESS[1]),
-                      intensity=np.pad(intensity * active, width), active=np.pad(active, width))
+    return LightBatch(
+        u=np.pad(u, width),
+        v=np.pad(v, width),
+        softness=np.pad(softness, width, constant_values=SUN_SOFTNESS[1]),
+        intensity=np.pad(intensity * active, width),
+        active=np.pad(active, width),
+    )
 
 
 def sample_family(rng: np.random.Generator, batch: int, family: str, max_lights: int = MAX_LIGHTS) -> LightBatch:
@@ -91,8 +101,9 @@ def sample_family(rng: np.random.Generator, batch: int, family: str, max_lights:
     return _padded(rng.random((batch, k)), v, softness, intensity, active, max_lights)
 
 
-def sample_mixture(rng: np.random.Generator, batch: int, mix: dict[str, float],
-                   max_lights: int = MAX_LIGHTS) -> LightBatch:
+def sample_mixture(
+    rng: np.random.Generator, batch: int, mix: dict[str, float], max_lights: int = MAX_LIGHTS
+) -> LightBatch:
     """Each light map from a family drawn with the probabilities ``mix`` (e.g. :data:`TRAIN_MIX`)."""
     names = list(mix)
     p = np.array([mix[f] for f in names], float)

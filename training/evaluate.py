@@ -37,8 +37,11 @@ from .progress import Progress
 
 GROUPS = {"objects": ("object", "animal"), "humans": ("human",)}
 PAPER = {
-    "objects": {"Non-inv-SSN": (0.0926, 0.0894, 0.7521, 0.2913), "SSN": (0.0561, 0.0506, 0.8192, 0.0616),
-                "GT-AO-SSN": (0.0342, 0.0304, 0.9171, 0.0461)},
+    "objects": {
+        "Non-inv-SSN": (0.0926, 0.0894, 0.7521, 0.2913),
+        "SSN": (0.0561, 0.0506, 0.8192, 0.0616),
+        "GT-AO-SSN": (0.0342, 0.0304, 0.9171, 0.0461),
+    },
     "humans": {"SSN": (0.0194, 0.0163, 0.8943, 0.0467), "GT-AO-SSN": (0.0150, 0.0127, 0.9316, 0.0403)},
 }
 
@@ -47,8 +50,12 @@ def parse_args(argv: list[str] | None = None) -> argparse.Namespace:
     p = argparse.ArgumentParser(prog="python -m training.evaluate", description=__doc__.split("\n")[0])
     p.add_argument("--data", default="data/ssn128")
     p.add_argument("--split", default="test")
-    p.add_argument("--aop", nargs="+", help="AOP checkpoint(s), several: the mean of their AO maps (without --aop "
-                                         "and --sr: the geometric baseline alone)")
+    p.add_argument(
+        "--aop",
+        nargs="+",
+        help="AOP checkpoint(s), several: the mean of their AO maps (without --aop "
+        "and --sr: the geometric baseline alone)",
+    )
     p.add_argument("--sr", help="SR checkpoint (shadow target)")
     p.add_argument("--noninv", help="SR checkpoint trained on irradiance (Non-inv-SSN)")
     p.add_argument("--no-geometric", action="store_true")
@@ -56,10 +63,17 @@ def parse_args(argv: list[str] | None = None) -> argparse.Namespace:
     p.add_argument("--n-elms", type=int, default=64, help="size of the fixed pool of random ELMs")
     p.add_argument("--per-view", type=int, default=2, help="ELMs per view")
     p.add_argument("--max-views", type=int, default=0, help="at most this many views per group (evenly spaced); 0: all")
-    p.add_argument("--floor", type=float, default=0.0,
-                   help="output floor applied to the networks' shadows (the shipped model.json's output_floor)")
-    p.add_argument("--mirror-average", action="store_true",
-                   help="run every network as training.model.MirrorAverage (export --mirror-average)")
+    p.add_argument(
+        "--floor",
+        type=float,
+        default=0.0,
+        help="output floor applied to the networks' shadows (the shipped model.json's output_floor)",
+    )
+    p.add_argument(
+        "--mirror-average",
+        action="store_true",
+        help="run every network as training.model.MirrorAverage (export --mirror-average)",
+    )
     p.add_argument("--seed", type=int, default=2021)
     p.add_argument("--threads", type=int, default=2)
     p.add_argument("--out", default="runs/eval")
@@ -83,8 +97,7 @@ def pick_views(ids: list[int], max_views: int) -> list[int]:
 class Networks:
     """AOP and SR (and optionally Non-inv SR) checkpoints, run at their resolution R on N x N frames."""
 
-    def __init__(self, aop: list[str], sr: str, noninv: str | None, floor: float = 0.0,
-                 mirror_average: bool = False):
+    def __init__(self, aop: list[str], sr: str, noninv: str | None, floor: float = 0.0, mirror_average: bool = False):
         def load(paths: list[str]):
             net, cks = load_models(paths)
             return (MirrorAverage(net) if mirror_average else net), cks
@@ -94,10 +107,11 @@ class Networks:
         self.sr, (ck_sr,) = load([sr])
         self.noninv = load([noninv])[0] if noninv else None
         self.r = cks[0]["unet"]["resolution"]
-        self.info = {"aop": [{"path": p, "step": ck["step"], "samples": ck["samples"]} for p, ck in zip(aop, cks,
-                                                                                                        strict=True)],
-                     "sr": {"path": sr, "step": ck_sr["step"], "samples": ck_sr["samples"]},
-                     "mirror_average": mirror_average}
+        self.info = {
+            "aop": [{"path": p, "step": ck["step"], "samples": ck["samples"]} for p, ck in zip(aop, cks, strict=True)],
+            "sr": {"path": sr, "step": ck_sr["step"], "samples": ck_sr["samples"]},
+            "mirror_average": mirror_average,
+        }
 
     @torch.no_grad()
     def predict_ao(self, masks: np.ndarray) -> np.ndarray:
@@ -107,8 +121,14 @@ class Networks:
         return np.clip(resample_frames(ao, n), 0, 1)
 
     @torch.no_grad()
-    def render(self, masks: np.ndarray, ao: np.ndarray, elm16: np.ndarray, elm_hb: np.ndarray | None = None,
-               noninv: bool = False) -> np.ndarray:
+    def render(
+        self,
+        masks: np.ndarray,
+        ao: np.ndarray,
+        elm16: np.ndarray,
+        elm_hb: np.ndarray | None = None,
+        noninv: bool = False,
+    ) -> np.ndarray:
         from ssn_engine.hemisphere import network_elm
         from ssn_engine.methods.onnx_ssn import apply_floor
 
@@ -137,9 +157,18 @@ def evaluate(args: argparse.Namespace, store=None) -> dict:
     geo = None if args.no_geometric else GeometricCard(resolution=n_px)
     methods = (["geometric"] if geo else []) + (["Non-inv-SSN"] if nets and nets.noninv else [])
     methods += ["SSN", "GT-AO-SSN"] if nets else []
-    results: dict = {"methods": methods, "groups": {}, "n_elms": args.n_elms, "per_view": args.per_view,
-                     "data": str(args.data), "N": n_px, "R": nets.r if nets else None, "split": args.split,
-                     "floor": args.floor, "networks": nets.info if nets else {}}
+    results: dict = {
+        "methods": methods,
+        "groups": {},
+        "n_elms": args.n_elms,
+        "per_view": args.per_view,
+        "data": str(args.data),
+        "N": n_px,
+        "R": nets.r if nets else None,
+        "split": args.split,
+        "floor": args.floor,
+        "networks": nets.info if nets else {},
+    }
     cache_path = Path(args.geo_cache) if args.geo_cache else None
     geo_cache = dict(np.load(cache_path)) if cache_path and cache_path.is_file() else {}
     grid_rows = []
@@ -188,10 +217,16 @@ def evaluate(args: argparse.Namespace, store=None) -> dict:
         by_pitch = {}
         for q in sorted(set(pitches)):
             rows = [b for b, x in enumerate(pitches) if x == q]
-            by_pitch[f"{q:g}"] = {"images": len(rows),
-                                  "metrics": {m: mean_metrics([per[m][b] for b in rows]) for m in methods}}
-        results["groups"][group] = {"views": len(ids), "images": len(ids) * args.per_view,
-                                    "metrics": {m: mean_metrics(per[m]) for m in methods}, "by_pitch": by_pitch}
+            by_pitch[f"{q:g}"] = {
+                "images": len(rows),
+                "metrics": {m: mean_metrics([per[m][b] for b in rows]) for m in methods},
+            }
+        results["groups"][group] = {
+            "views": len(ids),
+            "images": len(ids) * args.per_view,
+            "metrics": {m: mean_metrics(per[m]) for m in methods},
+            "by_pitch": by_pitch,
+        }
     results["seconds"] = time.perf_counter() - t0
     if cache_path:
         cache_path.parent.mkdir(parents=True, exist_ok=True)
@@ -227,8 +262,11 @@ class AOFailures:
 def pitch_table(results: dict) -> list[str]:
     """ZNCC and DSSIM per camera pitch (the views' pitch: 0, 15, 30 degrees)."""
     methods = results["methods"]
-    lines = ["### By camera pitch (ZNCC / DSSIM)\n", "| group | pitch | images | " + " | ".join(methods) + " |",
-             "|---" * (3 + len(methods)) + "|"]
+    lines = [
+        "### By camera pitch (ZNCC / DSSIM)\n",
+        "| group | pitch | images | " + " | ".join(methods) + " |",
+        "|---" * (3 + len(methods)) + "|",
+    ]
     for group, r in results["groups"].items():
         for q, row in r.get("by_pitch", {}).items():
             cells = " | ".join(f"{row['metrics'][m]['ZNCC']:.3f} / {row['metrics'][m]['DSSIM']:.3f}" for m in methods)
@@ -240,8 +278,10 @@ def tables_markdown(results: dict) -> str:
     """Our tables beside the paper's Tables 1 (objects) and 2 (humans)."""
     lines = []
     for group, r in results["groups"].items():
-        lines.append(f"### {group.capitalize()} ({r['views']} {results['split']} views x {results['per_view']} ELMs"
-                     f" = {r['images']} images)\n")
+        lines.append(
+            f"### {group.capitalize()} ({r['views']} {results['split']} views x {results['per_view']} ELMs"
+            f" = {r['images']} images)\n"
+        )
         lines.append("| Method | " + " | ".join(NAMES) + " | paper " + " | paper ".join(NAMES) + " |")
         lines.append("|---" * (1 + 2 * len(NAMES)) + "|")
         for m in results["methods"]:

@@ -30,14 +30,34 @@ SUN_AZIMUTH_U = 0.8  # the grid's sun: right of the camera's forward direction, 
 
 
 def add_arguments(p: argparse.ArgumentParser) -> None:
-    p.add_argument("--families", nargs="?", const=",".join(FAMILIES), default=None,
-                   help=f"evaluate by light family (comma list of {', '.join(FAMILIES)}; default all)")
-    p.add_argument("--model", action="append", default=[], metavar="NAME=DIR",
-                   help="--families: an installed model folder to evaluate (repeat for several)")
-    p.add_argument("--with-camera", action="append", default=[], metavar="NAME",
-                   help="--families: also evaluate NAME (a --model name or 'geometric') with the true camera")
-    p.add_argument("--with-gt-ao", action="append", default=[], metavar="NAME",
-                   help="--families: also evaluate model NAME with the ground-truth AO")
+    p.add_argument(
+        "--families",
+        nargs="?",
+        const=",".join(FAMILIES),
+        default=None,
+        help=f"evaluate by light family (comma list of {', '.join(FAMILIES)}; default all)",
+    )
+    p.add_argument(
+        "--model",
+        action="append",
+        default=[],
+        metavar="NAME=DIR",
+        help="--families: an installed model folder to evaluate (repeat for several)",
+    )
+    p.add_argument(
+        "--with-camera",
+        action="append",
+        default=[],
+        metavar="NAME",
+        help="--families: also evaluate NAME (a --model name or 'geometric') with the true camera",
+    )
+    p.add_argument(
+        "--with-gt-ao",
+        action="append",
+        default=[],
+        metavar="NAME",
+        help="--families: also evaluate model NAME with the ground-truth AO",
+    )
 
 
 class Row:
@@ -108,16 +128,29 @@ def evaluate_families(args: argparse.Namespace, store=None) -> dict:
             gt = np.stack([store.shadow(v.occlusion, e) for e in elm_hb])
             preds = {r.label: r.predict(v.mask, aos[r.label], elm16, cam) for r in rows}
             for b in range(len(gt)):
-                rec = {"family": family, "kind": info["kind"], "pitch": float(info["pitch"]),
-                       "metrics": {lab: all_metrics(preds[lab][b], gt[b]) for lab in labels}}
+                rec = {
+                    "family": family,
+                    "kind": info["kind"],
+                    "pitch": float(info["pitch"]),
+                    "metrics": {lab: all_metrics(preds[lab][b], gt[b]) for lab in labels},
+                }
                 if family == "sun":
                     rec["sun"] = {lab: sun_geometry(preds[lab][b], gt[b], v.mask) for lab in labels}
                 records.append(rec)
         prog.update(j + 1, info["mesh_id"])
     prog.close()
     results = summarise(records, labels, families)
-    results.update({"split": args.split, "views": len(ids), "per_view": args.per_view, "N": n,
-                    "data": str(args.data), "seconds": time.perf_counter() - t0, "seed": args.seed})
+    results.update(
+        {
+            "split": args.split,
+            "views": len(ids),
+            "per_view": args.per_view,
+            "N": n,
+            "data": str(args.data),
+            "seconds": time.perf_counter() - t0,
+            "seed": args.seed,
+        }
+    )
     out = Path(args.out)
     out.mkdir(parents=True, exist_ok=True)
     (out / "families.json").write_text(json.dumps(results, indent=1))
@@ -164,25 +197,37 @@ def families_markdown(results: dict) -> str:
     labels = results["rows"]
     lines = []
     for family, fam in results["families"].items():
-        lines += [f"### {family} ({fam['images']} images)\n", "| row | " + " | ".join(NAMES) + " |",
-                  "|---" * (1 + len(NAMES)) + "|"]
+        lines += [
+            f"### {family} ({fam['images']} images)\n",
+            "| row | " + " | ".join(NAMES) + " |",
+            "|---" * (1 + len(NAMES)) + "|",
+        ]
         for lab in labels:
             m = fam["all"]["metrics"][lab]
             lines.append(f"| {lab} | " + " | ".join(f"{m[k]:.4f}" for k in NAMES) + " |")
-        groups = [(k, fam["kinds"][k]) for k in fam["kinds"]] + [(f"pitch {p}", fam["pitches"][p])
-                                                                 for p in fam["pitches"]]
-        lines += ["", "| ZNCC / DSSIM | " + " | ".join(f"{g} ({part['images']})" for g, part in groups) + " |",
-                  "|---" * (1 + len(groups)) + "|"]
+        groups = [(k, fam["kinds"][k]) for k in fam["kinds"]] + [
+            (f"pitch {p}", fam["pitches"][p]) for p in fam["pitches"]
+        ]
+        lines += [
+            "",
+            "| ZNCC / DSSIM | " + " | ".join(f"{g} ({part['images']})" for g, part in groups) + " |",
+            "|---" * (1 + len(groups)) + "|",
+        ]
         for lab in labels:
             cells = [f"{part['metrics'][lab]['ZNCC']:.3f} / {part['metrics'][lab]['DSSIM']:.3f}" for _, part in groups]
             lines.append(f"| {lab} | " + " | ".join(cells) + " |")
         if "geometry" in fam:
-            lines += ["", "| sun geometry | images | median direction error (deg) | median length ratio | "
-                          "ratio in [0.8, 1.25] |", "|---|---:|---:|---:|---:|"]
+            lines += [
+                "",
+                "| sun geometry | images | median direction error (deg) | median length ratio | ratio in [0.8, 1.25] |",
+                "|---|---:|---:|---:|---:|",
+            ]
             for lab in labels:
                 g = fam["geometry"][lab]
-                lines.append(f"| {lab} | {g['images']} | {g['median_direction_error']:.1f} | "
-                             f"{g['median_length_ratio']:.2f} | {g['ratio_within_0.8_1.25']:.0%} |")
+                lines.append(
+                    f"| {lab} | {g['images']} | {g['median_direction_error']:.1f} | "
+                    f"{g['median_length_ratio']:.2f} | {g['ratio_within_0.8_1.25']:.0%} |"
+                )
         lines.append("")
     return "\n".join(lines)
 

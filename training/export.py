@@ -87,13 +87,24 @@ def export_graph(net: nn.Module, module: str, resolution: int, path: Path, opset
     if module == "aop":
         args, names, out = (mask,), ["mask"], ["ao"]
     else:
-        args, names, out = (mask, torch.rand(2, 1, resolution, resolution), torch.rand(2, 16, 32)), \
-            ["mask", "ao", "elm"], ["shadow"]
+        args, names, out = (
+            (mask, torch.rand(2, 1, resolution, resolution), torch.rand(2, 16, 32)),
+            ["mask", "ao", "elm"],
+            ["shadow"],
+        )
         if takes_card(net):
             args, names = args + (torch.rand(2, 1, resolution, resolution),), names + ["card"]
     axes = {n: {0: "batch"} for n in names + out}
-    torch.onnx.export(Clamped(net, export_form=True).eval(), args, str(path), input_names=names, output_names=out,
-                      dynamic_axes=axes, opset_version=opset, dynamo=False)
+    torch.onnx.export(
+        Clamped(net, export_form=True).eval(),
+        args,
+        str(path),
+        input_names=names,
+        output_names=out,
+        dynamic_axes=axes,
+        opset_version=opset,
+        dynamo=False,
+    )
 
 
 def takes_card(net: nn.Module) -> bool:
@@ -224,9 +235,15 @@ def mesh_attribution(data: str) -> list[dict]:
         mesh = m["mesh"]
         p = mesh.get("params", {})
         if mesh["split"] in ("train", "val"):
-            rows.append({"id": mesh["id"], "split": mesh["split"], "licence": p.get("licence", "generated"),
-                         "attribution": p.get("attribution", "procedural / project-generated"),
-                         "source": p.get("source_repo", mesh.get("source", ""))})
+            rows.append(
+                {
+                    "id": mesh["id"],
+                    "split": mesh["split"],
+                    "licence": p.get("licence", "generated"),
+                    "attribution": p.get("attribution", "procedural / project-generated"),
+                    "source": p.get("source_repo", mesh.get("source", "")),
+                }
+            )
     return rows
 
 
@@ -234,48 +251,75 @@ def model_card(card: dict, attribution: list[dict], command: str) -> str:
     """The model card (markdown) shipped next to model.json."""
     ex = card["export"]
     lines = [
-        "# SSN shadow model (AOP + SR)", "",
+        "# SSN shadow model (AOP + SR)",
+        "",
         "The paper's Soft Shadow Network (Sheng et al., CVPR 2021) as two ONNX graphs for "
         "`ssn_engine.methods.onnx_ssn`: AOP (mask -> AO map A^(1/3)) and SR (mask, AO, 16 x 32 ELM -> shadow s,",
-        "the conventions' normalised inverse shadow).", "",
+        "the conventions' normalised inverse shadow).",
+        "",
         f"- Resolution R = {card['resolution']} (the engine resamples its 256 x 256 frames to R and back).",
     ]
     for m in ("aop", "sr"):
         r = ex[m]
-        runs = " and ".join(f"U-Net widths {w}, {st} steps ({n} samples, `{p}`)" for p, w, st, n in
-                            zip(r["checkpoints"], r["widths"], r["steps"], r["samples"], strict=True))
+        runs = " and ".join(
+            f"U-Net widths {w}, {st} steps ({n} samples, `{p}`)"
+            for p, w, st, n in zip(r["checkpoints"], r["widths"], r["steps"], r["samples"], strict=True)
+        )
         mean = f"the mean of {len(r['checkpoints'])} networks, " if len(r["checkpoints"]) > 1 else ""
         reused = f" (the graph of `{r['reused_from']}`, reused as it is)" if r.get("reused_from") else ""
-        lines.append(f"- {m.upper()}: {mean}{runs}{reused}, {r['weights']} weights, "
-                     f"{r['bytes'] / 1e6:.2f} MB, max abs diff to torch {r['max_abs_diff']:.1e}")
+        lines.append(
+            f"- {m.upper()}: {mean}{runs}{reused}, {r['weights']} weights, "
+            f"{r['bytes'] / 1e6:.2f} MB, max abs diff to torch {r['max_abs_diff']:.1e}"
+        )
     if card.get("card_input"):
-        lines.append("- Geometry-guided SR: it also takes the engine's geometric card shadow for the same light map "
-                     "(traced with the camera input when given, else the conventions' default camera) and outputs a "
-                     "correction of it, so the shadow's direction and length come from the card's geometry and the "
-                     f"network refines contact, softness and shape. Light maps in training: {card['lights']}.")
+        lines.append(
+            "- Geometry-guided SR: it also takes the engine's geometric card shadow for the same light map "
+            "(traced with the camera input when given, else the conventions' default camera) and outputs a "
+            "correction of it, so the shadow's direction and length come from the card's geometry and the "
+            f"network refines contact, softness and shape. Light maps in training: {card['lights']}."
+        )
     if card.get("output_floor"):
-        lines.append(f"- Output floor {card['output_floor']}: the engine maps s to (s - floor) / (1 - floor), clipped "
-                     "(removes the network's faint noise; chosen on the validation split, docs/benchmark.md).")
+        lines.append(
+            f"- Output floor {card['output_floor']}: the engine maps s to (s - floor) / (1 - floor), clipped "
+            "(removes the network's faint noise; chosen on the validation split, docs/benchmark.md)."
+        )
     if card.get("mirror_average"):
-        lines.append("- Mirror-averaged graphs: each runs its network on the input and on its mirror image (frames "
-                     "in x, the ELM in azimuth) and averages (training.model.MirrorAverage).")
+        lines.append(
+            "- Mirror-averaged graphs: each runs its network on the input and on its mirror image (frames "
+            "in x, the ELM in azimuth) and averages (training.model.MirrorAverage)."
+        )
     if card.get("sr_training"):
         lines.append(f"- SR training: {card['sr_training']}.")
     t = ex["timing"]
-    lines += [f"- SR latency (onnxruntime, median, 2-core CPU): {t['sr_at_R_ms']:.1f} ms at R, "
-              f"{t['sr_engine_256_ms']:.1f} ms for a 256 frame including resampling.", "",
-              "## Training data", "",
-              f"Shadow bases of `{card.get('training_data')}` (training/data, `python -m training.make_dataset`), "
-              "train split; soft shadows from random light maps on the fly (Table 1, or the mixture of light families "
-              "of `training.elm`), exact linear algebra on the bases.",
-              ""]
+    lines += [
+        f"- SR latency (onnxruntime, median, 2-core CPU): {t['sr_at_R_ms']:.1f} ms at R, "
+        f"{t['sr_engine_256_ms']:.1f} ms for a 256 frame including resampling.",
+        "",
+        "## Training data",
+        "",
+        f"Shadow bases of `{card.get('training_data')}` (training/data, `python -m training.make_dataset`), "
+        "train split; soft shadows from random light maps on the fly (Table 1, or the mixture of light families "
+        "of `training.elm`), exact linear algebra on the bases.",
+        "",
+    ]
     if "metrics" in card:
         from .evaluate import tables_markdown
 
         lines += ["## Test metrics (`python -m training.evaluate`)", "", tables_markdown(card["metrics"]), ""]
-    lines += ["## Reproduce", "", "```", command, "```", "", "## Mesh attribution", "",
-              "The training meshes are CC BY (attribution below), CC0 or public domain. Per mesh:", "",
-              "| mesh | licence | attribution | source |", "|---|---|---|---|"]
+    lines += [
+        "## Reproduce",
+        "",
+        "```",
+        command,
+        "```",
+        "",
+        "## Mesh attribution",
+        "",
+        "The training meshes are CC BY (attribution below), CC0 or public domain. Per mesh:",
+        "",
+        "| mesh | licence | attribution | source |",
+        "|---|---|---|---|",
+    ]
     lines += [f"| {a['id']} | {a['licence']} | {a['attribution']} | {a['source']} |" for a in attribution]
     return "\n".join(lines) + "\n"
 
@@ -289,8 +333,10 @@ def training_summary(path: Path, ck: dict) -> str:
     text = f"{minutes}{ck['step']} steps, {ck['samples']} samples"
     parent = (ck.get("args") or {}).get("init_from")
     if parent and Path(parent).is_file():
-        text = (f"{training_summary(Path(parent), load_models([parent])[1][0])}, then fine-tuned for {text} "
-                f"(learning rate {ck['args']['lr']:g})")
+        text = (
+            f"{training_summary(Path(parent), load_models([parent])[1][0])}, then fine-tuned for {text} "
+            f"(learning rate {ck['args']['lr']:g})"
+        )
     return text
 
 
@@ -300,29 +346,56 @@ def reuse_aop(graph: Path, out: Path) -> dict:
         shutil.copy(graph, out / "aop.onnx")
     meta = graph.with_name("model.json")
     record = json.loads(meta.read_text())["export"]["aop"] if meta.is_file() else {}
-    return {"checkpoints": [], "steps": [], "samples": [], "widths": [], "weights": "float32", "max_abs_diff": 0.0,
-            **record, "bytes": (out / "aop.onnx").stat().st_size, "reused_from": str(graph)}
+    return {
+        "checkpoints": [],
+        "steps": [],
+        "samples": [],
+        "widths": [],
+        "weights": "float32",
+        "max_abs_diff": 0.0,
+        **record,
+        "bytes": (out / "aop.onnx").stat().st_size,
+        "reused_from": str(graph),
+    }
 
 
 def parse_args(argv: list[str] | None = None) -> argparse.Namespace:
     p = argparse.ArgumentParser(prog="python -m training.export", description=__doc__.split("\n")[0])
-    p.add_argument("--aop", nargs="+", required=True, help="AOP checkpoint(s); several: one graph of their mean; "
-                                                         "or an installed aop.onnx, reused as it is")
+    p.add_argument(
+        "--aop",
+        nargs="+",
+        required=True,
+        help="AOP checkpoint(s); several: one graph of their mean; or an installed aop.onnx, reused as it is",
+    )
     p.add_argument("--sr", required=True)
     p.add_argument("--out", default="runs/export")
     p.add_argument("--data", default="data/ssn128", help="dataset for test inputs and the card's attribution")
     p.add_argument("--tol", type=float, default=TOL)
     p.add_argument("--fp32", action="store_true", help="do not try float16 weights")
-    p.add_argument("--max-shift", type=float, default=None,
-                   help="largest output change that rounding the weights to float16 may cause (default: --tol)")
+    p.add_argument(
+        "--max-shift",
+        type=float,
+        default=None,
+        help="largest output change that rounding the weights to float16 may cause (default: --tol)",
+    )
     p.add_argument("--metrics", help="evaluate's results.json, copied into the card")
-    p.add_argument("--floor", type=float, default=0.0,
-                   help="model.json output_floor: the engine removes shadow values below it (evaluate --floor)")
-    p.add_argument("--mirror-average", action="store_true",
-                   help="export each network as training.model.MirrorAverage (twice the compute, mirror-symmetric)")
+    p.add_argument(
+        "--floor",
+        type=float,
+        default=0.0,
+        help="model.json output_floor: the engine removes shadow values below it (evaluate --floor)",
+    )
+    p.add_argument(
+        "--mirror-average",
+        action="store_true",
+        help="export each network as training.model.MirrorAverage (twice the compute, mirror-symmetric)",
+    )
     p.add_argument("--install", help="copy the model here (e.g. ssn_engine/models)")
-    p.add_argument("--command", default="training/pipeline.sh data/ssn128 runs",
-                   help="the reproducing command recorded in the card")
+    p.add_argument(
+        "--command",
+        default="training/pipeline.sh data/ssn128 runs",
+        help="the reproducing command recorded in the card",
+    )
     p.add_argument("--trained-on", default="", help="the machine the SR was trained on, for the card")
     return p.parse_args(argv)
 
@@ -333,8 +406,15 @@ def main(argv: list[str] | None = None) -> int:
         args.max_shift = args.tol
     out = Path(args.out)
     out.mkdir(parents=True, exist_ok=True)
-    card: dict = {"format": "ssn-shadow-model", "version": 1, "aop": "aop.onnx", "sr": "sr.onnx", "elm_shape": [16, 32],
-                  "output_floor": args.floor, "mirror_average": args.mirror_average}
+    card: dict = {
+        "format": "ssn-shadow-model",
+        "version": 1,
+        "aop": "aop.onnx",
+        "sr": "sr.onnx",
+        "elm_shape": [16, 32],
+        "output_floor": args.floor,
+        "mirror_average": args.mirror_average,
+    }
     report = {}
     for module, ck_paths in (("aop", args.aop), ("sr", [args.sr])):
         if module == "aop" and len(ck_paths) == 1 and ck_paths[0].endswith(".onnx"):
@@ -366,14 +446,23 @@ def main(argv: list[str] | None = None) -> int:
                 final, diff, dtype = fp16, diff16, "float16"
         shutil.copy(final, out / f"{module}.onnx")
         report[f"{module}_parity_fp32"] = diff32
-        report[module] = {"checkpoints": [str(p) for p in ck_paths], "steps": [ck["step"] for ck in cks],
-                          "samples": [ck["samples"] for ck in cks], "widths": [ck["unet"]["widths"] for ck in cks],
-                          "weights": dtype, "max_abs_diff": diff, "bytes": (out / f"{module}.onnx").stat().st_size}
+        report[module] = {
+            "checkpoints": [str(p) for p in ck_paths],
+            "steps": [ck["step"] for ck in cks],
+            "samples": [ck["samples"] for ck in cks],
+            "widths": [ck["unet"]["widths"] for ck in cks],
+            "weights": dtype,
+            "max_abs_diff": diff,
+            "bytes": (out / f"{module}.onnx").stat().st_size,
+        }
         if diff > args.tol:
             print(f"{module}: parity FAILED: max abs diff {diff:.2e} > {args.tol:.0e}", file=sys.stderr)
             return 1
-        print(f"{module}: {dtype} weights, max abs diff to torch {diff:.2e} (fp32 graph {diff32:.2e}), "
-              f"{report[module]['bytes'] / 1e6:.2f} MB", flush=True)
+        print(
+            f"{module}: {dtype} weights, max abs diff to torch {diff:.2e} (fp32 graph {diff32:.2e}), "
+            f"{report[module]['bytes'] / 1e6:.2f} MB",
+            flush=True,
+        )
     sr_ck = load_models([args.sr])[1][0]
     card["card_input"] = bool(sr_ck["unet"].get("card"))
     on = f", on {args.trained_on}" if args.trained_on else ""
@@ -381,8 +470,10 @@ def main(argv: list[str] | None = None) -> int:
     lights = sr_ck["args"].get("lights", "table1")
     card["lights"] = f"the family mixture {TRAIN_MIX}" if lights == "mix" else "the paper's Table 1"
     report["timing"] = time_sr(out / "sr.onnx", card["resolution"])
-    print(f"SR median latency (onnxruntime, this CPU): {report['timing']['sr_at_R_ms']:.1f} ms at R = "
-          f"{card['resolution']}, {report['timing']['sr_engine_256_ms']:.1f} ms on a 256 frame incl. resampling")
+    print(
+        f"SR median latency (onnxruntime, this CPU): {report['timing']['sr_at_R_ms']:.1f} ms at R = "
+        f"{card['resolution']}, {report['timing']['sr_engine_256_ms']:.1f} ms on a 256 frame incl. resampling"
+    )
     card["export"] = report
     if args.metrics:
         card["metrics"] = json.loads(Path(args.metrics).read_text())

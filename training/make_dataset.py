@@ -48,11 +48,13 @@ def parse_args(argv: list[str] | None = None) -> argparse.Namespace:
 
 def _init_worker(threads: int) -> None:
     from training.data.render_bases import set_threads
+
     set_threads(threads)
 
 
 def _run_item(job: tuple) -> dict:
     from training.data.generate import render_item
+
     item, root, res, elm_rows, samples, seed = job
     try:
         return render_item(item, root, res, elm_rows, samples, seed)
@@ -61,9 +63,18 @@ def _run_item(job: tuple) -> dict:
 
 
 def _dataset_meta(args: argparse.Namespace) -> dict:
-    return {"format": "ssn-shadow-bases", "version": FORMAT_VERSION, "res": args.res, "elm_rows": args.elm_rows,
-            "samples_per_texel": args.samples, "seed": args.seed, "views_per_mesh": 15,
-            "yaws": [0, 45, -45, 90, -90], "pitches": [0, 15, 30], "fov_range": [35, 55]}
+    return {
+        "format": "ssn-shadow-bases",
+        "version": FORMAT_VERSION,
+        "res": args.res,
+        "elm_rows": args.elm_rows,
+        "samples_per_texel": args.samples,
+        "seed": args.seed,
+        "views_per_mesh": 15,
+        "yaws": [0, 45, -45, 90, -90],
+        "pitches": [0, 15, 30],
+        "fov_range": [35, 55],
+    }
 
 
 def _check_meta(root: Path, meta: dict) -> None:
@@ -97,9 +108,13 @@ def main(argv: list[str] | None = None) -> int:
         items = items[shard::shards]
         writer.remove_stale(root) if shards == 1 else None
         todo = [it for it in items if not writer.is_done(root, it.id)]
-        print(f"{len(items)} items in shard {args.shard}, {len(items) - len(todo)} already done, "
-              f"{len(todo)} to render at N={args.res}, grid {args.elm_rows}x{2 * args.elm_rows}, "
-              f"{args.samples} directions per texel, {args.workers} workers", file=sys.stderr, flush=True)
+        print(
+            f"{len(items)} items in shard {args.shard}, {len(items) - len(todo)} already done, "
+            f"{len(todo)} to render at N={args.res}, grid {args.elm_rows}x{2 * args.elm_rows}, "
+            f"{args.samples} directions per texel, {args.workers} workers",
+            file=sys.stderr,
+            flush=True,
+        )
         jobs = [(it, root, args.res, args.elm_rows, args.samples, args.seed) for it in todo]
         threads = args.threads or max(1, (os.cpu_count() or 1) // max(args.workers, 1))
         start = time.time()
@@ -123,12 +138,25 @@ def main(argv: list[str] | None = None) -> int:
             pool.close()
             pool.join()
         with open(root / "runs.jsonl", "a") as fh:
-            fh.write(json.dumps({"shard": args.shard, "items": len(items), "rendered": len(jobs) - len(failures),
-                                 "failed": [f["id"] for f in failures], "wall_seconds": time.time() - start,
-                                 "workers": args.workers, "threads": threads, "argv": sys.argv[1:]}) + "\n")
+            fh.write(
+                json.dumps(
+                    {
+                        "shard": args.shard,
+                        "items": len(items),
+                        "rendered": len(jobs) - len(failures),
+                        "failed": [f["id"] for f in failures],
+                        "wall_seconds": time.time() - start,
+                        "workers": args.workers,
+                        "threads": threads,
+                        "argv": sys.argv[1:],
+                    }
+                )
+                + "\n"
+            )
     if not args.no_card:
         from training.data.card import write_card
         from training.data.contact_sheet import write_contact_sheet
+
         write_card(root)
         write_contact_sheet(root)
     return 0

@@ -110,5 +110,7 @@ def sun_geometry(p: np.ndarray, g: np.ndarray, mask: np.ndarray) -> dict[str, fl
     if pred_dir is None:
         return {"direction_error": 180.0, "length_ratio": 0.0}
     cos = float(pred_dir @ true_dir) / max(float(np.hypot(*pred_dir) * np.hypot(*true_dir)), 1e-12)
-    return {"direction_error": float(np.degrees(np.arccos(np.clip(cos, -1.0, 1.0)))),
-            "length_ratio": shadow_extent(p, mask, true_dir) / true_len}
+    return {
+        "direction_error": float(np.degrees(np.arccos(np.clip(cos, -1.0, 1.0)))),
+        "length_ratio": shadow_extent(p, mask, true_dir) / true_len,
+    }

@@ -8,8 +8,9 @@ from torch.nn import functional as F
 SIZES = (3, 5, 7)
 
 
-def perturb_ao(ao: torch.Tensor, generator: torch.Generator | None = None,
-               sizes: tuple[int, ...] = SIZES) -> torch.Tensor:
+def perturb_ao(
+    ao: torch.Tensor, generator: torch.Generator | None = None, sizes: tuple[int, ...] = SIZES
+) -> torch.Tensor:
     """Per sample of (B, 1, R, R): unchanged, eroded (dark contact regions grow) or dilated (they shrink),
     each with probability 1/3, with a square structuring element of a random size in ``sizes``."""
     out = ao.clone()

@@ -8,12 +8,25 @@ from pathlib import Path
 import numpy as np
 from PIL import Image, ImageDraw
 
-COLOURS = [(31, 119, 180), (255, 127, 14), (44, 160, 44), (214, 39, 40), (148, 103, 189), (140, 86, 75),
-           (227, 119, 194), (127, 127, 127)]
+COLOURS = [
+    (31, 119, 180),
+    (255, 127, 14),
+    (44, 160, 44),
+    (214, 39, 40),
+    (148, 103, 189),
+    (140, 86, 75),
+    (227, 119, 194),
+    (127, 127, 127),
+]
 
 
-def loss_curve(series: dict[str, list[tuple[float, float]]], path: str | Path, title: str = "",
-               xlabel: str = "step", size: tuple[int, int] = (720, 420)) -> None:
+def loss_curve(
+    series: dict[str, list[tuple[float, float]]],
+    path: str | Path,
+    title: str = "",
+    xlabel: str = "step",
+    size: tuple[int, int] = (720, 420),
+) -> None:
     """Plot named (x, y) series on a log-y axis and save a PNG."""
     w, h = size
     left, right, top, bottom = 70, 20, 30, 45
@@ -61,8 +74,9 @@ def loss_curve(series: dict[str, list[tuple[float, float]]], path: str | Path, t
     img.save(path)
 
 
-def image_grid(rows: list[list[np.ndarray]], path: str | Path, labels: list[str] | None = None,
-               cell: int = 128, pad: int = 2) -> None:
+def image_grid(
+    rows: list[list[np.ndarray]], path: str | Path, labels: list[str] | None = None, cell: int = 128, pad: int = 2
+) -> None:
     """Save a grid of [0, 1] greyscale images (rows of equal length), optionally with column labels."""
     n_rows, n_cols = len(rows), max(len(r) for r in rows)
     label_h = 14 if labels else 0

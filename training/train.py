@@ -44,8 +44,12 @@ LOG_FIELDS = ["step", "samples", "lr", "train_loss", "val_loss", "seconds", "sam
 def parse_args(argv: list[str] | None = None) -> argparse.Namespace:
     p = argparse.ArgumentParser(prog="python -m training.train", description=__doc__.split("\n")[0])
     p.add_argument("--module", choices=["aop", "sr"], required=True)
-    p.add_argument("--target", choices=["shadow", "irradiance"], default="shadow",
-                   help="SR target: the conventions' shadow s (SSN) or raw irradiance E (Non-inv-SSN ablation)")
+    p.add_argument(
+        "--target",
+        choices=["shadow", "irradiance"],
+        default="shadow",
+        help="SR target: the conventions' shadow s (SSN) or raw irradiance E (Non-inv-SSN ablation)",
+    )
     p.add_argument("--data", default="data/ssn128", help="dataset root (training.data.store.ViewStore)")
     p.add_argument("--run", required=True, help="run directory (checkpoints, logs)")
     p.add_argument("--resolution", type=int, default=128)
@@ -62,36 +66,64 @@ def parse_args(argv: list[str] | None = None) -> argparse.Namespace:
     p.add_argument("--elms-per-view", type=int, default=4, help="SR: ELMs per view in a batch (AOP: 1)")
     p.add_argument("--swap-every", type=int, default=1, help="replace a cached view every this many batches")
     p.add_argument("--no-perturb", action="store_true", help="SR: feed the ground-truth AO unperturbed")
-    p.add_argument("--balance-kinds", action="store_true",
-                   help="draw objects, humans and animals equally often (default: in proportion to their views)")
-    p.add_argument("--flip", action="store_true",
-                   help="mirror half of the samples left to right (frames in x, light maps in azimuth)")
-    p.add_argument("--ao-from", nargs="+", help="SR: AOP checkpoint(s) whose predicted AO (several: their mean, as "
-                   "export --aop), or an exported aop.onnx graph (such as the shipped ssn_engine/models/aop.onnx), "
-                   "replaces the (perturbed) ground-truth AO in a fraction --ao-from-prob of the samples "
-                   "(the AO SR gets in use)")
-    p.add_argument("--card", action="store_true", help="SR: geometry-guided; the geometric card's shadow for the "
-                   "same light map is an input and the base of the output (training.model.SRNet)")
-    p.add_argument("--true-camera", type=float, default=0.5,
-                   help="SR --card: share of samples whose card is traced with the view's true camera input "
-                        "(the others: the conventions' default camera, as the engine assumes blind)")
-    p.add_argument("--lights", choices=["table1", "mix"], default="table1",
-                   help="SR: light maps from the paper's Table 1, or the mixture of light families "
-                        f"{TRAIN_MIX} (training.elm)")
+    p.add_argument(
+        "--balance-kinds",
+        action="store_true",
+        help="draw objects, humans and animals equally often (default: in proportion to their views)",
+    )
+    p.add_argument(
+        "--flip",
+        action="store_true",
+        help="mirror half of the samples left to right (frames in x, light maps in azimuth)",
+    )
+    p.add_argument(
+        "--ao-from",
+        nargs="+",
+        help="SR: AOP checkpoint(s) whose predicted AO (several: their mean, as "
+        "export --aop), or an exported aop.onnx graph (such as the shipped ssn_engine/models/aop.onnx), "
+        "replaces the (perturbed) ground-truth AO in a fraction --ao-from-prob of the samples "
+        "(the AO SR gets in use)",
+    )
+    p.add_argument(
+        "--card",
+        action="store_true",
+        help="SR: geometry-guided; the geometric card's shadow for the "
+        "same light map is an input and the base of the output (training.model.SRNet)",
+    )
+    p.add_argument(
+        "--true-camera",
+        type=float,
+        default=0.5,
+        help="SR --card: share of samples whose card is traced with the view's true camera input "
+        "(the others: the conventions' default camera, as the engine assumes blind)",
+    )
+    p.add_argument(
+        "--lights",
+        choices=["table1", "mix"],
+        default="table1",
+        help=f"SR: light maps from the paper's Table 1, or the mixture of light families {TRAIN_MIX} (training.elm)",
+    )
     p.add_argument("--ao-from-prob", type=float, default=0.5)
-    p.add_argument("--through-sr", help="AOP: train through this frozen SR checkpoint too: the loss adds "
-                   "--shadow-weight x the L2 of the shadow it renders from the predicted AO under random ELMs")
+    p.add_argument(
+        "--through-sr",
+        help="AOP: train through this frozen SR checkpoint too: the loss adds "
+        "--shadow-weight x the L2 of the shadow it renders from the predicted AO under random ELMs",
+    )
     p.add_argument("--shadow-weight", type=float, default=1.0)
     p.add_argument("--ckpt-minutes", type=float, default=4.0)
     p.add_argument("--refresh-minutes", type=float, default=10.0, help="re-open the store (growing dataset)")
     p.add_argument("--val-every", type=int, default=250)
     p.add_argument("--val-samples", type=int, default=48)
     p.add_argument("--log-every", type=int, default=20)
-    p.add_argument("--max-minutes", type=float, default=0.0,
-                   help="stop (with a checkpoint) after this long; 0: no limit")
+    p.add_argument(
+        "--max-minutes", type=float, default=0.0, help="stop (with a checkpoint) after this long; 0: no limit"
+    )
     p.add_argument("--fresh", action="store_true", help="ignore an existing checkpoint in --run")
-    p.add_argument("--init-from", help="fine-tune: start a new run from this checkpoint's weights (same module, "
-                                       "target and U-Net) with a fresh optimizer and schedule")
+    p.add_argument(
+        "--init-from",
+        help="fine-tune: start a new run from this checkpoint's weights (same module, "
+        "target and U-Net) with a fresh optimizer and schedule",
+    )
     args = p.parse_args(argv)
     if args.through_sr and args.module != "aop":
         p.error("--through-sr trains an AOP (--module aop)")
@@ -158,8 +190,12 @@ class Prefetcher:
 
 def to_tensors(batch, device: torch.device) -> dict[str, torch.Tensor]:
     t = lambda a: torch.from_numpy(np.ascontiguousarray(a)).to(device)
-    out = {"mask": t(batch.mask[:, None]), "ao": t(batch.ao[:, None]), "elm": t(batch.elm),
-           "target": t(batch.target[:, None])}
+    out = {
+        "mask": t(batch.mask[:, None]),
+        "ao": t(batch.ao[:, None]),
+        "elm": t(batch.elm),
+        "target": t(batch.target[:, None]),
+    }
     if batch.card is not None:
         out["card"] = t(batch.card[:, None])
     if batch.ao_pred is not None:
@@ -198,8 +234,7 @@ def load_aop(paths: list[str]):
     return predict
 
 
-def mix_predicted_ao(x: dict[str, torch.Tensor], ao: torch.Tensor, prob: float,
-                     gen: torch.Generator) -> torch.Tensor:
+def mix_predicted_ao(x: dict[str, torch.Tensor], ao: torch.Tensor, prob: float, gen: torch.Generator) -> torch.Tensor:
     """``ao`` with each sample replaced, with probability ``prob``, by the AOP's prediction ``x["ao_pred"]``."""
     use = (torch.rand(ao.shape[0], generator=gen) < prob).to(ao.device)
     if not use.any():
@@ -233,8 +268,10 @@ def frozen_sr(path: str, device: torch.device) -> torch.nn.Module:
     """The SR network of checkpoint ``path`` (shadow target), without gradients for its weights."""
     net, ck = checkpoint.load_model(path)
     if ck["module"] != "sr" or ck.get("target") != "shadow" or ck["unet"].get("card"):
-        raise SystemExit(f"--through-sr needs an SR checkpoint with the shadow target and no card input; {path} is "
-                         f"{ck['module']}/{ck.get('target')}{' (card)' if ck['unet'].get('card') else ''}")
+        raise SystemExit(
+            f"--through-sr needs an SR checkpoint with the shadow target and no card input; {path} is "
+            f"{ck['module']}/{ck.get('target')}{' (card)' if ck['unet'].get('card') else ''}"
+        )
     return net.requires_grad_(False).to(device)
 
 
@@ -277,8 +314,9 @@ def build_val(store, args, weights_rows: int, run: Path | None = None):
 
 
 @torch.no_grad()
-def validate(model, module: str, val: dict[str, torch.Tensor], objective: Objective,
-             chunk: int = 16) -> tuple[float, torch.Tensor]:
+def validate(
+    model, module: str, val: dict[str, torch.Tensor], objective: Objective, chunk: int = 16
+) -> tuple[float, torch.Tensor]:
     """The objective on the validation batch (chunks weighted by size) and the predictions."""
     model.eval()
     preds, total = [], 0.0
@@ -326,8 +364,9 @@ def main(argv: list[str] | None = None, store=None) -> int:
         args.target = "ao"
     torch.set_num_threads(args.threads)
     rank, world, device = setup_distributed()
-    objective = Objective(args.module, frozen_sr(args.through_sr, device) if args.through_sr else None,
-                          args.shadow_weight)
+    objective = Objective(
+        args.module, frozen_sr(args.through_sr, device) if args.through_sr else None, args.shadow_weight
+    )
     main_proc = rank == 0
     run = Path(args.run)
     run.mkdir(parents=True, exist_ok=True)
@@ -371,19 +410,36 @@ def main(argv: list[str] | None = None, store=None) -> int:
 
     lit = shadow_target(args)
     predict_ao = load_aop(args.ao_from) if args.module == "sr" and args.ao_from else None
-    cache = ViewCache(store, "train", args.resolution, max_views=100000 if lit is None else args.cache_views,
-                      with_occ=lit is not None, balance_kinds=args.balance_kinds, with_card=args.card,
-                      predict_ao=predict_ao)
+    cache = ViewCache(
+        store,
+        "train",
+        args.resolution,
+        max_views=100000 if lit is None else args.cache_views,
+        with_occ=lit is not None,
+        balance_kinds=args.balance_kinds,
+        with_card=args.card,
+        predict_ao=predict_ao,
+    )
     # A plain AOP ignores the light, so repeating a view under several ELMs would only shrink its batch.
-    sampler = BatchSampler(cache, args.batch, lit, 1 if lit is None else args.elms_per_view, flip=args.flip,
-                           lights=TRAIN_MIX if args.lights == "mix" else None, true_camera=args.true_camera,
-                           swap_every=args.swap_every)
+    sampler = BatchSampler(
+        cache,
+        args.batch,
+        lit,
+        1 if lit is None else args.elms_per_view,
+        flip=args.flip,
+        lights=TRAIN_MIX if args.lights == "mix" else None,
+        true_camera=args.true_camera,
+        swap_every=args.swap_every,
+    )
     rows = store.meta["elm_rows"]
     val_batch, val_split = build_val(store, args, rows, run) if main_proc else (None, None)
     val = to_tensors(val_batch, device) if val_batch is not None else None
     if main_proc:
-        print(f"train views: {len(cache)} (cache {args.cache_views}), val: {args.val_samples} samples from the "
-              f"{val_split} split, batch {args.batch} x {world} process(es), device {device}", flush=True)
+        print(
+            f"train views: {len(cache)} (cache {args.cache_views}), val: {args.val_samples} samples from the "
+            f"{val_split} split, batch {args.batch} x {world} process(es), device {device}",
+            flush=True,
+        )
     gen = torch.Generator().manual_seed(args.seed * 1000 + rank + step)
     pre = Prefetcher(sampler, np.random.default_rng([args.seed, rank, step]))
 
@@ -396,10 +452,22 @@ def main(argv: list[str] | None = None, store=None) -> int:
     signal.signal(signal.SIGINT, on_signal)
 
     def save_ckpt(path: Path) -> None:
-        checkpoint.save(path, {"model": model.state_dict(), "optimizer": opt.state_dict(), "step": step,
-                               "samples": samples, "best_val": best, "module": args.module, "target": args.target,
-                               "unet": config.to_dict(), "args": {**vars(args), "widths": list(args.widths)},
-                               "elm_rows": rows, "data": str(args.data)})
+        checkpoint.save(
+            path,
+            {
+                "model": model.state_dict(),
+                "optimizer": opt.state_dict(),
+                "step": step,
+                "samples": samples,
+                "best_val": best,
+                "module": args.module,
+                "target": args.target,
+                "unet": config.to_dict(),
+                "args": {**vars(args), "widths": list(args.widths)},
+                "elm_rows": rows,
+                "data": str(args.data),
+            },
+        )
 
     log_path = run / "log.csv"
     new_log = not log_path.is_file()
@@ -437,9 +505,15 @@ def main(argv: list[str] | None = None, store=None) -> int:
             progress.update(step, f"loss {running / n_running:.5f} lr {lr:.2e}")
         do_val = main_proc and (step % args.val_every == 0 or step == args.steps)
         if main_proc and (step % args.log_every == 0 or do_val):
-            row = {"step": step, "samples": samples, "lr": f"{lr:.3e}", "train_loss": f"{running / n_running:.6f}",
-                   "val_loss": "", "seconds": f"{prior_seconds + time.perf_counter() - t_start:.1f}",
-                   "samples_per_s": f"{n_running * args.batch * world / (time.perf_counter() - t_log):.2f}"}
+            row = {
+                "step": step,
+                "samples": samples,
+                "lr": f"{lr:.3e}",
+                "train_loss": f"{running / n_running:.6f}",
+                "val_loss": "",
+                "seconds": f"{prior_seconds + time.perf_counter() - t_start:.1f}",
+                "samples_per_s": f"{n_running * args.batch * world / (time.perf_counter() - t_log):.2f}",
+            }
             running, n_running, t_log = 0.0, 0, time.perf_counter()
             if do_val:
                 v, vpred = validate(model, args.module, val, objective)

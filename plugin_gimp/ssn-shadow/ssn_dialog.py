@@ -236,8 +236,9 @@ def _axes(area: Gtk.Widget) -> Gtk.Widget:
     grid.attach(top, 1, 0, 1, 1)
     grid.attach(side, 0, 1, 1, 1)
     grid.attach(area, 1, 1, 1, 1)
-    grid.attach(small("a light right of centre casts its shadow to the left, and a low light a long one", 0.0),
-                0, 2, 2, 1)
+    grid.attach(
+        small("a light right of centre casts its shadow to the left, and a low light a long one", 0.0), 0, 2, 2, 1
+    )
     return grid
 
 
@@ -273,8 +274,11 @@ def _selftest(dialog, area: LightMapArea, preview: ShadowPreview, values, config
     edited = editor.to_json()
     config.set_property("light-map", "high-sun")  # what Reset to Factory Defaults / Load Saved Settings do
     shown = editor.lights.to_dict() == light_map.preset("high-sun").to_dict()
-    print(f"ssn-shadow dialog selftest: after a settings reset the map shows high-sun: {shown}", file=sys.stderr,
-          flush=True)
+    print(
+        f"ssn-shadow dialog selftest: after a settings reset the map shows high-sun: {shown}",
+        file=sys.stderr,
+        flush=True,
+    )
     config.set_property("light-map", edited)
 
     def finish() -> bool:

@@ -54,12 +54,22 @@ ARGUMENTS: tuple[ArgSpec, ...] = (
         0.0,
         4.0,
     ),
-    ArgSpec("use-horizon", "boolean", "Set the image's _horizon",
-            "Cast with the image's camera (horizon row and field of view); off: a camera looking 15 degrees down",
-            False),
-    ArgSpec("horizon", "double", "Hori_zon row",
-            "The image row (pixels from the top) where the ground meets the sky; it may lie outside the image",
-            0.0, -100000.0, 100000.0),
+    ArgSpec(
+        "use-horizon",
+        "boolean",
+        "Set the image's _horizon",
+        "Cast with the image's camera (horizon row and field of view); off: a camera looking 15 degrees down",
+        False,
+    ),
+    ArgSpec(
+        "horizon",
+        "double",
+        "Hori_zon row",
+        "The image row (pixels from the top) where the ground meets the sky; it may lie outside the image",
+        0.0,
+        -100000.0,
+        100000.0,
+    ),
     ArgSpec("fov", "double", "_Field of view", "The image's vertical field of view in degrees", 45.0, 10.0, 120.0),
 )
 ARG_BY_NAME = {a.name: a for a in ARGUMENTS}

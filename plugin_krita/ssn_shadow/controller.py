@@ -169,8 +169,13 @@ class ShadowController(QObject):
         def on_cutout(reply: dict, buffers: dict) -> None:
             self.cutout, self._cutout_key = reply["cutout"], key
             if self.ao_edits:
-                self.engine.request("edit_ao", {"cutout": self.cutout, "edits": self.ao_edits}, None,
-                                    self._on_ao_edited, self._on_edit_error)
+                self.engine.request(
+                    "edit_ao",
+                    {"cutout": self.cutout, "edits": self.ao_edits},
+                    None,
+                    self._on_ao_edited,
+                    self._on_edit_error,
+                )
             self.engine.request("get_ao", {"cutout": self.cutout}, None, self._on_ao, None)
             then()
 
@@ -187,7 +192,9 @@ class ShadowController(QObject):
             "format": source.layer_format.render_format(),
         }
         self.engine.request(
-            "render", params, None,
+            "render",
+            params,
+            None,
             lambda reply, buffers: self._on_rendered(job, source, reply, buffers),
             lambda e: self._on_error(e, job),
         )
@@ -247,8 +254,9 @@ class ShadowController(QObject):
             self._edit_dirty = True
             return
         self._edit_in_flight, self._edit_dirty = True, False
-        self.engine.request("edit_ao", {"cutout": self.cutout, "edits": self.ao_edits}, None,
-                            self._on_ao_edited, self._on_edit_error)
+        self.engine.request(
+            "edit_ao", {"cutout": self.cutout, "edits": self.ao_edits}, None, self._on_ao_edited, self._on_edit_error
+        )
 
     def _on_ao_edited(self, reply: dict, buffers: dict) -> None:
         self._edit_in_flight = False

@@ -26,12 +26,14 @@ class ShadowMethod(Protocol):
 
     def predict_ao(self, masks: np.ndarray, cameras: np.ndarray | None = None) -> np.ndarray: ...
 
-    def render(self, masks: np.ndarray, ao: np.ndarray, elms: np.ndarray,
-               cameras: np.ndarray | None = None) -> np.ndarray: ...
+    def render(
+        self, masks: np.ndarray, ao: np.ndarray, elms: np.ndarray, cameras: np.ndarray | None = None
+    ) -> np.ndarray: ...
 
 
-def check_batch(masks: np.ndarray, elms: np.ndarray | None, n: int, ao: np.ndarray | None = None,
-                cameras: np.ndarray | None = None) -> None:
+def check_batch(
+    masks: np.ndarray, elms: np.ndarray | None, n: int, ao: np.ndarray | None = None, cameras: np.ndarray | None = None
+) -> None:
     """Raise ValueError with the offending argument's name when shapes or values are off."""
     if masks.ndim != 3 or masks.shape[1:] != (n, n):
         raise ValueError(f"masks: expected shape (n, {n}, {n}), got {masks.shape}")
@@ -52,7 +54,13 @@ def check_cameras(cameras: np.ndarray, count: int, n: int) -> None:
     if cameras.shape != (count, 2):
         raise ValueError(f"cameras: expected shape ({count}, 2) (horizon row, focal length), got {cameras.shape}")
     lo, hi = focal_from_fov(n, 170.0), focal_from_fov(n, 1.0)
-    if not np.all(np.isfinite(cameras)) or np.any(np.abs(cameras[:, 0] - n / 2) > HORIZON_REACH * n) \
-            or np.any(cameras[:, 1] < lo) or np.any(cameras[:, 1] > hi):
-        raise ValueError(f"cameras: horizon rows must lie within {HORIZON_REACH} frames of the frame and focal "
-                         f"lengths in [{lo:.1f}, {hi:.0f}] pixels (a field of view from 1 to 170 degrees)")
+    if (
+        not np.all(np.isfinite(cameras))
+        or np.any(np.abs(cameras[:, 0] - n / 2) > HORIZON_REACH * n)
+        or np.any(cameras[:, 1] < lo)
+        or np.any(cameras[:, 1] > hi)
+    ):
+        raise ValueError(
+            f"cameras: horizon rows must lie within {HORIZON_REACH} frames of the frame and focal "
+            f"lengths in [{lo:.1f}, {hi:.0f}] pixels (a field of view from 1 to 170 degrees)"
+        )

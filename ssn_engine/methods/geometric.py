@@ -45,8 +45,9 @@ def _resize(image: np.ndarray, size: int) -> np.ndarray:
 class _Card:
     """The card and camera for one mask at the internal resolution."""
 
-    def __init__(self, mask: np.ndarray, directions: np.ndarray, weights: np.ndarray,
-                 camera: tuple[float, float] | None = None) -> None:
+    def __init__(
+        self, mask: np.ndarray, directions: np.ndarray, weights: np.ndarray, camera: tuple[float, float] | None = None
+    ) -> None:
         m = mask.shape[0]
         self.mask, self.directions, self.weights = mask, directions, weights
         self._ao: np.ndarray | None = None
@@ -92,8 +93,9 @@ class _Card:
             self._wide = {}
             n = int(round(self.mask.shape[0] * (1 + 2 * margin) / cell))
             cam = self.camera
-            wide = Camera(n, cam.target_height, fov=fov_from_focal(n, cam.focal / cell), pitch=cam.pitch,
-                          shift=cam.shift / cell)
+            wide = Camera(
+                n, cam.target_height, fov=fov_from_focal(n, cam.focal / cell), pitch=cam.pitch, shift=cam.shift / cell
+            )
             ground, valid = wide.ground_points()
             self._grid = ((margin, cell), ground[valid].astype(np.float32), valid)
         return self._grid[1], self._grid[2]
@@ -202,12 +204,17 @@ class GeometricCard:
         """The card for a frame mask (camera input in frame pixels, or None: the default camera) at the internal
         resolution; recent cards are cached. Its hard shadows (``card.bases`` (T, P), T = 512 texel directions
         on the P ground pixels ``card.valid`` of the internal grid) are traced when first needed."""
-        key = hashlib.blake2b(np.ascontiguousarray(mask, np.float32).tobytes() + repr(camera).encode(),
-                              digest_size=16).digest()
+        key = hashlib.blake2b(
+            np.ascontiguousarray(mask, np.float32).tobytes() + repr(camera).encode(), digest_size=16
+        ).digest()
         if key not in self._cache:
             scale = self.internal / mask.shape[0]
-            self._cache[key] = _Card(_resize(mask, self.internal), self._dirs, self._weights,
-                                     None if camera is None else (camera[0] * scale, camera[1] * scale))
+            self._cache[key] = _Card(
+                _resize(mask, self.internal),
+                self._dirs,
+                self._weights,
+                None if camera is None else (camera[0] * scale, camera[1] * scale),
+            )
             while len(self._cache) > CACHED_CARDS:
                 self._cache.popitem(last=False)
         self._cache.move_to_end(key)
@@ -221,16 +228,25 @@ class GeometricCard:
                 out[b] = self.card(mask, camera_at(cameras, b)).shadow(np.maximum(elm, 0).ravel() * self._weights)
         return out
 
-    def extended_shadow(self, mask: np.ndarray, elm: np.ndarray, camera: tuple[float, float] | None = None,
-                        margin: float = 1.0, cell: float = 4.0) -> np.ndarray:
+    def extended_shadow(
+        self,
+        mask: np.ndarray,
+        elm: np.ndarray,
+        camera: tuple[float, float] | None = None,
+        margin: float = 1.0,
+        cell: float = 4.0,
+    ) -> np.ndarray:
         """The card's shadow on a grid reaching ``margin`` frames beyond every side of the frame, in cells of
         ``cell`` frame pixels: (M, M) covering frame coordinates [-margin N, (1 + margin) N) on both axes.
 
         Only the brightest texels, those that hold 99.5 % of the light (at most ``EXTENDED_TEXELS``), are
         traced, when the light changes: long shadows come from small lights, which cover few texels."""
         card = self.card(mask, camera)
-        ground, valid = card.ground_grid(margin, cell * self.internal / mask.shape[0]) if not card.empty \
+        ground, valid = (
+            card.ground_grid(margin, cell * self.internal / mask.shape[0])
+            if not card.empty
             else (None, np.zeros((1, 1), bool))
+        )
         out = np.zeros(valid.shape, np.float32)
         w = np.maximum(elm, 0).ravel() * self._weights
         if card.empty or w.sum() <= 0:
@@ -241,11 +257,13 @@ class GeometricCard:
 
     def predict_ao(self, masks: np.ndarray, cameras: np.ndarray | None = None) -> np.ndarray:
         check_batch(masks, None, self.resolution, cameras=cameras)
-        return np.stack([_resize(self.card(m, camera_at(cameras, b)).ao, self.resolution)
-                         for b, m in enumerate(masks)]).clip(0, 1)
+        return np.stack(
+            [_resize(self.card(m, camera_at(cameras, b)).ao, self.resolution) for b, m in enumerate(masks)]
+        ).clip(0, 1)
 
-    def render(self, masks: np.ndarray, ao: np.ndarray, elms: np.ndarray,
-               cameras: np.ndarray | None = None) -> np.ndarray:
+    def render(
+        self, masks: np.ndarray, ao: np.ndarray, elms: np.ndarray, cameras: np.ndarray | None = None
+    ) -> np.ndarray:
         check_batch(masks, elms, self.resolution, ao, cameras)
         shadows = self.card_shadows(masks, elms, cameras)
         out = []

@@ -61,8 +61,9 @@ def _session(path: Path, role: str):
     got_out = {o.name: len(o.shape) for o in session.get_outputs()}
     if (got_in, got_out) not in _EXPECTED[role]:
         expected = " or ".join(f"inputs {i} and outputs {o}" for i, o in _EXPECTED[role])
-        raise ModelError(f"{path} does not match the {role} contract: expected {expected} (name: rank), "
-                         f"got {got_in} and {got_out}")
+        raise ModelError(
+            f"{path} does not match the {role} contract: expected {expected} (name: rank), got {got_in} and {got_out}"
+        )
     return session
 
 
@@ -124,8 +125,9 @@ class OnnxSSN:
                 self.card.card(mask, camera_at(cameras, b))
         return np.clip(resample_frames(ao, self.resolution), 0.0, 1.0)
 
-    def render(self, masks: np.ndarray, ao: np.ndarray, elms: np.ndarray,
-               cameras: np.ndarray | None = None) -> np.ndarray:
+    def render(
+        self, masks: np.ndarray, ao: np.ndarray, elms: np.ndarray, cameras: np.ndarray | None = None
+    ) -> np.ndarray:
         check_batch(masks, elms, self.resolution, ao, cameras)
         feeds = {
             "mask": resample_frames(masks, self.model_resolution)[:, None],

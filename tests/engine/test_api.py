@@ -241,14 +241,17 @@ def test_cameras_change_the_geometric_shadow_as_the_horizon_says(masks, monkeypa
     assert np.allclose(blind, api.predict_frames(m, elm, cameras=_default_camera(m[0])[None]), atol=0.02)
 
 
-@pytest.mark.parametrize("cameras, match", [
-    (np.zeros((1, 2)), "cameras: expected shape"),
-    (np.zeros((2, 3)), "cameras: expected shape"),
-    (np.array([[10.0, 0.0], [10.0, 200.0]]), "focal"),
-    (np.array([[np.nan, 200.0], [10.0, 200.0]]), "horizon rows"),
-    (np.array([[10.0, 1e30], [10.0, 200.0]]), "1 to 170 degrees"),
-    (np.array([[1e6, 200.0], [10.0, 200.0]]), "within 100 frames"),
-])
+@pytest.mark.parametrize(
+    "cameras, match",
+    [
+        (np.zeros((1, 2)), "cameras: expected shape"),
+        (np.zeros((2, 3)), "cameras: expected shape"),
+        (np.array([[10.0, 0.0], [10.0, 200.0]]), "focal"),
+        (np.array([[np.nan, 200.0], [10.0, 200.0]]), "horizon rows"),
+        (np.array([[10.0, 1e30], [10.0, 200.0]]), "1 to 170 degrees"),
+        (np.array([[1e6, 200.0], [10.0, 200.0]]), "within 100 frames"),
+    ],
+)
 def test_bad_cameras(masks, cameras, match):
     with pytest.raises(ValueError, match=match):
         api.predict_frames(masks, np.stack([elm_for(0.3, 0.6)] * 2), cameras=cameras)

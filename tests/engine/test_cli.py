@@ -170,8 +170,9 @@ def test_fully_transparent_cutout_and_a_light_map_without_light(cutout_png, tmp_
     dark = tmp_path / "dark.json"
     for lights in ([], [{"u": 0.3, "v": 0.5, "softness": 0.01, "intensity": 0.0}]):
         dark.write_text(json.dumps({"format": "ssn-shadow-elm", "version": 1, "lights": lights}))
-        code, err = _error(capsys, "render", str(cutout_png), "--layer", str(tmp_path / "l.png"), "--light-map",
-                           str(dark))
+        code, err = _error(
+            capsys, "render", str(cutout_png), "--layer", str(tmp_path / "l.png"), "--light-map", str(dark)
+        )
         assert code == 3 and "no visible shadow" in err and "no light" in err
     assert not (tmp_path / "l.png").exists()
 
@@ -217,8 +218,17 @@ def test_missing_light_map_file(cutout_png, tmp_path, capsys):
 def test_background_size_mismatch(cutout_png, tmp_path, capsys):
     bg = tmp_path / "bg.png"
     Image.fromarray(np.zeros((10, 10, 3), np.uint8)).save(bg)
-    code, err = _error(capsys, "render", str(cutout_png), "--layer", str(tmp_path / "l.png"),
-                       "--composite", str(tmp_path / "c.png"), "--background", str(bg))
+    code, err = _error(
+        capsys,
+        "render",
+        str(cutout_png),
+        "--layer",
+        str(tmp_path / "l.png"),
+        "--composite",
+        str(tmp_path / "c.png"),
+        "--background",
+        str(bg),
+    )
     assert code == 2 and "10 x 10" in err and f"{W} x {H}" in err
     assert not (tmp_path / "c.png").exists() and not (tmp_path / "l.png").exists()  # checked before any write
 
@@ -234,8 +244,20 @@ def test_horizon_and_fov_reach_the_method(tmp_path, cutout_png):
     tops = []
     for horizon in ("150", "-600"):
         out = tmp_path / f"h{horizon}.png"
-        argv = ["render", str(cutout_png), "--layer", str(out), "--method", "geometric", "--horizon", horizon,
-                "--fov", "40", "--light-map", str(_light_file(tmp_path, 0.0, 0.75))]
+        argv = [
+            "render",
+            str(cutout_png),
+            "--layer",
+            str(out),
+            "--method",
+            "geometric",
+            "--horizon",
+            horizon,
+            "--fov",
+            "40",
+            "--light-map",
+            str(_light_file(tmp_path, 0.0, 0.75)),
+        ]
         assert main(argv) == 0
         alpha = _read(out)[..., 3]
         tops.append(int(np.flatnonzero((alpha > 40).any(axis=1)).min()))
@@ -244,8 +266,15 @@ def test_horizon_and_fov_reach_the_method(tmp_path, cutout_png):
 
 def _light_file(tmp_path, u, v):
     path = tmp_path / f"light_{u}_{v}.json"
-    path.write_text(json.dumps({"format": "ssn-shadow-elm", "version": 1,
-                                "lights": [{"u": u, "v": v, "softness": 0.002, "intensity": 1.0}]}))
+    path.write_text(
+        json.dumps(
+            {
+                "format": "ssn-shadow-elm",
+                "version": 1,
+                "lights": [{"u": u, "v": v, "softness": 0.002, "intensity": 1.0}],
+            }
+        )
+    )
     return path
 
 
@@ -254,8 +283,9 @@ def test_fov_without_horizon_is_refused(cutout_png, tmp_path, capsys):
     assert code == 2 and "horizon" in err and not (tmp_path / "l.png").exists()
 
 
-@pytest.mark.parametrize("args", [["--color", "red"], ["--opacity", "1.5"], ["--opacity", "x"], ["--fov", "0"],
-                                  ["--horizon", "low"]])
+@pytest.mark.parametrize(
+    "args", [["--color", "red"], ["--opacity", "1.5"], ["--opacity", "x"], ["--fov", "0"], ["--horizon", "low"]]
+)
 def test_bad_option_values(cutout_png, tmp_path, capsys, args):
     with pytest.raises(SystemExit) as info:
         main(["render", str(cutout_png), "--layer", str(tmp_path / "l.png"), *args])

@@ -41,8 +41,12 @@ def _files(folder):
 @pytest.mark.parametrize("alias", ["same", "relative", "hardlink", "symlink"])
 def test_an_output_never_overwrites_the_cutout(cutout_png, tmp_path, capsys, monkeypatch, alias):
     before = cutout_png.read_bytes()
-    target = {"same": cutout_png, "relative": "cutout.png", "hardlink": tmp_path / "hard.png",
-              "symlink": tmp_path / "sym.png"}[alias]
+    target = {
+        "same": cutout_png,
+        "relative": "cutout.png",
+        "hardlink": tmp_path / "hard.png",
+        "symlink": tmp_path / "sym.png",
+    }[alias]
     if alias == "hardlink":
         os.link(cutout_png, target)
     if alias == "symlink":
@@ -66,8 +70,9 @@ def test_outputs_must_differ_from_the_background_and_each_other(cutout_png, tmp_
 
 def test_every_check_runs_before_any_write(cutout_png, tmp_path, capsys):
     """A composite into a missing folder: refused up front, so no --layer file is left behind."""
-    code, _, err = _run(capsys, "render", cutout_png, "--layer", tmp_path / "l.png", "--composite",
-                        tmp_path / "missing" / "c.png")
+    code, _, err = _run(
+        capsys, "render", cutout_png, "--layer", tmp_path / "l.png", "--composite", tmp_path / "missing" / "c.png"
+    )
     assert code == 2 and "does not exist" in err
     code, _, err = _run(capsys, "render", cutout_png, "--layer", tmp_path)
     assert code == 2 and "is a folder" in err
@@ -143,8 +148,9 @@ def test_demo_checks_its_samples_folder_first(tmp_path, capsys):
     code, _, err = _run(capsys, "demo", "--out", tmp_path / "d.png", "--save-samples", tmp_path / "missing")
     assert code == 2 and "missing" in err and "no such folder" in err and _files(tmp_path) == []
     (tmp_path / "s").mkdir()
-    code, out, _ = _run(capsys, "demo", "--out", tmp_path / "d.png", "--save-samples", tmp_path / "s",
-                        "--method", "geometric")
+    code, out, _ = _run(
+        capsys, "demo", "--out", tmp_path / "d.png", "--save-samples", tmp_path / "s", "--method", "geometric"
+    )
     assert code == 0 and _files(tmp_path / "s") == ["sample_background.png", "sample_cutout.png"]
     assert out.count("wrote") == 3
 

@@ -27,19 +27,42 @@ def test_the_code_keeps_the_numbers():
     assert math.isclose(camera.horizon_row(256, f, 20.0, 7.0), 128 - f * math.tan(math.radians(20.0)) + 7.0)
 
 
-@pytest.mark.parametrize("fact", [
-    "**N = 256**", "round(0.03 N) = 8", "**16 x 32**", "**distance 2**", "**45 degree**", "**15 degree**",
-    "**f = (N / 2) / tan(fov / 2)**", "**h = N/2 - f tan(pitch) + shift**", "h = k H + d and f = k F",
-    "`OBJECT_EXTENT = 0.5`", "**A^(1/3)**", "**s = 1 - E / E0**",
-])
+@pytest.mark.parametrize(
+    "fact",
+    [
+        "**N = 256**",
+        "round(0.03 N) = 8",
+        "**16 x 32**",
+        "**distance 2**",
+        "**45 degree**",
+        "**15 degree**",
+        "**f = (N / 2) / tan(fov / 2)**",
+        "**h = N/2 - f tan(pitch) + shift**",
+        "h = k H + d and f = k F",
+        "`OBJECT_EXTENT = 0.5`",
+        "**A^(1/3)**",
+        "**s = 1 - E / E0**",
+    ],
+)
 def test_our_page_states_them(fact):
     assert fact in OURS
 
 
 @pytest.mark.skipif(not SHARED.exists(), reason="the external contract is not in this workspace")
-@pytest.mark.parametrize("fact", [
-    "N = 256", "row 8 at N = 256", "round(0.03 N)", "16 x 32", "from\n  distance 2", "f = (N / 2) / tan(fov / 2)",
-    "h = N/2 - f tan(pitch) + shift", "h = k H + d and f = k F", "A^(1/3)", "s(x) = 1 - E(x) / E0",
-])
+@pytest.mark.parametrize(
+    "fact",
+    [
+        "N = 256",
+        "row 8 at N = 256",
+        "round(0.03 N)",
+        "16 x 32",
+        "from\n  distance 2",
+        "f = (N / 2) / tan(fov / 2)",
+        "h = N/2 - f tan(pitch) + shift",
+        "h = k H + d and f = k F",
+        "A^(1/3)",
+        "s(x) = 1 - E(x) / E0",
+    ],
+)
 def test_the_external_contract_says_the_same(fact):
     assert fact in SHARED.read_text()

@@ -128,6 +128,8 @@ def test_an_unclipped_shadow_reaches_past_the_canvas():
     clipped, whole = session.to_canvas(frame, sun), session.to_canvas(frame, sun, clip=False)
     assert clipped.x + clipped.values.shape[1] <= 400  # cut at the canvas
     assert whole.x + whole.values.shape[1] > 450  # kept whole past it
-    inside = whole.values[clipped.y - whole.y : clipped.y - whole.y + clipped.values.shape[0],
-                          clipped.x - whole.x : clipped.x - whole.x + clipped.values.shape[1]]
+    inside = whole.values[
+        clipped.y - whole.y : clipped.y - whole.y + clipped.values.shape[0],
+        clipped.x - whole.x : clipped.x - whole.x + clipped.values.shape[1],
+    ]
     np.testing.assert_allclose(inside, clipped.values, atol=1e-5)  # the same shadow where both cover it

@@ -393,10 +393,18 @@ def test_tcp_mode(worker_env):
 def test_stdio_bad_headers_get_replies_and_the_worker_goes_on(worker_env):
     """Garbage, then a header declaring a 10 GB buffer that never comes, then hello: two refusals at once (the
     10 GB are never waited for) and an answer; the worker ends cleanly with its input."""
-    lines = [b"this is not json\n",
-             json.dumps({"id": 2, "cmd": "set_cutout", "buffers": [
-                 {"name": "alpha", "dtype": "uint8", "shape": [100000, 100000], "nbytes": 10**10}]}).encode() + b"\n",
-             b'{"id": 3, "cmd": "hello"}\n']
+    lines = [
+        b"this is not json\n",
+        json.dumps(
+            {
+                "id": 2,
+                "cmd": "set_cutout",
+                "buffers": [{"name": "alpha", "dtype": "uint8", "shape": [100000, 100000], "nbytes": 10**10}],
+            }
+        ).encode()
+        + b"\n",
+        b'{"id": 3, "cmd": "hello"}\n',
+    ]
     result = subprocess.run(SERVE, input=b"".join(lines), capture_output=True, timeout=60)
     replies = [json.loads(line) for line in result.stdout.splitlines()]
     assert [r["ok"] for r in replies] == [False, False, True], replies
@@ -420,9 +428,14 @@ def test_set_cutout_with_a_camera_changes_the_geometric_shadow():
     assert layers[0].shape != layers[1].shape or np.abs(layers[0] - layers[1]).mean() > 1.0
 
 
-@pytest.mark.parametrize("camera, fragment", [
-    ({"fov": 40.0}, "camera"), ("low", "camera"), ({"horizon": 10.0, "fov": 0.0}, "camera.fov"),
-])
+@pytest.mark.parametrize(
+    "camera, fragment",
+    [
+        ({"fov": 40.0}, "camera"),
+        ("low", "camera"),
+        ({"horizon": 10.0, "fov": 0.0}, "camera.fov"),
+    ],
+)
 def test_bad_camera_is_a_bad_request(client, camera, fragment):
     with pytest.raises(EngineError) as info:
         client.request("set_cutout", {"alpha": buf(canvas_alpha())}, camera=camera)

@@ -44,23 +44,32 @@ def alpha_entry(shape, dtype="uint8", nbytes=None, name="alpha") -> dict:
     return {"name": name, "dtype": dtype, "shape": list(shape), "nbytes": size}
 
 
-@pytest.mark.parametrize("header, payload, fragment", [
-    ({"cmd": "launch", "buffers": [alpha_entry((4, 4))]}, bytes(16), "unknown command 'launch'"),
-    ({"cmd": "set_cutout", "buffers": [alpha_entry((4, 4), "int64", 16)]}, bytes(16), "unsupported dtype"),
-    ({"cmd": "set_cutout", "buffers": [alpha_entry((4, 4), nbytes=20)]}, bytes(20), "needs 16 bytes"),
-    ({"cmd": "set_cutout", "buffers": [alpha_entry((1, 1, 1, 1, 4), nbytes=4)]}, bytes(4), "at most 4"),
-    ({"cmd": "set_cutout", "buffers": [alpha_entry((4,))]}, bytes(4), "2D"),
-    ({"cmd": "set_cutout", "buffers": [alpha_entry((2, 2)), alpha_entry((2, 2))]}, bytes(8), "once"),
-    ({"cmd": "set_cutout", "buffers": [alpha_entry((1, 40000))]}, bytes(40000), "canvas is above"),
-    ({"cmd": "render", "buffers": [alpha_entry((2, 2), name="layer")]}, bytes(4), "unexpected buffer 'layer'"),
-    ({"cmd": "set_cutout", "buffers": [alpha_entry((2, 2), name="mask")]}, bytes(4), "it takes alpha"),
-    ({"cmd": "set_cutout", "buffers": [alpha_entry((65536, 65536))]}, b"", "limit of 1 GiB"),
-    ({"cmd": "set_cutout", "buffers": [{"name": "alpha", "dtype": "uint8", "shape": [2], "nbytes": -2}]}, b"",
-     "nbytes >= 0"),
-    ({"cmd": "set_cutout", "buffers": "alpha"}, b"", "must be a list"),
-    ({"cmd": "set_cutout", "buffers": [alpha_entry((2, 2), "float32", 16) | {"shape": [2, "2"]}]}, bytes(16),
-     "shape must be"),
-])
+@pytest.mark.parametrize(
+    "header, payload, fragment",
+    [
+        ({"cmd": "launch", "buffers": [alpha_entry((4, 4))]}, bytes(16), "unknown command 'launch'"),
+        ({"cmd": "set_cutout", "buffers": [alpha_entry((4, 4), "int64", 16)]}, bytes(16), "unsupported dtype"),
+        ({"cmd": "set_cutout", "buffers": [alpha_entry((4, 4), nbytes=20)]}, bytes(20), "needs 16 bytes"),
+        ({"cmd": "set_cutout", "buffers": [alpha_entry((1, 1, 1, 1, 4), nbytes=4)]}, bytes(4), "at most 4"),
+        ({"cmd": "set_cutout", "buffers": [alpha_entry((4,))]}, bytes(4), "2D"),
+        ({"cmd": "set_cutout", "buffers": [alpha_entry((2, 2)), alpha_entry((2, 2))]}, bytes(8), "once"),
+        ({"cmd": "set_cutout", "buffers": [alpha_entry((1, 40000))]}, bytes(40000), "canvas is above"),
+        ({"cmd": "render", "buffers": [alpha_entry((2, 2), name="layer")]}, bytes(4), "unexpected buffer 'layer'"),
+        ({"cmd": "set_cutout", "buffers": [alpha_entry((2, 2), name="mask")]}, bytes(4), "it takes alpha"),
+        ({"cmd": "set_cutout", "buffers": [alpha_entry((65536, 65536))]}, b"", "limit of 1 GiB"),
+        (
+            {"cmd": "set_cutout", "buffers": [{"name": "alpha", "dtype": "uint8", "shape": [2], "nbytes": -2}]},
+            b"",
+            "nbytes >= 0",
+        ),
+        ({"cmd": "set_cutout", "buffers": "alpha"}, b"", "must be a list"),
+        (
+            {"cmd": "set_cutout", "buffers": [alpha_entry((2, 2), "float32", 16) | {"shape": [2, "2"]}]},
+            bytes(16),
+            "shape must be",
+        ),
+    ],
+)
 def test_bad_header_is_refused_and_the_next_request_answered(worker, header, payload, fragment):
     replies, ended = converse(worker, message({"id": 1, **header}, payload) + HELLO)
     assert not ended and len(replies) == 2, replies
@@ -91,8 +100,9 @@ def test_a_real_cutout_after_refusals(worker):
     """Refusals leave no state behind: a real set_cutout and render still work on the same stream."""
     alpha = np.zeros((60, 80), np.uint8)
     alpha[20:50, 30:45] = 255
-    stream = (message({"id": 1, "cmd": "set_cutout", "buffers": [alpha_entry((3, 3), nbytes=5)]}, bytes(5))
-              + message({"id": 2, "cmd": "set_cutout", "buffers": [alpha_entry(alpha.shape)]}, alpha.tobytes()))
+    stream = message({"id": 1, "cmd": "set_cutout", "buffers": [alpha_entry((3, 3), nbytes=5)]}, bytes(5)) + message(
+        {"id": 2, "cmd": "set_cutout", "buffers": [alpha_entry(alpha.shape)]}, alpha.tobytes()
+    )
     replies, _ = converse(worker, stream)
     assert replies[0]["ok"] is False and replies[1]["ok"] is True
     render = message({"id": 3, "cmd": "render", "cutout": replies[1]["cutout"], "preset": "softbox"})

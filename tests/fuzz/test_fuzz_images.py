@@ -24,8 +24,11 @@ def encoded(mode: str, fmt: str, w: int, h: int, seed: int) -> bytes | None:
     rng = np.random.default_rng(seed)
     base = Image.fromarray(rng.integers(0, 256, (h, w, 4), dtype=np.uint8), "RGBA")
     try:
-        im = base.convert(mode) if mode not in ("I;16", "LAB", "HSV") else base.convert("L" if mode == "I;16" else
-                                                                                        "RGB").convert(mode)
+        im = (
+            base.convert(mode)
+            if mode not in ("I;16", "LAB", "HSV")
+            else base.convert("L" if mode == "I;16" else "RGB").convert(mode)
+        )
         if mode == "P":
             im.info["transparency"] = 0
         buf = io.BytesIO()
@@ -36,9 +39,15 @@ def encoded(mode: str, fmt: str, w: int, h: int, seed: int) -> bytes | None:
 
 
 @FUZZ
-@given(mode=st.sampled_from(MODES), fmt=st.sampled_from(FORMATS), w=st.integers(1, 40), h=st.integers(1, 40),
-       seed=st.integers(0, 1000), damage=st.sampled_from(["none", "truncate", "flip", "garbage"]),
-       where=st.floats(0, 1))
+@given(
+    mode=st.sampled_from(MODES),
+    fmt=st.sampled_from(FORMATS),
+    w=st.integers(1, 40),
+    h=st.integers(1, 40),
+    seed=st.integers(0, 1000),
+    damage=st.sampled_from(["none", "truncate", "flip", "garbage"]),
+    where=st.floats(0, 1),
+)
 def test_any_image_file(tmp_path_factory, mode, fmt, w, h, seed, damage, where):
     data = encoded(mode, fmt, w, h, seed)
     assume(data is not None)

@@ -14,12 +14,22 @@ from ssn_engine import predict_frames
 from ssn_engine.ao_edit import AOEditError, apply_edits
 from ssn_engine.light_map import MAX_LIGHTS, LightMap, LightMapError
 
-numbers = st.floats(allow_nan=True, allow_infinity=True) | st.integers(-10**6, 10**6) | st.text(max_size=4) \
-    | st.none() | st.booleans()
+numbers = (
+    st.floats(allow_nan=True, allow_infinity=True)
+    | st.integers(-(10**6), 10**6)
+    | st.text(max_size=4)
+    | st.none()
+    | st.booleans()
+)
 light = st.dictionaries(st.sampled_from(["u", "v", "softness", "intensity", "x"]), numbers, max_size=5)
-light_maps = st.fixed_dictionaries({}, optional={
-    "format": st.sampled_from(["ssn-shadow-elm", "elm", 1]), "version": st.sampled_from([1, 2, "1", None]),
-    "lights": st.lists(light | numbers, max_size=MAX_LIGHTS + 2) | numbers})
+light_maps = st.fixed_dictionaries(
+    {},
+    optional={
+        "format": st.sampled_from(["ssn-shadow-elm", "elm", 1]),
+        "version": st.sampled_from([1, 2, "1", None]),
+        "lights": st.lists(light | numbers, max_size=MAX_LIGHTS + 2) | numbers,
+    },
+)
 
 
 @FUZZ
@@ -34,8 +44,10 @@ def test_light_map_json(data, as_text):
     assert len(lights) <= MAX_LIGHTS and LightMap.from_json(lights.to_json()).to_dict() == lights.to_dict()
 
 
-edit = st.fixed_dictionaries({"op": st.sampled_from(["brush", "grow", "strength", "blur"]) | numbers}, optional={
-    "x": numbers, "y": numbers, "radius": numbers, "strength": numbers, "pixels": numbers, "value": numbers})
+edit = st.fixed_dictionaries(
+    {"op": st.sampled_from(["brush", "grow", "strength", "blur"]) | numbers},
+    optional={"x": numbers, "y": numbers, "radius": numbers, "strength": numbers, "pixels": numbers, "value": numbers},
+)
 AO = np.linspace(0, 1, 64 * 64, dtype=np.float32).reshape(64, 64)
 
 
@@ -50,10 +62,16 @@ def test_ao_edit_lists(edits):
     assert out.shape == AO.shape and np.all(np.isfinite(out)) and out.min() >= 0 and out.max() <= 1
 
 
-FILL = {"zeros": lambda r, s: np.zeros(s), "ones": lambda r, s: np.ones(s), "random": lambda r, s: r.random(s),
-        "blob": lambda r, s: (r.random(s) > 0.7).astype(float), "negative": lambda r, s: -r.random(s),
-        "huge": lambda r, s: r.random(s) * 1e30, "nan": lambda r, s: np.where(r.random(s) > 0.99, np.nan, 0.5),
-        "inf": lambda r, s: np.full(s, np.inf)}
+FILL = {
+    "zeros": lambda r, s: np.zeros(s),
+    "ones": lambda r, s: np.ones(s),
+    "random": lambda r, s: r.random(s),
+    "blob": lambda r, s: (r.random(s) > 0.7).astype(float),
+    "negative": lambda r, s: -r.random(s),
+    "huge": lambda r, s: r.random(s) * 1e30,
+    "nan": lambda r, s: np.where(r.random(s) > 0.99, np.nan, 0.5),
+    "inf": lambda r, s: np.full(s, np.inf),
+}
 
 
 @st.composite

@@ -21,12 +21,13 @@ ERROR_TYPES = {"BadRequest", "EmptyAlpha", "LightMapError", "UnknownCutout", "Mo
 WORKER = Worker(load_method("geometric"))
 
 json_values = st.recursive(
-    st.none() | st.booleans() | st.integers(-10**12, 10**12) | st.floats(allow_nan=True) | st.text(max_size=12),
+    st.none() | st.booleans() | st.integers(-(10**12), 10**12) | st.floats(allow_nan=True) | st.text(max_size=12),
     lambda inner: st.lists(inner, max_size=4) | st.dictionaries(st.text(max_size=8), inner, max_size=4),
     max_leaves=12,
 )
-fields = st.sampled_from(["cutout", "light_map", "preset", "color", "opacity", "format", "edits", "width", "camera",
-                          "token", "id"])
+fields = st.sampled_from(
+    ["cutout", "light_map", "preset", "color", "opacity", "format", "edits", "width", "camera", "token", "id"]
+)
 
 
 @st.composite
@@ -34,8 +35,7 @@ def requests(draw) -> bytes:
     """A request that is well framed but may say anything: random command, fields, buffers and payloads."""
     cmd = draw(st.sampled_from(list(Worker.COMMANDS) + ["shutdown", "auth", "", "x" * 40]) | json_values)
     header = {"id": draw(st.integers(0, 1000)), "cmd": cmd}
-    header.update(draw(st.dictionaries(fields, json_values | st.sampled_from(["softbox", "c1", "uint16"]),
-                                       max_size=4)))
+    header.update(draw(st.dictionaries(fields, json_values | st.sampled_from(["softbox", "c1", "uint16"]), max_size=4)))
     payload = b""
     if draw(st.booleans()):
         shape = draw(st.lists(st.integers(0, 40), min_size=1, max_size=3))
@@ -43,8 +43,9 @@ def requests(draw) -> bytes:
         size = int(np.prod(shape)) * np.dtype(dtype).itemsize
         nbytes = size if draw(st.integers(0, 9)) else draw(st.integers(-5, size + 5))  # sometimes inconsistent
         payload = (draw(st.binary(min_size=1, max_size=64)) * (size + 6))[: max(0, nbytes)]  # as many as declared
-        header["buffers"] = [{"name": draw(st.sampled_from(["alpha", "layer"])), "dtype": dtype, "shape": shape,
-                              "nbytes": nbytes}]
+        header["buffers"] = [
+            {"name": draw(st.sampled_from(["alpha", "layer"])), "dtype": dtype, "shape": shape, "nbytes": nbytes}
+        ]
     return json.dumps(header).encode() + b"\n" + payload
 
 

@@ -72,8 +72,9 @@ def build(case):
         mask = layer.create_mask(Gimp.AddMaskType.WHITE)
         layer.add_mask(mask)
         half = c["w"] // 2
-        mask.get_buffer().set(Gegl.Rectangle.new(half, 0, c["w"] - half, c["h"]), "Y u8",
-                              bytes((c["w"] - half) * c["h"]))
+        mask.get_buffer().set(
+            Gegl.Rectangle.new(half, 0, c["w"] - half, c["h"]), "Y u8", bytes((c["w"] - half) * c["h"])
+        )
         mask.get_buffer().flush()
     if case.get("select"):
         sx, sy, sw, sh = case["select"]

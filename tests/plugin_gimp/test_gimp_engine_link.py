@@ -93,8 +93,12 @@ def test_an_idle_worker_exits_by_itself():
     import subprocess
     import sys
 
-    proc = subprocess.Popen([sys.executable, "-m", "ssn_engine", "serve", "--port", "0", "--idle-timeout", "1",
-                             "--method", "geometric"], stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True)
+    proc = subprocess.Popen(
+        [sys.executable, "-m", "ssn_engine", "serve", "--port", "0", "--idle-timeout", "1", "--method", "geometric"],
+        stdout=subprocess.PIPE,
+        stderr=subprocess.PIPE,
+        text=True,
+    )
     try:
         assert proc.stdout.readline().startswith("listening 127.0.0.1:")
         assert proc.wait(timeout=60) == 0

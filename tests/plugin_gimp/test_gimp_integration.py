@@ -127,8 +127,15 @@ CASES = [
         "base": "RGB",
         "precision": "U8_NON_LINEAR",
         "cutout": PAWN,
-        "args": {"light-map": "low-sun-right", "opacity": 1.0, "ao-strength": 1.0, "shadow-color": [0, 0, 0],
-                 "use-horizon": True, "horizon": -300.0, "fov": 40.0},
+        "args": {
+            "light-map": "low-sun-right",
+            "opacity": 1.0,
+            "ao-strength": 1.0,
+            "shadow-color": [0, 0, 0],
+            "use-horizon": True,
+            "horizon": -300.0,
+            "fov": 40.0,
+        },
         "side": "left",
     },
     # errors: no selection and no alpha; a malformed light map
@@ -286,8 +293,9 @@ def _expected(worker: tuple[int, str], case: dict, cutout: np.ndarray) -> tuple[
     client = EngineClient(address=("127.0.0.1", worker[0]), token=worker[1])
     try:
         camera = {"camera": {"horizon": args["horizon"], "fov": args["fov"]}} if args.get("use-horizon") else {}
-        reply, _ = client.request("set_cutout", {"alpha": Buffer(str(alpha.dtype), alpha.shape, alpha.tobytes())},
-                                  **camera)
+        reply, _ = client.request(
+            "set_cutout", {"alpha": Buffer(str(alpha.dtype), alpha.shape, alpha.tobytes())}, **camera
+        )
         cid = reply["cutout"]
         if args["ao-strength"] != 1.0:
             client.request("edit_ao", cutout=cid, edits=[{"op": "strength", "value": args["ao-strength"]}])
@@ -380,8 +388,9 @@ def test_undo_group_closed(gimp_results):
 def _exec_scene_then(inner: str, script: str, precision: str = "") -> str:
     """python-fu-eval code: build the shared pawn scene (at ``precision``, a Gimp.Precision name, if given), then
     run ``script`` in the same globals."""
-    return (f'SCENE_PRECISION = "{precision}"; exec(open("{inner}/scene.py").read()); '
-            f'exec(open("{inner}/{script}").read())')
+    return (
+        f'SCENE_PRECISION = "{precision}"; exec(open("{inner}/scene.py").read()); exec(open("{inner}/{script}").read())'
+    )
 
 
 def test_one_undo_removes_the_shadow(workdir):
@@ -419,8 +428,10 @@ def test_interactive_dialog(workdir, worker, precision):
     if os.environ.get("SSN_GIMP_DIALOG_SCREENSHOT"):
         env["SSN_SHADOW_DIALOG_SCREENSHOT"] = inner + "/out/dialog.png"
     run, seconds = run_gimp(
-        inner, f'OUT_PATH = "{inner}/out/dialog.json"; {_exec_scene_then(inner, "dialog.py", precision)}',
-        profile=profile, **env,
+        inner,
+        f'OUT_PATH = "{inner}/out/dialog.json"; {_exec_scene_then(inner, "dialog.py", precision)}',
+        profile=profile,
+        **env,
     )
     log = run.stdout + run.stderr
     print(f"\ngimp-console dialog session: {seconds:.1f} s")

@@ -69,8 +69,19 @@ class FakeHost:
         self.reads += 1
         if self.fail:
             raise SourceError(self.fail)
-        return Source(document, "node", "node-1", "Person", self.alpha, "uint8", self.w, self.h, False,
-                      pixel_format("RGBA", "U8"), "sRGB-elle-V2-srgbtrc.icc")
+        return Source(
+            document,
+            "node",
+            "node-1",
+            "Person",
+            self.alpha,
+            "uint8",
+            self.w,
+            self.h,
+            False,
+            pixel_format("RGBA", "U8"),
+            "sRGB-elle-V2-srgbtrc.icc",
+        )
 
     def write(self, source, pixels, rect, new_step):
         self.writes.append((rect, len(pixels), new_step))

@@ -59,7 +59,10 @@ def run_in_krita(pykrita: Path, depth: str, result: Path) -> dict:
     # kritarunner's exit status says nothing (and it may crash on exit): the result file counts.
     proc = subprocess.run(
         [xvfb, "-a", kritarunner, "-s", "krita_driver", "-f", "main"],
-        env=env, capture_output=True, text=True, timeout=180,
+        env=env,
+        capture_output=True,
+        text=True,
+        timeout=180,
     )
     assert result.exists(), f"Krita wrote no result\n{proc.stdout[-3000:]}\n{proc.stderr[-3000:]}"
     data = json.loads(result.read_text())

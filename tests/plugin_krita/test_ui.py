@@ -60,8 +60,16 @@ def test_wheel_softness_and_delete_key(qapp):
     w, events = widget(qapp, lm.preset("softbox"))
     before = w.light_map.lights[0].softness
     centre = QPointF(pos(w, w.light_map.lights[0].u, w.light_map.lights[0].v))
-    ev = QWheelEvent(centre, w.mapToGlobal(centre.toPoint()), QPoint(), QPoint(0, 120), Qt.NoButton, Qt.NoModifier,
-                     Qt.NoScrollPhase, False)
+    ev = QWheelEvent(
+        centre,
+        w.mapToGlobal(centre.toPoint()),
+        QPoint(),
+        QPoint(0, 120),
+        Qt.NoButton,
+        Qt.NoModifier,
+        Qt.NoScrollPhase,
+        False,
+    )
     QApplication.sendEvent(w, ev)
     assert w.light_map.lights[0].softness > before
     w.setFocus()

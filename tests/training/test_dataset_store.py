@@ -56,6 +56,7 @@ def test_shadow_batch_and_irradiance_agree_with_soft_shadow(dataset):
     views = [store.load(i) for i in (0, 17, 33)]
     rng = np.random.default_rng(0)
     import random
+
     elms = np.stack([render_light_map(LightMap.random(random.Random(k)), 16) for k in range(3)])
     occ = np.stack([v.occlusion for v in views])
     batch = store.shadow_batch(occ, elms)
@@ -91,6 +92,7 @@ def test_resume_skips_finished_meshes_and_shards_partition(dataset, tmp_path):
 
 def test_interrupted_mesh_is_redone(dataset, tmp_path):
     import shutil
+
     root = tmp_path / "copy"
     shutil.copytree(dataset, root)
     victim = sorted((root / "views").iterdir())[1]

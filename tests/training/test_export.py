@@ -16,8 +16,26 @@ from test_train_standin import FakeStore  # noqa: E402
 from training.export import main as export_main  # noqa: E402
 from training.train import main as train_main  # noqa: E402
 
-TINY = ["--resolution", "32", "--widths", "4,8,8", "--groups", "2", "--batch", "4", "--val-samples", "4",
-        "--val-every", "2", "--threads", "1", "--warmup", "1", "--steps", "2"]
+TINY = [
+    "--resolution",
+    "32",
+    "--widths",
+    "4,8,8",
+    "--groups",
+    "2",
+    "--batch",
+    "4",
+    "--val-samples",
+    "4",
+    "--val-every",
+    "2",
+    "--threads",
+    "1",
+    "--warmup",
+    "1",
+    "--steps",
+    "2",
+]
 
 
 @pytest.fixture(scope="module")
@@ -26,8 +44,20 @@ def exported(tmp_path_factory):
     for module in ("aop", "sr"):
         assert train_main(["--module", module, "--run", str(tmp / module), *TINY], store=FakeStore(res=32)) == 0
     out = tmp / "model"
-    code = export_main(["--aop", str(tmp / "aop" / "last.pt"), "--sr", str(tmp / "sr" / "last.pt"),
-                        "--out", str(out), "--data", str(tmp / "no-data"), "--floor", "0.01"])
+    code = export_main(
+        [
+            "--aop",
+            str(tmp / "aop" / "last.pt"),
+            "--sr",
+            str(tmp / "sr" / "last.pt"),
+            "--out",
+            str(out),
+            "--data",
+            str(tmp / "no-data"),
+            "--floor",
+            "0.01",
+        ]
+    )
     assert code == 0
     return out
 
@@ -86,8 +116,11 @@ def _sr_mirror_gap(model_dir) -> float:
     """Largest difference between SR on mirrored inputs and SR's output mirrored."""
     sr = ort.InferenceSession(str(model_dir / "sr.onnx"), providers=["CPUExecutionProvider"])
     rng = np.random.default_rng(0)
-    x = {"mask": rng.random((2, 1, 32, 32), dtype=np.float32), "ao": rng.random((2, 1, 32, 32), dtype=np.float32),
-         "elm": rng.random((2, 16, 32), dtype=np.float32)}
+    x = {
+        "mask": rng.random((2, 1, 32, 32), dtype=np.float32),
+        "ao": rng.random((2, 1, 32, 32), dtype=np.float32),
+        "elm": rng.random((2, 16, 32), dtype=np.float32),
+    }
     direct = sr.run(None, x)[0]
     mirrored = sr.run(None, {k: np.ascontiguousarray(v[..., ::-1]) for k, v in x.items()})[0]
     return float(np.abs(mirrored[..., ::-1] - direct).max())
@@ -96,8 +129,19 @@ def _sr_mirror_gap(model_dir) -> float:
 def test_mirror_averaged_export_is_mirror_symmetric(exported):
     out = exported.parent / "mirrored"
     runs = exported.parent
-    code = export_main(["--aop", str(runs / "aop" / "last.pt"), "--sr", str(runs / "sr" / "last.pt"),
-                        "--out", str(out), "--data", str(runs / "no-data"), "--mirror-average"])
+    code = export_main(
+        [
+            "--aop",
+            str(runs / "aop" / "last.pt"),
+            "--sr",
+            str(runs / "sr" / "last.pt"),
+            "--out",
+            str(out),
+            "--data",
+            str(runs / "no-data"),
+            "--mirror-average",
+        ]
+    )
     assert code == 0
     card = json.loads((out / "model.json").read_text())
     assert card["mirror_average"] is True and card["export"]["sr"]["max_abs_diff"] <= 1e-4
@@ -111,12 +155,23 @@ def test_two_aops_export_as_one_graph_of_their_mean(exported):
 
     checkpoint_widths = lambda p: load(p)["unet"]["widths"]  # noqa: E731
     runs = exported.parent
-    assert train_main(["--module", "aop", "--run", str(runs / "aop2"), *TINY, "--seed", "1"],
-                      store=FakeStore(res=32)) == 0
+    assert (
+        train_main(["--module", "aop", "--run", str(runs / "aop2"), *TINY, "--seed", "1"], store=FakeStore(res=32)) == 0
+    )
     members = [runs / "aop" / "last.pt", runs / "aop2" / "last.pt"]
     out = runs / "ensemble"
-    code = export_main(["--aop", *map(str, members), "--sr", str(runs / "sr" / "last.pt"), "--out", str(out),
-                        "--data", str(runs / "no-data")])
+    code = export_main(
+        [
+            "--aop",
+            *map(str, members),
+            "--sr",
+            str(runs / "sr" / "last.pt"),
+            "--out",
+            str(out),
+            "--data",
+            str(runs / "no-data"),
+        ]
+    )
     assert code == 0
     m = np.random.default_rng(3).random((2, 1, 32, 32), dtype=np.float32)
     got = ort.InferenceSession(str(out / "aop.onnx"), providers=["CPUExecutionProvider"]).run(None, {"mask": m})[0]
@@ -135,11 +190,26 @@ def test_geometry_guided_sr_exports_with_the_card_input_and_the_engine_feeds_it(
     from ssn_engine.methods import OnnxSSN
 
     run = tmp_path / "sr_card"
-    assert train_main(["--module", "sr", "--card", "--lights", "mix", "--run", str(run), *TINY],
-                      store=FakeStore(res=32)) == 0
+    assert (
+        train_main(["--module", "sr", "--card", "--lights", "mix", "--run", str(run), *TINY], store=FakeStore(res=32))
+        == 0
+    )
     out = tmp_path / "model"
-    assert export_main(["--aop", str(exported / "aop.onnx"), "--sr", str(run / "last.pt"), "--out", str(out),
-                        "--data", str(tmp_path / "no-data")]) == 0
+    assert (
+        export_main(
+            [
+                "--aop",
+                str(exported / "aop.onnx"),
+                "--sr",
+                str(run / "last.pt"),
+                "--out",
+                str(out),
+                "--data",
+                str(tmp_path / "no-data"),
+            ]
+        )
+        == 0
+    )
     card = json.loads((out / "model.json").read_text())
     assert card["export"]["sr"]["max_abs_diff"] <= 1e-4
     assert card["export"]["aop"]["reused_from"] == str(exported / "aop.onnx")

@@ -20,8 +20,9 @@ def _shared_mesh(uid: str) -> meshes.Mesh:
     return sources.build_mesh(item)
 
 
-@pytest.mark.parametrize("uid,yaw,pitch", [("capod_chair_01", 45.0, 15.0), ("ycb_banana", -90.0, 30.0),
-                                           ("capod_spider_01", 0.0, 0.0)])
+@pytest.mark.parametrize(
+    "uid,yaw,pitch", [("capod_chair_01", 45.0, 15.0), ("ycb_banana", -90.0, 30.0), ("capod_spider_01", 0.0, 0.0)]
+)
 def test_bases_agree_with_brute_force_ray_casting(uid, yaw, pitch):
     mesh = _shared_mesh(uid)
     n, hb, s = 96, 16, 16
@@ -55,8 +56,11 @@ def test_mask_agrees_with_brute_force_ray_casting():
     mask = rb.mask_coverage(v, mesh.faces, meshes.topology(mesh), cam, ss)
     sub = (np.arange(n * ss) + 0.5) / ss
     cols, rows = np.meshgrid(sub, sub)
-    rays = cam.view + ((cols - 0.5 * n) / cam.focal)[..., None] * np.array([1.0, 0, 0]) \
+    rays = (
+        cam.view
+        + ((cols - 0.5 * n) / cam.focal)[..., None] * np.array([1.0, 0, 0])
         - ((rows - cam.shift - 0.5 * n) / cam.focal)[..., None] * cam.up
+    )
     hits = ray_hits(np.broadcast_to(cam.centre, rays.shape).reshape(-1, 3), rays.reshape(-1, 3), v, mesh.faces)
     brute = hits.reshape(n, ss, n, ss).mean(axis=(1, 3))
     assert np.abs(brute - mask).max() <= 1.0 / ss**2 + 1e-6  # at most one sub-sample on an edge differs

@@ -22,8 +22,12 @@ def test_procedural_items_are_reproducible_and_split_by_shape():
 
 
 def test_primitives_are_closed_and_outward():
-    for mesh in (procedural.box((1, 2, 3)), procedural.cylinder(0.3, 1.0), procedural.uv_sphere(0.5),
-                 procedural.torus(0.4, 0.1)):
+    for mesh in (
+        procedural.box((1, 2, 3)),
+        procedural.cylinder(0.3, 1.0),
+        procedural.uv_sphere(0.5),
+        procedural.torus(0.4, 0.1),
+    ):
         topo = meshes.topology(mesh)
         counts = np.diff(topo.ptr)
         assert np.all(counts == 2)  # closed 2-manifold
@@ -41,6 +45,7 @@ def test_torus_shadow_has_a_hole():
     mesh = meshes.normalise(procedural.torus(0.4, 0.08, upright=False))  # lying flat: a ring on the ground
     cam = rb.view_camera(mesh.vertices, 96, 45.0, 30.0)
     from helpers import hard_shadow, light_direction
+
     occ = hard_shadow(mesh, cam, light_direction(cam, 89.0, 0.0)).astype(bool)
     g, _ = cam.ground_points()
     d = np.hypot(g[..., 0], g[..., 2])
@@ -51,6 +56,7 @@ def test_torus_shadow_has_a_hole():
 def test_anny_humans_are_reproducible_people():
     pytest.importorskip("anny")
     from training.data import humans
+
     items = humans.human_items(3, seed=1)
     assert {it.kind for it in items} == {"human"}
     assert items[0].params == humans.human_items(1, seed=1)[0].params

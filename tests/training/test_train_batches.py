@@ -58,8 +58,9 @@ def test_irradiance_target_and_conversion_back_to_shadow():
     peak = elm16.reshape(4, -1).max(axis=1)
     e = targets_for(v.occ, elm_hb, peak, store._weights, "irradiance")
     for b in range(4):
-        np.testing.assert_allclose(e[b], store.irradiance(store.load(1).occlusion, elm_hb[b] / peak[b]).ravel(),
-                                   rtol=1e-4, atol=1e-5)
+        np.testing.assert_allclose(
+            e[b], store.irradiance(store.load(1).occlusion, elm_hb[b] / peak[b]).ravel(), rtol=1e-4, atol=1e-5
+        )
     s = targets_for(v.occ, elm_hb, peak, store._weights, "shadow")
     np.testing.assert_allclose(irradiance_to_shadow(e, elm_hb, elm16), s, atol=1e-5)
 
@@ -100,8 +101,13 @@ def test_balanced_kinds_are_drawn_equally_often():
         keys = list(cache.keys)
         drawn = cache.draw(rng, keys, 4000, replace=True)
         batch = BatchSampler(cache, 400, None, elms_per_view=1)(rng)
-        assert abs(np.mean([cache.kinds[k] == "human" for k in batch.keys]) - np.mean(
-            [cache.kinds[k] == "human" for k in drawn])) < 0.1  # the sampler draws the same way
+        assert (
+            abs(
+                np.mean([cache.kinds[k] == "human" for k in batch.keys])
+                - np.mean([cache.kinds[k] == "human" for k in drawn])
+            )
+            < 0.1
+        )  # the sampler draws the same way
         return float(np.mean([cache.kinds[k] == "human" for k in drawn]))
 
     assert abs(human_share(False) - 2 / 12) < 0.03
@@ -111,8 +117,9 @@ def test_balanced_kinds_are_drawn_equally_often():
 def test_aop_batches_skip_the_target():
     store = FakeStore(res=16)
     cache = ViewCache(store, "train", 16, with_occ=False)
-    b = make_batch([cache.get(next(iter(cache.keys)))] * 2, sample_lights(np.random.default_rng(0), 2), 4,
-                   cache.weights, None)
+    b = make_batch(
+        [cache.get(next(iter(cache.keys)))] * 2, sample_lights(np.random.default_rng(0), 2), 4, cache.weights, None
+    )
     assert b.target.shape == (2, 16, 16) and not b.target.any()
 
 
@@ -121,8 +128,13 @@ def _mirror_symmetric_view(res: int = 16, rows: int = 2) -> CachedView:
     copy shifted by 2j - (W - 1) pixels (so column W - 1 - j casts the mirrored shadow)."""
     mask = np.zeros((res, res), np.float32)
     mask[3:9, res // 2 - 3 : res // 2 + 3] = 1.0
-    occ = np.stack([np.roll(mask, (1 + i, 2 * j - (2 * rows - 1)), (0, 1)) * (0.4 + 0.3 * i)
-                    for i in range(rows) for j in range(2 * rows)])
+    occ = np.stack(
+        [
+            np.roll(mask, (1 + i, 2 * j - (2 * rows - 1)), (0, 1)) * (0.4 + 0.3 * i)
+            for i in range(rows)
+            for j in range(2 * rows)
+        ]
+    )
     return CachedView(("sym",), mask, 1.0 - 0.5 * mask, np.rint(occ * 255).astype(np.uint8).reshape(len(occ), -1))
 
 

@@ -26,10 +26,33 @@ def _worker(rank: int, world: int, port: int, run: str) -> None:
 
     from training.train import main
 
-    os.environ.update(RANK=str(rank), LOCAL_RANK=str(rank), WORLD_SIZE=str(world), MASTER_ADDR="127.0.0.1",
-                      MASTER_PORT=str(port))
-    argv = ["--module", "sr", "--run", run, "--steps", "3", "--resolution", "16", "--widths", "4,8", "--groups", "2",
-            "--batch", "2", "--val-samples", "2", "--val-every", "3", "--threads", "1", "--warmup", "1"]
+    os.environ.update(
+        RANK=str(rank), LOCAL_RANK=str(rank), WORLD_SIZE=str(world), MASTER_ADDR="127.0.0.1", MASTER_PORT=str(port)
+    )
+    argv = [
+        "--module",
+        "sr",
+        "--run",
+        run,
+        "--steps",
+        "3",
+        "--resolution",
+        "16",
+        "--widths",
+        "4,8",
+        "--groups",
+        "2",
+        "--batch",
+        "2",
+        "--val-samples",
+        "2",
+        "--val-every",
+        "3",
+        "--threads",
+        "1",
+        "--warmup",
+        "1",
+    ]
     assert main(argv, store=FakeStore(res=16)) == 0
 
 

@@ -23,8 +23,9 @@ def test_wrapping_light_at_the_seam():
     lights = sample_lights(np.random.default_rng(1), 1)
     lights.u[:] = 0.999
     lights.softness[:] = 0.05
-    np.testing.assert_allclose(render_lights(lights, 16)[0], render_light_map(lights.light_map(0), 16), rtol=1e-4,
-                               atol=1e-6)
+    np.testing.assert_allclose(
+        render_lights(lights, 16)[0], render_light_map(lights.light_map(0), 16), rtol=1e-4, atol=1e-6
+    )
 
 
 def test_sampling_follows_table_1():

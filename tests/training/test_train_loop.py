@@ -14,8 +14,28 @@ from test_train_standin import FakeStore  # noqa: E402
 from training import checkpoint  # noqa: E402
 from training.train import lr_at, main, parse_args  # noqa: E402
 
-TINY = ["--resolution", "16", "--widths", "4,8,8", "--groups", "2", "--batch", "4", "--val-samples", "4",
-        "--val-every", "2", "--log-every", "1", "--threads", "1", "--warmup", "2", "--elms-per-view", "2"]
+TINY = [
+    "--resolution",
+    "16",
+    "--widths",
+    "4,8,8",
+    "--groups",
+    "2",
+    "--batch",
+    "4",
+    "--val-samples",
+    "4",
+    "--val-every",
+    "2",
+    "--log-every",
+    "1",
+    "--threads",
+    "1",
+    "--warmup",
+    "2",
+    "--elms-per-view",
+    "2",
+]
 
 
 def _run(tmp_path, module, steps, extra=()):
@@ -25,9 +45,18 @@ def _run(tmp_path, module, steps, extra=()):
     return run
 
 
-@pytest.mark.parametrize("module,extra", [("aop", []), ("sr", []), ("sr", ["--target", "irradiance"]),
-                                          ("aop", ["--flip"]), ("sr", ["--flip"]),
-                                          ("sr", ["--balance-kinds"]), ("sr", ["--card", "--lights", "mix"])])
+@pytest.mark.parametrize(
+    "module,extra",
+    [
+        ("aop", []),
+        ("sr", []),
+        ("sr", ["--target", "irradiance"]),
+        ("aop", ["--flip"]),
+        ("sr", ["--flip"]),
+        ("sr", ["--balance-kinds"]),
+        ("sr", ["--card", "--lights", "mix"]),
+    ],
+)
 def test_training_writes_checkpoints_logs_and_figures(tmp_path, module, extra):
     run = _run(tmp_path, module, 4, extra)
     for name in ("last.pt", "best.pt", "log.csv", "loss.png", "samples_latest.png", "config.json"):
@@ -69,8 +98,24 @@ def test_evaluate_on_the_standin(tmp_path):
     aop = _run(tmp_path, "aop", 2) / "last.pt"
     sr = _run(tmp_path, "sr", 2) / "last.pt"
     noninv = _run(tmp_path / "n", "sr", 2, ["--target", "irradiance"]) / "last.pt"
-    args = eval_args(["--aop", str(aop), "--sr", str(sr), "--noninv", str(noninv), "--n-elms", "4",
-                      "--per-view", "2", "--out", str(tmp_path / "eval"), "--threads", "1"])
+    args = eval_args(
+        [
+            "--aop",
+            str(aop),
+            "--sr",
+            str(sr),
+            "--noninv",
+            str(noninv),
+            "--n-elms",
+            "4",
+            "--per-view",
+            "2",
+            "--out",
+            str(tmp_path / "eval"),
+            "--threads",
+            "1",
+        ]
+    )
     res = evaluate(args, store=FakeStore(res=32))
     assert set(res["groups"]) == {"objects", "humans"}
     for group in res["groups"].values():
@@ -84,8 +129,19 @@ def test_evaluate_on_the_standin(tmp_path):
         assert set(group["by_pitch"]) == {"0", "15"}
         assert sum(row["images"] for row in group["by_pitch"].values()) == group["images"]
     assert "### By camera pitch" in (tmp_path / "eval" / "tables.md").read_text()
-    common = ["--aop", str(aop), "--sr", str(sr), "--n-elms", "4", "--per-view", "2", "--no-geometric",
-              "--threads", "1"]
+    common = [
+        "--aop",
+        str(aop),
+        "--sr",
+        str(sr),
+        "--n-elms",
+        "4",
+        "--per-view",
+        "2",
+        "--no-geometric",
+        "--threads",
+        "1",
+    ]
 
     def run(name: str, *extra: str) -> dict:
         return evaluate(eval_args([*common, "--out", str(tmp_path / name), *extra]), store=FakeStore(res=32))
@@ -99,8 +155,18 @@ def test_evaluate_on_the_standin(tmp_path):
 def test_geometric_cache_reproduces_the_baseline(tmp_path):
     from training.evaluate import evaluate, parse_args as eval_args
 
-    argv = ["--n-elms", "4", "--per-view", "1", "--out", str(tmp_path / "e"), "--threads", "1",
-            "--geo-cache", str(tmp_path / "geo.npz")]
+    argv = [
+        "--n-elms",
+        "4",
+        "--per-view",
+        "1",
+        "--out",
+        str(tmp_path / "e"),
+        "--threads",
+        "1",
+        "--geo-cache",
+        str(tmp_path / "geo.npz"),
+    ]
     first = evaluate(eval_args(argv), store=FakeStore(res=32))
     assert first["methods"] == ["geometric"] and (tmp_path / "geo.npz").is_file()
     second = evaluate(eval_args(argv), store=FakeStore(res=32))
@@ -180,8 +246,9 @@ def test_evaluation_by_light_family_on_the_standin(tmp_path):
     from training.evaluate import parse_args as eval_args
     from training.evaluate_families import evaluate_families
 
-    args = eval_args(["--families", "sun,sky", "--per-view", "2", "--with-camera", "geometric",
-                      "--out", str(tmp_path / "fam")])
+    args = eval_args(
+        ["--families", "sun,sky", "--per-view", "2", "--with-camera", "geometric", "--out", str(tmp_path / "fam")]
+    )
     res = evaluate_families(args, store=FakeStore(res=32))
     assert set(res["families"]) == {"sun", "sky"} and res["rows"] == ["geometric", "geometric + camera"]
     sun = res["families"]["sun"]

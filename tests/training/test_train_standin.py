@@ -35,23 +35,44 @@ class FakeStore:
                 for i in range(elm_rows):
                     for j in range(2 * elm_rows):
                         dy, dx = 1 + (elm_rows - i), (j - elm_rows)
-                        occ[i, j] = (np.roll(np.roll(mask, dy, 0), dx // 2, 1) * 255 * (0.5 + 0.5 * i / elm_rows))
+                        occ[i, j] = np.roll(np.roll(mask, dy, 0), dx // 2, 1) * 255 * (0.5 + 0.5 * i / elm_rows)
                 ao = np.clip(1.0 - occ.mean(axis=(0, 1)) / 255.0, 0, 1) ** (1 / 3)
-                info = {"split": splits[m % len(splits)], "kind": kinds[m % len(kinds)], "category": "box",
-                        "source": "fake", "mesh_id": f"fake_{m:02d}", "yaw": float(45 * k), "pitch": float(15 * k),
-                        "fov": 45.0, "focal": res / 2 / np.tan(np.radians(22.5)), "shift": -0.1 * res}
+                info = {
+                    "split": splits[m % len(splits)],
+                    "kind": kinds[m % len(kinds)],
+                    "category": "box",
+                    "source": "fake",
+                    "mesh_id": f"fake_{m:02d}",
+                    "yaw": float(45 * k),
+                    "pitch": float(15 * k),
+                    "fov": 45.0,
+                    "focal": res / 2 / np.tan(np.radians(22.5)),
+                    "shift": -0.1 * res,
+                }
                 self._views.append(_View(mask, ao.astype(np.float32), occ, info))
-        self.meshes = [{"mesh": {"id": f"fake_{m:02d}", "split": splits[m % len(splits)],
-                                 "kind": kinds[m % len(kinds)], "source": "fake", "params": {}}}
-                       for m in range(n_meshes)]
+        self.meshes = [
+            {
+                "mesh": {
+                    "id": f"fake_{m:02d}",
+                    "split": splits[m % len(splits)],
+                    "kind": kinds[m % len(kinds)],
+                    "source": "fake",
+                    "params": {},
+                }
+            }
+            for m in range(n_meshes)
+        ]
         self._weights = texel_weights(elm_rows)
 
     def __len__(self) -> int:
         return len(self._views)
 
     def view_ids(self, split="train", kind=None):
-        return [i for i, v in enumerate(self._views)
-                if (split is None or v.info["split"] == split) and (kind is None or v.info["kind"] == kind)]
+        return [
+            i
+            for i, v in enumerate(self._views)
+            if (split is None or v.info["split"] == split) and (kind is None or v.info["kind"] == kind)
+        ]
 
     def info(self, i):
         return dict(self._views[i].info)

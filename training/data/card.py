@@ -31,15 +31,22 @@ def summarise(root: Path) -> dict:
 
     n_views = sum(views)
     return {
-        "root": str(root), "res": store.meta["res"], "elm_grid": [store.meta["elm_rows"], 2 * store.meta["elm_rows"]],
-        "samples_per_texel": store.meta["samples_per_texel"], "seed": store.meta["seed"],
-        "meshes": len(meshes), "views": n_views,
+        "root": str(root),
+        "res": store.meta["res"],
+        "elm_grid": [store.meta["elm_rows"], 2 * store.meta["elm_rows"]],
+        "samples_per_texel": store.meta["samples_per_texel"],
+        "seed": store.meta["seed"],
+        "meshes": len(meshes),
+        "views": n_views,
         "meshes_per_split": dict(Counter(m["split"] for m in meshes)),
         "views_per_split": dict(Counter(m["split"] for m, v in zip(meshes, views, strict=True) for _ in range(v))),
-        "views_per_split_kind": count("kind"), "views_per_split_source": count("source"),
+        "views_per_split_kind": count("kind"),
+        "views_per_split_source": count("source"),
         "views_per_split_category": count("category"),
-        "bytes": view_bytes, "bytes_per_view": view_bytes / max(n_views, 1),
-        "render_cpu_seconds": render_seconds, "render_seconds_per_view_one_worker": render_seconds / max(n_views, 1),
+        "bytes": view_bytes,
+        "bytes_per_view": view_bytes / max(n_views, 1),
+        "render_cpu_seconds": render_seconds,
+        "render_seconds_per_view_one_worker": render_seconds / max(n_views, 1),
         "runs": runs,
     }
 
@@ -49,10 +56,12 @@ def write_card(root: Path) -> dict:
     s = summarise(root)
     (Path(root) / "card.json").write_text(json.dumps(s, indent=1))
     lines = [
-        f"# SSN shadow-basis dataset `{Path(root).name}`", "",
+        f"# SSN shadow-basis dataset `{Path(root).name}`",
+        "",
         "Made by `python -m training.make_dataset` (training/data/README.md has the format;",
         "docs/dataset.md the method). Shapes: ../shared/meshes (licences and attribution per mesh in",
-        "each views/<id>/info.json, from manifest.csv), anny humans (CC0 body data), procedural shapes.", "",
+        "each views/<id>/info.json, from manifest.csv), anny humans (CC0 body data), procedural shapes.",
+        "",
         f"- frame N = {s['res']}, basis grid {s['elm_grid'][0]} x {s['elm_grid'][1]}, "
         f"{s['samples_per_texel']} stratified jittered directions per texel, seed {s['seed']}",
         f"- meshes {s['meshes']}, views {s['views']} (15 per mesh: yaw 0, +-45, +-90 x pitch 0, 15, 30; "
@@ -60,18 +69,25 @@ def write_card(root: Path) -> dict:
         f"- size {s['bytes'] / 2**30:.2f} GiB, {s['bytes_per_view'] / 2**20:.2f} MiB per view",
         f"- render time {s['render_cpu_seconds'] / 3600:.2f} h in one worker, "
         f"{s['render_seconds_per_view_one_worker']:.2f} s per view (single worker, shared machine)",
-        "", "| split | meshes | views |", "|---|---:|---:|",
+        "",
+        "| split | meshes | views |",
+        "|---|---:|---:|",
     ]
     for split in ("train", "val", "test"):
         lines.append(f"| {split} | {s['meshes_per_split'].get(split, 0)} | {s['views_per_split'].get(split, 0)} |")
-    for title, key in (("kind", "views_per_split_kind"), ("source", "views_per_split_source"),
-                       ("category", "views_per_split_category")):
+    for title, key in (
+        ("kind", "views_per_split_kind"),
+        ("source", "views_per_split_source"),
+        ("category", "views_per_split_category"),
+    ):
         lines += ["", f"Views per split and {title}:", "", f"| split/{title} | views |", "|---|---:|"]
         lines += [f"| {k} | {v} |" for k, v in s[key].items()]
     if s["runs"]:
         lines += ["", "Runs:", ""] + [
             f"- shard {r['shard']}: {r['rendered']} items rendered in {r['wall_seconds'] / 60:.1f} min "
-            f"({r['workers']} workers), failed: {r['failed'] or 'none'}" for r in s["runs"]]
+            f"({r['workers']} workers), failed: {r['failed'] or 'none'}"
+            for r in s["runs"]
+        ]
     lines += ["", "Contact sheet: contact_sheet.png (mask, AO, three soft shadows per view)."]
     (Path(root) / "card.md").write_text("\n".join(lines) + "\n")
     return s

@@ -17,8 +17,11 @@ from .store import ViewStore
 def sheet_elms(hb: int) -> list[np.ndarray]:
     """Three ELMs: a small light right of centre, a light ahead (behind the object), a broad sky."""
     maps = []
-    for lights in ([(0.65, 0.55, 0.002, 1.0)], [(0.5, 0.75, 0.004, 1.0)],
-                   [(0.3, 0.3, 0.05, 1.0), (0.8, 0.6, 0.01, 1.0)]):
+    for lights in (
+        [(0.65, 0.55, 0.002, 1.0)],
+        [(0.5, 0.75, 0.004, 1.0)],
+        [(0.3, 0.3, 0.05, 1.0), (0.8, 0.6, 0.01, 1.0)],
+    ):
         lm = LightMap()
         for u, v, soft, inten in lights:
             lm.add(u, v, soft, inten)
@@ -54,8 +57,10 @@ def write_contact_sheet(root: Path, count: int = 8, tile: int = 128, path: Path 
     for i in pick_views(store, count):
         v = store.load(i)
         tiles = [1.0 - v.mask, v.ao] + [1.0 - store.shadow(v.occlusion, e) * (1 - 0.5 * v.mask) for e in elms]
-        imgs = [Image.fromarray((np.clip(t, 0, 1) * 255).astype(np.uint8)).resize((tile, tile), Image.BILINEAR)
-                for t in tiles]
+        imgs = [
+            Image.fromarray((np.clip(t, 0, 1) * 255).astype(np.uint8)).resize((tile, tile), Image.BILINEAR)
+            for t in tiles
+        ]
         rows.append(np.concatenate([np.pad(np.asarray(im), 1, constant_values=128) for im in imgs], axis=1))
     path = Path(path or Path(root) / "contact_sheet.png")
     if rows:

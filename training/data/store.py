@@ -74,15 +74,16 @@ class ViewStore:
         m, k = self._views[i]
         mesh = self.meshes[m]["mesh"]
         view = self.meshes[m]["views"][k]
-        return {**{key: mesh[key] for key in ("split", "kind", "category", "source")},
-                "mesh_id": mesh["id"], **view}
+        return {**{key: mesh[key] for key in ("split", "kind", "category", "source")}, "mesh_id": mesh["id"], **view}
 
     def _mesh_arrays(self, m: int) -> dict[str, np.ndarray]:
         arrays = self._arrays.get(m)
         if arrays is None:
             d = self.root / VIEWS / self.meshes[m]["mesh"]["id"]
-            arrays = {name: np.load(d / f"{name}.npy", mmap_mode="r")
-                      for name in ("mask", "ao", "occ_spans", "occ_data", "occ_offsets")}
+            arrays = {
+                name: np.load(d / f"{name}.npy", mmap_mode="r")
+                for name in ("mask", "ao", "occ_spans", "occ_data", "occ_offsets")
+            }
             self._arrays[m] = arrays
         return arrays
 
@@ -91,7 +92,7 @@ class ViewStore:
         m, k = self._views[i]
         a = self._mesh_arrays(m)
         n, hb = self.meta["res"], self.meta["elm_rows"]
-        data = a["occ_data"][a["occ_offsets"][k]:a["occ_offsets"][k + 1]]
+        data = a["occ_data"][a["occ_offsets"][k] : a["occ_offsets"][k + 1]]
         occ = spanlib.unpack(np.asarray(a["occ_spans"][k]), data, n).reshape(hb, 2 * hb, n, n)
         return View(np.asarray(a["mask"][k], np.float32), np.asarray(a["ao"][k], np.float32), occ, self.info(i))
 

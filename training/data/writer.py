@@ -33,8 +33,9 @@ def is_done(root: Path, uid: str) -> bool:
     return (mesh_dir(root, uid) / INFO).is_file()
 
 
-def write_mesh(root: Path, uid: str, masks: list[np.ndarray], aos: list[np.ndarray],
-               occs: list[np.ndarray], info: dict) -> int:
+def write_mesh(
+    root: Path, uid: str, masks: list[np.ndarray], aos: list[np.ndarray], occs: list[np.ndarray], info: dict
+) -> int:
     """Write the views of one mesh; returns the bytes written. ``occs`` are (T, N, N) uint8."""
     final = mesh_dir(root, uid)
     tmp = final.parent / f".tmp-{uid}-{os.getpid()}"

@@ -48,5 +48,7 @@ def describe(module: str, model: nn.Module, resolution: int) -> str:
     model.eval()
     macs = count_macs(model, *inputs)
     model.train(was_training)
-    return (f"{module.upper()}: {count_parameters(model) / 1e6:.3f} M parameters, "
-            f"{macs / 1e9:.3f} G multiply-adds per {resolution}x{resolution} image")
+    return (
+        f"{module.upper()}: {count_parameters(model) / 1e6:.3f} M parameters, "
+        f"{macs / 1e9:.3f} G multiply-adds per {resolution}x{resolution} image"
+    )

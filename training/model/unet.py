@@ -40,8 +40,7 @@ class UNetConfig:
 
     @classmethod
     def from_dict(cls, d: dict) -> UNetConfig:
-        return cls(widths=tuple(d["widths"]), groups=d["groups"], resolution=d["resolution"],
-                   card=d.get("card", False))
+        return cls(widths=tuple(d["widths"]), groups=d["groups"], resolution=d["resolution"], card=d.get("card", False))
 
 
 def _norm(channels: int, groups: int) -> nn.GroupNorm:
@@ -136,8 +135,9 @@ class SRNet(nn.Module):
         self.config = config
         self.unet = UNet(3 if config.card else 2, config, bottleneck_extra=ELM_SHAPE[0] * ELM_SHAPE[1])
 
-    def forward(self, mask: torch.Tensor, ao: torch.Tensor, elm: torch.Tensor,
-                card: torch.Tensor | None = None) -> torch.Tensor:
+    def forward(
+        self, mask: torch.Tensor, ao: torch.Tensor, elm: torch.Tensor, card: torch.Tensor | None = None
+    ) -> torch.Tensor:
         if not self.config.card:
             return self.unet(torch.cat([mask, ao], dim=1), elm.flatten(1))
         return card + self.unet(torch.cat([mask, ao, card], dim=1), elm.flatten(1))

@@ -79,10 +79,23 @@ def read_source(document: Any) -> Source:
     if selection is not None and selection.width() > 0 and selection.height() > 0:
         alpha = bytes(selection.pixelData(0, 0, w, h))
         if opaque_everywhere(alpha, "uint8"):
-            raise SourceError("The selection covers the whole canvas, so its shadow would darken the whole "
-                              "picture. Select just the object, or deselect (Ctrl+Shift+A) to use the layer's alpha.")
-        return Source(document, node, node_id(node), node.name(), alpha, "uint8", w, h, True,
-                      layer_format, document.colorProfile())
+            raise SourceError(
+                "The selection covers the whole canvas, so its shadow would darken the whole "
+                "picture. Select just the object, or deselect (Ctrl+Shift+A) to use the layer's alpha."
+            )
+        return Source(
+            document,
+            node,
+            node_id(node),
+            node.name(),
+            alpha,
+            "uint8",
+            w,
+            h,
+            True,
+            layer_format,
+            document.colorProfile(),
+        )
     node_format = pixel_format(node.colorModel(), node.colorDepth())
     b = node.bounds()
     x, y, bw, bh = clip_rect(b.x(), b.y(), b.width(), b.height(), w, h)
@@ -91,10 +104,23 @@ def read_source(document: Any) -> Source:
     region = extract_alpha(bytes(node.projectionPixelData(x, y, bw, bh)), node_format)
     alpha = bytes(place_rows(region, x, y, bw, bh, w, h, node_format.itemsize))
     if opaque_everywhere(alpha, node_format.dtype):
-        raise SourceError(f"The layer '{node.name()}' is opaque over the whole canvas, so it holds no cutout. "
-                          "Erase the background around the object, or select the object.")
-    return Source(document, node, node_id(node), node.name(), alpha, node_format.dtype, w, h, False,
-                  layer_format, document.colorProfile())
+        raise SourceError(
+            f"The layer '{node.name()}' is opaque over the whole canvas, so it holds no cutout. "
+            "Erase the background around the object, or select the object."
+        )
+    return Source(
+        document,
+        node,
+        node_id(node),
+        node.name(),
+        alpha,
+        node_format.dtype,
+        w,
+        h,
+        False,
+        layer_format,
+        document.colorProfile(),
+    )
 
 
 def _source_of_shadow(shadow: Any) -> Any:

@@ -64,9 +64,7 @@ def extract_alpha(data: bytes | bytearray, fmt: PixelFormat) -> bytes:
     return bytes(out)
 
 
-def place_rows(
-    region: bytes, x: int, y: int, w: int, h: int, canvas_w: int, canvas_h: int, itemsize: int
-) -> bytearray:
+def place_rows(region: bytes, x: int, y: int, w: int, h: int, canvas_w: int, canvas_h: int, itemsize: int) -> bytearray:
     """A canvas-sized single-channel plane (zeros) with ``region`` (w x h at x, y) copied in."""
     plane = bytearray(canvas_w * canvas_h * itemsize)
     row = w * itemsize

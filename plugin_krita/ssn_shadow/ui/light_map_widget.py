@@ -148,7 +148,7 @@ class LightMapWidget(QWidget):
             return
         steps = event.angleDelta().y() / 120.0
         light = self.light_map.lights[target]
-        self.light_map.resize(target, light.softness * WHEEL_STEP ** steps)
+        self.light_map.resize(target, light.softness * WHEEL_STEP**steps)
         self._select(target)
         now = time.monotonic()
         started = now - self._last_wheel > STROKE_GAP_S

@@ -70,8 +70,10 @@ class ShadowPanel(QWidget):
         form.addRow("Softness", self.softness)
         form.addRow("Intensity", self.intensity)
         lv.addLayout(form)
-        hint = QLabel("A light casts its shadow the opposite way: right of centre, to the left; low, long. "
-                      "Click: add · drag: move · wheel: softness · right-click / Del: remove")
+        hint = QLabel(
+            "A light casts its shadow the opposite way: right of centre, to the left; low, long. "
+            "Click: add · drag: move · wheel: softness · right-click / Del: remove"
+        )
         hint.setWordWrap(True)
         hint.setStyleSheet("color: gray; font-size: 8pt;")
         lv.addWidget(hint)
