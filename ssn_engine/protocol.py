@@ -44,16 +44,20 @@ class Buffer:
             raise ProtocolError(f"buffer of shape {self.shape} {dtype} needs {expected} bytes, got {len(data)}")
 
 
-def write_message(stream: BinaryIO, header: dict, buffers: dict[str, Buffer] | None = None) -> None:
-    """Write one message and flush."""
-    buffers = buffers or {}
+def encode_header(header: dict, buffers: dict[str, Buffer] | None = None) -> bytes:
+    """One message's header line, its ``buffers`` list made from ``buffers`` (their bytes follow it, in order)."""
     header = dict(header)
     header["buffers"] = [
         {"name": name, "dtype": b.dtype, "shape": list(b.shape), "nbytes": len(memoryview(b.data).cast("B"))}
-        for name, b in buffers.items()
+        for name, b in (buffers or {}).items()
     ]
-    stream.write(json.dumps(header, separators=(",", ":")).encode("utf-8") + b"\n")
-    stream.writelines(memoryview(b.data).cast("B") for b in buffers.values())
+    return json.dumps(header, separators=(",", ":")).encode("utf-8") + b"\n"
+
+
+def write_message(stream: BinaryIO, header: dict, buffers: dict[str, Buffer] | None = None) -> None:
+    """Write one message and flush."""
+    stream.write(encode_header(header, buffers))
+    stream.writelines(memoryview(b.data).cast("B") for b in (buffers or {}).values())
     stream.flush()
 
 
@@ -120,7 +124,12 @@ def read_header(stream: BinaryIO) -> tuple[dict, list[BufferSpec]]:
     line = stream.readline(MAX_HEADER + 1)
     if not line:
         raise EOFError("stream closed")
-    if not line.endswith(b"\n"):
+    return parse_header(line)
+
+
+def parse_header(line: bytes) -> tuple[dict, list[BufferSpec]]:
+    """A header line (ending in a newline) as the header and its checked buffer entries (see :func:`read_header`)."""
+    if not line.endswith(b"\n") or len(line) > MAX_HEADER + 1:
         raise ProtocolError("header line too long or truncated")
     try:
         header = json.loads(line)
@@ -151,3 +160,35 @@ def read_message(stream: BinaryIO) -> tuple[dict, dict[str, Buffer]]:
     """Read one message; EOFError at a clean end of stream."""
     header, specs = read_header(stream)
     return header, read_buffers(stream, specs)
+
+
+class MessageDecoder:
+    """Sans-IO reading for event-driven clients (Krita's QProcess): :meth:`feed` takes bytes as they arrive and
+    returns the messages they complete."""
+
+    def __init__(self) -> None:
+        self._buf = bytearray()
+        self._pending: tuple[dict, list[BufferSpec]] | None = None  # a parsed header waiting for its buffers
+
+    def feed(self, data: bytes) -> list[tuple[dict, dict[str, Buffer]]]:
+        self._buf += data
+        out = []
+        while True:
+            if self._pending is None:
+                end = self._buf.find(b"\n")
+                if end < 0:
+                    if len(self._buf) > MAX_HEADER:
+                        raise ProtocolError("header line too long")
+                    return out
+                self._pending = parse_header(bytes(self._buf[: end + 1]))
+                del self._buf[: end + 1]
+            header, specs = self._pending
+            if len(self._buf) < sum(s.nbytes for s in specs):
+                return out
+            buffers, pos = {}, 0
+            for spec in specs:
+                buffers[spec.name] = Buffer(spec.dtype, spec.shape, bytes(self._buf[pos : pos + spec.nbytes]))
+                pos += spec.nbytes
+            del self._buf[:pos]
+            self._pending = None
+            out.append((header, buffers))

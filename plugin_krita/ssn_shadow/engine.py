@@ -9,7 +9,6 @@ message for people, and the next request starts a fresh worker.
 from __future__ import annotations
 
 import collections
-import json
 import time
 from collections.abc import Callable
 from dataclasses import dataclass
@@ -18,19 +17,11 @@ from typing import Any
 from PyQt5.QtCore import QObject, QProcess, QProcessEnvironment, QTimer, pyqtSignal
 
 from .settings import EngineCommand, EngineConfigError, engine_command, worker_environment
-from .shared import protocol
+from .shared import client, protocol
 
-Reply = tuple[dict, dict[str, "protocol.Buffer"]]
+EngineError = client.EngineError  # the worker answered with an error (``kind`` from the protocol) or is unavailable
 OnReply = Callable[[dict, dict], None]
-OnError = Callable[["EngineError"], None]
-
-
-class EngineError(RuntimeError):
-    """The worker answered with an error (``kind`` from the protocol) or is unavailable."""
-
-    def __init__(self, kind: str, message: str) -> None:
-        super().__init__(message)
-        self.kind = kind
+OnError = Callable[[EngineError], None]
 
 
 @dataclass
@@ -58,7 +49,7 @@ class EngineProcess(QObject):
         super().__init__(parent)
         self._command_provider, self.timeout_s = command, timeout_s
         self._proc: QProcess | None = None
-        self._buf = bytearray()
+        self._decoder = protocol.MessageDecoder()
         self._pending: collections.OrderedDict[int, _Pending] = collections.OrderedDict()
         self._stderr: collections.deque[str] = collections.deque(maxlen=40)
         self._next_id = 1
@@ -85,7 +76,7 @@ class EngineProcess(QObject):
         proc.readyReadStandardError.connect(self._on_stderr)
         proc.errorOccurred.connect(self._on_process_error)
         proc.finished.connect(self._on_finished)
-        self._proc, self._buf = proc, bytearray()
+        self._proc, self._decoder = proc, protocol.MessageDecoder()
         self._stderr.clear()
         self.info = {}
         self.stateChanged.emit("starting")
@@ -158,58 +149,23 @@ class EngineProcess(QObject):
         rid = self._next_id
         self._next_id += 1
         buffers = buffers or {}
-        header = {"id": rid, "cmd": cmd, **params}
-        header["buffers"] = [
-            {"name": name, "dtype": b.dtype, "shape": list(b.shape), "nbytes": len(b.data)}
-            for name, b in buffers.items()
-        ]
         self._pending[rid] = _Pending(rid, cmd, time.monotonic() + timeout_s, timeout_s, on_reply, on_error)
-        self._proc.write(json.dumps(header, separators=(",", ":")).encode("utf-8") + b"\n")
+        self._proc.write(protocol.encode_header({"id": rid, "cmd": cmd, **params}, buffers))
         for b in buffers.values():
-            self._proc.write(bytes(b.data))
+            self._proc.write(bytes(memoryview(b.data).cast("B")))
         return rid
 
     # -- replies ---------------------------------------------------------------
     def _on_stdout(self) -> None:
         if self._proc is None:
             return
-        self._buf += bytes(self._proc.readAllStandardOutput())
-        while True:
-            try:
-                message = self._take_message()
-            except protocol.ProtocolError as exc:
-                self._died(f"sent a malformed reply ({exc})")
-                return
-            if message is None:
-                return
+        try:
+            messages = self._decoder.feed(bytes(self._proc.readAllStandardOutput()))
+        except protocol.ProtocolError as exc:
+            self._died(f"sent a malformed reply ({exc})")
+            return
+        for message in messages:
             self._dispatch(*message)
-
-    def _take_message(self) -> Reply | None:
-        end = self._buf.find(b"\n")
-        if end < 0:
-            if len(self._buf) > protocol.MAX_HEADER:
-                raise protocol.ProtocolError("header line too long")
-            return None
-        try:
-            header = json.loads(bytes(self._buf[:end]))
-        except ValueError as exc:
-            raise protocol.ProtocolError(f"header is not JSON: {exc}") from None
-        if not isinstance(header, dict):
-            raise protocol.ProtocolError("header must be a JSON object")
-        entries = header.pop("buffers", None) or []
-        try:
-            total = sum(int(e["nbytes"]) for e in entries)
-        except (KeyError, TypeError, ValueError):
-            raise protocol.ProtocolError(f"malformed buffer list {entries!r}") from None
-        if len(self._buf) < end + 1 + total:
-            return None
-        pos, buffers = end + 1, {}
-        for e in entries:
-            n = int(e["nbytes"])
-            buffers[e["name"]] = protocol.Buffer(e["dtype"], e["shape"], bytes(self._buf[pos : pos + n]))
-            pos += n
-        del self._buf[:pos]
-        return header, buffers
 
     def _dispatch(self, header: dict, buffers: dict) -> None:
         pending = self._pending.pop(header.get("id"), None)

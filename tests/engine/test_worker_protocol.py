@@ -108,3 +108,31 @@ def test_a_real_cutout_after_refusals(worker):
     render = message({"id": 3, "cmd": "render", "cutout": replies[1]["cutout"], "preset": "softbox"})
     replies, _ = converse(worker, render)
     assert replies[0]["ok"] is True and replies[0]["width"] > 0
+
+
+def test_the_sans_io_decoder_reads_what_the_worker_writes_in_any_pieces(worker):
+    """Krita's QProcess client feeds MessageDecoder whatever arrives: the same messages as the stream reader."""
+    from ssn_engine.protocol import MessageDecoder
+
+    alpha = np.zeros((40, 50), np.uint8)
+    alpha[10:35, 20:30] = 255
+    stream = message({"id": 1, "cmd": "set_cutout", "buffers": [alpha_entry(alpha.shape)]}, alpha.tobytes())
+    stream += message({"id": 2, "cmd": "get_ao", "cutout": "c1"}) + HELLO
+    writer = io.BytesIO()
+    worker.sessions.clear()
+    worker._ids = iter(range(1, 100))
+    worker.serve(io.BytesIO(stream), writer)
+    data = writer.getvalue()
+    expected = []
+    reader = io.BytesIO(data)
+    while reader.tell() < len(data):
+        expected.append(read_message(reader))
+    for piece in (1, 7, 4096, len(data)):
+        decoder, got = MessageDecoder(), []
+        for i in range(0, len(data), piece):
+            got += decoder.feed(data[i : i + piece])
+        assert [h for h, _ in got] == [h for h, _ in expected]
+        assert [{k: bytes(b.data) for k, b in bufs.items()} for _, bufs in got] == [
+            {k: bytes(b.data) for k, b in bufs.items()} for _, bufs in expected
+        ]
+    assert len(expected) == 3 and "ao" in expected[1][1]
