@@ -11,10 +11,12 @@ from __future__ import annotations
 from typing import Any
 
 import numpy as np
+
+from . import defaults
 from skimage.morphology import dilation, disk, erosion
 
 MAX_GROW = 32  # frame pixels
-MAX_STRENGTH = 4.0
+MAX_STRENGTH = defaults.MAX_AO_STRENGTH
 
 
 class AOEditError(ValueError):

@@ -13,6 +13,8 @@ from pathlib import Path
 
 import numpy as np
 
+from . import defaults
+
 EXIT_OK, EXIT_ERROR, EXIT_USAGE = 0, 1, 2
 EXIT_NO_SHADOW = 3  # nothing casts a shadow or nothing lights it: nothing is written
 PROGRESS_AFTER = 1.0  # seconds: a command that runs longer prints its stages on stderr
@@ -376,7 +378,10 @@ def _add_shadow_options(p: argparse.ArgumentParser) -> None:
     light.add_argument("--light-map", metavar="ELM.json", help="light map JSON (see 'ssn-shadow presets NAME')")
     p.add_argument("--color", type=_color, default=(0.0, 0.0, 0.0), help="shadow colour, e.g. #1a1a2e (default black)")
     p.add_argument(
-        "--opacity", type=_number_in(0.0, 1.0), default=0.85, help="shadow opacity in [0, 1] (default %(default)s)"
+        "--opacity",
+        type=_number_in(0.0, 1.0),
+        default=defaults.OPACITY,
+        help="shadow opacity in [0, 1] (default %(default)s)",
     )
     p.add_argument("--ao-edits", metavar="EDITS.json", help="JSON list of AO edits (docs/protocol.md)")
     p.add_argument(

@@ -13,7 +13,7 @@ import shutil
 import sys
 from pathlib import Path
 
-SHARED_MODULES = ("light_map.py", "protocol.py", "client.py")
+SHARED_MODULES = ("light_map.py", "protocol.py", "client.py", "defaults.py")
 SHARED_PACKAGE = "engine_shared"
 CONFIG_NAME = "engine.json"
 

@@ -18,11 +18,11 @@ from pathlib import Path
 from typing import Any
 
 try:  # installed plug-in
-    from engine_shared import client, light_map, protocol  # type: ignore[import-not-found]
+    from engine_shared import client, defaults, light_map, protocol  # type: ignore[import-not-found]
 except ImportError:  # source checkout
-    from ssn_engine import client, light_map, protocol  # type: ignore[no-redef]
+    from ssn_engine import client, defaults, light_map, protocol  # type: ignore[no-redef]
 
-__all__ = ["client", "light_map", "protocol", "EngineConfigError", "load_engine_config", "connect"]
+__all__ = ["client", "defaults", "light_map", "protocol", "EngineConfigError", "load_engine_config", "connect"]
 
 PLUGIN_DIR = Path(__file__).resolve().parent
 CONFIG_NAME = "engine.json"

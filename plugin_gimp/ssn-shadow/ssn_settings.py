@@ -12,7 +12,7 @@ import math
 from dataclasses import dataclass
 from typing import Any
 
-from ssn_engine_link import light_map
+from ssn_engine_link import defaults, light_map
 
 PROCEDURE_NAME = "plug-in-ssn-shadow"
 MENU_LABEL = "Soft _Shadow (SSN)..."
@@ -44,7 +44,7 @@ ARGUMENTS: tuple[ArgSpec, ...] = (
         light_map.DEFAULT_PRESET,
     ),
     ArgSpec("shadow-color", "color", "Shadow colo_ur", "Colour of the shadow (sRGB)", (0.0, 0.0, 0.0)),
-    ArgSpec("opacity", "double", "O_pacity", "Shadow opacity, 0 (none) to 1 (full)", 0.8, 0.0, 1.0),
+    ArgSpec("opacity", "double", "O_pacity", "Shadow opacity, 0 (none) to 1 (full)", defaults.OPACITY, 0.0, 1.0),
     ArgSpec(
         "ao-strength",
         "double",
@@ -52,7 +52,7 @@ ARGUMENTS: tuple[ArgSpec, ...] = (
         "Ambient-occlusion (contact shadow) strength: 0 removes it, 1 keeps the predicted one, up to 4",
         1.0,
         0.0,
-        4.0,
+        defaults.MAX_AO_STRENGTH,
     ),
     ArgSpec(
         "use-horizon",
@@ -123,7 +123,7 @@ class ShadowSettings:
 
     light_map: str = light_map.DEFAULT_PRESET
     color: tuple[float, float, float] = (0.0, 0.0, 0.0)
-    opacity: float = 0.8
+    opacity: float = defaults.OPACITY
     ao_strength: float = 1.0
     horizon: float | None = None  # the image's horizon row, or None: the engine's default camera
     fov: float = 45.0

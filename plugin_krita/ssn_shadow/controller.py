@@ -18,6 +18,7 @@ from PyQt5.QtCore import QObject, pyqtSignal
 from .adapters.krita_document import SourceError
 from .adapters.pixel_format import UnsupportedFormat, shadow_color
 from .engine import EngineError
+from .shared import defaults
 from .shared import light_map as lm
 from .shared import protocol
 
@@ -56,7 +57,7 @@ class ShadowController(QObject):
         self.light_map = lm.preset(lm.DEFAULT_PRESET)
         self.ao_edits: list[dict] = []
         self.color: tuple[float, float, float] = (0.0, 0.0, 0.0)
-        self.opacity = 1.0
+        self.opacity = defaults.OPACITY
         self.camera: dict | None = None  # {"horizon": canvas row, "fov": degrees}, or None: the default camera
         self._cameras: dict[str, dict | None] = {}  # remembered per document
         self.live = True

@@ -161,7 +161,7 @@ def test_undo_group_closes_when_adding_the_layer_fails():
 
 def test_settings_from_arguments_defaults():
     st = settings_from_arguments({})
-    assert st.light_map == "softbox" and st.opacity == 0.8 and st.ao_strength == 1.0
+    assert st.light_map == "softbox" and st.opacity == 0.85 and st.ao_strength == 1.0
 
 
 # -- with the real engine worker ---------------------------------------------------------------

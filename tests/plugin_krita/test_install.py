@@ -24,7 +24,13 @@ def test_install_copies_or_links(tmp_path, link):
     assert pkg == tmp_path / "ssn_shadow"
     assert (tmp_path / "ssn_shadow.desktop").exists()
     assert pkg.is_symlink() == link
-    for name in ("__init__.py", "engine_shared/light_map.py", "engine_shared/protocol.py", "engine_shared/client.py"):
+    for name in (
+        "__init__.py",
+        "engine_shared/light_map.py",
+        "engine_shared/protocol.py",
+        "engine_shared/client.py",
+        "engine_shared/defaults.py",
+    ):
         assert (pkg / name).is_file(), name
     config = json.loads((pkg / "engine.json").read_text())
     assert config["python"] == "/opt/engine/bin/python" and config["args"] == ["-m", "ssn_engine", "serve"]

@@ -23,6 +23,7 @@ from PyQt5.QtWidgets import (
 )
 
 from ..ao_edits import AoEdits
+from ..shared import defaults
 from ..shared import light_map as lm
 from .ao_preview import AOPreview
 from .light_map_widget import LightMapWidget, slider_to_softness, softness_to_slider
@@ -97,7 +98,7 @@ class ShadowPanel(QWidget):
         aform = QFormLayout()
         self.brush_size = _slider(1, 25, 5)  # radius in % of the frame
         self.brush_strength = _slider(5, 100, 50)
-        self.ao_strength = _slider(0, 300, 100)
+        self.ao_strength = _slider(0, round(100 * defaults.MAX_AO_STRENGTH), 100)
         aform.addRow("Brush size", self.brush_size)
         aform.addRow("Brush strength", self.brush_strength)
         aform.addRow("AO strength", self.ao_strength)
@@ -142,7 +143,7 @@ class ShadowPanel(QWidget):
         self.color_button = QPushButton()
         self.color_button.setToolTip("Shadow colour")
         self._show_colour()
-        self.opacity = _slider(0, 100, 100)
+        self.opacity = _slider(0, 100, round(100 * self.controller.opacity))
         sf.addRow("Colour", self.color_button)
         sf.addRow("Opacity", self.opacity)
         root.addWidget(shadow_box)
