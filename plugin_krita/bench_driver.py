@@ -5,6 +5,7 @@ Started by ``python -m plugin_krita.benchmark``; writes JSON to $SSN_BENCH_RESUL
 
 import json
 import os
+import struct
 import time
 import traceback
 
@@ -14,7 +15,18 @@ from PyQt5.QtWidgets import QApplication
 
 RESULT = os.environ.get("SSN_BENCH_RESULT", "/tmp/ssn_bench.json")
 DRAG_S = float(os.environ.get("SSN_BENCH_DRAG_S", "8"))
-out = {}
+DEPTHS = os.environ.get("SSN_BENCH_DEPTHS", "U8,U16,F16,F32").split(",")
+out = {"live": {}}
+
+
+def pixel(depth, bgr, a):
+    """One pixel of the cutout in Krita's layout for ``depth`` (integer: B, G, R, A; float: R, G, B, A)."""
+    if depth == "U8":
+        return bytes([*bgr, a])
+    if depth == "U16":
+        return struct.pack("<4H", *(257 * v for v in (*bgr, a)))
+    rgba = [v / 255 for v in (*bgr[::-1], a)]
+    return struct.pack("<4e" if depth == "F16" else "<4f", *rgba)
 
 
 def save():
@@ -22,12 +34,12 @@ def save():
         json.dump(out, f, indent=1)
 
 
-def document(w, h):
-    doc = Krita.instance().createDocument(w, h, f"bench-{w}x{h}", "RGBA", "U8", "", 72.0)
+def document(w, h, depth="U8"):
+    doc = Krita.instance().createDocument(w, h, f"bench-{w}x{h}-{depth}", "RGBA", depth, "", 72.0)
     root = doc.rootNode()
     person = doc.createNode("Person", "paintlayer")
     x0, x1, y0, y1 = int(0.4 * w), int(0.6 * w), int(0.2 * h), int(0.75 * h)
-    row = bytes([40, 90, 200, 255]) * (x1 - x0)
+    row = pixel(depth, (40, 90, 200), 255) * (x1 - x0)
     person.setPixelData(row * (y1 - y0), x0, y0, x1 - x0, y1 - y0)
     root.addChildNode(person, root.childNodes()[0])
     window = Krita.instance().openWindow()  # a real view: the canvas redraws as the layer changes
@@ -60,14 +72,14 @@ def spin(controller, timeout_s):
     controller.busyChanged.disconnect()
 
 
-def live_drag(doc):
+def live_drag(doc, depth):
     c = controller_for(doc)
-    messages = out["live_messages"] = []
+    messages = out.setdefault("live_messages", {})[depth] = []
     c.status.connect(lambda level, text: messages.append([level, text]) if level != "info" else None)
     c.generate()
     spin(c, 120)
     frames = []
-    timings = out["write_timings"] = []
+    timings = out.setdefault("write_timings", {})[depth] = []
     c.rendered.connect(lambda info: frames.append((time.perf_counter(), info["elapsed_ms"])))
     c.rendered.connect(lambda info: timings.append([info["timing_ms"], dict(c.host.writer.last_timing)]))
     light = {"i": 0}
@@ -89,7 +101,7 @@ def live_drag(doc):
     spin(c, 30)
     t1 = time.perf_counter()
     in_window = [f for f in frames if f[0] <= t0 + DRAG_S]
-    out["live"] = {
+    out["live"][depth] = {
         "canvas": "2000x2000",
         "drag_s": DRAG_S,
         "mouse_moves": light["i"],
@@ -119,8 +131,9 @@ def generate_latency(doc, runs=3):
 
 def main(*args):
     try:
-        live_drag(document(2000, 2000))
-        save()
+        for depth in DEPTHS:
+            live_drag(document(2000, 2000, depth), depth)
+            save()
         generate_latency(document(4000, 3000))
         out["done"] = True
     except Exception:

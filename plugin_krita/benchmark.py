@@ -55,18 +55,17 @@ def main() -> None:
     data = run()
     if "error" in data:
         raise SystemExit(data["error"])
-    live = data["live"]
     gen = data["generate_4000x3000_ms"]
-    print(
-        f"live updates while dragging a light, 2000 x 2000 canvas: {live['updates_per_s']:.1f} per second "
-        f"({live['layer_updates']} layer updates in {live['drag_s']:g} s of 60 Hz mouse moves; "
-        f"median request-to-layer latency {live['median_latency_ms']} ms)"
-    )
+    u8 = data["live"].get("U8", {}).get("updates_per_s")
+    print("live updates while dragging a light, 2000 x 2000 canvas (60 Hz mouse moves):")
+    print(f"{'depth':6s} {'per second':>10s} {'median latency ms':>18s} {'time vs U8':>10s}")
+    for depth, live in data["live"].items():
+        ratio = f"{u8 / live['updates_per_s']:.2f}" if u8 and live["updates_per_s"] else "-"
+        print(f"{depth:6s} {live['updates_per_s']:10.1f} {live['median_latency_ms']!s:>18s} {ratio:>10s}")
     print(
         f"Generate to visible layer, 4000 x 3000 canvas: median {sorted(gen)[len(gen) // 2]:.0f} ms "
         f"(runs: {', '.join(f'{t:.0f}' for t in gen)} ms; full path: read alpha, AO, render, write)"
     )
-    print(json.dumps(data))
 
 
 if __name__ == "__main__":

@@ -29,8 +29,10 @@ def save():
 def pixel(depth, bgr_or_rgb, a):
     if depth == "U8":
         return bytes([*bgr_or_rgb, a])
-    if depth == "F32":
-        return struct.pack("<4f", *[c / 255 for c in bgr_or_rgb], a / 255)
+    if depth == "U16":
+        return struct.pack("<4H", *[257 * c for c in bgr_or_rgb], 257 * a)
+    if depth in ("F16", "F32"):
+        return struct.pack("<4e" if depth == "F16" else "<4f", *[c / 255 for c in bgr_or_rgb], a / 255)
     raise ValueError(depth)
 
 
@@ -78,6 +80,10 @@ def alpha_plane(node, depth):
     raw = extract_alpha(bytes(node.pixelData(0, 0, W, H)), pixel_format("RGBA", depth))
     if depth == "U8":
         return [a / 255 for a in raw]
+    if depth == "U16":
+        return [a / 65535 for a in array("H", raw)]
+    if depth == "F16":
+        return [v for (v,) in struct.iter_unpack("<e", raw)]
     return list(array("f", raw))
 
 

@@ -83,7 +83,7 @@ def _check_shadow(state: dict, side: str) -> None:
     assert state["far_above"]["max"] == 0.0, state  # none far above it
 
 
-@pytest.mark.parametrize("depth", ["U8", "F32"])
+@pytest.mark.parametrize("depth", ["U8", "U16", "F16", "F32"])
 def test_generate_in_real_krita(pykrita, tmp_path, depth):
     case = run_in_krita(pykrita, depth, tmp_path / f"result-{depth}.json")
     errors = [m for m in case["messages"] if m[0] == "error"]

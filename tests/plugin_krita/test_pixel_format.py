@@ -58,3 +58,17 @@ def test_shadow_colour_linearised_for_linear_profiles():
     assert shadow_color((0.5, 0, 1), "sRGB-elle-V2-srgbtrc.icc") == [0.5, 0.0, 1.0]
     lin = shadow_color((0.5, 0, 1), "sRGB-elle-V2-g10.icc")
     assert lin[0] == pytest.approx(0.214, abs=1e-3) and lin[1:] == [0.0, 1.0]
+
+
+@pytest.mark.parametrize("dtype, fmt", [("uint8", "B"), ("uint16", "H"), ("float16", "e"), ("float32", "f")])
+def test_opaque_everywhere_in_every_depth(dtype, fmt):
+    """Select All or a full-canvas opaque layer is no cutout; one transparent pixel makes it one (every depth:
+    a half-float alpha broke this check once, and with it every F16 document)."""
+    from plugin_krita.ssn_shadow.adapters.pixel_format import opaque_everywhere
+
+    one = {"uint8": 255, "uint16": 65535}.get(dtype, 1.0)
+    opaque = struct.pack(f"<{100}{fmt}", *([one] * 100))
+    holed = struct.pack(f"<{100}{fmt}", *([one] * 99 + [0]))
+    half_transparent = struct.pack(f"<{100}{fmt}", *([one] * 99 + [one * 0.4 if fmt in "ef" else int(one * 0.4)]))
+    assert opaque_everywhere(opaque, dtype)
+    assert not opaque_everywhere(holed, dtype) and not opaque_everywhere(half_transparent, dtype)

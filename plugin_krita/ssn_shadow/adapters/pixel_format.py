@@ -80,15 +80,15 @@ def place_rows(region: bytes, x: int, y: int, w: int, h: int, canvas_w: int, can
     return plane
 
 
-HALF = {"uint8": 128, "uint16": 32768, "float16": 0.5, "float32": 0.5}  # half opacity per dtype
-MEMORYVIEW_FORMAT = {"uint8": "B", "uint16": "H", "float16": "e", "float32": "f"}
-
-
 def opaque_everywhere(alpha: bytes, dtype: str) -> bool:
     """True when no pixel of a canvas alpha plane is more than half transparent: it holds no cutout."""
     if not alpha:
         return False
-    return min(memoryview(alpha).cast(MEMORYVIEW_FORMAT[dtype])) >= HALF[dtype]
+    if dtype == "float16":  # memoryview cannot cast to half floats: compare the bits (0.5 is 0x3800, sign clear)
+        bits = memoryview(alpha).cast("H")
+        return min(bits) >= 0x3800 and max(bits) < 0x8000
+    fmt, half = {"uint8": ("B", 128), "uint16": ("H", 32768), "float32": ("f", 0.5)}[dtype]
+    return min(memoryview(alpha).cast(fmt)) >= half
 
 
 def clip_rect(x: int, y: int, w: int, h: int, canvas_w: int, canvas_h: int) -> tuple[int, int, int, int]:
