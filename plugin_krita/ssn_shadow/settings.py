@@ -1,4 +1,4 @@
-"""Where the engine worker comes from, and the docker's remembered settings."""
+"""Where the engine worker comes from: engine.json beside the plug-in, or ssn-shadow on PATH."""
 
 from __future__ import annotations
 
@@ -7,7 +7,6 @@ import os
 import shutil
 from dataclasses import dataclass, field
 from pathlib import Path
-from typing import Any
 
 CONFIG_ENV = "SSN_SHADOW_ENGINE_CONFIG"
 CONFIG_NAME = "engine.json"
@@ -71,24 +70,3 @@ def worker_environment(base: dict[str, str], extra: dict[str, str]) -> dict[str,
     env.update(extra)
     env.setdefault("PYTHONUNBUFFERED", "1")
     return env
-
-
-class Settings:
-    """Small persistent settings: Krita's config file inside Krita, a dict elsewhere."""
-
-    GROUP = "ssn_shadow"
-
-    def __init__(self, krita: Any = None) -> None:
-        self._krita = krita
-        self._memory: dict[str, str] = {}
-
-    def get(self, key: str, default: str = "") -> str:
-        if self._krita is not None:
-            return self._krita.readSetting(self.GROUP, key, default)
-        return self._memory.get(key, default)
-
-    def set(self, key: str, value: str) -> None:
-        if self._krita is not None:
-            self._krita.writeSetting(self.GROUP, key, value)
-        else:
-            self._memory[key] = value
