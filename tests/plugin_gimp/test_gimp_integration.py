@@ -1,6 +1,6 @@
 """Real GIMP 3 integration test: the plug-in inside gimp-console-3.0 in a Debian 13 chroot.
 
-The chroot (plugin_gimp/tools/gimp_chroot.sh, cached outside the checkout in
+The chroot (tools/gimp_chroot.sh, cached outside the checkout in
 $SSN_GIMP_CHROOT, default /var/cache/ssn-shadow/gimp-trixie) is built once per
 machine. The engine worker runs on the host (``ssn-shadow serve --port 0``);
 the plug-in reaches it through the loopback socket, the chroot sharing the
@@ -34,7 +34,7 @@ from ssn_engine.protocol import Buffer
 pytestmark = pytest.mark.gimp
 
 ROOT = Path(__file__).resolve().parents[2]
-TOOL = ROOT / "plugin_gimp" / "tools" / "gimp_chroot.sh"
+TOOL = ROOT / "tools" / "gimp_chroot.sh"
 BATCH_SCRIPT = Path(__file__).with_name("gimp_batch_check.py")
 DIALOG_SCRIPT = Path(__file__).with_name("gimp_dialog_check.py")
 UNDO_SCRIPT = Path(__file__).with_name("gimp_undo_check.py")

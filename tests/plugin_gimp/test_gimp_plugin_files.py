@@ -10,7 +10,7 @@ import pytest
 
 ROOT = Path(__file__).resolve().parents[2]
 PLUGIN = ROOT / "plugin_gimp" / "ssn-shadow"
-TOOL = ROOT / "plugin_gimp" / "tools" / "gimp_chroot.sh"
+TOOL = ROOT / "tools" / "gimp_chroot.sh"
 
 
 def test_entry_script_is_executable_gimp_plugin():
