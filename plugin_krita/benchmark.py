@@ -8,6 +8,7 @@ from __future__ import annotations
 
 import json
 import os
+import random
 import shutil
 import subprocess
 import sys
@@ -40,7 +41,8 @@ def run(drag_s: float = 8.0) -> dict:
         if xvfb is None:
             raise SystemExit("xvfb-run not found: apt-get install xvfb")
         proc = subprocess.run(
-            [xvfb, "-a", kritarunner, "-s", "bench_driver", "-f", "main"],
+            # a random first display number: an X server in another mount namespace may hold a low one
+            [xvfb, "-a", "-n", str(random.randint(200, 900)), kritarunner, "-s", "bench_driver", "-f", "main"],
             env=env,
             capture_output=True,
             text=True,

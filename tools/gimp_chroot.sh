@@ -131,9 +131,9 @@ case "$cmd" in
         [ -n "${SSN_SHADOW_DIALOG_SCREENSHOT:-}" ] && extra+=("SSN_SHADOW_DIALOG_SCREENSHOT=$SSN_SHADOW_DIALOG_SCREENSHOT")
         xvfb=()
         gimp=(gimp-console-3.0 -i)
-        [ -n "${SSN_GIMP_XVFB:-}" ] && xvfb=(xvfb-run -a -s "-screen 0 1280x1024x24")
+        [ -n "${SSN_GIMP_XVFB:-}" ] && xvfb=(xvfb-run -a -n $((RANDOM % 700 + 200)) -s "-screen 0 1280x1024x24")
         if [ -n "${SSN_GIMP_GUI:-}" ]; then
-            xvfb=(xvfb-run -a -s "-screen 0 1280x1024x24")
+            xvfb=(xvfb-run -a -n $((RANDOM % 700 + 200)) -s "-screen 0 1280x1024x24")
             gimp=(gimp-3.0 --no-splash)
         fi
         # shellcheck disable=SC2046

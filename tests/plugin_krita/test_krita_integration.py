@@ -7,6 +7,7 @@ server but not on the offscreen platform. Skips only outside CI.
 
 import json
 import os
+import random
 import shutil
 import subprocess
 import sys
@@ -56,14 +57,20 @@ def run_in_krita(pykrita: Path, depth: str, result: Path) -> dict:
     # not the test's (pyenv, venv, /usr/local), or it cannot import PyQt5/PyKrita.
     env["PATH"] = os.pathsep.join(["/usr/bin", "/bin", env.get("PATH", "")])
     env.pop("QT_QPA_PLATFORM", None)  # xcb on the virtual X server (the unit tests set offscreen)
-    # kritarunner's exit status says nothing (and it may crash on exit): the result file counts.
-    proc = subprocess.run(
-        [xvfb, "-a", kritarunner, "-s", "krita_driver", "-f", "main"],
-        env=env,
-        capture_output=True,
-        text=True,
-        timeout=180,
-    )
+    # kritarunner's exit status says nothing (and it may crash on exit): the result file counts. xvfb-run -a
+    # checks only this /tmp's lock files, so an X server elsewhere (the GIMP test's chroot shares the abstract
+    # socket namespace) can hold the display it picks ("could not connect to display"): start the search at a
+    # random number, and retry.
+    for _attempt in range(3):
+        proc = subprocess.run(
+            [xvfb, "-a", "-n", str(random.randint(200, 900)), kritarunner, "-s", "krita_driver", "-f", "main"],
+            env=env,
+            capture_output=True,
+            text=True,
+            timeout=180,
+        )
+        if result.exists() or "could not connect to display" not in proc.stderr:
+            break
     assert result.exists(), f"Krita wrote no result\n{proc.stdout[-3000:]}\n{proc.stderr[-3000:]}"
     data = json.loads(result.read_text())
     assert "error" not in data, data["error"]
