@@ -12,6 +12,7 @@ token.
 from __future__ import annotations
 
 import collections
+import ctypes
 import hmac
 import itertools
 import os
@@ -324,8 +325,19 @@ def _step_over(reader: BinaryIO, nbytes: int | None) -> bool:
     return True
 
 
+def fix_mmap_threshold(threshold: int = 1 << 20) -> None:
+    """Large buffers (canvas-sized arrays) straight from and back to the OS, so a long-running worker's memory
+    stays flat. glibc raises its mmap threshold to the size of each large block freed (up to 32 MB), after which
+    such arrays come from the heap and fragment it; a fixed threshold turns that off. Elsewhere a no-op."""
+    try:
+        ctypes.CDLL("libc.so.6").mallopt(-3, threshold)  # M_MMAP_THRESHOLD
+    except (OSError, AttributeError):
+        pass
+
+
 def serve_stdio(loaded: LoadedMethod) -> None:
     """Serve over stdin/stdout; anything printed goes to stderr instead."""
+    fix_mmap_threshold()
     reader, writer = sys.stdin.buffer, sys.stdout.buffer
     sys.stdout = sys.stderr
     print(f"ssn-shadow worker ready: {loaded.note}", file=sys.stderr, flush=True)
@@ -343,6 +355,7 @@ def serve_tcp(
     port and the per-start token (random unless given) that each connection's ``auth`` must carry. With
     ``idle_timeout`` (seconds) the worker exits when no connection comes for that long, and drops a connection
     that sends nothing for that long."""
+    fix_mmap_threshold()
     worker = Worker(loaded)
     token = token or secrets.token_urlsafe(24)
     with socket.create_server(("127.0.0.1", port)) as server:
