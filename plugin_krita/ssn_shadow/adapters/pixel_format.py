@@ -80,15 +80,21 @@ def place_rows(region: bytes, x: int, y: int, w: int, h: int, canvas_w: int, can
     return plane
 
 
+# The most significant byte of an alpha sample at least half opaque (little-endian): unsigned integers from 0x80,
+# half floats from 0x38 (0.5 = 0x3800), floats from 0x3F (0.5 = 0x3F000000); the sign bit clear for floats.
+HALF_OPAQUE_TOP_BYTE = {"uint8": (0x80, 0xFF), "uint16": (0x80, 0xFF), "float16": (0x38, 0x7F), "float32": (0x3F, 0x7F)}
+
+
 def opaque_everywhere(alpha: bytes, dtype: str) -> bool:
-    """True when no pixel of a canvas alpha plane is more than half transparent: it holds no cutout."""
+    """True when no pixel of a canvas alpha plane is more than half transparent: it holds no cutout. Byte
+    operations only (C speed: a 4000 x 3000 plane in milliseconds, where a Python loop took about half a
+    second)."""
     if not alpha:
         return False
-    if dtype == "float16":  # memoryview cannot cast to half floats: compare the bits (0.5 is 0x3800, sign clear)
-        bits = memoryview(alpha).cast("H")
-        return min(bits) >= 0x3800 and max(bits) < 0x8000
-    fmt, half = {"uint8": ("B", 128), "uint16": ("H", 32768), "float32": ("f", 0.5)}[dtype]
-    return min(memoryview(alpha).cast(fmt)) >= half
+    size = {"uint8": 1, "uint16": 2, "float16": 2, "float32": 4}[dtype]
+    lo, hi = HALF_OPAQUE_TOP_BYTE[dtype]
+    top = bytes(alpha[size - 1 :: size])
+    return not top.translate(None, bytes(range(lo, hi + 1)))  # nothing left: every top byte in range
 
 
 def clip_rect(x: int, y: int, w: int, h: int, canvas_w: int, canvas_h: int) -> tuple[int, int, int, int]:
