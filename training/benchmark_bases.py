@@ -48,21 +48,7 @@ def stages(mesh, topo, yaw, pitch, fov, n, hb, samples, rng) -> dict[str, float]
     dirs = np.ascontiguousarray(cam.to_world(stratified_directions(hb, samples, rng)).reshape(-1, samples, 3))
     normals = meshes.face_normals(v, mesh.faces)
     t["setup (camera, directions, normals)"] = time.perf_counter() - t0
-    args = (
-        v,
-        normals,
-        topo.edges,
-        topo.ptr,
-        topo.inc_face,
-        topo.inc_dir,
-        dirs,
-        rows.z,
-        rows.x0,
-        rows.dx,
-        rows.rowmap,
-        rows.first,
-        n,
-    )
+    args = rb.kernel_args(v, normals, topo, rows, dirs, n)
     times = []
     for stage in (1, 2, 3):
         t0 = time.perf_counter()

@@ -14,19 +14,7 @@ def hard_shadow(mesh: meshes.Mesh, camera, w) -> np.ndarray:
     topo = meshes.topology(mesh)
     dirs = np.ascontiguousarray(np.asarray(w, float).reshape(1, 1, 3))
     out = rb.occlusion_counts(
-        mesh.vertices,
-        meshes.face_normals(mesh.vertices, mesh.faces),
-        topo.edges,
-        topo.ptr,
-        topo.inc_face,
-        topo.inc_dir,
-        dirs,
-        rows.z,
-        rows.x0,
-        rows.dx,
-        rows.rowmap,
-        rows.first,
-        camera.n,
+        *rb.kernel_args(mesh.vertices, meshes.face_normals(mesh.vertices, mesh.faces), topo, rows, dirs, camera.n)
     )
     return out[0]
 

@@ -207,6 +207,26 @@ def _sign(x: float) -> int:
     return 1 if x > 0.0 else (-1 if x < 0.0 else 0)
 
 
+def kernel_args(verts, normals, topo, rows, dirs, n: int) -> tuple:
+    """:func:`occlusion_counts`' arguments (without ``stage``) from a mesh's vertices and face normals, its
+    topology, a view's ground rows (:func:`ground_rows`) and directions (T, S, 3), and the frame size."""
+    return (
+        verts,
+        normals,
+        topo.edges,
+        topo.ptr,
+        topo.inc_face,
+        topo.inc_dir,
+        dirs,
+        rows.z,
+        rows.x0,
+        rows.dx,
+        rows.rowmap,
+        rows.first,
+        n,
+    )
+
+
 @njit(cache=True, parallel=True)
 def occlusion_counts(
     verts, normals, edges, ptr, inc_face, inc_dir, dirs, row_z, row_x0, row_dx, rowmap, first, n, stage=3
@@ -435,21 +455,7 @@ def render_view(
     rows = ground_rows(cam)
     dirs = cam.to_world(stratified_directions(elm_rows, samples, rng))
     dirs = np.ascontiguousarray(dirs.reshape(-1, samples, 3))
-    counts = occlusion_counts(
-        v,
-        face_normals(v, mesh.faces),
-        topo.edges,
-        topo.ptr,
-        topo.inc_face,
-        topo.inc_dir,
-        dirs,
-        rows.z,
-        rows.x0,
-        rows.dx,
-        rows.rowmap,
-        rows.first,
-        n,
-    )
+    counts = occlusion_counts(*kernel_args(v, face_normals(v, mesh.faces), topo, rows, dirs, n))
     w = (texel_weights(elm_rows) / np.pi / samples).reshape(-1)
     a = np.clip(1.0 - weighted_sum(counts, w), 0.0, 1.0)
     ss = mask_ss or max(4, -(-1024 // n))

@@ -76,48 +76,37 @@ def read_source(document: Any) -> Source:
         node = _source_of_shadow(node)
     w, h = document.width(), document.height()
     selection = document.selection()
-    if selection is not None and selection.width() > 0 and selection.height() > 0:
-        alpha = bytes(selection.pixelData(0, 0, w, h))
-        if opaque_everywhere(alpha, "uint8"):
-            raise SourceError(
-                "The selection covers the whole canvas, so its shadow would darken the whole "
-                "picture. Select just the object, or deselect (Ctrl+Shift+A) to use the layer's alpha."
-            )
-        return Source(
-            document,
-            node,
-            node_id(node),
-            node.name(),
-            alpha,
-            "uint8",
-            w,
-            h,
-            True,
-            layer_format,
-            document.colorProfile(),
+    from_selection = selection is not None and selection.width() > 0 and selection.height() > 0
+    if from_selection:
+        alpha, dtype = bytes(selection.pixelData(0, 0, w, h)), "uint8"
+        whole = (
+            "The selection covers the whole canvas, so its shadow would darken the whole "
+            "picture. Select just the object, or deselect (Ctrl+Shift+A) to use the layer's alpha."
         )
-    node_format = pixel_format(node.colorModel(), node.colorDepth())
-    b = node.bounds()
-    x, y, bw, bh = clip_rect(b.x(), b.y(), b.width(), b.height(), w, h)
-    if bw == 0 or bh == 0:
-        raise SourceError(f"The layer '{node.name()}' is empty on the canvas: nothing to cast a shadow from.")
-    region = extract_alpha(bytes(node.projectionPixelData(x, y, bw, bh)), node_format)
-    alpha = bytes(place_rows(region, x, y, bw, bh, w, h, node_format.itemsize))
-    if opaque_everywhere(alpha, node_format.dtype):
-        raise SourceError(
+    else:
+        node_format = pixel_format(node.colorModel(), node.colorDepth())
+        b = node.bounds()
+        x, y, bw, bh = clip_rect(b.x(), b.y(), b.width(), b.height(), w, h)
+        if bw == 0 or bh == 0:
+            raise SourceError(f"The layer '{node.name()}' is empty on the canvas: nothing to cast a shadow from.")
+        region = extract_alpha(bytes(node.projectionPixelData(x, y, bw, bh)), node_format)
+        alpha, dtype = bytes(place_rows(region, x, y, bw, bh, w, h, node_format.itemsize)), node_format.dtype
+        whole = (
             f"The layer '{node.name()}' is opaque over the whole canvas, so it holds no cutout. "
             "Erase the background around the object, or select the object."
         )
+    if opaque_everywhere(alpha, dtype):
+        raise SourceError(whole)
     return Source(
         document,
         node,
         node_id(node),
         node.name(),
         alpha,
-        node_format.dtype,
+        dtype,
         w,
         h,
-        False,
+        from_selection,
         layer_format,
         document.colorProfile(),
     )
