@@ -14,6 +14,7 @@ import json
 import os
 import shutil
 import sys
+from collections.abc import Mapping
 from pathlib import Path
 
 from ssn_engine.plugin_files import CONFIG_NAME, SHARED_PACKAGE, copy_shared_modules, write_engine_config
@@ -23,7 +24,9 @@ SOURCE_DIR = Path(__file__).resolve().parent / PLUGIN_NAME
 GIMP_SERIES = "3.0"
 
 
-def gimp_profile_dir(platform: str | None = None, env: dict[str, str] | None = None, home: Path | None = None) -> Path:
+def gimp_profile_dir(
+    platform: str | None = None, env: Mapping[str, str] | None = None, home: Path | None = None
+) -> Path:
     """The user's GIMP 3 profile folder (``GIMP3_DIRECTORY`` overrides it, as in GIMP)."""
     platform = platform or sys.platform
     env = os.environ if env is None else env
@@ -39,7 +42,7 @@ def gimp_profile_dir(platform: str | None = None, env: dict[str, str] | None = N
     return base / "GIMP" / GIMP_SERIES
 
 
-def default_dest(platform: str | None = None, env: dict[str, str] | None = None, home: Path | None = None) -> Path:
+def default_dest(platform: str | None = None, env: Mapping[str, str] | None = None, home: Path | None = None) -> Path:
     """``<profile>/plug-ins/ssn-shadow``, e.g. ~/.config/GIMP/3.0/plug-ins/ssn-shadow on Linux."""
     return gimp_profile_dir(platform, env, home) / "plug-ins" / PLUGIN_NAME
 

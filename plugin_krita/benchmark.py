@@ -17,11 +17,13 @@ from pathlib import Path
 
 from .install import install
 
-HERE = Path(__file__).resolve().parent
-REPO = HERE.parent
+REPO = Path(__file__).resolve().parents[1]
+DRIVER = REPO / "tools" / "krita_bench_driver.py"  # runs inside Krita; a checkout's tool, not shipped
 
 
 def run(drag_s: float = 8.0) -> dict:
+    if not DRIVER.is_file():
+        raise SystemExit(f"{DRIVER} not found: run the benchmark from a checkout of the repository")
     kritarunner = shutil.which("kritarunner")
     if kritarunner is None:
         raise SystemExit("kritarunner not found: apt-get install krita")
@@ -32,7 +34,7 @@ def run(drag_s: float = 8.0) -> dict:
         env.update(
             SSN_BENCH_RESULT=str(result),
             SSN_BENCH_DRAG_S=str(drag_s),
-            PYTHONPATH=os.pathsep.join([str(pykrita), str(HERE), str(REPO)]),
+            PYTHONPATH=os.pathsep.join([str(pykrita), str(DRIVER.parent), str(REPO)]),
             PATH=os.pathsep.join(["/usr/bin", "/bin", env.get("PATH", "")]),  # Krita's own python3 first
         )
         env.pop("SSN_SHADOW_ENGINE_CONFIG", None)
@@ -42,7 +44,7 @@ def run(drag_s: float = 8.0) -> dict:
             raise SystemExit("xvfb-run not found: apt-get install xvfb")
         proc = subprocess.run(
             # a random first display number: an X server in another mount namespace may hold a low one
-            [xvfb, "-a", "-n", str(random.randint(200, 900)), kritarunner, "-s", "bench_driver", "-f", "main"],
+            [xvfb, "-a", "-n", str(random.randint(200, 900)), kritarunner, "-s", DRIVER.stem, "-f", "main"],
             env=env,
             capture_output=True,
             text=True,

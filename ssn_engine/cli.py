@@ -257,6 +257,11 @@ def cmd_render(args: argparse.Namespace) -> int:
             written = _write_outputs(write, cutout, shadow, args, background, stage)
     finally:
         stage.close()
+    return _report(written, loaded)
+
+
+def _report(written: list, loaded) -> int:
+    """Say what was written and which method made it."""
     for path in written:
         print(f"wrote {path}")
     print(f"method: {loaded.method.name} ({loaded.note})")
@@ -291,10 +296,7 @@ def cmd_demo(args: argparse.Namespace) -> int:
             written += [write(path, image) for path, image in zip(samples, (cutout, studio_background()), strict=False)]
     finally:
         stage.close()
-    for path in written:
-        print(f"wrote {path}")
-    print(f"method: {loaded.method.name} ({loaded.note})")
-    return EXIT_OK
+    return _report(written, loaded)
 
 
 def cmd_presets(args: argparse.Namespace) -> int:

@@ -17,11 +17,10 @@ import subprocess
 import threading
 from collections.abc import Sequence
 from pathlib import Path
+from typing import IO
 
-try:
-    from .protocol import Buffer, ProtocolError, read_message, write_message
-except ImportError:  # loaded as a top-level module beside the plug-in
-    from protocol import Buffer, ProtocolError, read_message, write_message  # type: ignore
+from .engine_config import EngineConfig, worker_environment
+from .protocol import Buffer, ProtocolError, read_message, write_message
 
 
 class EngineError(RuntimeError):
@@ -49,13 +48,16 @@ class EngineClient:
         address: tuple[str, int] | None = None,
         timeout: float = 120.0,
         token: str | None = None,
+        env: dict[str, str] | None = None,
     ) -> None:
         if (command is None) == (address is None):
             raise ValueError("give exactly one of command or address")
         self.command, self.address, self.timeout, self.token = command, address, timeout, token
-        self._proc: subprocess.Popen | None = None
+        self.env = env or {}
+        self._proc: subprocess.Popen[bytes] | None = None
         self._sock: socket.socket | None = None
-        self._reader = self._writer = None
+        self._reader: IO[bytes] | None = None
+        self._writer: IO[bytes] | None = None
         self._stderr: collections.deque[str] = collections.deque(maxlen=40)
         self._ids = itertools.count(1)
         self._lock = threading.Lock()
@@ -75,6 +77,7 @@ class EngineClient:
                     stdin=subprocess.PIPE,
                     stdout=subprocess.PIPE,
                     stderr=subprocess.PIPE,
+                    env=worker_environment(os.environ, self.env),
                     creationflags=getattr(subprocess, "CREATE_NO_WINDOW", 0),  # no console flash on Windows
                 )
             except OSError as exc:
@@ -86,6 +89,7 @@ class EngineClient:
             self._reader, self._writer = self._proc.stdout, self._proc.stdin
             threading.Thread(target=self._drain, args=(self._proc.stderr,), daemon=True).start()
         else:
+            assert self.address is not None  # __init__: exactly one of command and address
             try:
                 self._sock = socket.create_connection(self.address, timeout=self.timeout)
             except OSError as exc:
@@ -97,6 +101,7 @@ class EngineClient:
 
     def _authenticate(self) -> None:
         """A loopback worker's first request: ``auth`` with its token (under the connect timeout)."""
+        assert self.address is not None and self._reader is not None and self._writer is not None  # set by _start
         host, port = self.address
         try:
             write_message(self._writer, {"id": 0, "cmd": "auth", "token": self.token or ""})
@@ -111,7 +116,7 @@ class EngineClient:
                 "when it started ('listening ... token=...') in engine.json, or restart it"
             )
 
-    def _drain(self, stream) -> None:
+    def _drain(self, stream: IO[bytes]) -> None:
         for line in iter(stream.readline, b""):
             self._stderr.append(line.decode("utf-8", "replace").rstrip())
 
@@ -153,9 +158,11 @@ class EngineClient:
             result: list = []
 
             def exchange() -> None:
+                reader, writer = self._reader, self._writer
+                assert reader is not None and writer is not None  # connected by _start above
                 try:
-                    write_message(self._writer, header, buffers)
-                    result.append(read_message(self._reader))
+                    write_message(writer, header, buffers)
+                    result.append(read_message(reader))
                 except (OSError, EOFError, ProtocolError, ValueError) as exc:
                     result.append(exc)
 
@@ -179,8 +186,23 @@ IDLE_TIMEOUT = 900.0  # seconds a shared worker waits for the next call before i
 START_TIMEOUT = 120.0  # seconds a new shared worker may take to announce its port
 
 
+def connect(config: EngineConfig, state_path: Path, timeout: float = 120.0) -> EngineClient:
+    """A client for an :class:`~engine_config.EngineConfig`: the worker at its address, the shared worker its
+    command starts (recorded in ``state_path``, see :func:`shared_client`), or, without ``shared``, a worker of
+    this client's own (started with the first request)."""
+    if config.address is not None:
+        return EngineClient(address=config.address, timeout=timeout, token=config.token)
+    if config.shared:
+        return shared_client(config.command, state_path, timeout, env=dict(config.env))
+    return EngineClient(command=list(config.command), timeout=timeout, env=dict(config.env))
+
+
 def shared_client(
-    command: Sequence[str], state_path: Path, timeout: float = 120.0, idle_timeout: float = IDLE_TIMEOUT
+    command: Sequence[str],
+    state_path: Path,
+    timeout: float = 120.0,
+    idle_timeout: float = IDLE_TIMEOUT,
+    env: dict[str, str] | None = None,
 ) -> EngineClient:
     """A client of a long-lived loopback worker started from ``command`` (``... ssn-shadow serve``): the one
     recorded in ``state_path`` while it answers, else a new one started detached with ``--port 0
@@ -195,7 +217,7 @@ def shared_client(
             return reuse
         except EngineError:
             reuse.close()
-    host, port, token = _start_detached(command, idle_timeout)
+    host, port, token = _start_detached(command, idle_timeout, env or {})
     _write_state(state_path, {"command": list(command), "host": host, "port": port, "token": token})
     return EngineClient(address=(host, port), timeout=timeout, token=token)
 
@@ -228,22 +250,27 @@ def _write_state(path: Path, state: dict) -> None:
         pass  # not recorded: the next call starts its own worker, nothing worse
 
 
-def _start_detached(command: Sequence[str], idle_timeout: float) -> tuple[str, int, str]:
+def _start_detached(command: Sequence[str], idle_timeout: float, env: dict[str, str]) -> tuple[str, int, str]:
     """Start ``command --port 0 --idle-timeout S`` in its own session and read its ``listening`` line."""
     args = [*command, "--port", "0", "--idle-timeout", f"{idle_timeout:g}"]
-    flags = (
-        {"start_new_session": True}
-        if os.name == "posix"
-        else {"creationflags": getattr(subprocess, "DETACHED_PROCESS", 0) | getattr(subprocess, "CREATE_NO_WINDOW", 0)}
-    )
+    posix = os.name == "posix"  # POSIX: a new session; Windows: a detached process without a console
+    flags = 0 if posix else getattr(subprocess, "DETACHED_PROCESS", 0) | getattr(subprocess, "CREATE_NO_WINDOW", 0)
     try:
         proc = subprocess.Popen(
-            args, stdin=subprocess.DEVNULL, stdout=subprocess.PIPE, stderr=subprocess.DEVNULL, **flags
+            args,
+            stdin=subprocess.DEVNULL,
+            stdout=subprocess.PIPE,
+            stderr=subprocess.DEVNULL,
+            env=worker_environment(os.environ, env),
+            start_new_session=posix,
+            creationflags=flags,
         )
     except OSError as exc:
         raise WorkerUnavailable(f"could not start the shadow engine ({' '.join(args)}): {exc}") from None
+    stdout = proc.stdout
+    assert stdout is not None  # stdout=PIPE
     line: list[bytes] = []
-    reader = threading.Thread(target=lambda: line.append(proc.stdout.readline()), daemon=True)
+    reader = threading.Thread(target=lambda: line.append(stdout.readline()), daemon=True)
     reader.start()
     reader.join(START_TIMEOUT)
     words = line[0].decode("utf-8", "replace").split() if line else []
@@ -251,6 +278,6 @@ def _start_detached(command: Sequence[str], idle_timeout: float) -> tuple[str, i
         proc.kill()
         said = f"it said {line[0][:200]!r}" if line else f"it did not announce a port within {START_TIMEOUT:g} s"
         raise WorkerUnavailable(f"the shadow engine ({' '.join(args)}) did not start: {said}")
-    proc.stdout.close()  # the worker never writes to it again
+    stdout.close()  # the worker never writes to it again
     host, _, port = words[1].rpartition(":")
     return host, int(port), words[2].removeprefix("token=")

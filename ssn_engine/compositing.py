@@ -162,3 +162,36 @@ def composite_image(
         for rows in _stripes(int(ys[0]), int(ys[-1]) + 1, cols.stop - cols.start):
             background[rows, cols] = over(background[rows, cols], cutout[rows, cols])
     return background
+
+
+HORIZON_DASH = 6  # pixels on, pixels off
+HORIZON_RGB = (255, 140, 0)
+
+
+def preview_image(
+    background: np.ndarray,
+    shadow: CanvasShadow,
+    cover: np.ndarray | None = None,
+    color: Sequence[float] = (0.0, 0.0, 0.0),
+    opacity: float = 1.0,
+    horizon: float | None = None,
+) -> np.ndarray:
+    """A dialog's preview: the shadow multiplied onto a small uint8 RGB(A) ``background`` (h, w, 3|4) as a
+    Multiply layer would, hidden where the cutout above it covers the image (``cover``: its alpha (h, w), any
+    dtype), with the ``horizon`` row as a dashed orange line. Returns packed RGB (h, w, 3) uint8."""
+    h, w = background.shape[:2]
+    rgb = background[..., :3].astype(np.float32)
+    if not shadow.is_empty:
+        sh, sw = shadow.values.shape
+        x0, y0, x1, y1 = max(shadow.x, 0), max(shadow.y, 0), min(shadow.x + sw, w), min(shadow.y + sh, h)
+        if x0 < x1 and y0 < y1:
+            s = np.clip(shadow.values[y0 - shadow.y : y1 - shadow.y, x0 - shadow.x : x1 - shadow.x], 0.0, 1.0)
+            s = s * np.float32(_opacity(opacity))
+            if cover is not None:
+                s = s * (1.0 - to_unit_float(cover[y0:y1, x0:x1]))
+            rgb[y0:y1, x0:x1] *= 1.0 - s[..., None] * (1.0 - _colour(color))
+    out = np.rint(np.clip(rgb, 0, 255)).astype(np.uint8)
+    if horizon is not None and 0 <= np.floor(horizon) < h:
+        dashes = (np.arange(w) // HORIZON_DASH) % 2 == 0
+        out[int(np.floor(horizon)), dashes] = HORIZON_RGB
+    return out

@@ -1,8 +1,9 @@
 """Files every host plug-in gets at install time (stdlib only).
 
 The plug-ins run inside the host's own Python, which has no numpy, so they
-carry copies of the engine's toolkit-free modules (the light-map editor, the
-protocol framing and the worker client) and an ``engine.json`` naming the
+carry copies of the engine's stdlib-only modules, the host kit: the worker
+client and its protocol framing, the engine.json reader, the light map, its
+editor and its picture, and the shared defaults. ``engine.json`` names the
 Python that runs ``ssn-shadow serve``.
 """
 
@@ -13,7 +14,15 @@ import shutil
 import sys
 from pathlib import Path
 
-SHARED_MODULES = ("light_map.py", "protocol.py", "client.py", "defaults.py")
+SHARED_MODULES = (  # the host kit
+    "client.py",
+    "defaults.py",
+    "engine_config.py",
+    "light_editor.py",
+    "light_map.py",
+    "light_map_picture.py",
+    "protocol.py",
+)
 SHARED_PACKAGE = "engine_shared"
 CONFIG_NAME = "engine.json"
 

@@ -44,13 +44,14 @@ def _alpha(rng: random.Random) -> Buffer:
     return Buffer(dtype, data.shape, data.tobytes())
 
 
-def _step(client: EngineClient, rng: random.Random, cutouts: list[str]) -> str:
-    """One request of the mix; returns its kind."""
+def _step(client: EngineClient, rng: random.Random, cutouts: dict[str, tuple[int, ...]]) -> str:
+    """One request of the mix; returns its kind. ``cutouts``: the live cutouts' canvas shapes."""
     roll = rng.random()
     if roll < 0.08 or not cutouts:
-        cutouts.append(client.request("set_cutout", {"alpha": _alpha(rng)})[0]["cutout"])
+        alpha = _alpha(rng)
+        cutouts[client.request("set_cutout", {"alpha": alpha})[0]["cutout"]] = tuple(alpha.shape)
         return "set_cutout"
-    key = rng.choice(cutouts)
+    key = rng.choice(list(cutouts))
     light = LightMap.random(rng, max_lights=rng.choice([1, 2, 8])).to_dict()
     kind = "bad request"
     try:
@@ -70,11 +71,15 @@ def _step(client: EngineClient, rng: random.Random, cutouts: list[str]) -> str:
             kind = "get_ao"
             client.request("get_ao", cutout=key)
         elif roll < 0.9:
-            kind = "elm_image"
-            client.request("elm_image", light_map=light, width=256)
+            kind = "preview"
+            grey = np.full((*cutouts[key], 3), rng.randrange(256), np.uint8)
+            client.request(
+                "preview", {"background": Buffer("uint8", grey.shape, grey.tobytes())}, cutout=key, light_map=light
+            )
         elif roll < 0.95:
             kind = "release"
-            client.request("release", cutout=cutouts.pop(cutouts.index(key)))
+            client.request("release", cutout=key)
+            del cutouts[key]
         elif roll < 0.975:
             client.request("render", cutout=key, light_map={"lights": "none"})  # refused: LightMapError
         else:
@@ -83,7 +88,7 @@ def _step(client: EngineClient, rng: random.Random, cutouts: list[str]) -> str:
         if exc.kind in ("Internal", "WorkerUnavailable"):
             raise
         if exc.kind == "UnknownCutout":  # the worker keeps at most MAX_SESSIONS; older ones are gone
-            cutouts.remove(key)
+            del cutouts[key]
     return kind
 
 
@@ -95,8 +100,9 @@ def run_soak(requests: int = 10000, minutes: float = 0.0, method: str = "auto", 
     latency: dict[str, list[float]] = {}
     try:
         client.request("hello")
+        assert client._proc is not None  # the hello above started the worker
         pid = client._proc.pid
-        start, cutouts, samples, done = time.monotonic(), [], [], 0
+        start, cutouts, samples, done = time.monotonic(), {}, [], 0
         deadline = start + 60 * minutes if minutes else None
         every = max(1, requests // 400) if deadline is None else 25
         report = max(1, requests // 20) if deadline is None else 500

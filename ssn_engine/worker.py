@@ -21,16 +21,15 @@ import socket
 import sys
 import time
 import traceback
-from typing import Any, BinaryIO
+from typing import IO, Any
 
 import numpy as np
 
 from . import __version__
 from .ao_edit import AOEditError
 from .camera import DEFAULT_FOV
-from .compositing import shadow_layer
+from .compositing import preview_image, shadow_layer
 from .framing import EmptyAlphaError
-from .hemisphere import render_light_map
 from .light_map import PRESETS, LightMap, LightMapError, preset
 from .methods import LoadedMethod, ModelError
 from .protocol import (
@@ -46,11 +45,14 @@ from .protocol import (
 from .session import ShadowSession, no_shadow_reason
 
 MAX_SESSIONS = 8
-MAX_ELM_IMAGE_WIDTH = 2048
+MAX_PREVIEW_SIDE = 4096  # pixels, either side of a preview's background
 MAX_REQUEST_BYTES = 1 << 30  # buffers of one request
 MAX_CANVAS_SIDE = 32768  # pixels, either side of a set_cutout alpha
 MAX_CANVAS_PIXELS = 1 << 28  # 268 megapixels
-REQUEST_BUFFERS = {"set_cutout": ("alpha",)}  # the buffers each command takes; the others take none
+REQUEST_BUFFERS = {  # the buffers each command takes; the others take none
+    "set_cutout": ("alpha",),
+    "preview": ("background", "cover"),
+}
 
 
 class RequestError(Exception):
@@ -85,14 +87,6 @@ def _camera(camera: Any) -> tuple[float, float]:
     if not np.isfinite(camera["horizon"]):
         raise RequestError("BadRequest", "camera.horizon: expected a finite canvas row")
     return float(camera["horizon"]), float(fov)
-
-
-def elm_display_image(light_map: LightMap, width: int) -> np.ndarray:
-    """The light map tone-mapped for display, (width / 2, width, 3) uint8."""
-    elm = render_light_map(light_map, max(1, width // 2))
-    v = (elm / (1.0 + elm))[..., None]
-    night, light = np.array([0.10, 0.13, 0.20]), np.array([1.0, 0.96, 0.85])
-    return np.rint((night + (light - night) * v) * 255).astype(np.uint8)
 
 
 class Worker:
@@ -157,8 +151,8 @@ class Worker:
         return {}, {"ao": _u8(s.set_ao_edits(edits))}
 
     def render(self, header: dict, buffers: dict) -> tuple[dict, dict]:
-        s = self._session(header)
         light_map = self._light_map(header)
+        s = self._session(header)
         fmt = header.get("format") or {}
         if not isinstance(fmt, dict):
             raise RequestError("BadRequest", "format: expected an object")
@@ -193,17 +187,40 @@ class Worker:
         }
         return reply, out
 
-    def elm_image(self, header: dict, buffers: dict) -> tuple[dict, dict]:
-        width = header.get("width", 256)
-        if not isinstance(width, int) or width % 2 or not 2 <= width <= MAX_ELM_IMAGE_WIDTH:
-            raise RequestError("BadRequest", f"width: expected an even integer in [2, {MAX_ELM_IMAGE_WIDTH}]")
-        return {}, {"image": to_buffer(elm_display_image(self._light_map(header), width))}
+    def preview(self, header: dict, buffers: dict) -> tuple[dict, dict]:
+        light_map = self._light_map(header)
+        s = self._session(header)
+        if "background" not in buffers:
+            raise RequestError("BadRequest", "background: buffer missing")
+        background = to_array(buffers["background"])  # uint8 (h, w, 3|4), bounded: check_request
+        canvas = (s.framing.canvas_height, s.framing.canvas_width)
+        if background.shape[:2] != canvas:
+            raise RequestError(
+                "BadRequest",
+                f"background: {background.shape[1]} x {background.shape[0]}, but the cutout is "
+                f"{canvas[1]} x {canvas[0]}",
+            )
+        cover = to_array(buffers["cover"]) if "cover" in buffers else None
+        if cover is not None and cover.shape != canvas:
+            raise RequestError("BadRequest", f"cover: expected the cutout's size {canvas[1]} x {canvas[0]}")
+        horizon = header.get("horizon")
+        if horizon is not None and (not isinstance(horizon, (int, float)) or not np.isfinite(horizon)):
+            raise RequestError("BadRequest", f"horizon: expected a row number, got {horizon!r}")
+        shadow = s.render(light_map)
+        color, opacity = header.get("color", (0.0, 0.0, 0.0)), float(header.get("opacity", 1.0))
+        reply = {}
+        reason = no_shadow_reason(light_map, shadow)
+        if reason:
+            reply["no_shadow"] = reason
+        return reply, {"image": to_buffer(preview_image(background, shadow, cover, color, opacity, horizon))}
 
     def release(self, header: dict, buffers: dict) -> tuple[dict, dict]:
-        self.sessions.pop(header.get("cutout"), None)
+        key = header.get("cutout")
+        if key in self.sessions:  # an unhashable key raises TypeError (BadRequest), as in _session
+            del self.sessions[key]
         return {}, {}
 
-    COMMANDS = ("hello", "set_cutout", "get_ao", "edit_ao", "render", "elm_image", "release")
+    COMMANDS = ("hello", "set_cutout", "get_ao", "edit_ao", "render", "preview", "release")
 
     def handle(self, header: dict, buffers: dict[str, Buffer]) -> tuple[dict, dict[str, Buffer]]:
         """Answer one request; never raises."""
@@ -252,6 +269,13 @@ class Worker:
                 + (f"; it takes {', '.join(allowed)}" if allowed else "; it takes none"),
             )
         for spec in specs:
+            if spec.name == "background":
+                if len(spec.shape) != 3 or spec.shape[2] not in (3, 4) or spec.dtype != "uint8":
+                    raise RequestError(
+                        "BadRequest", f"background: expected uint8 (height, width, 3 or 4), got {list(spec.shape)}"
+                    )
+                if max(spec.shape[:2]) > MAX_PREVIEW_SIDE:
+                    raise RequestError("BadRequest", f"background: at most {MAX_PREVIEW_SIDE} pixels a side")
             if spec.name == "alpha":
                 if len(spec.shape) != 2:
                     raise RequestError("BadRequest", f"alpha: expected a 2D buffer, got shape {list(spec.shape)}")
@@ -263,7 +287,7 @@ class Worker:
                         f"{MAX_CANVAS_SIDE} pixels a side and {MAX_CANVAS_PIXELS / 1e6:.0f} megapixels",
                     )
 
-    def serve(self, reader: BinaryIO, writer: BinaryIO, token: str | None = None) -> bool:
+    def serve(self, reader: IO[bytes], writer: IO[bytes], token: str | None = None) -> bool:
         """Answer requests until the stream ends (False) or a shutdown (True). With a ``token``, the first
         request must be ``auth`` carrying it, or the conversation ends (False) after an Unauthorized reply."""
         authorised, lost = token is None, False
@@ -283,6 +307,7 @@ class Worker:
             rid = header.get("id")
             if not authorised:
                 given = header.get("token")
+                assert token is not None  # not authorised: a token was given
                 if (
                     header.get("cmd") != "auth"
                     or not isinstance(given, str)
@@ -310,11 +335,11 @@ class Worker:
             write_message(writer, reply, out)
 
 
-def _refuse(writer: BinaryIO, rid: Any, kind: str, message: str) -> None:
+def _refuse(writer: IO[bytes], rid: Any, kind: str, message: str) -> None:
     write_message(writer, {"id": rid, "ok": False, "error": {"type": kind, "message": message}})
 
 
-def _step_over(reader: BinaryIO, nbytes: int | None) -> bool:
+def _step_over(reader: IO[bytes], nbytes: int | None) -> bool:
     """Drop a refused request's buffers; False where their size is unknown or unbounded (not read)."""
     if nbytes is None or nbytes > MAX_REQUEST_BYTES:
         return False

@@ -23,7 +23,7 @@ from gi.repository import Babl, Gegl, Gimp, GLib, GObject  # noqa: E402
 
 from ssn_core import ShadowError, make_shadow  # noqa: E402
 from ssn_gimp_host import GimpHost, config_values  # noqa: E402
-from ssn_engine_link import EngineConfigError, connect, load_engine_config  # noqa: E402
+from ssn_engine_link import connect, engine_config  # noqa: E402
 from ssn_settings import (  # noqa: E402
     ARGUMENTS,
     IMAGE_TYPES,
@@ -88,7 +88,7 @@ class SoftShadow(Gimp.PlugIn):
     def run(self, procedure, run_mode, image, drawables, config, data):
         try:
             return self._run(procedure, run_mode, image, drawables, config)
-        except (ShadowError, EngineConfigError) as exc:
+        except (ShadowError, engine_config.EngineConfigError) as exc:
             return failure(procedure, str(exc))
         except Exception:  # noqa: BLE001 - never crash GIMP; report the bug instead
             return failure(procedure, "Soft Shadow failed unexpectedly (a bug):\n" + traceback.format_exc(limit=6))
@@ -97,7 +97,7 @@ class SoftShadow(Gimp.PlugIn):
         if len(drawables) != 1:
             raise ShadowError("Soft Shadow works on one layer: select exactly one layer.")
         host = GimpHost(image, drawables[0])
-        engine = connect(load_engine_config())
+        engine = connect()
         try:
             if run_mode == Gimp.RunMode.INTERACTIVE:
                 import ssn_dialog

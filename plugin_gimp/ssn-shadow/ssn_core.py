@@ -70,7 +70,7 @@ def shadow_layer_name(source_name: str) -> str:
     return f"{LAYER_PREFIX}{source_name}"
 
 
-def _engine_call(engine: Engine, cmd: str, buffers: dict | None = None, **params: Any) -> tuple[dict, dict]:
+def engine_call(engine: Engine, cmd: str, buffers: dict | None = None, **params: Any) -> tuple[dict, dict]:
     try:
         return engine.request(cmd, buffers, **params)
     except engine_client.EngineError as exc:
@@ -90,7 +90,7 @@ def upload_cutout(engine: Engine, cutout: Cutout, camera: dict[str, float] | Non
             "Select the object or paint it on a layer with a transparent background."
         )
     alpha = protocol.Buffer(cutout.dtype, (cutout.height, cutout.width), cutout.data)
-    reply, _ = _engine_call(engine, "set_cutout", {"alpha": alpha}, **({"camera": camera} if camera else {}))
+    reply, _ = engine_call(engine, "set_cutout", {"alpha": alpha}, **({"camera": camera} if camera else {}))
     return str(reply["cutout"])
 
 
@@ -98,8 +98,8 @@ def render_shadow(engine: Engine, cutout_id: str, settings: ShadowSettings, dtyp
     """Apply the AO edits and render the shadow layer in ``dtype``."""
     edits = settings.ao_edits()
     if edits:
-        _engine_call(engine, "edit_ao", cutout=cutout_id, edits=edits)
-    reply, buffers = _engine_call(engine, "render", cutout=cutout_id, **settings.render_params(dtype))
+        engine_call(engine, "edit_ao", cutout=cutout_id, edits=edits)
+    reply, buffers = engine_call(engine, "render", cutout=cutout_id, **settings.render_params(dtype))
     x, y, w, h = (int(reply[k]) for k in ("x", "y", "width", "height"))
     if w == 0 or h == 0:
         return ShadowLayerData(x, y, 0, 0, dtype, b"")

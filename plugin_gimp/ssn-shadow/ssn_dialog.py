@@ -19,13 +19,12 @@ gi.require_version("Gtk", "3.0")
 gi.require_version("GdkPixbuf", "2.0")
 from gi.repository import GdkPixbuf, Gimp, GimpUi, GLib, Gtk  # noqa: E402
 
-from ssn_core import Cutout, ShadowError, release, render_shadow, settings_from_arguments, upload_cutout  # noqa: E402
-from ssn_editor import LightMapEditor  # noqa: E402
+from ssn_core import ShadowError, release, settings_from_arguments, upload_cutout  # noqa: E402
 from ssn_engine_link import client as engine_client  # noqa: E402
-from ssn_engine_link import light_map  # noqa: E402
+from ssn_engine_link import light_editor, light_map  # noqa: E402
 from ssn_gimp_host import config_values  # noqa: E402
 from ssn_light_area import LightMapArea  # noqa: E402
-from ssn_preview import draw_horizon, multiply_composite, preview_size  # noqa: E402
+from ssn_preview import preview_size, render_preview  # noqa: E402
 from ssn_settings import PROCEDURE_NAME, SettingsError, editor_light_map  # noqa: E402
 
 CUSTOM = "(custom)"
@@ -34,7 +33,7 @@ PREVIEW_DELAY_MS = 150
 
 
 class ShadowPreview:
-    """A thumbnail of the image with the shadow multiplied on, re-rendered on every complete edit."""
+    """A thumbnail of the image with the shadow multiplied on, re-rendered while the light moves."""
 
     def __init__(self, host, engine) -> None:
         self.host, self.engine = host, engine
@@ -42,78 +41,62 @@ class ShadowPreview:
         self.status = Gtk.Label(xalign=0.0)
         self.status.set_line_wrap(True)
         self.cutout_id: str | None = None
-        self.cover: bytes | None = None
-        self._pending = 0
+        self._values = None
+        self._timer = False
         width, height = host.image.get_width(), host.image.get_height()
-        self.tw, self.th, _ = preview_size(width, height)
+        tw, th, _ = preview_size(width, height)
         try:
-            self.background = host.thumbnail(self.tw, self.th)
-            self.tw, self.th = self.background[1], self.background[2]
-            plan = host.pixel_plan()
-            small = host.read_cutout(plan, size=(self.tw, self.th))
-            # the preview always works in 8 bits
-            if small.dtype == "uint16":
-                raw = memoryview(small.data).cast("H")
-                small = Cutout(small.width, small.height, "uint8", bytes(v >> 8 for v in raw), small.source)
-            self.small, self.scale = small, self.tw / width
+            self.thumbnail = host.thumbnail(tw, th)
+            self.scale = self.thumbnail.width / width
+            # the thumbnail-sized cutout casts the shadow and hides it where it covers the image
+            self.small = host.read_cutout(host.pixel_plan(), size=(self.thumbnail.width, self.thumbnail.height))
             self.camera: dict | None = None  # the camera the worker's cutout was analysed with
-            self.cutout_id = upload_cutout(engine, small)
-            self.cover = small.data  # the cutout hides the shadow layer below it
+            self.cutout_id = upload_cutout(engine, self.small)
         except (ShadowError, engine_client.EngineError) as exc:
             self.status.set_text(str(exc))
 
     def schedule(self, values_getter) -> None:
-        """Re-render soon (edits in quick succession render once)."""
+        """Render the latest values soon: at most one render per PREVIEW_DELAY_MS, so a light being dragged is
+        followed live and a burst of edits renders once."""
         if self.cutout_id is None:
             return
-        self._pending += 1
-        token = self._pending
+        self._values = values_getter
+        if self._timer:
+            return
+        self._timer = True
 
         def fire() -> bool:
-            if token == self._pending:
-                self.render(values_getter())
+            self._timer = False
+            if self._values is not None:
+                self.render(self._values())
             return False
 
         GLib.timeout_add(PREVIEW_DELAY_MS, fire)
 
     def render(self, values: dict) -> None:
+        if self.cutout_id is None:
+            return
         try:
             settings = settings_from_arguments(values)
             camera = settings.camera(self.scale)
             if camera != self.camera:  # a new horizon: the worker analyses the cutout again
                 release(self.engine, self.cutout_id)
                 self.cutout_id, self.camera = upload_cutout(self.engine, self.small, camera), camera
-            shadow = render_shadow(self.engine, self.cutout_id, settings, "uint8")
+            rgb, no_shadow = render_preview(
+                self.engine, self.cutout_id, settings, self.thumbnail, self.small, self.scale
+            )
         except (ShadowError, SettingsError) as exc:
             self.status.set_text(str(exc))
             return
-        pixels, w, h, stride, channels = self.background
-        rgb = multiply_composite(
-            pixels, w, h, stride, channels, shadow.data, shadow.x, shadow.y, shadow.width, shadow.height, self.cover
-        )
-        if camera is not None:
-            rgb = draw_horizon(rgb, w, h, camera["horizon"])
+        w, h = self.thumbnail.width, self.thumbnail.height
         self.widget.set_from_pixbuf(
             GdkPixbuf.Pixbuf.new_from_bytes(GLib.Bytes.new(rgb), GdkPixbuf.Colorspace.RGB, False, 8, w, h, 3 * w)
         )
-        self.status.set_text("" if shadow.width else "No visible shadow with these lights.")
+        self.status.set_text("No visible shadow with these lights." if no_shadow else "")
 
     def close(self) -> None:
         if self.cutout_id is not None:
             release(self.engine, self.cutout_id)
-
-
-def _map_image(engine):
-    def fetch(light_map_json: str, width: int) -> bytes | None:
-        try:
-            import json
-
-            _, buffers = engine.request("elm_image", light_map=json.loads(light_map_json), width=width)
-            return bytes(memoryview(buffers["image"].data).cast("B"))
-        except Exception:  # noqa: BLE001 - the editor still works on a plain background
-            return None
-
-    return fetch
 
 
 def run_dialog(procedure: Gimp.Procedure, config: Gimp.ProcedureConfig, host, engine) -> bool:
@@ -136,15 +119,18 @@ def run_dialog(procedure: Gimp.Procedure, config: Gimp.ProcedureConfig, host, en
     preview = ShadowPreview(host, engine)
     area: LightMapArea | None = None
 
-    def on_change(final: bool) -> None:
+    def on_change(live: bool, new_stroke: bool) -> None:
         if area is not None:
             area.refresh()
-        if final:
-            if presets.get_active_text() != CUSTOM and not loading[0]:
-                presets.set_active(len(light_map.PRESETS))
-            preview.schedule(values)
+        if not live and presets.get_active_text() != CUSTOM and not loading[0]:
+            presets.set_active(len(light_map.PRESETS))
+        preview.schedule(values)
 
-    editor = LightMapEditor(lights, on_change)
+    def on_select(index: int | None) -> None:
+        if area is not None:
+            area.refresh()
+
+    editor = light_editor.LightMapEditor(lights, on_change, on_select)
     loading = [False]
 
     presets = Gtk.ComboBoxText()
@@ -177,7 +163,7 @@ def run_dialog(procedure: Gimp.Procedure, config: Gimp.ProcedureConfig, host, en
         loading[0] = False
 
     config.connect("notify::light-map", on_light_map_setting)
-    area = LightMapArea(editor, _map_image(engine))
+    area = LightMapArea(editor)
 
     box = Gtk.Box(orientation=Gtk.Orientation.VERTICAL, spacing=6)
     row = Gtk.Box(spacing=6)
@@ -261,6 +247,7 @@ def _selftest(dialog, area: LightMapArea, preview: ShadowPreview, values, config
     area._on_motion(area, moved)
     area._on_release(area, SimpleNamespace(button=1))
     editor.scroll(1)
+    assert editor.selected is not None
     light = editor.lights.lights[editor.selected]
     print(f"ssn-shadow dialog selftest: light at u={light.u:.3f} v={light.v:.3f}", file=sys.stderr, flush=True)
     preview.render(values())

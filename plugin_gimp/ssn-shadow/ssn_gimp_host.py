@@ -18,6 +18,7 @@ from gi.repository import Babl, Gegl, Gimp  # noqa: E402
 
 from ssn_core import Cutout, ShadowError, ShadowLayerData  # noqa: E402
 from ssn_pixels import PixelFormatError, PixelPlan, layer_image_type, plan_for_precision  # noqa: E402
+from ssn_preview import Thumbnail  # noqa: E402
 from ssn_settings import ARGUMENTS  # noqa: E402
 
 
@@ -116,8 +117,8 @@ class GimpHost:
         sink.process()
         return out
 
-    def thumbnail(self, width: int, height: int) -> tuple[bytes, int, int, int, int]:
-        """The image's composite as (pixels, width, height, rowstride, channels), 8-bit sRGB."""
+    def thumbnail(self, width: int, height: int) -> Thumbnail:
+        """The image's composite, 8-bit sRGB, at most ``width`` x ``height``."""
         pixbuf = self.image.get_thumbnail(width, height, Gimp.PixbufTransparency.SMALL_CHECKS)
         if pixbuf is None:
             # GIMP makes no thumbnail at some precisions (16/32-bit integer, half, float, double): take it
@@ -131,13 +132,19 @@ class GimpHost:
                 copy.delete()
             if pixbuf is None:
                 raise ShadowError("GIMP could not make a preview of this image; run the filter without the dialog.")
-        return (
-            bytes(pixbuf.get_pixels()),
+        w, h, channels, stride = (
             pixbuf.get_width(),
             pixbuf.get_height(),
-            pixbuf.get_rowstride(),
             pixbuf.get_n_channels(),
+            pixbuf.get_rowstride(),
         )
+        pixels = pixbuf.get_pixels()
+        packed = (
+            pixels
+            if stride == w * channels
+            else b"".join(pixels[y * stride : y * stride + w * channels] for y in range(h))
+        )
+        return Thumbnail(w, h, channels, bytes(packed[: w * h * channels]))
 
     def undo_group_start(self) -> None:
         self.image.undo_group_start()

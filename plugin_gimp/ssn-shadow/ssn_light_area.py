@@ -1,13 +1,11 @@
 """The light-map editor widget (GTK 3): shows the map and forwards pointer gestures to LightMapEditor.
 
-The map picture comes from the engine worker (``elm_image``), the light rings
-are drawn by :func:`ssn_editor.overlay_markers`; the widget is a Gtk.Image in
-a Gtk.EventBox, so it needs no pycairo (GIMP's Python does not ship it).
+The editor, the map picture and the light rings are the host kit's (the same
+as Krita's); the widget is a Gtk.Image in a Gtk.EventBox, so it needs no
+pycairo (GIMP's Python does not ship it).
 """
 
 from __future__ import annotations
-
-from collections.abc import Callable
 
 import gi
 
@@ -16,7 +14,7 @@ gi.require_version("Gdk", "3.0")
 gi.require_version("GdkPixbuf", "2.0")
 from gi.repository import Gdk, GdkPixbuf, GLib, Gtk  # noqa: E402
 
-from ssn_editor import LightMapEditor, overlay_markers  # noqa: E402
+from ssn_engine_link import light_editor, light_map_picture  # noqa: E402
 
 MAP_WIDTH = 384  # the map is 2:1
 
@@ -24,10 +22,9 @@ MAP_WIDTH = 384  # the map is 2:1
 class LightMapArea(Gtk.EventBox):
     """Click to add a light, drag to move, wheel to resize (Shift: intensity), right-click/Delete to remove."""
 
-    def __init__(self, editor: LightMapEditor, map_image: Callable[[str, int], bytes | None]) -> None:
+    def __init__(self, editor: light_editor.LightMapEditor) -> None:
         super().__init__()
         self.editor = editor
-        self.map_image = map_image  # (light-map JSON, width) -> RGB bytes of width x width/2, or None
         self.width, self.height = MAP_WIDTH, MAP_WIDTH // 2
         self.image = Gtk.Image()
         self.add(self.image)
@@ -61,9 +58,19 @@ class LightMapArea(Gtk.EventBox):
 
     def refresh(self) -> None:
         """Redraw the map and the markers."""
-        data = self.map_image(self.editor.to_json(), self.width)
-        rgb = bytearray(data) if data is not None else bytearray(b"\x20\x20\x30" * (self.width * self.height))
-        overlay_markers(rgb, self.width, self.height, self.editor.lights, self.editor.selected)
+        w, h = light_map_picture.PICTURE_SIZE
+        picture = GdkPixbuf.Pixbuf.new_from_bytes(
+            GLib.Bytes.new(light_map_picture.map_rgb(self.editor.lights, w, h)),
+            GdkPixbuf.Colorspace.RGB,
+            False,
+            8,
+            w,
+            h,
+            3 * w,
+        ).scale_simple(self.width, self.height, GdkPixbuf.InterpType.BILINEAR)
+        stride, data = picture.get_rowstride(), picture.get_pixels()
+        rgb = bytearray(b"".join(data[y * stride : y * stride + 3 * self.width] for y in range(self.height)))
+        light_map_picture.overlay_markers(rgb, self.width, self.height, self.editor.lights, self.editor.selected)
         pixbuf = GdkPixbuf.Pixbuf.new_from_bytes(
             GLib.Bytes.new(bytes(rgb)), GdkPixbuf.Colorspace.RGB, False, 8, self.width, self.height, 3 * self.width
         )
@@ -99,7 +106,8 @@ class LightMapArea(Gtk.EventBox):
             notches = -round(event.delta_y) if abs(event.delta_y) >= 0.5 else 0
         else:
             return False
-        self.editor.scroll(notches, intensity=bool(event.state & Gdk.ModifierType.SHIFT_MASK))
+        shift = bool(event.state & Gdk.ModifierType.SHIFT_MASK)
+        self.editor.scroll(notches, intensity=shift, at=self._uv(event))
         return True
 
     def _on_key(self, _widget, event) -> bool:

@@ -33,6 +33,13 @@ class ArgSpec:
     lo: float | None = None
     hi: float | None = None
 
+    @property
+    def bounds(self) -> tuple[float, float]:
+        """(lo, hi) of a numeric argument."""
+        if self.lo is None or self.hi is None:
+            raise TypeError(f"{self.name} has no numeric range")
+        return self.lo, self.hi
+
 
 ARGUMENTS: tuple[ArgSpec, ...] = (
     ArgSpec(
@@ -137,12 +144,12 @@ class ShadowSettings:
         object.__setattr__(self, "color", color)
         object.__setattr__(self, "opacity", _unit(self.opacity, "opacity", 0.0, 1.0))
         spec = ARG_BY_NAME["ao-strength"]
-        object.__setattr__(self, "ao_strength", _unit(self.ao_strength, "ao-strength", spec.lo, spec.hi))
+        object.__setattr__(self, "ao_strength", _unit(self.ao_strength, "ao-strength", *spec.bounds))
         if self.horizon is not None:
             spec = ARG_BY_NAME["horizon"]
-            object.__setattr__(self, "horizon", _unit(self.horizon, "horizon", spec.lo, spec.hi))
+            object.__setattr__(self, "horizon", _unit(self.horizon, "horizon", *spec.bounds))
         spec = ARG_BY_NAME["fov"]
-        object.__setattr__(self, "fov", _unit(self.fov, "fov", spec.lo, spec.hi))
+        object.__setattr__(self, "fov", _unit(self.fov, "fov", *spec.bounds))
         resolve_light_map(self.light_map)  # validate now, before any pixel is read
 
     def camera(self, scale: float = 1.0) -> dict[str, float] | None:

@@ -83,14 +83,18 @@ class ShadowController(QObject):
         """Read the source again and render; the layer write is one new undo step."""
         self._schedule(RenderJob(new_step=True, reread=True, started=time.perf_counter()))
 
-    def lights_edited(self, dragging: bool, stroke_started: bool = False) -> None:
-        """The light map changed; re-render at once when Live is on and a shadow exists."""
+    def lights_edited(self, stroke_started: bool = False) -> None:
+        """The light map or the shadow options changed; re-render at once when Live is on and a shadow exists."""
         if self.live and self.source is not None:
             self._schedule(RenderJob(new_step=stroke_started, reread=False, started=time.perf_counter()))
 
-    def set_light_map(self, light_map: Any) -> None:
-        self.light_map = light_map
-        self.lights_edited(dragging=False, stroke_started=True)
+    def set_light_map(self, light_map: Any, stroke_started: bool = True) -> None:
+        """The editor's map changed (the controller keeps its own copy); a map equal to the current one, as
+        after the last move of a drag, renders nothing new."""
+        if light_map == self.light_map and not stroke_started:
+            return
+        self.light_map = light_map.copy()
+        self.lights_edited(stroke_started=stroke_started)
 
     def set_ao_edits(self, edits: list[dict], stroke_started: bool = False) -> None:
         """Replace the AO edits (the whole list); the worker re-applies them to its AO map."""
@@ -98,7 +102,7 @@ class ShadowController(QObject):
         if self.cutout is None:
             return
         self._send_edits()
-        self.lights_edited(dragging=True, stroke_started=stroke_started)
+        self.lights_edited(stroke_started=stroke_started)
 
     def set_camera(self, camera: dict | None) -> None:
         """The image's horizon row and field of view (None: the engine's default camera), remembered for the
@@ -107,7 +111,7 @@ class ShadowController(QObject):
         document = self.host.active_document()
         if document is not None:
             self._cameras[document_key(document)] = self.camera
-        self.lights_edited(dragging=False, stroke_started=True)
+        self.lights_edited(stroke_started=True)
 
     def camera_for(self, document) -> dict | None:
         """The camera remembered for ``document`` (None when none was set)."""
@@ -160,6 +164,7 @@ class ShadowController(QObject):
 
     def _ensure_cutout(self, then: Any, job: RenderJob) -> None:
         source = self.source
+        assert source is not None, "a job reads its source first"
         key = f"{source.key}:{sorted(self.camera.items()) if self.camera else None}"  # the AO depends on both
         if self.cutout is not None and key == self._cutout_key:
             then()
@@ -185,6 +190,7 @@ class ShadowController(QObject):
 
     def _render(self, job: RenderJob) -> None:
         source = self.source
+        assert source is not None, "a job reads its source first"
         params = {
             "cutout": self.cutout,
             "light_map": self.light_map.to_dict(),

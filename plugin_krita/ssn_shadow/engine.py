@@ -16,12 +16,28 @@ from typing import Any
 
 from PyQt5.QtCore import QObject, QProcess, QProcessEnvironment, QTimer, pyqtSignal
 
-from .settings import EngineCommand, EngineConfigError, engine_command, worker_environment
-from .shared import client, protocol
+from pathlib import Path
 
+from .shared import client, engine_config, protocol
+
+EngineConfig = engine_config.EngineConfig
 EngineError = client.EngineError  # the worker answered with an error (``kind`` from the protocol) or is unavailable
 OnReply = Callable[[dict, dict], None]
 OnError = Callable[[EngineError], None]
+
+
+PLUGIN_DIR = Path(__file__).resolve().parent
+
+
+def engine_command(plugin_dir: Path = PLUGIN_DIR) -> EngineConfig:
+    """The command that starts this docker's worker (:func:`engine_config.load_engine_config`)."""
+    config = engine_config.load_engine_config(plugin_dir, "krita")
+    if config.address is not None:
+        raise engine_config.EngineConfigError(
+            f"{config.source} names a running worker ({config.describe()}); the Krita plug-in starts its own. "
+            "Re-run 'ssn-shadow install-plugin krita' from the engine's Python."
+        )
+    return config
 
 
 @dataclass
@@ -42,7 +58,7 @@ class EngineProcess(QObject):
 
     def __init__(
         self,
-        command: Callable[[], EngineCommand] = engine_command,
+        command: Callable[[], EngineConfig] = engine_command,
         timeout_s: float = 120.0,
         parent: QObject | None = None,
     ) -> None:
@@ -53,7 +69,7 @@ class EngineProcess(QObject):
         self._pending: collections.OrderedDict[int, _Pending] = collections.OrderedDict()
         self._stderr: collections.deque[str] = collections.deque(maxlen=40)
         self._next_id = 1
-        self._command: EngineCommand | None = None
+        self._command: EngineConfig | None = None
         self.info: dict[str, Any] = {}
         self._watchdog = QTimer(self)
         self._watchdog.setInterval(250)
@@ -62,14 +78,15 @@ class EngineProcess(QObject):
     # -- process -------------------------------------------------------------
     @property
     def running(self) -> bool:
-        return self._proc is not None and self._proc.state() != QProcess.NotRunning
+        return self._proc is not None and self._proc.state() != QProcess.ProcessState.NotRunning
 
     def _start(self) -> None:
         self._command = self._command_provider()
         proc = QProcess(self)
         env = QProcessEnvironment()
         base = QProcessEnvironment.systemEnvironment()
-        for key, value in worker_environment({k: base.value(k) for k in base.keys()}, self._command.env).items():
+        environment = engine_config.worker_environment({k: base.value(k) for k in base.keys()}, self._command.env)
+        for key, value in environment.items():
             env.insert(key, value)
         proc.setProcessEnvironment(env)
         proc.readyReadStandardOutput.connect(self._on_stdout)
@@ -80,7 +97,7 @@ class EngineProcess(QObject):
         self._stderr.clear()
         self.info = {}
         self.stateChanged.emit("starting")
-        proc.start(self._command.program, self._command.args)
+        proc.start(self._command.command[0], list(self._command.command[1:]))
         self._watchdog.start()
         self._send("hello", {}, None, self._on_hello, None, self.timeout_s)
 
@@ -105,7 +122,7 @@ class EngineProcess(QObject):
                     sig.disconnect()
                 except TypeError:
                     pass
-            if proc.state() != QProcess.NotRunning:
+            if proc.state() != QProcess.ProcessState.NotRunning:
                 proc.kill()
                 proc.waitForFinished(2000)
             proc.deleteLater()
@@ -120,9 +137,10 @@ class EngineProcess(QObject):
 
     def shutdown(self) -> None:
         """Ask the worker to exit, then stop it."""
-        if self.running:
+        proc = self._proc
+        if proc is not None and proc.state() != QProcess.ProcessState.NotRunning:
             self._send("shutdown", {}, None, None, None, 5.0)
-            self._proc.waitForFinished(3000)
+            proc.waitForFinished(3000)
         self.stop()
 
     # -- requests ------------------------------------------------------------
@@ -140,7 +158,7 @@ class EngineProcess(QObject):
             self.stop()
             try:
                 self._start()
-            except EngineConfigError as exc:
+            except engine_config.EngineConfigError as exc:
                 self._deliver_error(on_error, EngineError("WorkerUnavailable", str(exc)))
                 return -1
         return self._send(cmd, params or {}, buffers, on_reply, on_error, timeout_s or self.timeout_s)
@@ -149,10 +167,12 @@ class EngineProcess(QObject):
         rid = self._next_id
         self._next_id += 1
         buffers = buffers or {}
+        proc = self._proc
+        assert proc is not None, "_send follows _start"
         self._pending[rid] = _Pending(rid, cmd, time.monotonic() + timeout_s, timeout_s, on_reply, on_error)
-        self._proc.write(protocol.encode_header({"id": rid, "cmd": cmd, **params}, buffers))
+        proc.write(protocol.encode_header({"id": rid, "cmd": cmd, **params}, buffers))
         for b in buffers.values():
-            self._proc.write(bytes(memoryview(b.data).cast("B")))
+            proc.write(bytes(memoryview(b.data).cast("B")))
         return rid
 
     # -- replies ---------------------------------------------------------------
@@ -168,7 +188,8 @@ class EngineProcess(QObject):
             self._dispatch(*message)
 
     def _dispatch(self, header: dict, buffers: dict) -> None:
-        pending = self._pending.pop(header.get("id"), None)
+        rid = header.get("id")
+        pending = self._pending.pop(rid, None) if isinstance(rid, int) else None
         if pending is None:
             return
         if header.get("ok"):
@@ -193,7 +214,7 @@ class EngineProcess(QObject):
             self._stderr.extend(line for line in text.splitlines() if line.strip())
 
     def _on_process_error(self, error: QProcess.ProcessError) -> None:
-        if error == QProcess.FailedToStart:
+        if error == QProcess.ProcessError.FailedToStart:
             cmd = self._command.describe() if self._command else "?"
             self._fail_all(
                 f"could not start the shadow engine ({cmd}). Check the Python named in the plug-in's "
@@ -203,7 +224,7 @@ class EngineProcess(QObject):
 
     def _on_finished(self, code: int, status: QProcess.ExitStatus) -> None:
         self._on_stderr()
-        how = "crashed" if status == QProcess.CrashExit else f"exited with code {code}"
+        how = "crashed" if status == QProcess.ExitStatus.CrashExit else f"exited with code {code}"
         self._died(how)
 
     def _died(self, what: str) -> None:

@@ -1,10 +1,15 @@
-"""The engine's toolkit-free modules: copies beside the plug-in, or ssn_engine in a checkout."""
+"""The host kit: the engine's stdlib-only modules, copied beside the plug-in, or ssn_engine in a checkout."""
 
 from __future__ import annotations
 
-try:  # installed: copies made by `ssn-shadow install-plugin krita`
-    from .engine_shared import client, defaults, light_map, protocol
-except ImportError:  # running from the repository (tests)
-    from ssn_engine import client, defaults, light_map, protocol  # type: ignore[no-redef]
+from typing import TYPE_CHECKING
 
-__all__ = ["client", "defaults", "light_map", "protocol"]
+if TYPE_CHECKING:  # the copies are these modules
+    from ssn_engine import client, defaults, engine_config, light_editor, light_map, light_map_picture, protocol
+else:
+    try:  # installed: copies made by `ssn-shadow install-plugin krita`
+        from .engine_shared import client, defaults, engine_config, light_editor, light_map, light_map_picture, protocol
+    except ImportError:  # running from the repository (tests)
+        from ssn_engine import client, defaults, engine_config, light_editor, light_map, light_map_picture, protocol
+
+__all__ = ["client", "defaults", "engine_config", "light_editor", "light_map", "light_map_picture", "protocol"]

@@ -5,7 +5,16 @@ from __future__ import annotations
 import numpy as np
 import pytest
 
-from ssn_engine.compositing import composite_shadow, from_unit_float, over, shadow_layer, to_unit_float
+from ssn_engine.compositing import (
+    HORIZON_RGB,
+    composite_shadow,
+    from_unit_float,
+    over,
+    preview_image,
+    shadow_layer,
+    to_unit_float,
+)
+from ssn_engine.framing import CanvasShadow
 
 
 def _shadow():
@@ -144,3 +153,22 @@ def test_unit_float_round_trips():
     assert f.tolist() == [0.0, 0.0, 0.25, 1.0]
     with pytest.raises(ValueError, match="dtype"):
         from_unit_float(np.zeros(2, np.float32), np.int16)
+
+
+def test_preview_image_multiplies_hides_under_the_cutout_and_draws_the_horizon():
+    bg = np.array([[[200, 200, 200, 255], [100, 100, 100, 255]]], np.uint8)  # 2 x 1 RGBA
+    green = preview_image(bg, CanvasShadow(np.ones((1, 1), np.float32), 1, 0), color=(0.0, 1.0, 0.0))
+    assert green.tolist() == [[[200, 200, 200], [0, 100, 0]]]
+    half = preview_image(bg, CanvasShadow(np.full((1, 1), 0.5, np.float32), 0, 0))
+    assert half.tolist() == [[[100, 100, 100], [100, 100, 100]]]
+    # the cutout above the shadow layer hides it: fully where opaque, half where half transparent
+    covered = preview_image(bg, CanvasShadow(np.ones((1, 2), np.float32), 0, 0), np.array([[255, 128]], np.uint8))
+    assert covered.tolist() == [[[200, 200, 200], [50, 50, 50]]]
+    # a shadow hanging off the image is clipped
+    assert preview_image(bg, CanvasShadow(np.ones((2, 2), np.float32), 1, -1))[0, 1].tolist() == [0, 0, 0]
+    rgb = np.zeros((10, 20, 3), np.uint8)
+    lined = preview_image(rgb, CanvasShadow(np.zeros((0, 0), np.float32), 0, 0), horizon=4.6)
+    assert tuple(lined[4, 0]) == HORIZON_RGB and lined[4, 6].tolist() == [0, 0, 0]  # a dash, then a gap
+    assert lined[:4].max() == 0 and lined[5:].max() == 0  # only that row
+    for outside in (-3.0, 10.0):
+        assert preview_image(rgb, CanvasShadow(np.zeros((0, 0), np.float32), 0, 0), horizon=outside).max() == 0

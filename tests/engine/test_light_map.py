@@ -9,7 +9,6 @@ import subprocess
 import sys
 
 import pytest
-from engine_helpers import REPO
 
 from ssn_engine import light_map as lm_mod
 from ssn_engine.light_map import (
@@ -297,34 +296,14 @@ def test_blocking_numpy_really_blocks_it():
     assert result.returncode != 0 and "import of numpy halted" in result.stderr
 
 
-def test_toolkit_free_modules_import_without_numpy_by_path():
-    body = f"""
-folder = {str(REPO / "ssn_engine")!r}
-for name in ('light_map', 'protocol'):
-    spec = importlib.util.spec_from_file_location(name, folder + '/' + name + '.py')
-    module = importlib.util.module_from_spec(spec)
-    sys.modules[name] = module
-    spec.loader.exec_module(module)
-spec = importlib.util.spec_from_file_location('client', folder + '/client.py')
-client = importlib.util.module_from_spec(spec)
-spec.loader.exec_module(client)
-lm = sys.modules['light_map'].preset('softbox')
-assert sys.modules['light_map'].LightMap.from_json(lm.to_json()).lights == lm.lights
-assert client.EngineClient
-"""
-    result = _run_without_numpy(body)
-    assert result.returncode == 0, result.stderr
-    assert result.stdout.strip() == "ok"
-
-
 def test_plugin_copy_of_shared_modules_imports_without_numpy(tmp_path):
-    from ssn_engine.plugin_files import copy_shared_modules
+    from ssn_engine.plugin_files import SHARED_MODULES, copy_shared_modules
 
     dest = copy_shared_modules(tmp_path)
-    assert {p.name for p in dest.iterdir()} >= {"__init__.py", "light_map.py", "protocol.py", "client.py"}
+    assert {p.name for p in dest.iterdir()} == {"__init__.py", *SHARED_MODULES}
     body = f"""
 sys.path.insert(0, {str(tmp_path)!r})
-from engine_shared import light_map, protocol, client
+from engine_shared import {", ".join(m.removesuffix(".py") for m in SHARED_MODULES)}
 import io
 buf = io.BytesIO()
 protocol.write_message(buf, {{'id': 1, 'cmd': 'hello'}}, {{'a': protocol.Buffer('uint8', (2, 2), b'abcd')}})
@@ -333,6 +312,9 @@ header, buffers = protocol.read_message(buf)
 assert header['cmd'] == 'hello' and bytes(buffers['a'].data) == b'abcd'
 assert light_map.preset('high-sun').lights
 assert client.EngineClient is not None
+editor = light_editor.LightMapEditor(light_map.preset('softbox'))
+editor.press(0.1, 0.2)
+assert len(light_map_picture.map_rgb(editor.lights, 8, 4)) == 96
 """
     result = _run_without_numpy(body)
     assert result.returncode == 0, result.stderr

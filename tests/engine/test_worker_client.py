@@ -201,17 +201,30 @@ def test_edit_ao(client):
     assert info.value.kind == "BadRequest" and "edits" in str(info.value)
 
 
-def test_elm_image(client):
-    _, buffers = client.request("elm_image", preset="two-lights", width=64)
-    image = arr(buffers["image"])
-    assert image.shape == (32, 64, 3) and image.dtype == np.uint8
-    assert image.max() > image.min() + 50
-    _, buffers = client.request("elm_image", light_map=_light(0.75, 0.5, 0.001, 3.0), width=128)
-    image = arr(buffers["image"]).astype(int).sum(axis=2)
-    assert np.unravel_index(np.argmax(image), image.shape)[1] > 64  # right of centre
-    with pytest.raises(EngineError, match="width") as info:
-        client.request("elm_image", preset="softbox", width=100000)
+def test_preview_is_the_shadow_multiplied_onto_the_thumbnail(client):
+    """A dialog's preview (GIMP): the worker composites, hides the shadow under the cutout and draws the
+    horizon, so the host's Python does no pixel maths."""
+    alpha = drawn_alpha(160, 120, np.uint16)  # the thumbnail's cutout, at its own depth
+    key = client.request("set_cutout", {"alpha": buf(alpha)})[0]["cutout"]
+    background = np.full((120, 160, 4), 200, np.uint8)
+    sent = {"background": buf(background), "cover": buf(alpha)}
+    reply, out = client.request("preview", sent, cutout=key, preset="high-sun", opacity=1.0)
+    image = arr(out["image"])
+    assert image.shape == (120, 160, 3) and image.dtype == np.uint8 and "no_shadow" not in reply
+    assert image.min() < 120  # a dark contact shadow
+    assert (image[alpha > 0] == 200).all()  # the cutout, above the shadow layer, hides it
+    red = client.request("preview", sent, cutout=key, preset="high-sun", color=[1.0, 0.0, 0.0], horizon=30.4)[1]
+    red = arr(red["image"])
+    assert (red[..., 0][alpha == 0] >= 199).all() and red[..., 1].min() < 120  # a red shadow keeps the red
+    assert tuple(red[30, 0]) == (255, 140, 0) and tuple(red[30, 6]) != (255, 140, 0)  # dashed horizon
+    dark = client.request("preview", sent, cutout=key, light_map={**_light(0.5, 0.2), "lights": []})
+    assert dark[0]["no_shadow"] and (arr(dark[1]["image"]) == 200).all()
+    with pytest.raises(EngineError, match="background: 80 x 60, but the cutout is 160 x 120") as info:
+        client.request("preview", {"background": buf(background[:60, :80])}, cutout=key, preset="softbox")
     assert info.value.kind == "BadRequest"
+    with pytest.raises(EngineError, match="background: expected uint8"):
+        client.request("preview", {"background": buf(background[..., 0])}, cutout=key, preset="softbox")
+    client.request("release", cutout=key)
 
 
 @pytest.mark.parametrize(
@@ -224,11 +237,12 @@ def test_elm_image(client):
         ("render", {"cutout": "c999", "preset": "softbox"}, {}, "UnknownCutout", "c999"),
         ("get_ao", {"cutout": None}, {}, "UnknownCutout", "set_cutout"),
         ("frobnicate", {}, {}, "BadRequest", "frobnicate"),
-        ("elm_image", {"preset": "sunset-glow", "width": 64}, {}, "LightMapError", "sunset-glow"),
-        ("elm_image", {"width": 64}, {}, "BadRequest", "light_map or preset"),
+        ("render", {"cutout": "c999", "preset": "sunset-glow"}, {}, "LightMapError", "sunset-glow"),
+        ("preview", {"cutout": "c999"}, {}, "BadRequest", "light_map or preset"),
         (
-            "elm_image",
+            "render",
             {
+                "cutout": "c999",
                 "light_map": {
                     "format": "ssn-shadow-elm",
                     "version": 1,
@@ -237,15 +251,14 @@ def test_elm_image(client):
                         {"u": 1.5, "v": 0.5, "softness": 0.01, "intensity": 1},
                     ],
                 },
-                "width": 64,
             },
             {},
             "LightMapError",
             "lights[1].u",
         ),
         (
-            "elm_image",
-            {"light_map": {"format": "ssn-shadow-elm", "version": 7, "lights": []}, "width": 64},
+            "render",
+            {"cutout": "c999", "light_map": {"format": "ssn-shadow-elm", "version": 7, "lights": []}},
             {},
             "LightMapError",
             "version",

@@ -4,7 +4,15 @@ import sys
 
 import numpy as np
 import pytest
-from ssn_core import Cutout, ShadowError, ShadowLayerData, make_shadow, settings_from_arguments
+from ssn_core import (
+    Cutout,
+    ShadowError,
+    ShadowLayerData,
+    make_shadow,
+    release,
+    settings_from_arguments,
+    upload_cutout,
+)
 from ssn_pixels import plan_for_precision
 
 from ssn_engine.client import EngineClient, EngineError, WorkerUnavailable
@@ -188,3 +196,28 @@ def test_real_worker_casts_the_shadow_away_from_the_light(real_engine, precision
     ys, xs = np.nonzero(a > 0.2)
     assert shadow.x + xs.mean() < 80 - 5  # the pawn's centre is x = 80: the shadow falls left
     assert shadow.x < 0  # the low sun's shadow runs past the canvas's left edge: the layer keeps it whole
+
+
+@pytest.mark.parametrize("precision", ["u8-non-linear", "u16-linear", "float-perceptual"])
+def test_dialog_preview_from_the_real_worker(real_engine, precision):
+    """The dialog's preview: the worker composites the thumbnail (any cutout depth, no 8-bit cut in Python),
+    the cutout hides its own shadow, and a horizon setting draws the line at the thumbnail's scale."""
+    from ssn_preview import Thumbnail, preview_size, render_preview
+
+    assert preview_size(1024, 512) == (384, 192, 0.375)
+    assert preview_size(100, 50) == (100, 50, 1.0)
+    host = FakeHost(precision)
+    small = host.read_cutout(host.plan)
+    thumbnail = Thumbnail(W, H, 4, bytes([230, 230, 230, 255]) * (W * H))
+    key = upload_cutout(real_engine, small)
+    settings = settings_from_arguments({**ARGS, "light-map": "high-sun", "use-horizon": True, "horizon": 40.0})
+    rgb, no_shadow = render_preview(real_engine, key, settings, thumbnail, small, 0.5)
+    image = np.frombuffer(rgb, np.uint8).reshape(H, W, 3)
+    assert not no_shadow and image.min() < 150
+    opaque = host.alpha.astype("f4") >= host.alpha.max()
+    opaque[20] = False  # the horizon row
+    assert (image[opaque] == 230).all()  # hidden under the opaque cutout
+    assert tuple(image[20, 0]) == (255, 140, 0)  # horizon 40 at scale 0.5
+    dark = settings_from_arguments({**ARGS, "light-map": '{"format": "ssn-shadow-elm", "version": 1, "lights": []}'})
+    assert render_preview(real_engine, key, dark, thumbnail, small, 1.0)[1]
+    release(real_engine, key)

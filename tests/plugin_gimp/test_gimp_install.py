@@ -8,6 +8,7 @@ from pathlib import Path
 import pytest
 
 from plugin_gimp import install as inst
+from ssn_engine.plugin_files import SHARED_MODULES
 
 
 @pytest.mark.parametrize(
@@ -35,13 +36,12 @@ def test_copy_install(tmp_path):
         "ssn_pixels.py",
         "ssn_gimp_host.py",
         "ssn_dialog.py",
-        "ssn_editor.py",
         "ssn_light_area.py",
         "ssn_preview.py",
         "ssn_engine_link.py",
     ):
         assert (dest / module).is_file(), module
-    for module in ("light_map.py", "protocol.py", "client.py", "__init__.py"):
+    for module in (*SHARED_MODULES, "__init__.py"):
         assert (dest / "engine_shared" / module).is_file()
     config = json.loads((dest / "engine.json").read_text())
     assert config["python"] == "/opt/venv/bin/python" and config["args"] == ["-m", "ssn_engine", "serve"]
@@ -75,7 +75,9 @@ def test_installed_plugin_imports_shared_copies(tmp_path):
     import subprocess
 
     dest = inst.install(tmp_path / "ssn-shadow")
-    code = "import ssn_settings, ssn_engine_link as l; print(l.light_map.__name__)"
+    code = (
+        "import ssn_settings, ssn_preview, ssn_engine_link as l; print(l.light_map.__name__, l.light_editor.__name__)"
+    )
     env = {k: v for k, v in os.environ.items() if k != "PYTHONPATH"}
     out = subprocess.run(
         [sys.executable, "-I", "-c", f"import sys; sys.path.insert(0, '.'); {code}"],
@@ -85,4 +87,4 @@ def test_installed_plugin_imports_shared_copies(tmp_path):
         env=env,
     )
     assert out.returncode == 0, out.stderr
-    assert out.stdout.strip() == "engine_shared.light_map"
+    assert out.stdout.strip() == "engine_shared.light_map engine_shared.light_editor"

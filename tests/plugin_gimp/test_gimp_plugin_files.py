@@ -8,6 +8,8 @@ from pathlib import Path
 
 import pytest
 
+from ssn_engine.plugin_files import SHARED_MODULES
+
 ROOT = Path(__file__).resolve().parents[2]
 PLUGIN = ROOT / "plugin_gimp" / "ssn-shadow"
 TOOL = ROOT / "tools" / "gimp_chroot.sh"
@@ -26,7 +28,7 @@ def test_entry_script_is_executable_gimp_plugin():
 
 def test_plugin_is_thin_no_heavy_imports():
     """GIMP's Python has only GObject introspection: no numpy, no ssn_engine internals beyond the shared copies."""
-    allowed_engine = {"client", "defaults", "light_map", "protocol"}
+    allowed_engine = {m.removesuffix(".py") for m in SHARED_MODULES}
     for path in PLUGIN.glob("*.py"):
         for node in ast.walk(ast.parse(path.read_text())):
             names = []

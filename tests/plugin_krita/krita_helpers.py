@@ -8,14 +8,14 @@ from PyQt5.QtCore import QEventLoop, QTimer
 
 from plugin_krita.ssn_shadow.adapters.krita_document import Source, SourceError, WriteResult
 from plugin_krita.ssn_shadow.adapters.pixel_format import pixel_format
-from plugin_krita.ssn_shadow.settings import EngineCommand
+from ssn_engine.engine_config import EngineConfig
 
 REPO = Path(__file__).resolve().parents[2]
 
 
-def worker_command(*args: str) -> EngineCommand:
+def worker_command(*args: str) -> EngineConfig:
     """The real engine worker from this checkout, or another Python command."""
-    return EngineCommand(sys.executable, list(args or ("-m", "ssn_engine", "serve")), {"PYTHONPATH": str(REPO)})
+    return EngineConfig((sys.executable, *(args or ("-m", "ssn_engine", "serve"))), env={"PYTHONPATH": str(REPO)})
 
 
 def wait_until(predicate, timeout_s: float = 60.0) -> bool:

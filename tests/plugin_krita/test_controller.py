@@ -1,7 +1,7 @@
 from krita_helpers import FakeHost, wait_until, worker_command
 from plugin_krita.ssn_shadow.controller import ShadowController
 from plugin_krita.ssn_shadow.engine import EngineProcess
-from plugin_krita.ssn_shadow.settings import EngineCommand
+from ssn_engine.engine_config import EngineConfig
 
 
 def make(host, command=worker_command):
@@ -33,7 +33,7 @@ def test_generate_then_live_drag(qapp):
 
         for i in range(30):  # a fast drag: requests coalesce, only the first is an undo step
             c.light_map.move(0, 0.2 + 0.01 * i, 0.6)
-            c.lights_edited(True, i == 0)
+            c.lights_edited(i == 0)
         assert wait_until(lambda: not c.busy)
         live = host.writes[2:]
         assert 1 <= len(live) < 30
@@ -51,7 +51,7 @@ def test_live_off_does_not_render(qapp):
     host = FakeHost()
     c, engine, messages, _ = make(host)
     c.live = False
-    c.lights_edited(True, True)
+    c.lights_edited(True)
     assert not c.busy and not host.writes
     engine.stop()
 
@@ -76,7 +76,7 @@ def test_empty_alpha_message(qapp):
 
 
 def test_missing_worker_message_and_recovery(qapp):
-    commands = [EngineCommand("/nonexistent/python", ["-m", "ssn_engine", "serve"])]
+    commands = [EngineConfig(("/nonexistent/python", "-m", "ssn_engine", "serve"))]
     host = FakeHost()
     c, engine, messages, _ = make(host, lambda: commands[-1])
     try:
@@ -99,7 +99,7 @@ def test_worker_crash_mid_session_recovers(qapp):
         engine._proc.kill()  # the worker dies
         assert wait_until(lambda: not engine.running)
         c.light_map.move(0, 0.3, 0.5)
-        c.lights_edited(True, True)  # needs the cutout again: sent again from the kept source
+        c.lights_edited(True)  # needs the cutout again: sent again from the kept source
         assert wait_until(lambda: not c.busy and len(host.writes) == 2), messages
     finally:
         engine.shutdown()

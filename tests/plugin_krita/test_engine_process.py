@@ -4,7 +4,7 @@ import pytest
 
 from krita_helpers import cutout_alpha, wait_until, worker_command
 from plugin_krita.ssn_shadow.engine import EngineProcess
-from plugin_krita.ssn_shadow.settings import EngineCommand
+from ssn_engine.engine_config import EngineConfig
 from plugin_krita.ssn_shadow.shared import protocol
 
 
@@ -48,7 +48,7 @@ def test_real_worker_round_trip(qapp):
 
 
 def test_missing_worker_gives_a_message_then_restarts(qapp):
-    commands = [EngineCommand("/nonexistent/python", ["-m", "ssn_engine", "serve"]), worker_command()]
+    commands = [EngineConfig(("/nonexistent/python", "-m", "ssn_engine", "serve")), worker_command()]
     engine = EngineProcess(lambda: commands.pop(0) if len(commands) > 1 else commands[0])
     try:
         calls = Calls()

@@ -2,9 +2,12 @@
 
 from __future__ import annotations
 
-from typing import Any
+from typing import TYPE_CHECKING
 
 from PyQt5.QtCore import QTimer
+
+if TYPE_CHECKING:
+    from krita import Document, Krita
 
 from .krita_document import LayerWriter, Source, WriteResult, read_source
 
@@ -12,14 +15,14 @@ from .krita_document import LayerWriter, Source, WriteResult, read_source
 class KritaHost:
     """Binds the document adapters to a running Krita (``Krita.instance()``)."""
 
-    def __init__(self, krita: Any) -> None:
+    def __init__(self, krita: Krita) -> None:
         self.krita = krita
         self.writer = LayerWriter()
 
-    def active_document(self) -> Any:
+    def active_document(self) -> Document | None:
         return self.krita.activeDocument()
 
-    def read_source(self, document: Any) -> Source:
+    def read_source(self, document: Document | None) -> Source:
         return read_source(document)
 
     def write(self, source: Source, pixels: bytes, rect: tuple[int, int, int, int], new_step: bool) -> WriteResult:

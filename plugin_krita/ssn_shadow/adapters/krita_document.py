@@ -22,7 +22,10 @@ from __future__ import annotations
 import hashlib
 import time
 from dataclasses import dataclass
-from typing import Any
+from typing import TYPE_CHECKING
+
+if TYPE_CHECKING:
+    from krita import Document, Node
 
 from .pixel_format import PixelFormat, clip_rect, extract_alpha, opaque_everywhere, pixel_format, place_rows
 
@@ -37,8 +40,8 @@ class SourceError(RuntimeError):
 class Source:
     """The cutout to cast a shadow from: a canvas-sized alpha plane and the layer it belongs to."""
 
-    document: Any
-    node: Any
+    document: Document
+    node: Node
     node_id: str
     name: str
     alpha: bytes
@@ -56,7 +59,7 @@ class Source:
         return f"{self.node_id}:{self.width}x{self.height}:{self.dtype}:{digest}"
 
 
-def node_id(node: Any) -> str:
+def node_id(node: Node) -> str:
     return node.uniqueId().toString()
 
 
@@ -64,7 +67,7 @@ def shadow_name(source_name: str) -> str:
     return SHADOW_PREFIX + source_name
 
 
-def read_source(document: Any) -> Source:
+def read_source(document: Document | None) -> Source:
     """The active selection's alpha if there is one, else the active layer's alpha."""
     if document is None:
         raise SourceError("Open an image first.")
@@ -77,7 +80,7 @@ def read_source(document: Any) -> Source:
     w, h = document.width(), document.height()
     selection = document.selection()
     from_selection = selection is not None and selection.width() > 0 and selection.height() > 0
-    if from_selection:
+    if selection is not None and from_selection:
         alpha, dtype = bytes(selection.pixelData(0, 0, w, h)), "uint8"
         whole = (
             "The selection covers the whole canvas, so its shadow would darken the whole "
@@ -112,16 +115,23 @@ def read_source(document: Any) -> Source:
     )
 
 
-def _source_of_shadow(shadow: Any) -> Any:
+def _source_of_shadow(shadow: Node) -> Node:
     """The layer directly above a shadow layer, when it is the layer the shadow was made from."""
-    siblings = shadow.parentNode().childNodes()
+    siblings = _parent(shadow).childNodes()
     i = _index_of(siblings, shadow)
     if i + 1 < len(siblings) and shadow_name(siblings[i + 1].name()) == shadow.name():
         return siblings[i + 1]
     raise SourceError("The active layer is a shadow layer; select the cutout's layer instead.")
 
 
-def _index_of(nodes: list, node: Any) -> int:
+def _parent(node: Node) -> Node:
+    parent = node.parentNode()
+    if parent is None:
+        raise SourceError(f"The layer '{node.name()}' is no longer in the image.")
+    return parent
+
+
+def _index_of(nodes: list[Node], node: Node) -> int:
     target = node_id(node)
     for i, n in enumerate(nodes):
         if node_id(n) == target:
@@ -129,7 +139,7 @@ def _index_of(nodes: list, node: Any) -> int:
     raise SourceError(f"The layer '{node.name()}' is no longer in the image.")
 
 
-def shadow_below(source_node: Any) -> Any | None:
+def shadow_below(source_node: Node) -> Node | None:
     """The shadow layer directly below the source (by name), or None."""
     parent = source_node.parentNode()
     if parent is None:
@@ -143,7 +153,7 @@ def shadow_below(source_node: Any) -> Any | None:
 
 @dataclass
 class WriteResult:
-    node: Any
+    node: Node
     created: bool
     notice: str = ""
 
@@ -157,8 +167,8 @@ class LayerWriter:
 
     def write(
         self,
-        document: Any,
-        source_node: Any,
+        document: Document,
+        source_node: Node,
         pixels: bytes,
         rect: tuple[int, int, int, int],
         new_step: bool,
@@ -191,7 +201,7 @@ class LayerWriter:
         document.setActiveNode(source_node)  # Krita makes an added layer active; keep the source active
         return WriteResult(node, True, notice)
 
-    def _rect_of(self, node: Any) -> tuple[int, int, int, int]:
+    def _rect_of(self, node: Node) -> tuple[int, int, int, int]:
         rect = self._rects.get(node_id(node))
         if rect is None:
             b = node.bounds()
@@ -199,13 +209,13 @@ class LayerWriter:
         return rect
 
     @staticmethod
-    def _clear(node: Any, rect: tuple[int, int, int, int]) -> None:
+    def _clear(node: Node, rect: tuple[int, int, int, int]) -> None:
         x, y, w, h = rect
         if w > 0 and h > 0:
             ps = len(bytes(node.pixelData(0, 0, 1, 1)))
             node.setPixelData(bytes(w * h * ps), x, y, w, h)
 
-    def _write_in_place(self, document: Any, node: Any, pixels: bytes, rect: tuple[int, int, int, int]) -> None:
+    def _write_in_place(self, document: Document, node: Node, pixels: bytes, rect: tuple[int, int, int, int]) -> None:
         t0 = time.perf_counter()
         self._clear(node, self._rect_of(node))
         t1 = time.perf_counter()
@@ -218,8 +228,8 @@ class LayerWriter:
         t3 = time.perf_counter()
         self.last_timing = {"clear": 1e3 * (t1 - t0), "write": 1e3 * (t2 - t1), "refresh": 1e3 * (t3 - t2)}
 
-    def _insert_below(self, document: Any, source_node: Any, node: Any) -> str:
-        parent = source_node.parentNode()
+    def _insert_below(self, document: Document, source_node: Node, node: Node) -> str:
+        parent = _parent(source_node)
         siblings = parent.childNodes()
         i = _index_of(siblings, source_node)
         if i > 0:

@@ -123,13 +123,13 @@ class AOPreview(QWidget):
         self.brushed.emit(x, y, started)
 
     def mousePressEvent(self, event) -> None:
-        if event.button() == Qt.LeftButton and self.has_image:
+        if event.button() == Qt.MouseButton.LeftButton and self.has_image:
             self._last = None
             self._dab(QPointF(event.pos()), True)
 
     def mouseMoveEvent(self, event) -> None:
         self._cursor = QPointF(event.pos())
-        if event.buttons() & Qt.LeftButton and self.has_image:
+        if event.buttons() & Qt.MouseButton.LeftButton and self.has_image:
             self._dab(QPointF(event.pos()), False)
         self.update()
 
@@ -144,14 +144,18 @@ class AOPreview(QWidget):
         if self._ao is None:
             p.fillRect(r, QColor(60, 60, 60))
             p.setPen(QColor(200, 200, 200))
-            p.drawText(r, Qt.AlignCenter | Qt.TextWordWrap, "Generate a shadow to see\nits ambient occlusion")
+            p.drawText(
+                r,
+                Qt.AlignmentFlag.AlignCenter | Qt.TextFlag.TextWordWrap,
+                "Generate a shadow to see\nits ambient occlusion",
+            )
         else:
             p.drawImage(r, self._ao, self._source())
             if self._mask is not None:
                 p.drawImage(r, self._mask, self._source())
             if self._cursor is not None:
                 p.setPen(QPen(QColor(255, 120, 0), 1))
-                p.setBrush(Qt.NoBrush)
+                p.setBrush(Qt.BrushStyle.NoBrush)
                 rad = self.brush_radius * r.width() / self.view[2]
                 p.drawEllipse(self._cursor, rad, rad)
         p.end()

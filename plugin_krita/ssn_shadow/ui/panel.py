@@ -34,7 +34,7 @@ NO_GUIDE = "Add a horizontal guide on the horizon first (drag one down from the 
 
 
 def _slider(lo: int, hi: int, value: int) -> QSlider:
-    s = QSlider(Qt.Horizontal)
+    s = QSlider(Qt.Orientation.Horizontal)
     s.setRange(lo, hi)
     s.setValue(value)
     return s
@@ -63,7 +63,7 @@ class ShadowPanel(QWidget):
         self.presets.addItem("Preset…")
         self.presets.addItems(list(lm.PRESETS))
         lv.addWidget(self.presets)
-        self.map_widget = LightMapWidget(self.controller.light_map)
+        self.map_widget = LightMapWidget(self.controller.light_map.copy())
         lv.addWidget(self.map_widget)
         form = QFormLayout()
         self.softness = _slider(0, 100, 50)
@@ -73,7 +73,7 @@ class ShadowPanel(QWidget):
         lv.addLayout(form)
         hint = QLabel(
             "A light casts its shadow the opposite way: right of centre, to the left; low, long. "
-            "Click: add · drag: move · wheel: softness · right-click / Del: remove"
+            "Click: add · drag: move · wheel: softness · Shift+wheel: intensity · right-click / Del: remove"
         )
         hint.setWordWrap(True)
         hint.setStyleSheet("color: gray; font-size: 8pt;")
@@ -171,7 +171,7 @@ class ShadowPanel(QWidget):
         root.addLayout(busy_row)
         self.message = QLabel("Select the cutout's layer (or a selection) and press Generate.")
         self.message.setWordWrap(True)
-        self.message.setTextInteractionFlags(Qt.TextSelectableByMouse)
+        self.message.setTextInteractionFlags(Qt.TextInteractionFlag.TextSelectableByMouse)
         root.addWidget(self.message)
         root.addStretch(1)
 
@@ -243,23 +243,19 @@ class ShadowPanel(QWidget):
             return
         name = self.presets.itemText(index)
         self.presets.setCurrentIndex(0)
-        new_map = lm.preset(name)
-        self.controller.light_map = new_map
-        self.map_widget.set_light_map(new_map)
+        self.map_widget.editor.load(lm.preset(name))
         self._sync_light_controls()
 
-    def _lights_changed(self, dragging: bool, stroke_started: bool) -> None:
-        self.controller.light_map = self.map_widget.light_map
+    def _lights_changed(self, live: bool, new_stroke: bool) -> None:
         self._sync_light_controls()
-        self.controller.lights_edited(dragging, stroke_started)
+        self.controller.set_light_map(self.map_widget.light_map.copy(), new_stroke)
 
     def _sync_light_controls(self) -> None:
         i = self.map_widget.selected
-        has = i is not None and i < len(self.map_widget.light_map)
-        self.softness.setEnabled(has)
-        self.intensity.setEnabled(has)
-        if has:
-            light = self.map_widget.light_map.lights[i]
+        light = self.map_widget.light_map.lights[i] if i is not None and i < len(self.map_widget.light_map) else None
+        self.softness.setEnabled(light is not None)
+        self.intensity.setEnabled(light is not None)
+        if light is not None:
             self._syncing = True
             self.softness.setValue(softness_to_slider(light.softness))
             self.intensity.setValue(round(100 * light.intensity))
@@ -275,12 +271,12 @@ class ShadowPanel(QWidget):
     def _softness_moved(self, value: int) -> None:
         if not self._syncing:  # the widget's lightsChanged re-renders
             started = self._take_stroke() or not self.softness.isSliderDown()
-            self.map_widget.set_softness(slider_to_softness(value), started)
+            self.map_widget.editor.set_softness(slider_to_softness(value), started)
 
     def _intensity_moved(self, value: int) -> None:
         if not self._syncing:
             started = self._take_stroke() or not self.intensity.isSliderDown()
-            self.map_widget.set_intensity(value / 100.0, started)
+            self.map_widget.editor.set_intensity(value / 100.0, started)
 
     # -- AO ----------------------------------------------------------------------------------
     def _brush_size(self, value: int) -> None:
@@ -367,8 +363,8 @@ class ShadowPanel(QWidget):
     def set_colour(self, rgb: tuple[float, float, float]) -> None:
         self.controller.color = tuple(float(c) for c in rgb)
         self._show_colour()
-        self.controller.lights_edited(False, True)
+        self.controller.lights_edited(True)
 
     def _opacity(self, value: int) -> None:
         self.controller.opacity = value / 100.0
-        self.controller.lights_edited(True, self._take_stroke() or not self.opacity.isSliderDown())
+        self.controller.lights_edited(self._take_stroke() or not self.opacity.isSliderDown())

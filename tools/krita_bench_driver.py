@@ -88,7 +88,7 @@ def live_drag(doc, depth):
         light["i"] += 1
         u = 0.30 + 0.4 * ((light["i"] % 240) / 240.0)
         c.light_map.move(0, u, 0.6)
-        c.lights_edited(True, light["i"] == 1)
+        c.lights_edited(light["i"] == 1)
 
     timer = QTimer()
     timer.timeout.connect(move)

@@ -1,0 +1,157 @@
+"""The light-map editor's gestures, toolkit-free (stdlib only): both plug-ins' widgets forward events here.
+
+Map coordinates as in :mod:`light_map`: ``u`` across (0.5 = behind the
+object), ``v`` down from the zenith. Gestures: a press on empty sky adds a
+light, a press on a light selects it and dragging moves it (keeping the grab
+offset); the wheel changes the softness (size) of the light under the pointer
+or else of the selected one, with Shift its intensity; right-click or Delete
+removes a light.
+
+After every change ``on_change(live, new_stroke)`` is called: ``live`` while
+a light is being dragged or a slider moved (redraw, preview at once), not
+when an edit is complete (a press that added a light, a release after a drag,
+a wheel notch, a removal, a new map); ``new_stroke`` when the change starts a
+new undo step. ``on_select(index)`` follows a change of the selected light
+(None: no light selected).
+"""
+
+from __future__ import annotations
+
+import json
+import time
+from collections.abc import Callable
+
+from . import light_map
+
+NEW_SOFTNESS = 0.01
+NEW_INTENSITY = 2.0
+SOFTNESS_STEP = 1.25  # per wheel notch, multiplicative
+INTENSITY_STEP = 0.1  # per wheel notch with Shift
+STROKE_GAP_S = 0.6  # wheel notches further apart than this start a new undo step
+
+OnChange = Callable[[bool, bool], None]
+OnSelect = Callable[[int | None], None]
+
+
+class LightMapEditor:
+    """Edits a :class:`light_map.LightMap` in response to pointer gestures and slider moves."""
+
+    def __init__(
+        self,
+        lights: light_map.LightMap | None = None,
+        on_change: OnChange | None = None,
+        on_select: OnSelect | None = None,
+        clock: Callable[[], float] = time.monotonic,
+    ) -> None:
+        self.lights = lights if lights is not None else light_map.preset(light_map.DEFAULT_PRESET)
+        self.on_change, self.on_select, self._clock = on_change, on_select, clock
+        self.selected: int | None = 0 if len(self.lights) else None
+        self._grab: tuple[float, float] | None = None  # pointer offset from the dragged light's centre
+        self._dragged = False  # the grabbed light has moved since the press
+        self._stroke_open = False  # the next move continues the undo step a press started
+        self._last_wheel = -1e9
+        self.message = ""  # the last refusal (e.g. too many lights), for a status line
+
+    def _changed(self, live: bool, new_stroke: bool) -> None:
+        if self.on_change is not None:
+            self.on_change(live, new_stroke)
+
+    def select(self, index: int | None) -> None:
+        """Select a light (None: none)."""
+        if index != self.selected:
+            self.selected = index
+            if self.on_select is not None:
+                self.on_select(index)
+
+    # -- gestures --------------------------------------------------------------
+    def press(self, u: float, v: float) -> None:
+        """Select the light under the pointer and grab it, or add one on empty sky (a complete edit)."""
+        self.message = ""
+        hit = self.lights.hit_test(u, v)
+        added = hit is None
+        if hit is None:
+            try:
+                hit = self.lights.add(u, v, NEW_SOFTNESS, NEW_INTENSITY)
+            except light_map.LightMapError as exc:
+                self.message = str(exc)
+                self.select(None)
+                return
+        self.select(hit)
+        light = self.lights.lights[hit]
+        du = (u - light.u + 0.5) % 1.0 - 0.5
+        self._grab, self._dragged, self._stroke_open = (du, v - light.v), False, added
+        if added:
+            self._changed(False, True)
+
+    def drag(self, u: float, v: float) -> None:
+        """Move the grabbed light so that it keeps its offset from the pointer; the first move of a light that
+        was already there starts a new undo step (a light just added moves within its own)."""
+        if self._grab is None or self.selected is None:
+            return
+        self.lights.move(self.selected, u - self._grab[0], v - self._grab[1])
+        first = not self._dragged and not self._stroke_open
+        self._dragged = True
+        self._changed(True, first)
+
+    def release(self) -> None:
+        """End a drag; a light that moved is a complete edit."""
+        dragged, self._grab, self._dragged, self._stroke_open = self._dragged, None, False, False
+        if dragged:
+            self._changed(False, False)
+
+    def scroll(self, notches: float, intensity: bool = False, at: tuple[float, float] | None = None) -> None:
+        """Wheel: the softness (or with ``intensity`` the intensity) of the light under ``at``, else the
+        selected one. Notches in quick succession are one undo step."""
+        target = self.lights.hit_test(*at) if at is not None else None
+        target = self.selected if target is None else target
+        if target is None or notches == 0:
+            return
+        self.select(target)
+        light = self.lights.lights[target]
+        if intensity:
+            self.lights.reweight(target, light.intensity + INTENSITY_STEP * notches)
+        else:
+            self.lights.resize(target, light.softness * SOFTNESS_STEP**notches)
+        now = self._clock()
+        new_stroke, self._last_wheel = now - self._last_wheel > STROKE_GAP_S, now
+        self._changed(False, new_stroke)
+
+    def remove_at(self, u: float, v: float) -> None:
+        """Remove the light under the pointer, if any."""
+        hit = self.lights.hit_test(u, v)
+        if hit is not None:
+            self._remove(hit)
+
+    def remove_selected(self) -> None:
+        if self.selected is not None and self.selected < len(self.lights):
+            self._remove(self.selected)
+
+    def _remove(self, index: int) -> None:
+        self.lights.delete(index)
+        self._grab = None
+        self.select(None)
+        self._changed(False, True)
+
+    # -- sliders -----------------------------------------------------------------
+    def set_softness(self, softness: float, new_stroke: bool) -> None:
+        """The selected light's softness (a slider moved); ``new_stroke`` on a slider's first move."""
+        if self.selected is not None:
+            self.lights.resize(self.selected, softness)
+            self._changed(True, new_stroke)
+
+    def set_intensity(self, intensity: float, new_stroke: bool) -> None:
+        """The selected light's intensity (a slider moved)."""
+        if self.selected is not None:
+            self.lights.reweight(self.selected, intensity)
+            self._changed(True, new_stroke)
+
+    # -- whole map ---------------------------------------------------------------
+    def load(self, lights: light_map.LightMap) -> None:
+        """Replace the map (a preset was chosen, or the settings were reset): one new undo step."""
+        self.lights, self._grab = lights, None
+        self.select(0 if len(lights) else None)
+        self._changed(False, True)
+
+    def to_json(self) -> str:
+        """The light map as compact JSON (GIMP's ``light-map`` argument)."""
+        return json.dumps(self.lights.to_dict(), separators=(",", ":"))
