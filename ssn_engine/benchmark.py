@@ -6,6 +6,7 @@ import os
 import platform
 import time
 from collections.abc import Callable
+from typing import TypeVar
 
 import numpy as np
 from PIL import Image
@@ -18,6 +19,8 @@ from .methods import GeometricCard, load_method
 from .samples import pawn_cutout
 from .session import ShadowSession
 
+
+T = TypeVar("T")
 
 VARIANTS = 6  # distinct inputs cycled through when timing uncached work
 DRAG = 64  # sun positions of the dragged-light row, each rendered once
@@ -34,10 +37,11 @@ def _time(fn: Callable[[], object], repeats: int, warmup: int = 2) -> np.ndarray
     return np.array(times) * 1e3
 
 
-def _alternating(items: list) -> Callable[[], object]:
+def _alternating(items: list[T]) -> Callable[[], T]:
+    """A function returning the next of ``items`` on each call, cycling."""
     state = {"i": 0}
 
-    def next_item() -> object:
+    def next_item() -> T:
         state["i"] += 1
         return items[state["i"] % len(items)]
 

@@ -10,7 +10,7 @@ See ``docs/protocol.md`` for the commands. The plug-ins import this module
 from __future__ import annotations
 
 import json
-from typing import BinaryIO, NamedTuple
+from typing import IO, NamedTuple
 
 PROTOCOL_VERSION = 1
 DTYPES = {"uint8": 1, "uint16": 2, "float16": 2, "float32": 4}
@@ -54,14 +54,14 @@ def encode_header(header: dict, buffers: dict[str, Buffer] | None = None) -> byt
     return json.dumps(header, separators=(",", ":")).encode("utf-8") + b"\n"
 
 
-def write_message(stream: BinaryIO, header: dict, buffers: dict[str, Buffer] | None = None) -> None:
+def write_message(stream: IO[bytes], header: dict, buffers: dict[str, Buffer] | None = None) -> None:
     """Write one message and flush."""
     stream.write(encode_header(header, buffers))
     stream.writelines(memoryview(b.data).cast("B") for b in (buffers or {}).values())
     stream.flush()
 
 
-def _read_exact(stream: BinaryIO, n: int) -> bytes:
+def _read_exact(stream: IO[bytes], n: int) -> bytes:
     chunks, left = [], n
     while left:
         chunk = stream.read(min(left, CHUNK))
@@ -72,7 +72,7 @@ def _read_exact(stream: BinaryIO, n: int) -> bytes:
     return b"".join(chunks)
 
 
-def skip(stream: BinaryIO, n: int) -> None:
+def skip(stream: IO[bytes], n: int) -> None:
     """Read and drop ``n`` bytes (a refused request's buffers) in bounded chunks."""
     left = n
     while left:
@@ -116,7 +116,7 @@ def _spec(entry: object) -> BufferSpec:
     return BufferSpec(name, dtype, tuple(shape), nbytes)
 
 
-def read_header(stream: BinaryIO) -> tuple[dict, list[BufferSpec]]:
+def read_header(stream: IO[bytes]) -> tuple[dict, list[BufferSpec]]:
     """Read one message's header line and check its buffer entries, without reading the buffers.
 
     EOFError at a clean end of stream. A ProtocolError's ``skip`` is the number of buffer bytes that follow
@@ -141,7 +141,8 @@ def parse_header(line: bytes) -> tuple[dict, list[BufferSpec]]:
     if not isinstance(entries, list):
         raise ProtocolError("header: buffers must be a list")
     sizes = [e.get("nbytes") if isinstance(e, dict) else None for e in entries]
-    declared = sum(sizes) if all(isinstance(n, int) and not isinstance(n, bool) and n >= 0 for n in sizes) else None
+    counts = [n for n in sizes if isinstance(n, int) and not isinstance(n, bool) and n >= 0]
+    declared = sum(counts) if len(counts) == len(sizes) else None  # None unless every entry declares its nbytes
     try:
         specs = [_spec(e) for e in entries]
     except ProtocolError as exc:
@@ -151,12 +152,12 @@ def parse_header(line: bytes) -> tuple[dict, list[BufferSpec]]:
     return header, specs
 
 
-def read_buffers(stream: BinaryIO, specs: list[BufferSpec]) -> dict[str, Buffer]:
+def read_buffers(stream: IO[bytes], specs: list[BufferSpec]) -> dict[str, Buffer]:
     """Read the buffers a header declared."""
     return {s.name: Buffer(s.dtype, s.shape, _read_exact(stream, s.nbytes)) for s in specs}
 
 
-def read_message(stream: BinaryIO) -> tuple[dict, dict[str, Buffer]]:
+def read_message(stream: IO[bytes]) -> tuple[dict, dict[str, Buffer]]:
     """Read one message; EOFError at a clean end of stream."""
     header, specs = read_header(stream)
     return header, read_buffers(stream, specs)

@@ -249,7 +249,7 @@ class GeometricCard:
         )
         out = np.zeros(valid.shape, np.float32)
         w = np.maximum(elm, 0).ravel() * self._weights
-        if card.empty or w.sum() <= 0:
+        if ground is None or w.sum() <= 0:  # ground is None: the card is empty
             return out
         keep = brightest(w, 0.995, EXTENDED_TEXELS)
         out[valid] = np.einsum("t,tp->p", (w[keep] / w[keep].sum()).astype(np.float32), card.wide_bases(keep, ground))

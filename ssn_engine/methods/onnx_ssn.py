@@ -15,6 +15,7 @@ from __future__ import annotations
 
 import json
 from pathlib import Path
+from typing import TYPE_CHECKING
 
 import numpy as np
 
@@ -22,6 +23,9 @@ from ..frames import resample_frames
 from ..hemisphere import NETWORK_SHAPE, network_elm
 from .base import check_batch
 from .geometric import GeometricCard, camera_at
+
+if TYPE_CHECKING:  # imported where a model loads: the engine runs without onnxruntime until then
+    import onnxruntime as ort
 
 MODEL_FORMAT = "ssn-shadow-model"
 MODEL_VERSION = 1
@@ -45,7 +49,7 @@ def apply_floor(shadow: np.ndarray, floor: float) -> np.ndarray:
     return np.clip((shadow - np.float32(floor)) / np.float32(1.0 - floor), 0.0, 1.0)
 
 
-def _session(path: Path, role: str):
+def _session(path: Path, role: str) -> ort.InferenceSession:
     import onnxruntime as ort
 
     if not path.is_file():
@@ -65,6 +69,14 @@ def _session(path: Path, role: str):
             f"{path} does not match the {role} contract: expected {expected} (name: rank), got {got_in} and {got_out}"
         )
     return session
+
+
+def _run(session: ort.InferenceSession, output: str, feeds: dict[str, np.ndarray]) -> np.ndarray:
+    """The tensor ``output`` of one run of ``session`` (the contract checked by :func:`_session`: all tensors)."""
+    result = session.run([output], feeds)[0]
+    if not isinstance(result, np.ndarray):
+        raise ModelError(f"{output}: expected a tensor output, got {type(result).__name__}")
+    return result
 
 
 class OnnxSSN:
@@ -103,11 +115,11 @@ class OnnxSSN:
         """Run both graphs once so that a graph that loads but cannot run fails now."""
         mask = np.zeros((1, 1, self.model_resolution, self.model_resolution), np.float32)
         try:
-            ao = self._aop.run(["ao"], {"mask": mask})[0]
+            ao = _run(self._aop, "ao", {"mask": mask})
             feeds = {"mask": mask, "ao": ao, "elm": np.zeros((1, 16, 32), np.float32)}
             if self.card is not None:
                 feeds["card"] = mask
-            s = self._sr.run(["shadow"], feeds)[0]
+            s = _run(self._sr, "shadow", feeds)
         except Exception as exc:
             raise ModelError(
                 f"model in {self.meta.get('aop')} / {self.meta.get('sr')} failed a test run: {exc}"
@@ -119,7 +131,7 @@ class OnnxSSN:
         """The AO maps; a geometry-guided model also traces each mask's card here, so moving a light does not."""
         check_batch(masks, None, self.resolution, cameras=cameras)
         m = resample_frames(masks, self.model_resolution)[:, None]
-        ao = self._aop.run(["ao"], {"mask": m})[0][:, 0]
+        ao = _run(self._aop, "ao", {"mask": m})[:, 0]
         if self.card is not None:
             for b, mask in enumerate(masks):
                 self.card.card(mask, camera_at(cameras, b))
@@ -136,7 +148,7 @@ class OnnxSSN:
         }
         if self.card is not None:
             feeds["card"] = self.card.card_shadows(masks, elms, cameras)[:, None]
-        s = self._sr.run(["shadow"], feeds)[0][:, 0]
+        s = _run(self._sr, "shadow", feeds)[:, 0]
         s = apply_floor(resample_frames(s, self.resolution), self.output_floor)
         s[np.asarray(elms).max(axis=(1, 2)) <= 0] = 0.0  # no light, no shadow (conventions)
         return s

@@ -1,0 +1,3 @@
+"""PyGObject's entry point, as the GIMP plug-in uses it (GIMP's Python provides it; it has no stubs)."""
+
+def require_version(namespace: str, version: str) -> None: ...
