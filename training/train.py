@@ -21,7 +21,9 @@ import signal
 import sys
 import threading
 import time
+from dataclasses import dataclass
 from pathlib import Path
+from typing import Any
 
 import numpy as np
 import torch
@@ -357,60 +359,242 @@ def plot_log(run: Path, title: str) -> None:
     loss_curve({"train (per-pixel L2)": train, "val": val}, run / "loss.png", title)
 
 
-def main(argv: list[str] | None = None, store=None) -> int:
-    """Train; ``store`` replaces ``ViewStore(--data)`` (tests pass an in-memory stand-in)."""
+# The output conv's bias starts at the typical target (docs/training.md, "Network").
+HEAD_BIAS = {"ao": 1.0, "shadow": 0.0, "irradiance": 1.0}
+
+
+@dataclass
+class Process:
+    """This process of the run: its rank and the world size (torchrun, else 1) and its device."""
+
+    rank: int
+    world: int
+    device: torch.device
+
+    @property
+    def is_main(self) -> bool:
+        """Rank 0 validates, logs and checkpoints."""
+        return self.rank == 0
+
+
+@dataclass
+class Network:
+    """The module being trained, its U-Net shape and Adam optimizer, and where training stands (checkpointed).
+
+    ``parallel`` is what the train steps call: the DistributedDataParallel wrapper, or the model itself.
+    """
+
+    model: torch.nn.Module
+    config: UNetConfig
+    opt: torch.optim.Optimizer
+    parallel: torch.nn.Module
+    step: int = 0
+    samples: int = 0
+    best: float = float("inf")
+
+
+@dataclass
+class TrainData:
+    """The train split's view cache and batch sampler, the basis grid's ELM rows and rank 0's validation batch."""
+
+    cache: ViewCache
+    sampler: BatchSampler
+    elm_rows: int
+    val: dict[str, torch.Tensor] | None
+    refreshable: bool  # the store is re-opened every --refresh-minutes (not a store handed to main)
+
+
+class BatchStream:
+    """This process's train batches, built ahead in a thread, and the generator of the AO augmentation.
+
+    Both are seeded from --seed, the rank and the step, so a resumed run is reproducible given where it stopped.
+    """
+
+    def __init__(self, sampler: BatchSampler, seed: int, rank: int, step: int):
+        self.sampler, self.seed, self.rank = sampler, seed, rank
+        self.gen = torch.Generator().manual_seed(seed * 1000 + rank + step)
+        self.start(step)
+
+    def start(self, step: int) -> None:
+        """(Re)start the prefetcher on a batch stream seeded from ``step``."""
+        self.pre = Prefetcher(self.sampler, np.random.default_rng([self.seed, self.rank, step]))
+
+    def next(self):
+        return self.pre.next()
+
+    def close(self) -> None:
+        self.pre.close()
+
+
+class Interval:
+    """A clock that is due every ``minutes`` after its last restart."""
+
+    def __init__(self, minutes: float):
+        self.seconds = minutes * 60
+        self.restart()
+
+    def restart(self) -> None:
+        self.t0 = time.perf_counter()
+
+    def due(self) -> bool:
+        return time.perf_counter() - self.t0 > self.seconds
+
+
+class RunLog:
+    """``log.csv`` (rank 0; appended on resume, its seconds counted on from the last row), the progress bar and
+    the running mean of the train loss between two rows."""
+
+    def __init__(self, run: Path, is_main: bool, steps: int, step: int, every: int, samples_per_step: int):
+        path = run / "log.csv"
+        new = not path.is_file()
+        self.is_main, self.samples_per_step = is_main, samples_per_step
+        self.file = path.open("a", newline="") if is_main else None
+        self.writer = csv.DictWriter(self.file, LOG_FIELDS) if self.file else None
+        if self.writer and new:
+            self.writer.writeheader()
+        self.t_start = time.perf_counter()
+        old_rows = read_log(path) if is_main and not new else []
+        self.prior_seconds = float(old_rows[-1]["seconds"]) if old_rows else 0.0
+        self.progress = Progress(steps, start=step, every=every)
+        self.running, self.n_running, self.t_log = 0.0, 0, time.perf_counter()
+
+    def elapsed(self) -> float:
+        """Seconds since this chunk of the run started."""
+        return time.perf_counter() - self.t_start
+
+    def add(self, step: int, loss: float, lr: float) -> None:
+        self.running += loss
+        self.n_running += 1
+        if self.is_main:
+            self.progress.update(step, f"loss {self.running / self.n_running:.5f} lr {lr:.2e}")
+
+    def row(self, step: int, samples: int, lr: float) -> dict:
+        """The next row (no validation loss yet); restarts the running mean."""
+        row = {
+            "step": step,
+            "samples": samples,
+            "lr": f"{lr:.3e}",
+            "train_loss": f"{self.running / self.n_running:.6f}",
+            "val_loss": "",
+            "seconds": f"{self.prior_seconds + self.elapsed():.1f}",
+            "samples_per_s": f"{self.n_running * self.samples_per_step / (time.perf_counter() - self.t_log):.2f}",
+        }
+        self.running, self.n_running, self.t_log = 0.0, 0, time.perf_counter()
+        return row
+
+    def write(self, row: dict) -> None:
+        self.writer.writerow(row)
+        self.file.flush()
+
+    def close(self) -> None:
+        if self.file:
+            self.file.close()
+
+
+def run_args(argv: list[str] | None) -> argparse.Namespace:
+    """The command line; an AOP's target is the AO map."""
     args = parse_args(argv)
     if args.module == "aop":
         args.target = "ao"
+    return args
+
+
+def start_process(args: argparse.Namespace) -> Process:
+    """Torch's CPU threads, and this process's rank and device (DistributedDataParallel under torchrun)."""
     torch.set_num_threads(args.threads)
-    rank, world, device = setup_distributed()
-    objective = Objective(
-        args.module, frozen_sr(args.through_sr, device) if args.through_sr else None, args.shadow_weight
-    )
-    main_proc = rank == 0
+    return Process(*setup_distributed())
+
+
+def make_objective(args: argparse.Namespace, device: torch.device) -> Objective:
+    """Per-pixel L2 to the target; with --through-sr (AOP), plus the L2 of the shadow a frozen SR renders."""
+    sr_net = frozen_sr(args.through_sr, device) if args.through_sr else None
+    return Objective(args.module, sr_net, args.shadow_weight)
+
+
+def open_run(args: argparse.Namespace) -> Path:
+    """The run directory (created)."""
     run = Path(args.run)
     run.mkdir(parents=True, exist_ok=True)
-    torch.manual_seed(args.seed)
+    return run
 
+
+def open_store(args: argparse.Namespace, given: Any = None) -> Any:
+    """``given`` (a test's stand-in), else the ViewStore of --data as the generator has written it so far."""
+    if given is not None:
+        return given
     from .data.store import ViewStore
 
-    fixed_store = store is not None
-    store = store if fixed_store else ViewStore(args.data)
+    return ViewStore(args.data)
+
+
+def build_network(args: argparse.Namespace, proc: Process) -> Network:
+    """The module's U-Net (seeded by --seed, the output bias at the typical target) and its Adam optimizer."""
+    torch.manual_seed(args.seed)
     config = UNetConfig(widths=args.widths, groups=args.groups, resolution=args.resolution, card=args.card)
-    head_bias = {"ao": 1.0, "shadow": 0.0, "irradiance": 1.0}[args.target]
-    model = build(args.module, config, head_bias).to(device)
-    if main_proc:
+    model = build(args.module, config, HEAD_BIAS[args.target]).to(proc.device)
+    if proc.is_main:
         print(describe(args.module, model, args.resolution), flush=True)
-    opt = torch.optim.Adam(model.parameters(), lr=args.lr)
-    step, samples, best = 0, 0, float("inf")
-    ckpt_path = None if args.fresh else checkpoint.resume_path(run)
+    return Network(model, config, torch.optim.Adam(model.parameters(), lr=args.lr), parallel=model)
 
-    def load_matching(path, advice: str) -> dict:
-        """The checkpoint at ``path``, refused unless it holds this run's module, target and U-Net."""
-        ck = checkpoint.load(path)
-        if ck["module"] != args.module or ck.get("target") != args.target or ck["unet"] != config.to_dict():
-            raise SystemExit(f"{path} is a {ck['module']}/{ck.get('target')} {ck['unet']} run; {advice}")
-        return ck
 
-    if ckpt_path is not None:
-        ckpt = load_matching(ckpt_path, "use another --run or --fresh")
-        model.load_state_dict(ckpt["model"])
-        opt.load_state_dict(ckpt["optimizer"])
-        step, samples, best = ckpt["step"], ckpt["samples"], ckpt.get("best_val", float("inf"))
-        if main_proc:
-            print(f"resumed from {ckpt_path} at step {step}", flush=True)
+def load_matching(path: str | Path, args: argparse.Namespace, config: UNetConfig, advice: str) -> dict:
+    """The checkpoint at ``path``, refused unless it holds this run's module, target and U-Net."""
+    ck = checkpoint.load(path)
+    if ck["module"] != args.module or ck.get("target") != args.target or ck["unet"] != config.to_dict():
+        raise SystemExit(f"{path} is a {ck['module']}/{ck.get('target')} {ck['unet']} run; {advice}")
+    return ck
+
+
+def resume(net: Network, args: argparse.Namespace, path: Path, proc: Process) -> None:
+    """Continue the run of ``last.pt``: weights, optimizer, step, samples and best validation loss."""
+    ck = load_matching(path, args, net.config, "use another --run or --fresh")
+    net.model.load_state_dict(ck["model"])
+    net.opt.load_state_dict(ck["optimizer"])
+    net.step, net.samples, net.best = ck["step"], ck["samples"], ck.get("best_val", float("inf"))
+    if proc.is_main:
+        print(f"resumed from {path} at step {net.step}", flush=True)
+
+
+def init_from(net: Network, args: argparse.Namespace, proc: Process) -> None:
+    """Fine-tune: a new run from --init-from's weights, with a fresh optimizer and schedule."""
+    ck = load_matching(args.init_from, args, net.config, "it cannot initialise this run (--init-from)")
+    net.model.load_state_dict(ck["model"])
+    if proc.is_main:
+        print(f"initialised from {args.init_from} (step {ck['step']})", flush=True)
+
+
+def restore(net: Network, args: argparse.Namespace, run: Path, proc: Process) -> None:
+    """Resume from the run's checkpoint (unless --fresh), else start from --init-from's weights if given."""
+    path = None if args.fresh else checkpoint.resume_path(run)
+    if path is not None:
+        resume(net, args, path, proc)
     elif args.init_from:
-        init = load_matching(args.init_from, "it cannot initialise this run (--init-from)")
-        model.load_state_dict(init["model"])
-        if main_proc:
-            print(f"initialised from {args.init_from} (step {init['step']})", flush=True)
-    if main_proc:
-        (run / "config.json").write_text(json.dumps({**vars(args), "widths": list(args.widths)}, indent=1))
-    ddp = torch.nn.parallel.DistributedDataParallel(model) if world > 1 else model
+        init_from(net, args, proc)
 
+
+def args_record(args: argparse.Namespace) -> dict:
+    """The arguments as config.json and the checkpoints keep them."""
+    return {**vars(args), "widths": list(args.widths)}
+
+
+def write_config(run: Path, args: argparse.Namespace, proc: Process) -> None:
+    """``config.json`` of the run (rank 0)."""
+    if proc.is_main:
+        (run / "config.json").write_text(json.dumps(args_record(args), indent=1))
+
+
+def distribute(net: Network, proc: Process) -> None:
+    """Wrap the restored model in DistributedDataParallel when several processes train it."""
+    if proc.world > 1:
+        net.parallel = torch.nn.parallel.DistributedDataParallel(net.model)
+
+
+def train_cache(args: argparse.Namespace, store: Any) -> ViewCache:
+    """The train split's views at R (a plain AOP keeps them all: it needs no bases), with their bases, cards and
+    the --ao-from AOP's predicted AO as the run needs them."""
     lit = shadow_target(args)
     predict_ao = load_aop(args.ao_from) if args.module == "sr" and args.ao_from else None
-    cache = ViewCache(
+    return ViewCache(
         store,
         "train",
         args.resolution,
@@ -420,8 +604,13 @@ def main(argv: list[str] | None = None, store=None) -> int:
         with_card=args.card,
         predict_ao=predict_ao,
     )
+
+
+def batch_sampler(args: argparse.Namespace, cache: ViewCache) -> BatchSampler:
+    """Batches of --elms-per-view fresh light maps per view (Table 1 or the family mixture), mirrored with --flip."""
+    lit = shadow_target(args)
     # A plain AOP ignores the light, so repeating a view under several ELMs would only shrink its batch.
-    sampler = BatchSampler(
+    return BatchSampler(
         cache,
         args.batch,
         lit,
@@ -431,18 +620,26 @@ def main(argv: list[str] | None = None, store=None) -> int:
         true_camera=args.true_camera,
         swap_every=args.swap_every,
     )
+
+
+def build_data(args: argparse.Namespace, proc: Process, store: Any, run: Path, refreshable: bool) -> TrainData:
+    """Views of the store: the train split's cache and sampler, and on rank 0 the fixed validation batch."""
+    cache = train_cache(args, store)
+    sampler = batch_sampler(args, cache)
     rows = store.meta["elm_rows"]
-    val_batch, val_split = build_val(store, args, rows, run) if main_proc else (None, None)
-    val = to_tensors(val_batch, device) if val_batch is not None else None
-    if main_proc:
+    val_batch, val_split = build_val(store, args, rows, run) if proc.is_main else (None, None)
+    val = to_tensors(val_batch, proc.device) if val_batch is not None else None
+    if proc.is_main:
         print(
             f"train views: {len(cache)} (cache {args.cache_views}), val: {args.val_samples} samples from the "
-            f"{val_split} split, batch {args.batch} x {world} process(es), device {device}",
+            f"{val_split} split, batch {args.batch} x {proc.world} process(es), device {proc.device}",
             flush=True,
         )
-    gen = torch.Generator().manual_seed(args.seed * 1000 + rank + step)
-    pre = Prefetcher(sampler, np.random.default_rng([args.seed, rank, step]))
+    return TrainData(cache, sampler, rows, val, refreshable)
 
+
+def stop_on_signals() -> dict[str, bool]:
+    """A flag that SIGTERM and SIGINT (Ctrl-C) raise, so the run ends cleanly with a checkpoint."""
     stop = {"flag": False}
 
     def on_signal(signum, _frame):
@@ -450,104 +647,157 @@ def main(argv: list[str] | None = None, store=None) -> int:
 
     signal.signal(signal.SIGTERM, on_signal)
     signal.signal(signal.SIGINT, on_signal)
+    return stop
 
-    def save_ckpt(path: Path) -> None:
-        checkpoint.save(
-            path,
-            {
-                "model": model.state_dict(),
-                "optimizer": opt.state_dict(),
-                "step": step,
-                "samples": samples,
-                "best_val": best,
-                "module": args.module,
-                "target": args.target,
-                "unet": config.to_dict(),
-                "args": {**vars(args), "widths": list(args.widths)},
-                "elm_rows": rows,
-                "data": str(args.data),
-            },
-        )
 
-    log_path = run / "log.csv"
-    new_log = not log_path.is_file()
-    log_f = log_path.open("a", newline="") if main_proc else None
-    writer = csv.DictWriter(log_f, LOG_FIELDS) if log_f else None
-    if writer and new_log:
-        writer.writeheader()
-    t_start = time.perf_counter()
-    t_ckpt = t_refresh = time.perf_counter()
-    old_rows = read_log(log_path) if main_proc and not new_log else []
-    prior_seconds = float(old_rows[-1]["seconds"]) if old_rows else 0.0
-    progress = Progress(args.steps, start=step, every=args.log_every)
-    running, n_running, t_log = 0.0, 0, time.perf_counter()
-    ddp.train()
-    while step < args.steps and not stop["flag"]:
-        lr = lr_at(step, args)
-        for g in opt.param_groups:
-            g["lr"] = lr
-        x = to_tensors(pre.next(), device)
-        ao_in = None
-        if args.module == "sr" and not args.no_perturb:
-            ao_in = perturb_ao(x["ao"].cpu(), gen).to(device)
-        if "ao_pred" in x:
-            ao_in = mix_predicted_ao(x, x["ao"] if ao_in is None else ao_in, args.ao_from_prob, gen)
-        pred = forward(ddp, args.module, x, ao_in)
-        loss = objective(pred, x)
-        opt.zero_grad(set_to_none=True)
-        loss.backward()
-        opt.step()
-        step += 1
-        samples += args.batch * world
-        running += loss.item()
-        n_running += 1
-        if main_proc:
-            progress.update(step, f"loss {running / n_running:.5f} lr {lr:.2e}")
-        do_val = main_proc and (step % args.val_every == 0 or step == args.steps)
-        if main_proc and (step % args.log_every == 0 or do_val):
-            row = {
-                "step": step,
-                "samples": samples,
-                "lr": f"{lr:.3e}",
-                "train_loss": f"{running / n_running:.6f}",
-                "val_loss": "",
-                "seconds": f"{prior_seconds + time.perf_counter() - t_start:.1f}",
-                "samples_per_s": f"{n_running * args.batch * world / (time.perf_counter() - t_log):.2f}",
-            }
-            running, n_running, t_log = 0.0, 0, time.perf_counter()
-            if do_val:
-                v, vpred = validate(model, args.module, val, objective)
-                row["val_loss"] = f"{v:.6f}"
-                write_samples(run / "samples_latest.png", args.module, val, vpred)
-                if v < best:
-                    best = v
-                    save_ckpt(run / checkpoint.BEST)
-            writer.writerow(row)
-            log_f.flush()
-            if do_val:
-                plot_log(run, f"{args.module.upper()} ({args.target}) {run.name}")
-        if main_proc and time.perf_counter() - t_ckpt > args.ckpt_minutes * 60:
-            save_ckpt(run / checkpoint.LAST)
-            t_ckpt = time.perf_counter()
-        if not fixed_store and time.perf_counter() - t_refresh > args.refresh_minutes * 60:
-            store = ViewStore(args.data)
-            pre.close()
-            cache.open(store)
-            pre = Prefetcher(sampler, np.random.default_rng([args.seed, rank, step]))
-            t_refresh = time.perf_counter()
-            if main_proc:
-                print(f"\nstore re-opened: {len(cache)} train views", flush=True)
-        if args.max_minutes and time.perf_counter() - t_start > args.max_minutes * 60:
+def ao_input(args: argparse.Namespace, x: dict[str, torch.Tensor], gen: torch.Generator) -> torch.Tensor | None:
+    """SR's AO input: the ground truth perturbed (unless --no-perturb), in a share --ao-from-prob of the samples
+    the AOP's prediction instead; None: the batch's AO as it is."""
+    ao_in = None
+    if args.module == "sr" and not args.no_perturb:
+        ao_in = perturb_ao(x["ao"].cpu(), gen).to(x["ao"].device)
+    if "ao_pred" in x:
+        ao_in = mix_predicted_ao(x, x["ao"] if ao_in is None else ao_in, args.ao_from_prob, gen)
+    return ao_in
+
+
+def train_step(
+    net: Network, module: str, objective: Objective, x: dict[str, torch.Tensor], ao: torch.Tensor | None, lr: float
+) -> float:
+    """One Adam step at learning rate ``lr`` on batch ``x``; the loss."""
+    for g in net.opt.param_groups:
+        g["lr"] = lr
+    loss = objective(forward(net.parallel, module, x, ao), x)
+    net.opt.zero_grad(set_to_none=True)
+    loss.backward()
+    net.opt.step()
+    return loss.item()
+
+
+def save_checkpoint(path: Path, net: Network, args: argparse.Namespace, elm_rows: int) -> None:
+    """``last.pt`` or ``best.pt``: weights, optimizer, progress, and what the network is (module, target, U-Net)."""
+    checkpoint.save(
+        path,
+        {
+            "model": net.model.state_dict(),
+            "optimizer": net.opt.state_dict(),
+            "step": net.step,
+            "samples": net.samples,
+            "best_val": net.best,
+            "module": args.module,
+            "target": args.target,
+            "unet": net.config.to_dict(),
+            "args": args_record(args),
+            "elm_rows": elm_rows,
+            "data": str(args.data),
+        },
+    )
+
+
+def loss_title(args: argparse.Namespace, run: Path) -> str:
+    """The title of ``loss.png``."""
+    return f"{args.module.upper()} ({args.target}) {run.name}"
+
+
+def validate_and_keep_best(
+    args: argparse.Namespace, run: Path, net: Network, data: TrainData, objective: Objective
+) -> float:
+    """The validation loss; writes ``samples_latest.png``, and ``best.pt`` at the lowest loss so far."""
+    v, pred = validate(net.model, args.module, data.val, objective)
+    write_samples(run / "samples_latest.png", args.module, data.val, pred)
+    if v < net.best:
+        net.best = v
+        save_checkpoint(run / checkpoint.BEST, net, args, data.elm_rows)
+    return v
+
+
+def report(
+    args: argparse.Namespace, run: Path, net: Network, data: TrainData, objective: Objective, log: RunLog, lr: float
+) -> None:
+    """Rank 0 after a step: a log row every --log-every steps; every --val-every steps and at the end, with the
+    validation loss, samples, ``best.pt`` and ``loss.png``."""
+    do_val = net.step % args.val_every == 0 or net.step == args.steps
+    if net.step % args.log_every and not do_val:
+        return
+    row = log.row(net.step, net.samples, lr)
+    if do_val:
+        row["val_loss"] = f"{validate_and_keep_best(args, run, net, data, objective):.6f}"
+    log.write(row)
+    if do_val:
+        plot_log(run, loss_title(args, run))
+
+
+def refresh_store(args: argparse.Namespace, data: TrainData, stream: BatchStream, step: int, proc: Process) -> None:
+    """Re-open the store so the cache picks up meshes the generator finished meanwhile; restart the stream."""
+    store = open_store(args)
+    stream.close()
+    data.cache.open(store)
+    stream.start(step)
+    if proc.is_main:
+        print(f"\nstore re-opened: {len(data.cache)} train views", flush=True)
+
+
+def train(
+    args: argparse.Namespace, proc: Process, run: Path, net: Network, data: TrainData, objective: Objective
+) -> None:
+    """Train steps to --steps (or a stop signal, or --max-minutes): learning rate schedule, batch, Adam step;
+    rank 0 logs, validates and writes ``last.pt`` every --ckpt-minutes and at the end."""
+    stream = BatchStream(data.sampler, args.seed, proc.rank, net.step)
+    stop = stop_on_signals()
+    log = RunLog(run, proc.is_main, args.steps, net.step, args.log_every, args.batch * proc.world)
+    ckpt_clock, refresh_clock = Interval(args.ckpt_minutes), Interval(args.refresh_minutes)
+    net.parallel.train()
+    while net.step < args.steps and not stop["flag"]:
+        lr = lr_at(net.step, args)
+        x = to_tensors(stream.next(), proc.device)
+        loss = train_step(net, args.module, objective, x, ao_input(args, x, stream.gen), lr)
+        net.step += 1
+        net.samples += args.batch * proc.world
+        log.add(net.step, loss, lr)
+        if proc.is_main:
+            report(args, run, net, data, objective, log, lr)
+        if proc.is_main and ckpt_clock.due():
+            save_checkpoint(run / checkpoint.LAST, net, args, data.elm_rows)
+            ckpt_clock.restart()
+        if data.refreshable and refresh_clock.due():
+            refresh_store(args, data, stream, net.step, proc)
+            refresh_clock.restart()
+        if args.max_minutes and log.elapsed() > args.max_minutes * 60:
             break
-    pre.close()
-    if main_proc:
-        progress.close()
-        save_ckpt(run / checkpoint.LAST)
-        plot_log(run, f"{args.module.upper()} ({args.target}) {run.name}")
-        print(f"stopped at step {step} ({samples} samples); checkpoint {run / checkpoint.LAST}", flush=True)
-        log_f.close()
-    if world > 1:
+    stream.close()
+    if proc.is_main:
+        finish_run(args, run, net, data, log)
+
+
+def finish_run(args: argparse.Namespace, run: Path, net: Network, data: TrainData, log: RunLog) -> None:
+    """Rank 0 at the end of a chunk: ``last.pt``, the loss plot, and where it stopped."""
+    log.progress.close()
+    save_checkpoint(run / checkpoint.LAST, net, args, data.elm_rows)
+    plot_log(run, loss_title(args, run))
+    print(f"stopped at step {net.step} ({net.samples} samples); checkpoint {run / checkpoint.LAST}", flush=True)
+    log.close()
+
+
+def end_process(proc: Process) -> None:
+    """Leave the process group of a distributed run."""
+    if proc.world > 1:
         torch.distributed.destroy_process_group()
+
+
+def main(argv: list[str] | None = None, store=None) -> int:
+    """Train; ``store`` replaces ``ViewStore(--data)`` (tests pass an in-memory stand-in)."""
+    args = run_args(argv)
+    proc = start_process(args)
+    objective = make_objective(args, proc.device)
+    run = open_run(args)
+    views = open_store(args, store)
+    net = build_network(args, proc)
+    restore(net, args, run, proc)
+    write_config(run, args, proc)
+    distribute(net, proc)
+    data = build_data(args, proc, views, run, refreshable=store is None)
+    train(args, proc, run, net, data, objective)
+    end_process(proc)
     return 0
 
 

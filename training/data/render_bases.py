@@ -227,6 +227,183 @@ def kernel_args(verts, normals, topo, rows, dirs, n: int) -> tuple:
     )
 
 
+@njit(cache=True)
+def _face_norms(normals):
+    """|n_f| per face."""
+    norms = np.empty(normals.shape[0])
+    for f in range(normals.shape[0]):
+        norms[f] = math.sqrt(normals[f, 0] ** 2 + normals[f, 1] ** 2 + normals[f, 2] ** 2)
+    return norms
+
+
+@njit(cache=True, inline="always")
+def _direction_cone(dirs):
+    """The mean (cx, cy, cz) of a texel's directions ``dirs`` (S, 3) and a radius about it that holds them all."""
+    s_count = dirs.shape[0]
+    cx, cy, cz = 0.0, 0.0, 0.0
+    for s in range(s_count):
+        cx += dirs[s, 0]
+        cy += dirs[s, 1]
+        cz += dirs[s, 2]
+    cx, cy, cz = cx / s_count, cy / s_count, cz / s_count
+    radius = 0.0
+    for s in range(s_count):
+        d2 = (dirs[s, 0] - cx) ** 2 + (dirs[s, 1] - cy) ** 2 + (dirs[s, 2] - cz) ** 2
+        radius = max(radius, math.sqrt(d2))
+    return cx, cy, cz, radius * (1.0 + 1e-9) + 1e-12
+
+
+@njit(cache=True, inline="always")
+def _sample_signs(nx, ny, nz, dirs, row):
+    """sign(n . w) of every direction w in ``dirs`` (S, 3) into ``row``; their common value, else MIXED."""
+    c0 = _sign(nx * dirs[0, 0] + ny * dirs[0, 1] + nz * dirs[0, 2])
+    row[0] = c0
+    same = True
+    for s in range(1, dirs.shape[0]):
+        cs = _sign(nx * dirs[s, 0] + ny * dirs[s, 1] + nz * dirs[s, 2])
+        row[s] = cs
+        same = same and cs == c0
+    return c0 if same else MIXED
+
+
+@njit(cache=True)
+def _face_signs(normals, norms, dirs):
+    """Each face's sign(n_f . w) over a texel's directions ``dirs`` (S, 3): ``code`` +1 / -1 / 0 when all samples
+    agree, else MIXED with the per-sample signs in row ``slot[f]`` of ``signs``.
+
+    One dot product with the mean direction settles a face when the samples' spread cannot change its sign.
+    """
+    nf = normals.shape[0]
+    code = np.empty(nf, np.int8)
+    slot = np.empty(nf, np.int64)
+    signs = np.empty((nf, dirs.shape[0]), np.int8)
+    cx, cy, cz, radius = _direction_cone(dirs)
+    n_signs = 0
+    for f in range(nf):
+        nx, ny, nz = normals[f, 0], normals[f, 1], normals[f, 2]
+        nn = norms[f]
+        dc = nx * cx + ny * cy + nz * cz
+        if nn == 0.0:
+            code[f] = 0
+        elif dc > nn * radius:
+            code[f] = 1
+        elif dc < -nn * radius:
+            code[f] = -1
+        else:
+            code[f] = _sample_signs(nx, ny, nz, dirs, signs[n_signs])
+            if code[f] == MIXED:
+                slot[f] = n_signs
+                n_signs += 1
+    return code, slot, signs
+
+
+@njit(cache=True, inline="always")
+def _settled_coefficient(e, ptr, inc_face, inc_dir, code):
+    """c_e summed over the edge's settled faces, and whether a MIXED face touches it."""
+    coef = 0
+    is_mixed = False
+    for k in range(ptr[e], ptr[e + 1]):
+        cf = code[inc_face[k]]
+        if cf == MIXED:
+            is_mixed = True
+        else:
+            coef += cf * inc_dir[k]
+    return coef, is_mixed
+
+
+@njit(cache=True, inline="always")
+def _sample_coefficients(e, settled, ptr, inc_face, inc_dir, code, slot, signs, row):
+    """c_e per sample into ``row``: ``settled`` plus the MIXED faces' per-sample terms."""
+    for s in range(row.shape[0]):
+        row[s] = settled
+    for k in range(ptr[e], ptr[e + 1]):
+        f = inc_face[k]
+        if code[f] == MIXED:
+            for s in range(row.shape[0]):
+                row[s] += signs[slot[f], s] * inc_dir[k]
+
+
+@njit(cache=True)
+def _edge_coefficients(n_edges, ptr, inc_face, inc_dir, code, slot, signs):
+    """The edges that can cast shadow under a texel: ``fixed`` with their one non-zero coefficient, and ``mixed``
+    (touching a MIXED face) with one coefficient per sample. Edges with coefficient 0 everywhere cancel."""
+    s_count = signs.shape[1]
+    fixed = np.empty(n_edges, np.int32)
+    fixed_coef = np.empty(n_edges, np.int32)
+    mixed = np.empty(n_edges, np.int32)
+    mixed_coef = np.empty((n_edges, s_count), np.int32)
+    n_fixed = 0
+    n_mixed = 0
+    for e in range(n_edges):
+        coef, is_mixed = _settled_coefficient(e, ptr, inc_face, inc_dir, code)
+        if is_mixed:
+            _sample_coefficients(e, coef, ptr, inc_face, inc_dir, code, slot, signs, mixed_coef[n_mixed])
+            mixed[n_mixed] = e
+            n_mixed += 1
+        elif coef != 0:
+            fixed[n_fixed] = e
+            fixed_coef[n_fixed] = coef
+            n_fixed += 1
+    return fixed[:n_fixed], fixed_coef[:n_fixed], mixed[:n_mixed], mixed_coef[:n_mixed]
+
+
+@njit(cache=True, inline="always")
+def _project_vertex(a, s, kx, kz, verts, ground, ground_row, stamp, rowmap, row_z, first):
+    """Vertex a's projection onto the ground along direction s: (x, z) and its first row at or beyond z.
+
+    ``stamp`` holds the direction each vertex was last projected for, so a vertex is projected once per direction.
+    """
+    if stamp[a] != s:
+        stamp[a] = s
+        ground[a, 0] = verts[a, 0] - kx * verts[a, 1]
+        ground[a, 1] = verts[a, 2] - kz * verts[a, 1]
+        ground_row[a] = _first_row(ground[a, 1], rowmap, row_z, first)
+
+
+@njit(cache=True, inline="always")
+def _edge_at(m, s, fixed, fixed_coef, mixed, mixed_coef):
+    """The m-th counting edge (fixed ones first) and its coefficient for direction s (0: it casts nothing)."""
+    if m < fixed.shape[0]:
+        return fixed[m], fixed_coef[m]
+    m -= fixed.shape[0]
+    return mixed[m], mixed_coef[m, s]
+
+
+# Inlined into occlusion_counts' parallel loop: compiled as a function of its own, its vertex projection
+# loop ran about twice as slow.
+@njit(cache=True, inline="always")
+def _scan_texel(verts, edges, dirs, fixed, fixed_coef, mixed, mixed_coef, rows, first, scan, out):
+    """Per direction of the texel: project the counting edges' vertices onto the ground, and with ``scan``
+    scan-convert the edges and add the running sums' shadowed pixels to ``out`` (n, n).
+
+    ``rows`` = (row_z, row_x0, row_dx, rowmap) of :class:`GroundRows`.
+    """
+    row_z, row_x0, row_dx, rowmap = rows
+    n = out.shape[0]
+    nv = verts.shape[0]
+    diff = np.zeros((n, n), np.int32)
+    box = np.array([n, -1, n, -1], np.int64)
+    ground = np.empty((nv, 2))
+    ground_row = np.empty(nv, np.int64)
+    stamp = np.full(nv, -1, np.int64)
+    for s in range(dirs.shape[0]):
+        kx = dirs[s, 0] / dirs[s, 1]
+        kz = dirs[s, 2] / dirs[s, 1]
+        for m in range(fixed.shape[0] + mixed.shape[0]):
+            e, coef = _edge_at(m, s, fixed, fixed_coef, mixed, mixed_coef)
+            if coef == 0:
+                continue
+            a = edges[e, 0]
+            b = edges[e, 1]
+            _project_vertex(a, s, kx, kz, verts, ground, ground_row, stamp, rowmap, row_z, first)
+            _project_vertex(b, s, kx, kz, verts, ground, ground_row, stamp, rowmap, row_z, first)
+            if scan:
+                xa, za, xb, zb = ground[a, 0], ground[a, 1], ground[b, 0], ground[b, 1]
+                _scan_edge_rows(xa, za, ground_row[a], xb, zb, ground_row[b], coef, row_z, row_x0, row_dx, diff, box)
+        if scan:
+            _resolve(diff, box, out)
+
+
 @njit(cache=True, parallel=True)
 def occlusion_counts(
     verts, normals, edges, ptr, inc_face, inc_dir, dirs, row_z, row_x0, row_dx, rowmap, first, n, stage=3
@@ -241,119 +418,16 @@ def occlusion_counts(
     ``stage`` < 3 stops early, for timing: 1 after the per-texel tables, 2
     before scan conversion (the result is then incomplete).
     """
-    t_count, s_count = dirs.shape[0], dirs.shape[1]
-    nf = normals.shape[0]
-    ne = edges.shape[0]
-    nv = verts.shape[0]
-    out = np.zeros((t_count, n, n), np.uint8)
-    norms = np.empty(nf)
-    for f in range(nf):
-        norms[f] = math.sqrt(normals[f, 0] ** 2 + normals[f, 1] ** 2 + normals[f, 2] ** 2)
-    for t in prange(t_count):
-        diff = np.zeros((n, n), np.int32)
-        box = np.array([n, -1, n, -1], np.int64)
-        code = np.empty(nf, np.int8)  # +1 / -1 / 0 for all samples, else MIXED
-        slot = np.empty(nf, np.int64)  # row of a MIXED face in ``signs``
-        signs = np.empty((nf, s_count), np.int8)
-        cx, cy, cz = 0.0, 0.0, 0.0
-        for s in range(s_count):
-            cx += dirs[t, s, 0]
-            cy += dirs[t, s, 1]
-            cz += dirs[t, s, 2]
-        cx, cy, cz = cx / s_count, cy / s_count, cz / s_count
-        radius = 0.0
-        for s in range(s_count):
-            d2 = (dirs[t, s, 0] - cx) ** 2 + (dirs[t, s, 1] - cy) ** 2 + (dirs[t, s, 2] - cz) ** 2
-            radius = max(radius, math.sqrt(d2))
-        radius = radius * (1.0 + 1e-9) + 1e-12
-        n_signs = 0
-        for f in range(nf):
-            nx, ny, nz = normals[f, 0], normals[f, 1], normals[f, 2]
-            nn = norms[f]
-            dc = nx * cx + ny * cy + nz * cz
-            if nn == 0.0:
-                code[f] = 0
-            elif dc > nn * radius:
-                code[f] = 1
-            elif dc < -nn * radius:
-                code[f] = -1
-            else:
-                c0 = _sign(nx * dirs[t, 0, 0] + ny * dirs[t, 0, 1] + nz * dirs[t, 0, 2])
-                signs[n_signs, 0] = c0
-                same = True
-                for s in range(1, s_count):
-                    cs = _sign(nx * dirs[t, s, 0] + ny * dirs[t, s, 1] + nz * dirs[t, s, 2])
-                    signs[n_signs, s] = cs
-                    same = same and cs == c0
-                if same:
-                    code[f] = c0
-                else:
-                    code[f] = MIXED
-                    slot[f] = n_signs
-                    n_signs += 1
-        # Edges with a fixed non-zero coefficient, and edges with one coefficient per sample.
-        fixed = np.empty(ne, np.int32)
-        fixed_coef = np.empty(ne, np.int32)
-        mixed = np.empty(ne, np.int32)
-        mixed_coef = np.empty((ne, s_count), np.int32)
-        n_fixed = 0
-        n_mixed = 0
-        for e in range(ne):
-            coef = 0
-            is_mixed = False
-            for k in range(ptr[e], ptr[e + 1]):
-                cf = code[inc_face[k]]
-                if cf == MIXED:
-                    is_mixed = True
-                else:
-                    coef += cf * inc_dir[k]
-            if is_mixed:
-                for s in range(s_count):
-                    mixed_coef[n_mixed, s] = coef
-                for k in range(ptr[e], ptr[e + 1]):
-                    f = inc_face[k]
-                    if code[f] == MIXED:
-                        for s in range(s_count):
-                            mixed_coef[n_mixed, s] += signs[slot[f], s] * inc_dir[k]
-                mixed[n_mixed] = e
-                n_mixed += 1
-            elif coef != 0:
-                fixed[n_fixed] = e
-                fixed_coef[n_fixed] = coef
-                n_fixed += 1
-        vx = np.empty(nv)
-        vz = np.empty(nv)
-        vk = np.empty(nv, np.int64)
-        stamp = np.full(nv, -1, np.int64)
-        for s in range(s_count if stage >= 2 else 0):
-            wx, wy, wz = dirs[t, s, 0], dirs[t, s, 1], dirs[t, s, 2]
-            kx = wx / wy
-            kz = wz / wy
-            for m in range(n_fixed + n_mixed):
-                if m < n_fixed:
-                    e = fixed[m]
-                    coef = fixed_coef[m]
-                else:
-                    coef = mixed_coef[m - n_fixed, s]
-                    if coef == 0:
-                        continue
-                    e = mixed[m - n_fixed]
-                a = edges[e, 0]
-                b = edges[e, 1]
-                if stamp[a] != s:
-                    stamp[a] = s
-                    vx[a] = verts[a, 0] - kx * verts[a, 1]
-                    vz[a] = verts[a, 2] - kz * verts[a, 1]
-                    vk[a] = _first_row(vz[a], rowmap, row_z, first)
-                if stamp[b] != s:
-                    stamp[b] = s
-                    vx[b] = verts[b, 0] - kx * verts[b, 1]
-                    vz[b] = verts[b, 2] - kz * verts[b, 1]
-                    vk[b] = _first_row(vz[b], rowmap, row_z, first)
-                if stage >= 3:
-                    _scan_edge_rows(vx[a], vz[a], vk[a], vx[b], vz[b], vk[b], coef, row_z, row_x0, row_dx, diff, box)
-            if stage >= 3:
-                _resolve(diff, box, out[t])
+    out = np.zeros((dirs.shape[0], n, n), np.uint8)
+    norms = _face_norms(normals)
+    rows = (row_z, row_x0, row_dx, rowmap)
+    for t in prange(dirs.shape[0]):
+        code, slot, signs = _face_signs(normals, norms, dirs[t])
+        fixed, fixed_coef, mixed, mixed_coef = _edge_coefficients(
+            edges.shape[0], ptr, inc_face, inc_dir, code, slot, signs
+        )
+        if stage >= 2:
+            _scan_texel(verts, edges, dirs[t], fixed, fixed_coef, mixed, mixed_coef, rows, first, stage >= 3, out[t])
     return out
 
 

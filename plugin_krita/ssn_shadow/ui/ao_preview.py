@@ -42,11 +42,12 @@ def view_of(mask: bytes, n: int) -> tuple[float, float, float]:
 
 def mask_overlay(mask: bytes, n: int) -> QImage:
     """A translucent blue image where the mask is set (ARGB32 premultiplied)."""
+    alpha = bytes(m * 90 // 255 for m in range(256))
     data = bytearray(4 * n * n)
-    for i, m in enumerate(mask):
-        if m:
-            a = m * 90 // 255
-            data[4 * i : 4 * i + 4] = bytes((a, a * 40 // 255, a * 20 // 255, a))  # B, G, R, A premultiplied
+    data[0::4] = mask.translate(alpha)  # B, G, R, A premultiplied, by byte tables (no loop over pixels)
+    data[1::4] = mask.translate(bytes(a * 40 // 255 for a in alpha))
+    data[2::4] = mask.translate(bytes(a * 20 // 255 for a in alpha))
+    data[3::4] = mask.translate(alpha)
     return QImage(bytes(data), n, n, 4 * n, QImage.Format_ARGB32_Premultiplied).copy()
 
 
