@@ -8,11 +8,11 @@ black shadow is ``background * (1 - opacity * s)``.
 
 from __future__ import annotations
 
-from collections.abc import Iterator, Sequence
+from collections.abc import Sequence
 
 import numpy as np
 
-from .framing import CanvasShadow
+from .framing import CanvasShadow, row_stripes
 
 LAYER_DTYPES = ("uint8", "uint16", "float16", "float32")
 _INT_MAX = {"uint8": 255, "uint16": 65535}
@@ -63,25 +63,28 @@ def shadow_layer(
     c = _colour(color)
     if channels == "bgra":
         c = c[::-1]
-    # In place on one float32 buffer: this runs on every light change, over the whole visible shadow.
-    alpha = np.clip(shadow, 0.0, 1.0, dtype=np.float32)
-    alpha *= np.float32(_opacity(opacity))
-    if dtype in _INT_MAX:
-        alpha *= np.float32(_INT_MAX[dtype])
-        np.rint(alpha, out=alpha)
-    a = alpha.astype(dtype)
-    del alpha
+    opacity = _opacity(opacity)
     out = np.empty(shadow.shape + (4,), dtype)
-    if dtype == "uint8":  # one 32-bit word per pixel: colour bytes, then alpha (little-endian RGBA in memory)
-        r, g, b = (int(v) for v in from_unit_float(c, "uint8"))
-        words = out.view(np.uint32).reshape(shadow.shape)
-        np.left_shift(a, 24, out=words, dtype=np.uint32)
-        words |= np.uint32(r | g << 8 | b << 16)
-        if not np.little_endian:  # pragma: no cover - the word order assumes little-endian memory
-            out[..., :3], out[..., 3] = from_unit_float(c, dtype), a
-    else:
-        out[..., :3] = from_unit_float(c, dtype)
-        out[..., 3] = a
+    # In stripes, in place on one float32 buffer each: this runs on every light change, over the whole visible
+    # shadow, and stripes keep the temporaries small.
+    for rows in row_stripes(0, shadow.shape[0], shadow.shape[1]):
+        alpha = np.clip(shadow[rows], 0.0, 1.0, dtype=np.float32)
+        alpha *= np.float32(opacity)
+        if dtype in _INT_MAX:
+            alpha *= np.float32(_INT_MAX[dtype])
+            np.rint(alpha, out=alpha)
+        a = alpha.astype(dtype)
+        part = out[rows]
+        if dtype == "uint8":  # one 32-bit word per pixel: colour bytes, then alpha (little-endian RGBA in memory)
+            r, g, b = (int(v) for v in from_unit_float(c, "uint8"))
+            words = part.view(np.uint32).reshape(a.shape)
+            np.left_shift(a, 24, out=words, dtype=np.uint32)
+            words |= np.uint32(r | g << 8 | b << 16)
+            if not np.little_endian:  # pragma: no cover - the word order assumes little-endian memory
+                part[..., :3], part[..., 3] = from_unit_float(c, dtype), a
+        else:
+            part[..., :3] = from_unit_float(c, dtype)
+            part[..., 3] = a
     return out
 
 
@@ -111,15 +114,6 @@ def over(background: np.ndarray, cutout: np.ndarray) -> np.ndarray:
     return from_unit_float(out, background.dtype)
 
 
-STRIPE_PIXELS = 1 << 18  # canvas pixels blended at once: memory follows the shadow's and cutout's boxes
-
-
-def _stripes(y0: int, y1: int, width: int) -> Iterator[slice]:
-    rows = max(1, STRIPE_PIXELS // max(1, width))
-    for top in range(y0, y1, rows):
-        yield slice(top, min(top + rows, y1))
-
-
 def layer_image(
     shadow: CanvasShadow, width: int, height: int, color: Sequence[float] = (0.0, 0.0, 0.0), opacity: float = 1.0
 ) -> np.ndarray:
@@ -131,7 +125,7 @@ def layer_image(
     if not shadow.is_empty:
         h, w = shadow.values.shape
         cols = slice(shadow.x, shadow.x + w)
-        for rows in _stripes(shadow.y, shadow.y + h, w):
+        for rows in row_stripes(shadow.y, shadow.y + h, w):
             out[rows, cols] = shadow_layer(shadow.values[rows.start - shadow.y : rows.stop - shadow.y], color, opacity)
     return out
 
@@ -151,7 +145,7 @@ def composite_image(
     if not shadow.is_empty:
         h, w = shadow.values.shape
         cols = slice(shadow.x, shadow.x + w)
-        for rows in _stripes(shadow.y, shadow.y + h, w):
+        for rows in row_stripes(shadow.y, shadow.y + h, w):
             part = shadow.values[rows.start - shadow.y : rows.stop - shadow.y]
             background[rows, cols] = composite_shadow(background[rows, cols], part, color, opacity)
     visible = cutout[..., 3] > 0
@@ -159,7 +153,7 @@ def composite_image(
     del visible
     if ys.size:
         cols = slice(int(xs[0]), int(xs[-1]) + 1)
-        for rows in _stripes(int(ys[0]), int(ys[-1]) + 1, cols.stop - cols.start):
+        for rows in row_stripes(int(ys[0]), int(ys[-1]) + 1, cols.stop - cols.start):
             background[rows, cols] = over(background[rows, cols], cutout[rows, cols])
     return background
 
