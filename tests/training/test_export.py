@@ -11,31 +11,17 @@ torch = pytest.importorskip("torch")
 pytest.importorskip("onnx")
 ort = pytest.importorskip("onnxruntime")
 
-from test_train_standin import FakeStore  # noqa: E402
+from test_train_standin import FakeStore, tiny_run_args  # noqa: E402
 
 from training.export import main as export_main  # noqa: E402
 from training.train import main as train_main  # noqa: E402
 
-TINY = [
-    "--resolution",
-    "32",
-    "--widths",
-    "4,8,8",
-    "--groups",
-    "2",
-    "--batch",
-    "4",
-    "--val-samples",
-    "4",
-    "--val-every",
-    "2",
-    "--threads",
-    "1",
-    "--warmup",
-    "1",
-    "--steps",
-    "2",
-]
+TINY = tiny_run_args(32, 1, "--steps", "2")
+
+
+def export(aop: list, sr, out, data, *extra: str) -> int:
+    """Run `training.export` on AOP checkpoints or a graph (``aop``) and an SR checkpoint."""
+    return export_main(["--aop", *map(str, aop), "--sr", str(sr), "--out", str(out), "--data", str(data), *extra])
 
 
 @pytest.fixture(scope="module")
@@ -44,21 +30,7 @@ def exported(tmp_path_factory):
     for module in ("aop", "sr"):
         assert train_main(["--module", module, "--run", str(tmp / module), *TINY], store=FakeStore(res=32)) == 0
     out = tmp / "model"
-    code = export_main(
-        [
-            "--aop",
-            str(tmp / "aop" / "last.pt"),
-            "--sr",
-            str(tmp / "sr" / "last.pt"),
-            "--out",
-            str(out),
-            "--data",
-            str(tmp / "no-data"),
-            "--floor",
-            "0.01",
-        ]
-    )
-    assert code == 0
+    assert export([tmp / "aop" / "last.pt"], tmp / "sr" / "last.pt", out, tmp / "no-data", "--floor", "0.01") == 0
     return out
 
 
@@ -129,20 +101,7 @@ def _sr_mirror_gap(model_dir) -> float:
 def test_mirror_averaged_export_is_mirror_symmetric(exported):
     out = exported.parent / "mirrored"
     runs = exported.parent
-    code = export_main(
-        [
-            "--aop",
-            str(runs / "aop" / "last.pt"),
-            "--sr",
-            str(runs / "sr" / "last.pt"),
-            "--out",
-            str(out),
-            "--data",
-            str(runs / "no-data"),
-            "--mirror-average",
-        ]
-    )
-    assert code == 0
+    assert export([runs / "aop" / "last.pt"], runs / "sr" / "last.pt", out, runs / "no-data", "--mirror-average") == 0
     card = json.loads((out / "model.json").read_text())
     assert card["mirror_average"] is True and card["export"]["sr"]["max_abs_diff"] <= 1e-4
     assert "Mirror-averaged" in (out / "MODEL_CARD.md").read_text()
@@ -160,19 +119,7 @@ def test_two_aops_export_as_one_graph_of_their_mean(exported):
     )
     members = [runs / "aop" / "last.pt", runs / "aop2" / "last.pt"]
     out = runs / "ensemble"
-    code = export_main(
-        [
-            "--aop",
-            *map(str, members),
-            "--sr",
-            str(runs / "sr" / "last.pt"),
-            "--out",
-            str(out),
-            "--data",
-            str(runs / "no-data"),
-        ]
-    )
-    assert code == 0
+    assert export(members, runs / "sr" / "last.pt", out, runs / "no-data") == 0
     m = np.random.default_rng(3).random((2, 1, 32, 32), dtype=np.float32)
     got = ort.InferenceSession(str(out / "aop.onnx"), providers=["CPUExecutionProvider"]).run(None, {"mask": m})[0]
     with torch.no_grad():
@@ -195,21 +142,7 @@ def test_geometry_guided_sr_exports_with_the_card_input_and_the_engine_feeds_it(
         == 0
     )
     out = tmp_path / "model"
-    assert (
-        export_main(
-            [
-                "--aop",
-                str(exported / "aop.onnx"),
-                "--sr",
-                str(run / "last.pt"),
-                "--out",
-                str(out),
-                "--data",
-                str(tmp_path / "no-data"),
-            ]
-        )
-        == 0
-    )
+    assert export([exported / "aop.onnx"], run / "last.pt", out, tmp_path / "no-data") == 0
     card = json.loads((out / "model.json").read_text())
     assert card["export"]["sr"]["max_abs_diff"] <= 1e-4
     assert card["export"]["aop"]["reused_from"] == str(exported / "aop.onnx")

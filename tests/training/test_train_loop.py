@@ -9,33 +9,12 @@ import pytest
 
 torch = pytest.importorskip("torch")
 
-from test_train_standin import FakeStore  # noqa: E402
+from test_train_standin import FakeStore, tiny_run_args  # noqa: E402
 
 from training import checkpoint  # noqa: E402
 from training.train import lr_at, main, parse_args  # noqa: E402
 
-TINY = [
-    "--resolution",
-    "16",
-    "--widths",
-    "4,8,8",
-    "--groups",
-    "2",
-    "--batch",
-    "4",
-    "--val-samples",
-    "4",
-    "--val-every",
-    "2",
-    "--log-every",
-    "1",
-    "--threads",
-    "1",
-    "--warmup",
-    "2",
-    "--elms-per-view",
-    "2",
-]
+TINY = tiny_run_args(16, 2, "--log-every", "1", "--elms-per-view", "2")
 
 
 def _run(tmp_path, module, steps, extra=()):

@@ -93,6 +93,29 @@ class FakeStore:
         return np.stack([self.shadow(o, e) for o, e in zip(occlusion, elms, strict=True)])
 
 
+def tiny_run_args(resolution: int, warmup: int, *extra: str) -> list[str]:
+    """`training.train` arguments of a tiny run on the stand-in store: a 4-8-8 U-Net, batches of 4, one thread."""
+    return [
+        "--resolution",
+        str(resolution),
+        "--widths",
+        "4,8,8",
+        "--groups",
+        "2",
+        "--batch",
+        "4",
+        "--val-samples",
+        "4",
+        "--val-every",
+        "2",
+        "--threads",
+        "1",
+        "--warmup",
+        str(warmup),
+        *extra,
+    ]
+
+
 def test_standin_shapes_and_splits():
     s = FakeStore()
     v = s.load(s.view_ids("train")[0])
