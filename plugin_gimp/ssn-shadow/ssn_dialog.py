@@ -82,9 +82,8 @@ class ShadowPreview:
             if camera != self.camera:  # a new horizon: the worker analyses the cutout again
                 release(self.engine, self.cutout_id)
                 self.cutout_id, self.camera = upload_cutout(self.engine, self.small, camera), camera
-            rgb, no_shadow = render_preview(
-                self.engine, self.cutout_id, settings, self.thumbnail, self.small, self.scale
-            )
+            horizon = camera["horizon"] if camera is not None else None
+            rgb, no_shadow = render_preview(self.engine, self.cutout_id, settings, self.thumbnail, self.small, horizon)
         except (ShadowError, SettingsError) as exc:
             self.status.set_text(str(exc))
             return

@@ -35,10 +35,15 @@ def preview_size(width: int, height: int, limit: int = PREVIEW_SIZE) -> tuple[in
 
 
 def render_preview(
-    engine: Engine, cutout_id: str, settings: ShadowSettings, thumbnail: Thumbnail, cover: Cutout, scale: float
+    engine: Engine,
+    cutout_id: str,
+    settings: ShadowSettings,
+    thumbnail: Thumbnail,
+    cover: Cutout,
+    horizon: float | None = None,
 ) -> tuple[bytes, str]:
     """The thumbnail with the shadow multiplied on (packed RGB, the thumbnail's size) and why no shadow shows
-    ("" when one does). ``cover`` is the thumbnail-sized cutout, ``scale`` the thumbnail's scale."""
+    ("" when one does). ``cover`` is the thumbnail-sized cutout; ``horizon``, a thumbnail row, is drawn."""
     edits = settings.ao_edits()
     if edits:
         engine_call(engine, "edit_ao", cutout=cutout_id, edits=edits)
@@ -49,9 +54,8 @@ def render_preview(
     }
     params = settings.render_params("uint8")
     params = {key: params[key] for key in ("light_map", "preset", "color", "opacity") if key in params}
-    camera = settings.camera(scale)
-    if camera is not None:
-        params["horizon"] = camera["horizon"]
+    if horizon is not None:
+        params["horizon"] = horizon
     reply, out = engine_call(engine, "preview", buffers, cutout=cutout_id, **params)
     image = out.get("image")
     if image is None or image.dtype != "uint8" or tuple(image.shape) != (h, w, 3):

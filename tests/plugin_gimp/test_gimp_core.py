@@ -211,7 +211,9 @@ def test_dialog_preview_from_the_real_worker(real_engine, precision):
     thumbnail = Thumbnail(W, H, 4, bytes([230, 230, 230, 255]) * (W * H))
     key = upload_cutout(real_engine, small)
     settings = settings_from_arguments({**ARGS, "light-map": "high-sun", "use-horizon": True, "horizon": 40.0})
-    rgb, no_shadow = render_preview(real_engine, key, settings, thumbnail, small, 0.5)
+    camera = settings.camera(0.5)  # the thumbnail at half the image's size
+    assert camera is not None
+    rgb, no_shadow = render_preview(real_engine, key, settings, thumbnail, small, camera["horizon"])
     image = np.frombuffer(rgb, np.uint8).reshape(H, W, 3)
     assert not no_shadow and image.min() < 150
     opaque = host.alpha.astype("f4") >= host.alpha.max()
@@ -219,5 +221,5 @@ def test_dialog_preview_from_the_real_worker(real_engine, precision):
     assert (image[opaque] == 230).all()  # hidden under the opaque cutout
     assert tuple(image[20, 0]) == (255, 140, 0)  # horizon 40 at scale 0.5
     dark = settings_from_arguments({**ARGS, "light-map": '{"format": "ssn-shadow-elm", "version": 1, "lights": []}'})
-    assert render_preview(real_engine, key, dark, thumbnail, small, 1.0)[1]
+    assert render_preview(real_engine, key, dark, thumbnail, small)[1]
     release(real_engine, key)
