@@ -248,7 +248,7 @@ class ShadowPanel(QWidget):
 
     def _lights_changed(self, live: bool, new_stroke: bool) -> None:
         self._sync_light_controls()
-        self.controller.set_light_map(self.map_widget.light_map.copy(), new_stroke)
+        self.controller.set_light_map(self.map_widget.light_map, new_stroke)  # it keeps a copy
 
     def _sync_light_controls(self) -> None:
         i = self.map_widget.selected
