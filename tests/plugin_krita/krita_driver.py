@@ -62,6 +62,14 @@ def activate(doc, node):
         time.sleep(0.01)
 
 
+def pump(seconds):
+    """Run the event loop for a while (with a view, Krita switches the active layer through queued events)."""
+    deadline = time.monotonic() + seconds
+    while time.monotonic() < deadline:
+        QApplication.processEvents()
+        time.sleep(0.01)
+
+
 def wait_for(controller, timeout_s=90.0):
     loop = QEventLoop()
     timer = QTimer()
@@ -148,10 +156,7 @@ def run_case(depth, with_window):
     wait_for(controller)
     case["first_ms"] = round(1e3 * (time.perf_counter() - t), 1)
     case["after_first"] = shadow_state(doc, depth)
-    settle = time.monotonic() + 1.0  # the view changes the active node through the event loop
-    while time.monotonic() < settle:
-        QApplication.processEvents()
-        time.sleep(0.01)
+    pump(1.0)  # the view changes the active node through the event loop
     case["active_after_first"] = doc.activeNode().name() if doc.activeNode() is not None else None
     save()
 
@@ -213,12 +218,21 @@ def run_case(depth, with_window):
         low_doc.waitForDone()
         activate(low_doc, low)
         host.active_document = lambda: low_doc
-        start = len(messages)
+        start, rendered = len(messages), len(renders)
         for _ in range(2):
             controller.generate()
             wait_for(controller)
+            pump(1.0)
+            activate(low_doc, low)  # whichever layer the view left active, the cutout's is
         case["lowest_layer_messages"] = messages[start:]
         case["lowest_layer_names"] = layer_names(low_doc)
+        # ... and from the shadow layer above it, which names its cutout below
+        activate(low_doc, low_doc.rootNode().childNodes()[-1])
+        controller.generate()
+        wait_for(controller)
+        case["lowest_layer_renders"] = len(renders) - rendered
+        case["lowest_layer_names_from_shadow"] = layer_names(low_doc)
+        case["lowest_layer_all_messages"] = messages[start:]
 
         # The horizon from a guide, through the docker's panel: the shadow is cast again with that camera
         from ssn_shadow.ui.panel import ShadowPanel

@@ -129,6 +129,9 @@ def test_generate_in_real_krita(pykrita, tmp_path, depth):
         # the lowest layer of its group: the shadow goes above it (with a notice), and Generate works again
         assert not [m for m in case["lowest_layer_messages"] if m[0] == "error"], case["lowest_layer_messages"]
         assert case["lowest_layer_names"] == ["Person", "Shadow: Person"]
+        # ... also with the shadow layer active: it names its cutout, and that shadow is replaced, not doubled
+        assert case["lowest_layer_renders"] == 3, case["lowest_layer_all_messages"]
+        assert case["lowest_layer_names_from_shadow"] == ["Person", "Shadow: Person"]
         # the horizon from a guide (issue #14, horizon control): a different shadow, still one layer
         assert case["camera_from_guide"] == {"horizon": 40.0, "fov": 45.0}
         before, after = case["before_camera"], case["with_camera"]

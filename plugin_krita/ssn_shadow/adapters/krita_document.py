@@ -116,11 +116,14 @@ def read_source(document: Document | None) -> Source:
 
 
 def _source_of_shadow(shadow: Node) -> Node:
-    """The layer directly above a shadow layer, when it is the layer the shadow was made from."""
+    """The layer the shadow was made from: the one directly above it, or, where the cutout is the lowest layer
+    of its group and its shadow had to go above it, the one directly below it."""
     siblings = _parent(shadow).childNodes()
     i = _index_of(siblings, shadow)
     if i + 1 < len(siblings) and shadow_name(siblings[i + 1].name()) == shadow.name():
         return siblings[i + 1]
+    if i == 1 and shadow_name(siblings[0].name()) == shadow.name():
+        return siblings[0]
     raise SourceError("The active layer is a shadow layer; select the cutout's layer instead.")
 
 
@@ -139,15 +142,17 @@ def _index_of(nodes: list[Node], node: Node) -> int:
     raise SourceError(f"The layer '{node.name()}' is no longer in the image.")
 
 
-def shadow_below(source_node: Node) -> Node | None:
-    """The shadow layer directly below the source (by name), or None."""
+def shadow_of(source_node: Node) -> Node | None:
+    """The source's shadow layer (by name): directly below it, or directly above it where the source is the
+    lowest layer of its group (where ``LayerWriter`` had to put it); None when there is none."""
     parent = source_node.parentNode()
     if parent is None:
         return None
     siblings = parent.childNodes()
     i = _index_of(siblings, source_node)
-    if i > 0 and siblings[i - 1].name() == shadow_name(source_node.name()):
-        return siblings[i - 1]
+    neighbour = i - 1 if i > 0 else 1
+    if neighbour < len(siblings) and siblings[neighbour].name() == shadow_name(source_node.name()):
+        return siblings[neighbour]
     return None
 
 
@@ -178,7 +183,7 @@ class LayerWriter:
         ``new_step``: make this an undo step (a new layer replacing the old one); otherwise
         write in place into the existing shadow layer (live updates within one drag).
         """
-        existing = shadow_below(source_node)
+        existing = shadow_of(source_node)
         if existing is not None and not new_step:
             self._write_in_place(document, existing, pixels, rect)
             return WriteResult(existing, False)
