@@ -10,10 +10,13 @@
 #                                      (with SSN_GIMP_XVFB=1: under xvfb-run, so plug-in dialogs can open;
 #                                      with SSN_GIMP_GUI=1: the full gimp-3.0 GUI under xvfb-run)
 #                                      (GIMP3_DIRECTORY is taken from $SSN_GIMP3_DIRECTORY, a
-#                                      path inside the chroot, when set)
+#                                      path inside the chroot, when set; the plug-in's hooks
+#                                      SSN_SHADOW_DIALOG_SELFTEST, SSN_SHADOW_DIALOG_SCREENSHOT and
+#                                      SSN_SHADOW_SCREEN_SCREENSHOT are passed on when set)
 #
 # Environment: SSN_GIMP_CHROOT  the chroot (default /var/cache/ssn-shadow/gimp-trixie)
 #              SSN_GIMP_MIRROR  the Debian mirror (default http://deb.debian.org/debian)
+#              SSN_GIMP_SCREEN  the Xvfb screen, WIDTHxHEIGHTxDEPTH (default 1280x1024x24)
 #
 # Needs root (debootstrap, chroot, mount). The chroot is built in DIR.partial and renamed to
 # DIR only after a stamp file is written, so an interrupted build is never mistaken for a
@@ -129,11 +132,14 @@ case "$cmd" in
         [ -n "${SSN_GIMP3_DIRECTORY:-}" ] && extra+=("GIMP3_DIRECTORY=$SSN_GIMP3_DIRECTORY")
         [ -n "${SSN_SHADOW_DIALOG_SELFTEST:-}" ] && extra+=("SSN_SHADOW_DIALOG_SELFTEST=$SSN_SHADOW_DIALOG_SELFTEST")
         [ -n "${SSN_SHADOW_DIALOG_SCREENSHOT:-}" ] && extra+=("SSN_SHADOW_DIALOG_SCREENSHOT=$SSN_SHADOW_DIALOG_SCREENSHOT")
+        [ -n "${SSN_SHADOW_SCREEN_SCREENSHOT:-}" ] && extra+=("SSN_SHADOW_SCREEN_SCREENSHOT=$SSN_SHADOW_SCREEN_SCREENSHOT")
+        screen="${SSN_GIMP_SCREEN:-1280x1024x24}"
+        [[ "$screen" =~ ^[0-9]+x[0-9]+x[0-9]+$ ]] || die "SSN_GIMP_SCREEN must read WIDTHxHEIGHTxDEPTH, not '$screen'"
         xvfb=()
         gimp=(gimp-console-3.0 -i)
-        [ -n "${SSN_GIMP_XVFB:-}" ] && xvfb=(xvfb-run -a -n $((RANDOM % 700 + 200)) -s "-screen 0 1280x1024x24")
+        [ -n "${SSN_GIMP_XVFB:-}" ] && xvfb=(xvfb-run -a -n $((RANDOM % 700 + 200)) -s "-screen 0 $screen")
         if [ -n "${SSN_GIMP_GUI:-}" ]; then
-            xvfb=(xvfb-run -a -n $((RANDOM % 700 + 200)) -s "-screen 0 1280x1024x24")
+            xvfb=(xvfb-run -a -n $((RANDOM % 700 + 200)) -s "-screen 0 $screen")
             gimp=(gimp-3.0 --no-splash)
         fi
         # shellcheck disable=SC2046

@@ -29,6 +29,7 @@ from ssn_settings import PROCEDURE_NAME, SettingsError, editor_light_map  # noqa
 
 CUSTOM = "(custom)"
 SELFTEST_ENV = "SSN_SHADOW_DIALOG_SELFTEST"
+SCREEN_SCREENSHOT_ENV = "SSN_SHADOW_SCREEN_SCREENSHOT"  # the selftest grabs the whole screen
 PREVIEW_DELAY_MS = 150
 
 
@@ -164,24 +165,29 @@ def run_dialog(procedure: Gimp.Procedure, config: Gimp.ProcedureConfig, host, en
     config.connect("notify::light-map", on_light_map_setting)
     area = LightMapArea(editor)
 
-    box = Gtk.Box(orientation=Gtk.Orientation.VERTICAL, spacing=6)
+    # The light map (the main control) and the preview side by side, above colour, opacity, AO and camera: the
+    # dialog then fits a 1366 x 768 screen (stacked, it was 814 px tall).
+    lights_box = Gtk.Box(orientation=Gtk.Orientation.VERTICAL, spacing=6)
     row = Gtk.Box(spacing=6)
     row.pack_start(Gtk.Label(label="Preset:"), False, False, 0)
     row.pack_start(presets, True, True, 0)
-    box.pack_start(row, False, False, 0)
-    box.pack_start(
-        Gtk.Label(
-            label="Light map (click: add, drag: move, wheel: size, Shift+wheel: intensity, right-click: remove)",
-            xalign=0.0,
+    lights_box.pack_start(row, False, False, 0)
+    lights_box.pack_start(_axes(area), False, False, 0)
+    lights_box.pack_start(
+        _wrapped(
+            "Light map: click to add a light, drag to move it, wheel: size, Shift+wheel: intensity, right-click: remove"
         ),
         False,
         False,
         0,
     )
-    box.pack_start(_axes(area), False, False, 0)
-    box.pack_start(Gtk.Label(label="Preview", xalign=0.0), False, False, 0)
-    box.pack_start(preview.widget, False, False, 0)
-    box.pack_start(preview.status, False, False, 0)
+    preview_box = Gtk.Box(orientation=Gtk.Orientation.VERTICAL, spacing=6)
+    preview_box.pack_start(Gtk.Label(label="Preview", xalign=0.0), False, False, 0)
+    preview_box.pack_start(preview.widget, False, False, 0)
+    preview_box.pack_start(preview.status, False, False, 0)
+    box = Gtk.Box(spacing=12)
+    box.pack_start(lights_box, False, False, 0)
+    box.pack_start(preview_box, True, True, 0)
     content = dialog.get_content_area()
     content.pack_start(box, True, True, 6)
     content.reorder_child(box, 0)  # the light map, the main control, above colour, opacity, AO and camera
@@ -221,10 +227,19 @@ def _axes(area: Gtk.Widget) -> Gtk.Widget:
     grid.attach(top, 1, 0, 1, 1)
     grid.attach(side, 0, 1, 1, 1)
     grid.attach(area, 1, 1, 1, 1)
-    grid.attach(
-        small("a light right of centre casts its shadow to the left, and a low light a long one", 0.0), 0, 2, 2, 1
-    )
+    note = small("a light right of centre casts its shadow to the left, and a low light a long one", 0.0)
+    note.set_line_wrap(True)
+    note.set_max_width_chars(48)
+    grid.attach(note, 0, 2, 2, 1)
     return grid
+
+
+def _wrapped(text: str) -> Gtk.Label:
+    """A left-aligned label that wraps instead of widening the dialog."""
+    label = Gtk.Label(label=text, xalign=0.0)
+    label.set_line_wrap(True)
+    label.set_max_width_chars(48)
+    return label
 
 
 def _selftest(dialog, area: LightMapArea, preview: ShadowPreview, values, config) -> bool:
@@ -232,7 +247,10 @@ def _selftest(dialog, area: LightMapArea, preview: ShadowPreview, values, config
     widget's event handlers, resize it, render the preview, set the light-map setting as Reset to Factory
     Defaults does (the map must follow), then put the edited map back and press OK.
 
-    With SSN_SHADOW_DIALOG_SCREENSHOT=<path.png> it also saves a picture of the dialog.
+    With SSN_SHADOW_DIALOG_SCREENSHOT=<path.png> it also saves a picture of the dialog. With
+    SSN_SHADOW_SCREEN_SCREENSHOT=<path.png> it saves one of the whole screen instead (tools/gimp_window_figure.py):
+    the horizon option on with a row inside the image, the preview rendered with it, and the dialog moved to the
+    screen's top-right corner (Xvfb has no window manager to place it) so that the image window shows beside it.
     """
     from types import SimpleNamespace
 
@@ -268,13 +286,55 @@ def _selftest(dialog, area: LightMapArea, preview: ShadowPreview, values, config
     config.set_property("light-map", edited)
 
     def finish() -> bool:
+        window = dialog.get_window()
+        print(
+            f"ssn-shadow dialog selftest: dialog {window.get_width()}x{window.get_height()}",
+            file=sys.stderr,
+            flush=True,
+        )
         path = os.environ.get("SSN_SHADOW_DIALOG_SCREENSHOT")
         if path:
-            window = dialog.get_window()
             shot = Gdk.pixbuf_get_from_window(window, 0, 0, window.get_width(), window.get_height())
             shot.savev(path, "png", [], [])
+        if os.environ.get(SCREEN_SCREENSHOT_ENV):
+            _show_horizon(preview, values, config)
+            _to_top_right(dialog)
+            GLib.timeout_add(1500, grab_screen)  # time to draw the preview and the moved dialog
+            return False
+        dialog.response(Gtk.ResponseType.OK)
+        return False
+
+    def grab_screen() -> bool:
+        root = Gdk.get_default_root_window()
+        shot = Gdk.pixbuf_get_from_window(root, 0, 0, root.get_width(), root.get_height())
+        shot.savev(os.environ[SCREEN_SCREENSHOT_ENV], "png", [], [])
+        window = dialog.get_window()
+        print(
+            f"ssn-shadow dialog selftest: screen {root.get_width()}x{root.get_height()}, dialog at "
+            f"{window.get_origin()[1:]} {window.get_width()}x{window.get_height()}",
+            file=sys.stderr,
+            flush=True,
+        )
         dialog.response(Gtk.ResponseType.OK)
         return False
 
     GLib.timeout_add(400, finish)
     return False
+
+
+def _show_horizon(preview: ShadowPreview, values, config) -> None:
+    """Turn the horizon option on, with the row at 35 % of the image height unless it already lies inside the
+    image, and render the preview with it (the preview draws the horizon line)."""
+    height = preview.host.image.get_height()
+    config.set_property("use-horizon", True)
+    if not 0.05 * height < config.get_property("horizon") < 0.95 * height:
+        config.set_property("horizon", float(round(0.35 * height)))
+    preview.render(values())
+
+
+def _to_top_right(dialog) -> None:
+    """Move the dialog to the screen's top-right corner."""
+    from gi.repository import Gdk
+
+    screen_width = Gdk.get_default_root_window().get_width()
+    dialog.move(max(0, screen_width - dialog.get_window().get_width()), 0)

@@ -17,6 +17,7 @@ from __future__ import annotations
 
 import json
 import os
+import re
 import shutil
 import subprocess
 import sys
@@ -446,6 +447,11 @@ def test_interactive_dialog(workdir, worker, precision):
     assert "ssn-shadow dialog selftest: light at u=0.800 v=0.720" in log, log[-3000:]
     # Reset to Factory Defaults / Load Saved Settings reach the light map (issue #14, item 12)
     assert "after a settings reset the map shows high-sun: True" in log, log[-3000:]
+    # the light map and the preview side by side: the dialog fits a 1366 x 768 screen with a title bar and a
+    # panel (stacked, it was 814 px tall and its OK button was off-screen)
+    size = re.search(r"ssn-shadow dialog selftest: dialog (\d+)x(\d+)", log)
+    assert size is not None, log[-3000:]
+    assert int(size[1]) <= 1366 and int(size[2]) <= 700, size[0]
     assert "traceback" not in log.lower(), log[-6000:]
     if os.environ.get("SSN_GIMP_DIALOG_SCREENSHOT"):
         shutil.copy(work / "out" / "dialog.png", os.environ["SSN_GIMP_DIALOG_SCREENSHOT"])
