@@ -112,6 +112,12 @@ def parse_args(argv: list[str] | None = None) -> argparse.Namespace:
         "--shadow-weight x the L2 of the shadow it renders from the predicted AO under random ELMs",
     )
     p.add_argument("--shadow-weight", type=float, default=1.0)
+    p.add_argument(
+        "--ssim-weight",
+        type=float,
+        default=0.0,
+        help="SR: add this x DSSIM (7 x 7 windows, as the benchmark's metric) to the per-pixel L2",
+    )
     p.add_argument("--ckpt-minutes", type=float, default=4.0)
     p.add_argument("--refresh-minutes", type=float, default=10.0, help="re-open the store (growing dataset)")
     p.add_argument("--val-every", type=int, default=250)
@@ -250,16 +256,42 @@ def target_of(module: str, x: dict[str, torch.Tensor]) -> torch.Tensor:
     return x["ao"] if module == "aop" else x["target"]
 
 
-class Objective:
-    """The loss: per-pixel L2 to the module's target; for AOP with a frozen SR network (``--through-sr``), plus
-    ``shadow_weight`` x the L2 of the shadow SR renders from the predicted AO, so the AO errors that cost most in
-    the shadow cost most in training."""
+def dssim_loss(pred: torch.Tensor, target: torch.Tensor, window: int = 7) -> torch.Tensor:
+    """Mean (1 - SSIM) / 2 of (B, 1, H, W) maps with data range 1, as :func:`training.metrics.dssim` computes it
+    (skimage: uniform windows, sample covariance, borders cropped), so training can weigh what the metric sees:
+    faint haze where the truth is dark-free costs much more here than in L2."""
+    c1, c2 = 0.01**2, 0.03**2
+    k = window * window / (window * window - 1.0)
 
-    def __init__(self, module: str, sr_net: torch.nn.Module | None = None, shadow_weight: float = 1.0):
-        self.module, self.sr, self.shadow_weight = module, sr_net, shadow_weight
+    def mean(t: torch.Tensor) -> torch.Tensor:
+        return F.avg_pool2d(t, window, stride=1)
+
+    mp, mt = mean(pred), mean(target)
+    vp, vt = k * (mean(pred * pred) - mp * mp), k * (mean(target * target) - mt * mt)
+    cov = k * (mean(pred * target) - mp * mt)
+    ssim = ((2 * mp * mt + c1) * (2 * cov + c2)) / ((mp * mp + mt * mt + c1) * (vp + vt + c2))
+    return (1.0 - ssim).mean() / 2.0
+
+
+class Objective:
+    """The loss: per-pixel L2 to the module's target, plus ``ssim_weight`` x its DSSIM; for AOP with a frozen SR
+    network (``--through-sr``), plus ``shadow_weight`` x the L2 of the shadow SR renders from the predicted AO,
+    so the AO errors that cost most in the shadow cost most in training."""
+
+    def __init__(
+        self,
+        module: str,
+        sr_net: torch.nn.Module | None = None,
+        shadow_weight: float = 1.0,
+        ssim_weight: float = 0.0,
+    ):
+        self.module, self.sr, self.shadow_weight, self.ssim_weight = module, sr_net, shadow_weight, ssim_weight
 
     def __call__(self, pred: torch.Tensor, x: dict[str, torch.Tensor]) -> torch.Tensor:
-        loss = F.mse_loss(pred, target_of(self.module, x))
+        target = target_of(self.module, x)
+        loss = F.mse_loss(pred, target)
+        if self.ssim_weight:
+            loss = loss + self.ssim_weight * dssim_loss(pred, target)
         if self.sr is not None:
             shadow = self.sr(x["mask"], pred.clamp(0.0, 1.0), x["elm"])
             loss = loss + self.shadow_weight * F.mse_loss(shadow, x["target"])
@@ -506,9 +538,10 @@ def start_process(args: argparse.Namespace) -> Process:
 
 
 def make_objective(args: argparse.Namespace, device: torch.device) -> Objective:
-    """Per-pixel L2 to the target; with --through-sr (AOP), plus the L2 of the shadow a frozen SR renders."""
+    """Per-pixel L2 to the target (plus --ssim-weight x DSSIM); with --through-sr (AOP), plus the L2 of the shadow
+    a frozen SR renders."""
     sr_net = frozen_sr(args.through_sr, device) if args.through_sr else None
-    return Objective(args.module, sr_net, args.shadow_weight)
+    return Objective(args.module, sr_net, args.shadow_weight, args.ssim_weight)
 
 
 def open_run(args: argparse.Namespace) -> Path:

@@ -205,6 +205,24 @@ def test_aop_through_sr_adds_the_shadow_error_of_the_predicted_ao():
     assert float(pred.grad.abs().min()) > 0
 
 
+def test_ssim_term_is_the_benchmark_dssim_and_punishes_faint_haze():
+    import numpy as np
+
+    from training.metrics import dssim
+    from training.train import Objective, dssim_loss
+
+    rng = np.random.default_rng(0)
+    truth = np.zeros((32, 32), np.float32)
+    truth[20:28, 4:28] = 0.8  # a dark cast shadow on lit ground
+    haze = truth + 0.03 * rng.random(truth.shape).astype(np.float32)  # plus a faint noisy haze
+    t = lambda a: torch.tensor(a)[None, None]  # noqa: E731
+    assert dssim_loss(t(haze), t(truth)).item() == pytest.approx(dssim(haze, truth), abs=1e-5)  # float32 against float64
+    x = {"target": t(truth)}
+    plain, weighted = Objective("sr")(t(haze), x).item(), Objective("sr", ssim_weight=0.1)(t(haze), x).item()
+    # the haze costs almost nothing in L2 (under 0.001) but a large share of the SSIM of the lit ground
+    assert plain < 1e-3 and weighted - plain > 20 * plain
+
+
 def test_aop_trains_through_a_frozen_sr(tmp_path):
     from training.train import frozen_sr
 
