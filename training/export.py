@@ -139,6 +139,42 @@ def to_fp16_weights(src: Path, dst: Path) -> None:
     onnx.save(model, str(dst))
 
 
+def without_mirror_average(src: Path, dst: Path) -> None:
+    """Rewrite a graph exported from :class:`training.model.MirrorAverage` (its network run on ``cat([x,
+    flip(x)])``, the halves averaged) into the network run once on ``x``: half the compute. The shipped AOP's
+    checkpoints are gone; its graph is all there is to rewrite."""
+    import onnx
+    import onnx.utils
+
+    model = onnx.load(str(src))
+    g = model.graph
+    producer = {o: n for n in g.node for o in n.output}
+    source, output = g.input[0].name, g.output[0].name
+
+    def made_by(name: str, op: str):
+        node = producer.get(name)
+        if node is None or node.op_type != op:
+            raise ValueError(f"{src} is not a mirror-averaged graph: expected {op} to make {name!r}")
+        return node
+
+    # output <- Clip(Mul(Add(Slice(y), Slice(Slice(y))), 0.5)): y is the network's output on the doubled batch
+    clip = made_by(output, "Clip")
+    mul = made_by(clip.input[0], "Mul")
+    first_half = made_by(made_by(mul.input[0], "Add").input[0], "Slice")
+    network_out = first_half.input[0]
+    doubled = [n for n in g.node if n.op_type == "Concat" and list(n.input)[:1] == [source]]
+    if len(doubled) != 1 or made_by(doubled[0].input[1], "Slice").input[0] != source:
+        raise ValueError(f"{src} is not a mirror-averaged graph: no Concat of {source!r} and its mirror image")
+    for node in g.node:
+        node.input[:] = [source if name == doubled[0].output[0] else name for name in node.input]
+    clip.input[0] = network_out
+    rewired = dst.with_suffix(".rewired.onnx")
+    onnx.save(model, str(rewired))
+    onnx.utils.extract_model(str(rewired), str(dst), [source], [output])  # drops the now unused mirror nodes
+    rewired.unlink()
+    onnx.checker.check_model(onnx.load(str(dst)))
+
+
 def rounded_to_fp16(net: nn.Module) -> nn.Module:
     """A copy of ``net`` whose parameters are rounded to float16 (kept as float32 tensors)."""
     import copy
@@ -266,7 +302,10 @@ def model_card(card: dict, attribution: list[dict], command: str) -> str:
             for p, w, st, n in zip(r["checkpoints"], r["widths"], r["steps"], r["samples"], strict=True)
         )
         mean = f"the mean of {len(r['checkpoints'])} networks, " if len(r["checkpoints"]) > 1 else ""
-        reused = f" (the graph of `{r['reused_from']}`, reused as it is)" if r.get("reused_from") else ""
+        reused = ""
+        if r.get("reused_from"):
+            how = "without its mirror average" if r.get("mirror_average") is False else "as it is"
+            reused = f" (the graph of `{r['reused_from']}`, reused {how})"
         lines.append(
             f"- {m.upper()}: {mean}{runs}{reused}, {r['weights']} weights, "
             f"{r['bytes'] / 1e6:.2f} MB, max abs diff to torch {r['max_abs_diff']:.1e}"
@@ -340,9 +379,12 @@ def training_summary(path: Path, ck: dict) -> str:
     return text
 
 
-def reuse_aop(graph: Path, out: Path) -> dict:
-    """Copy an installed aop.onnx into ``out``; its record from the model.json beside it (or a bare one)."""
-    if graph.resolve() != (out / "aop.onnx").resolve():
+def reuse_aop(graph: Path, out: Path, drop_mirror: bool = False) -> dict:
+    """Copy an installed aop.onnx into ``out`` (``drop_mirror``: :func:`without_mirror_average` of it); its record
+    from the model.json beside it (or a bare one)."""
+    if drop_mirror:
+        without_mirror_average(graph, out / "aop.onnx")
+    elif graph.resolve() != (out / "aop.onnx").resolve():
         shutil.copy(graph, out / "aop.onnx")
     meta = graph.with_name("model.json")
     record = json.loads(meta.read_text())["export"]["aop"] if meta.is_file() else {}
@@ -356,6 +398,7 @@ def reuse_aop(graph: Path, out: Path) -> dict:
         **record,
         "bytes": (out / "aop.onnx").stat().st_size,
         "reused_from": str(graph),
+        **({"mirror_average": False} if drop_mirror else {}),
     }
 
 
@@ -390,6 +433,12 @@ def parse_args(argv: list[str] | None = None) -> argparse.Namespace:
         action="store_true",
         help="export each network as training.model.MirrorAverage (twice the compute, mirror-symmetric)",
     )
+    p.add_argument(
+        "--aop-without-mirror",
+        action="store_true",
+        help="with an installed, mirror-averaged aop.onnx as --aop: reuse it without its mirror average "
+        "(each network once; half the AOP's compute)",
+    )
     p.add_argument("--install", help="copy the model here (e.g. ssn_engine/models)")
     p.add_argument(
         "--command",
@@ -404,6 +453,9 @@ def main(argv: list[str] | None = None) -> int:
     args = parse_args(argv)
     if args.max_shift is None:
         args.max_shift = args.tol
+    reused = len(args.aop) == 1 and args.aop[0].endswith(".onnx")
+    if args.aop_without_mirror and not reused:
+        raise SystemExit("--aop-without-mirror rewrites an installed aop.onnx: give one as --aop")
     out = Path(args.out)
     out.mkdir(parents=True, exist_ok=True)
     card: dict = {
@@ -417,9 +469,10 @@ def main(argv: list[str] | None = None) -> int:
     }
     report = {}
     for module, ck_paths in (("aop", args.aop), ("sr", [args.sr])):
-        if module == "aop" and len(ck_paths) == 1 and ck_paths[0].endswith(".onnx"):
-            report["aop"] = reuse_aop(Path(ck_paths[0]), out)
-            print(f"aop: reused {ck_paths[0]}", flush=True)
+        if module == "aop" and reused:
+            report["aop"] = reuse_aop(Path(ck_paths[0]), out, args.aop_without_mirror)
+            without = " without its mirror average" if args.aop_without_mirror else ""
+            print(f"aop: reused {ck_paths[0]}{without}", flush=True)
             continue
         net, cks = load_models(ck_paths)
         net = MirrorAverage(net).eval() if args.mirror_average else net

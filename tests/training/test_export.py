@@ -109,6 +109,35 @@ def test_mirror_averaged_export_is_mirror_symmetric(exported):
     assert _sr_mirror_gap(out) < 1e-5  # ... its mirror average is
 
 
+def test_a_mirror_averaged_aop_graph_is_reused_without_its_mirror_average(exported):
+    import onnx
+
+    from training.checkpoint import load_model
+
+    runs = exported.parent
+    mirrored, plain = runs / "aop-mirrored", runs / "aop-plain"
+    aop, sr = runs / "aop" / "last.pt", runs / "sr" / "last.pt"
+    assert export([aop], sr, mirrored, runs / "no-data", "--mirror-average") == 0
+    assert export([mirrored / "aop.onnx"], sr, plain, runs / "no-data", "--aop-without-mirror") == 0
+    m = np.random.default_rng(4).random((2, 1, 32, 32), dtype=np.float32)
+    run = lambda d: ort.InferenceSession(str(d / "aop.onnx"), providers=["CPUExecutionProvider"]).run(
+        None, {"mask": m}
+    )[0]  # noqa: E731
+    with torch.no_grad():
+        net = np.clip(load_model(aop)[0](torch.from_numpy(m)).numpy(), 0, 1)
+    assert np.abs(run(mirrored) - net).max() > 1e-3  # the mirror average differs from one pass ...
+    assert np.abs(run(plain) - net).max() < 1e-5  # ... and the rewritten graph is that one pass
+    doubling = lambda d: [
+        n for n in onnx.load(str(d / "aop.onnx")).graph.node if n.op_type == "Concat" and n.input[0] == "mask"
+    ]  # noqa: E731
+    assert len(doubling(mirrored)) == 1 and not doubling(plain)  # no second pass on the mirror image
+    assert "reused without its mirror average" in (plain / "MODEL_CARD.md").read_text()
+    with pytest.raises(SystemExit):  # checkpoints have no mirror average to drop
+        export([aop], sr, runs / "bad", runs / "no-data", "--aop-without-mirror")
+    with pytest.raises(ValueError, match="not a mirror-averaged graph"):
+        export([plain / "aop.onnx"], sr, runs / "twice", runs / "no-data", "--aop-without-mirror")
+
+
 def test_two_aops_export_as_one_graph_of_their_mean(exported):
     from training.checkpoint import load, load_model
 

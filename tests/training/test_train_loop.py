@@ -216,7 +216,8 @@ def test_ssim_term_is_the_benchmark_dssim_and_punishes_faint_haze():
     truth[20:28, 4:28] = 0.8  # a dark cast shadow on lit ground
     haze = truth + 0.03 * rng.random(truth.shape).astype(np.float32)  # plus a faint noisy haze
     t = lambda a: torch.tensor(a)[None, None]  # noqa: E731
-    assert dssim_loss(t(haze), t(truth)).item() == pytest.approx(dssim(haze, truth), abs=1e-5)  # float32 against float64
+    # the metric in float64, the loss in float32
+    assert dssim_loss(t(haze), t(truth)).item() == pytest.approx(dssim(haze, truth), abs=1e-5)
     x = {"target": t(truth)}
     plain, weighted = Objective("sr")(t(haze), x).item(), Objective("sr", ssim_weight=0.1)(t(haze), x).item()
     # the haze costs almost nothing in L2 (under 0.001) but a large share of the SSIM of the lit ground
