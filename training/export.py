@@ -369,12 +369,14 @@ def training_summary(path: Path, ck: dict) -> str:
     log = path.with_name("log.csv")
     rows = log.read_text().splitlines()[1:] if log.is_file() else []
     minutes = f"{float(rows[-1].split(',')[5]) / 60:.0f} min of training time, " if rows else ""
-    text = f"{minutes}{ck['step']} steps, {ck['samples']} samples"
-    parent = (ck.get("args") or {}).get("init_from")
+    args = ck.get("args") or {}
+    loss = f" (loss: L2 + {args['ssim_weight']:g} x DSSIM)" if args.get("ssim_weight") else ""
+    text = f"{minutes}{ck['step']} steps, {ck['samples']} samples{loss}"
+    parent = args.get("init_from")
     if parent and Path(parent).is_file():
         text = (
             f"{training_summary(Path(parent), load_models([parent])[1][0])}, then fine-tuned for {text} "
-            f"(learning rate {ck['args']['lr']:g})"
+            f"(learning rate {args['lr']:g})"
         )
     return text
 
