@@ -13,10 +13,10 @@ from PIL import Image, ImageDraw
 from ssn_engine.compositing import composite_shadow, over
 from ssn_engine.cli import DEMO_PRESET
 from ssn_engine.light_map import PRESETS, preset
+from ssn_engine.light_map_picture import map_rgb
 from ssn_engine.methods import load_method
 from ssn_engine.samples import pawn_cutout, studio_background
 from ssn_engine.session import ShadowSession
-from ssn_engine.worker import elm_display_image
 
 TILE = 360
 CONTRAST = ("low-sun-left", "low-sun-right", "high-sun", "softbox")  # the README's "shadow follows the light" row
@@ -39,7 +39,7 @@ def main() -> None:
         if name == DEMO_PRESET:
             Image.fromarray(image).save(out / "demo.png", optimize=True)
         tile = Image.fromarray(image).crop((150, 150, 1050, 900)).resize((TILE, TILE * 750 // 900))
-        sky = Image.fromarray(elm_display_image(light, 128))
+        sky = Image.frombytes("RGB", (128, 64), map_rgb(light, 128, 64))  # the sky map as the plug-ins draw it
         tile.paste(sky, (TILE - 128 - 6, 6))
         ImageDraw.Draw(tile).text((8, 6), name, fill=(20, 20, 20))
         tiles[name] = tile

@@ -388,7 +388,7 @@ def plot_log(run: Path, title: str) -> None:
     rows = read_log(run / "log.csv")
     train = [(float(r["step"]), float(r["train_loss"])) for r in rows if r["train_loss"]]
     val = [(float(r["step"]), float(r["val_loss"])) for r in rows if r["val_loss"]]
-    loss_curve({"train (per-pixel L2)": train, "val": val}, run / "loss.png", title)
+    loss_curve({"train": train, "val": val}, run / "loss.png", title)
 
 
 # The output conv's bias starts at the typical target (docs/training.md, "Network").
@@ -728,8 +728,9 @@ def save_checkpoint(path: Path, net: Network, args: argparse.Namespace, elm_rows
 
 
 def loss_title(args: argparse.Namespace, run: Path) -> str:
-    """The title of ``loss.png``."""
-    return f"{args.module.upper()} ({args.target}) {run.name}"
+    """The title of ``loss.png``: module, target, run and loss."""
+    loss = f"per-pixel L2 + {args.ssim_weight:g} x DSSIM" if args.ssim_weight else "per-pixel L2"
+    return f"{args.module.upper()} ({args.target}) {run.name}: {loss}"
 
 
 def validate_and_keep_best(
