@@ -259,7 +259,7 @@ def target_of(module: str, x: dict[str, torch.Tensor]) -> torch.Tensor:
 def dssim_loss(pred: torch.Tensor, target: torch.Tensor, window: int = 7) -> torch.Tensor:
     """Mean (1 - SSIM) / 2 of (B, 1, H, W) maps with data range 1, as :func:`training.metrics.dssim` computes it
     (skimage: uniform windows, sample covariance, borders cropped), so training can weigh what the metric sees:
-    faint haze where the truth is dark-free costs much more here than in L2."""
+    faint haze where the truth has no shadow costs much more here than in L2."""
     c1, c2 = 0.01**2, 0.03**2
     k = window * window / (window * window - 1.0)
 
