@@ -4,9 +4,10 @@
 usage: sudo python tools/gimp_window_figure.py [--out docs/img/gimp-window.png]
 
 Needs root and the GIMP 3 chroot (sudo tools/gimp_chroot.sh build). Like the integration test
-(tests/plugin_gimp/test_gimp_integration.py), this script starts an engine worker on a loopback port, installs
-the plug-in into a fresh GIMP profile in the chroot's /tmp (its sessionrc: a 1366 x 768 single window) and runs
-the GIMP GUI on a 1366 x 768 Xvfb screen. There the test's scene (gimp_pawn_scene.py) is built, this file's
+(tests/plugin_gimp/test_gimp_integration.py), this script starts an engine worker on a loopback port (the test's
+loopback_worker.py), installs the plug-in into a fresh GIMP profile in the chroot's /tmp (its sessionrc: a
+1366 x 768 single window) and runs the GIMP GUI on a 1366 x 768 Xvfb screen. There the test's scene
+(gimp_pawn_scene.py) is built, this file's
 ``inside`` shows it in a display zoomed to fit, and the test's gimp_dialog_check.py opens the dialog, whose
 self-test hook (SSN_SHADOW_DIALOG_SELFTEST, SSN_SHADOW_SCREEN_SCREENSHOT) edits the light map, turns the horizon
 on, moves the dialog to the screen's top-right corner and grabs the screen.
@@ -68,25 +69,6 @@ def write_profile(profile: Path, chroot: Path) -> None:
     (profile / "gimprc").write_text("(show-welcome-dialog no)\n(check-updates no)\n")
 
 
-def start_worker(repo: Path):
-    """``python -m ssn_engine serve --port 0``: (process, port, token)."""
-    import subprocess
-
-    proc = subprocess.Popen(
-        [sys.executable, "-m", "ssn_engine", "serve", "--port", "0"],
-        cwd=repo,
-        stdout=subprocess.PIPE,
-        stderr=subprocess.DEVNULL,
-        text=True,
-    )
-    line = proc.stdout.readline()
-    if not line.startswith("listening 127.0.0.1:"):
-        proc.kill()
-        raise SystemExit(f"the engine worker said {line!r}")
-    _, address, token = line.split()
-    return proc, int(address.rsplit(":", 1)[1]), token.removeprefix("token=")
-
-
 def run_gimp(tool: Path, inner: str, shot: str) -> tuple[str, float]:
     """The GIMP GUI on a 1366 x 768 Xvfb screen: the scene, the display, the dialog. Returns its log and seconds."""
     import subprocess
@@ -135,24 +117,25 @@ def main(argv: list[str] | None = None) -> int:
     if status.returncode != 0:
         raise SystemExit(f"no GIMP 3 chroot ({status.stdout.strip()}): sudo tools/gimp_chroot.sh build")
     chroot = Path(status.stdout.split(None, 1)[1].strip())
-    worker, port, token = start_worker(repo)
+    sys.path.insert(0, str(tests))
+    from loopback_worker import loopback_worker  # the integration test's worker
+
     work = Path(tempfile.mkdtemp(prefix="ssn-gimp-figure-", dir=chroot / "tmp"))
     inner = "/tmp/" + work.name  # the same folder seen from inside the chroot
     try:
-        install(work / "profile" / "plug-ins" / "ssn-shadow", address=("127.0.0.1", port), token=token)
-        write_profile(work / "profile", chroot)
-        (work / "out").mkdir()
-        shutil.copy(tests / "gimp_pawn_scene.py", work / "scene.py")
-        shutil.copy(tests / "gimp_dialog_check.py", work / "dialog.py")
-        shutil.copy(__file__, work / Path(__file__).name)
-        log, seconds = run_gimp(tool, inner, inner + "/out/screen.png")
+        with loopback_worker(repo) as (port, token):
+            install(work / "profile" / "plug-ins" / "ssn-shadow", address=("127.0.0.1", port), token=token)
+            write_profile(work / "profile", chroot)
+            (work / "out").mkdir()
+            shutil.copy(tests / "gimp_pawn_scene.py", work / "scene.py")
+            shutil.copy(tests / "gimp_dialog_check.py", work / "dialog.py")
+            shutil.copy(__file__, work / Path(__file__).name)
+            log, seconds = run_gimp(tool, inner, inner + "/out/screen.png")
         said = "\n".join(ln for ln in log.splitlines() if "selftest" in ln or "figure:" in ln or "rror" in ln)
         if not (work / "out" / "screen.png").exists():
             raise SystemExit(f"GIMP wrote no picture:\n{said or log[-3000:]}")
         shutil.copy(work / "out" / "screen.png", out)
     finally:
-        worker.kill()
-        worker.wait(timeout=10)
         shutil.rmtree(work, ignore_errors=True)
     print(f"{said}\nwrote {out} (GIMP session {seconds:.1f} s)", file=sys.stderr)
     return 0

@@ -28,6 +28,8 @@ from pathlib import Path
 import numpy as np
 import pytest
 
+from loopback_worker import loopback_worker
+
 from plugin_gimp.install import install
 from ssn_engine.client import EngineClient
 from ssn_engine.protocol import Buffer
@@ -229,21 +231,8 @@ def chroot() -> Path:
 @pytest.fixture(scope="module")
 def worker():
     """A host engine worker on a loopback port: yields (port, token)."""
-    proc = subprocess.Popen(
-        [sys.executable, "-m", "ssn_engine", "serve", "--port", "0"],
-        cwd=ROOT,
-        stdout=subprocess.PIPE,
-        stderr=subprocess.PIPE,
-        text=True,
-    )
-    try:
-        line = proc.stdout.readline()
-        assert line.startswith("listening 127.0.0.1:"), f"worker said {line!r}; stderr: {proc.stderr.read()[-2000:]}"
-        _, address, token = line.split()
-        yield int(address.rsplit(":", 1)[1]), token.removeprefix("token=")
-    finally:
-        proc.kill()
-        proc.wait(timeout=10)
+    with loopback_worker(ROOT) as port_token:
+        yield port_token
 
 
 @pytest.fixture(scope="module")
