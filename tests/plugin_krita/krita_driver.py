@@ -239,6 +239,14 @@ def run_case(depth, with_window):
 
         host.active_document = lambda: doc
         doc.setSelection(Selection())  # an empty selection: the layer's alpha again
+        # Generate with the shadow layer below the cutout active: it names its cutout, and is replaced
+        shadow_layer = next(n for n in doc.rootNode().childNodes() if n.name() == "Shadow: Person")
+        activate(doc, shadow_layer)
+        start = len(messages)
+        controller.generate()
+        wait_for(controller)
+        case["from_shadow_messages"] = messages[start:]
+        case["from_shadow_names"] = layer_names(doc)
         activate(doc, person)
         panel = ShadowPanel(controller)
         controller.generate()

@@ -132,6 +132,11 @@ def test_generate_in_real_krita(pykrita, tmp_path, depth):
         # ... also with the shadow layer active: it names its cutout, and that shadow is replaced, not doubled
         assert case["lowest_layer_renders"] == 3, case["lowest_layer_all_messages"]
         assert case["lowest_layer_names_from_shadow"] == ["Person", "Shadow: Person"]
+        # and the usual shadow below its cutout, active, names that cutout too
+        refused = [m for m in case["from_shadow_messages"] if m[0] in ("error", "warning")]
+        assert not refused, refused
+        names = case["from_shadow_names"]  # (Krita adds a "Selection Mask" node for the empty selection)
+        assert names.count("Shadow: Person") == 1 and names.index("Shadow: Person") == names.index("Person") - 1
         # the horizon from a guide (issue #14, horizon control): a different shadow, still one layer
         assert case["camera_from_guide"] == {"horizon": 40.0, "fov": 45.0}
         before, after = case["before_camera"], case["with_camera"]

@@ -116,14 +116,14 @@ def read_source(document: Document | None) -> Source:
 
 
 def _source_of_shadow(shadow: Node) -> Node:
-    """The layer the shadow was made from: the one directly above it, or, where the cutout is the lowest layer
-    of its group and its shadow had to go above it, the one directly below it."""
+    """The layer the shadow was made from: a neighbour (the layer directly above it, or the lowest layer of the
+    group) whose :func:`shadow_of` is this shadow."""
     siblings = _parent(shadow).childNodes()
     i = _index_of(siblings, shadow)
-    if i + 1 < len(siblings) and shadow_name(siblings[i + 1].name()) == shadow.name():
-        return siblings[i + 1]
-    if i == 1 and shadow_name(siblings[0].name()) == shadow.name():
-        return siblings[0]
+    for candidate in siblings[i + 1 : i + 2] + siblings[:1]:
+        found = shadow_of(candidate)
+        if found is not None and node_id(found) == node_id(shadow):
+            return candidate
     raise SourceError("The active layer is a shadow layer; select the cutout's layer instead.")
 
 
