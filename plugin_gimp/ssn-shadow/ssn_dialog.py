@@ -174,8 +174,12 @@ def run_dialog(procedure: Gimp.Procedure, config: Gimp.ProcedureConfig, host, en
     lights_box.pack_start(row, False, False, 0)
     lights_box.pack_start(_axes(area), False, False, 0)
     lights_box.pack_start(
-        _wrapped(
-            "Light map: click to add a light, drag to move it, wheel: size, Shift+wheel: intensity, right-click: remove"
+        _wrap(
+            Gtk.Label(
+                label="Light map: click to add a light, drag to move it, wheel: size, Shift+wheel: intensity, "
+                "right-click: remove",
+                xalign=0.0,
+            )
         ),
         False,
         False,
@@ -227,16 +231,18 @@ def _axes(area: Gtk.Widget) -> Gtk.Widget:
     grid.attach(top, 1, 0, 1, 1)
     grid.attach(side, 0, 1, 1, 1)
     grid.attach(area, 1, 1, 1, 1)
-    note = small("a light right of centre casts its shadow to the left, and a low light a long one", 0.0)
-    note.set_line_wrap(True)
-    note.set_max_width_chars(48)
-    grid.attach(note, 0, 2, 2, 1)
+    grid.attach(
+        _wrap(small("a light right of centre casts its shadow to the left, and a low light a long one", 0.0)),
+        0,
+        2,
+        2,
+        1,
+    )
     return grid
 
 
-def _wrapped(text: str) -> Gtk.Label:
-    """A left-aligned label that wraps instead of widening the dialog."""
-    label = Gtk.Label(label=text, xalign=0.0)
+def _wrap(label: Gtk.Label) -> Gtk.Label:
+    """``label``, wrapping its lines instead of widening the dialog."""
     label.set_line_wrap(True)
     label.set_max_width_chars(48)
     return label
