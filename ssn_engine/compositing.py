@@ -12,7 +12,8 @@ from collections.abc import Sequence
 
 import numpy as np
 
-from .framing import CanvasShadow, row_stripes
+from .framing import CanvasShadow
+from .stripes import for_each_stripe
 
 LAYER_DTYPES = ("uint8", "uint16", "float16", "float32")
 _INT_MAX = {"uint8": 255, "uint16": 65535}
@@ -65,9 +66,11 @@ def shadow_layer(
         c = c[::-1]
     opacity = _opacity(opacity)
     out = np.empty(shadow.shape + (4,), dtype)
+    colour_bytes = from_unit_float(c, dtype)
+
     # In stripes, in place on one float32 buffer each: this runs on every light change, over the whole visible
-    # shadow, and stripes keep the temporaries small.
-    for rows in row_stripes(0, shadow.shape[0], shadow.shape[1]):
+    # shadow, and stripes keep the temporaries small (and use every core).
+    def fill(rows: slice) -> None:
         alpha = np.clip(shadow[rows], 0.0, 1.0, dtype=np.float32)
         alpha *= np.float32(opacity)
         if dtype in _INT_MAX:
@@ -75,16 +78,16 @@ def shadow_layer(
             np.rint(alpha, out=alpha)
         a = alpha.astype(dtype)
         part = out[rows]
-        if dtype == "uint8":  # one 32-bit word per pixel: colour bytes, then alpha (little-endian RGBA in memory)
-            r, g, b = (int(v) for v in from_unit_float(c, "uint8"))
+        if dtype == "uint8" and np.little_endian:  # one 32-bit word per pixel: colour bytes, then alpha
+            r, g, b = (int(v) for v in colour_bytes)
             words = part.view(np.uint32).reshape(a.shape)
             np.left_shift(a, 24, out=words, dtype=np.uint32)
             words |= np.uint32(r | g << 8 | b << 16)
-            if not np.little_endian:  # pragma: no cover - the word order assumes little-endian memory
-                part[..., :3], part[..., 3] = from_unit_float(c, dtype), a
         else:
-            part[..., :3] = from_unit_float(c, dtype)
+            part[..., :3] = colour_bytes
             part[..., 3] = a
+
+    for_each_stripe(fill, 0, shadow.shape[0], shadow.shape[1])
     return out
 
 
@@ -125,8 +128,11 @@ def layer_image(
     if not shadow.is_empty:
         h, w = shadow.values.shape
         cols = slice(shadow.x, shadow.x + w)
-        for rows in row_stripes(shadow.y, shadow.y + h, w):
+
+        def fill(rows: slice) -> None:
             out[rows, cols] = shadow_layer(shadow.values[rows.start - shadow.y : rows.stop - shadow.y], color, opacity)
+
+        for_each_stripe(fill, shadow.y, shadow.y + h, w)
     return out
 
 
@@ -145,16 +151,22 @@ def composite_image(
     if not shadow.is_empty:
         h, w = shadow.values.shape
         cols = slice(shadow.x, shadow.x + w)
-        for rows in row_stripes(shadow.y, shadow.y + h, w):
+
+        def multiply(rows: slice) -> None:
             part = shadow.values[rows.start - shadow.y : rows.stop - shadow.y]
             background[rows, cols] = composite_shadow(background[rows, cols], part, color, opacity)
+
+        for_each_stripe(multiply, shadow.y, shadow.y + h, w)
     visible = cutout[..., 3] > 0
     ys, xs = np.flatnonzero(visible.any(axis=1)), np.flatnonzero(visible.any(axis=0))
     del visible
     if ys.size:
         cols = slice(int(xs[0]), int(xs[-1]) + 1)
-        for rows in row_stripes(int(ys[0]), int(ys[-1]) + 1, cols.stop - cols.start):
+
+        def cover(rows: slice) -> None:
             background[rows, cols] = over(background[rows, cols], cutout[rows, cols])
+
+        for_each_stripe(cover, int(ys[0]), int(ys[-1]) + 1, cols.stop - cols.start)
     return background
 
 

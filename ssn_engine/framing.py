@@ -16,13 +16,13 @@ from __future__ import annotations
 
 import functools
 import math
-from collections.abc import Iterator
 from dataclasses import dataclass
 
 import numpy as np
 from PIL import Image
 
 from .camera import DEFAULT_FOV, focal_from_fov, top_row
+from .stripes import for_each_stripe
 
 OBJECT_EXTENT = 0.5
 ALPHA_THRESHOLD = 0.01  # alpha at or below this is background for the bounding box
@@ -202,21 +202,14 @@ def shadow_to_canvas(
     left, right = x0 * s + framing.offset_x + pad - origin, x1 * s + framing.offset_x + pad - origin
     top = framing.offset_y + pad - origin
     out = np.empty((y1 - y0, x1 - x0), np.float32)
+
     # In stripes of rows: the same samples, but a large canvas is made without canvas-sized temporaries
-    # (PIL's own buffers are reused), several times faster on big layers.
-    for rows in row_stripes(y0, y1, x1 - x0):
+    # (PIL's own buffers are reused), several times faster on big layers, and on every core.
+    def resample(rows: slice) -> None:
         box = (left, rows.start * s + top, right, rows.stop * s + top)
         part = image.resize((x1 - x0, rows.stop - rows.start), Image.Resampling.BILINEAR, box=box)
         out[rows.start - y0 : rows.stop - y0] = np.asarray(part)
+
+    for_each_stripe(resample, y0, y1, x1 - x0)
     # Bilinear and antialiasing weights are non-negative and sum to 1: values stay in [0, 1] (no clip pass).
     return CanvasShadow(out, x0, y0)
-
-
-STRIPE_PIXELS = 1 << 18  # canvas pixels made at once: temporaries follow this, not the canvas
-
-
-def row_stripes(y0: int, y1: int, width: int) -> Iterator[slice]:
-    """Consecutive row ranges covering [y0, y1), about STRIPE_PIXELS pixels each."""
-    rows = max(1, STRIPE_PIXELS // max(1, width))
-    for start in range(y0, y1, rows):
-        yield slice(start, min(start + rows, y1))

@@ -18,9 +18,10 @@ from pathlib import Path
 import numpy as np
 from PIL import Image, UnidentifiedImageError
 
+from .stripes import row_stripes
+
 DEFAULT_MAX_MEGAPIXELS = 200.0
 ALPHA_MODES = ("RGBA", "LA", "PA", "RGBa", "La")
-STRIPE_PIXELS = 1 << 20  # pixels converted to RGBA at once
 
 
 class ImageFileError(ValueError):
@@ -32,10 +33,9 @@ def _rgba_array(im: Image.Image) -> np.ndarray:
     the decoded image and the array (a whole-image conversion would add two more)."""
     w, h = im.size
     out = np.empty((h, w, 4), np.uint8)
-    rows = max(1, STRIPE_PIXELS // max(1, w))
-    for top in range(0, h, rows):
-        part = im.crop((0, top, w, min(h, top + rows)))
-        out[top : top + rows] = np.asarray(part if part.mode == "RGBA" else part.convert("RGBA"))
+    for rows in row_stripes(0, h, w):
+        part = im.crop((0, rows.start, w, rows.stop))
+        out[rows] = np.asarray(part if part.mode == "RGBA" else part.convert("RGBA"))
     return out
 
 

@@ -6,6 +6,7 @@ import numpy as np
 
 SAMPLE_SIZE = (1200, 900)  # width, height of the sample canvas
 SAMPLE_FILES = ("sample_cutout.png", "sample_background.png")  # what demo --save-samples writes
+STRIPE_ROWS = 64  # canvas rows of the pawn shaded at once
 
 
 def _pawn_profile(t: np.ndarray) -> np.ndarray:
@@ -28,7 +29,9 @@ def pawn_cutout(size: tuple[int, int] = SAMPLE_SIZE, height: int = 560, base_y: 
     x0, x1 = max(0, int(w / 2 - 0.31 * height) - 1), min(w, int(w / 2 + 0.31 * height) + 2)
     y0, y1 = max(0, base_y - height - 1), min(h, base_y + 1)
     out = np.zeros((h, w, 4), np.uint8)
-    out[y0:y1, x0:x1] = _shaded_pawn(x0, x1, y0, y1, ss, w, height, base_y)
+    for top in range(y0, y1, STRIPE_ROWS):  # in stripes: the float64 shading of the whole box would peak ~140 MB
+        bottom = min(top + STRIPE_ROWS, y1)
+        out[top:bottom, x0:x1] = _shaded_pawn(x0, x1, top, bottom, ss, w, height, base_y)
     return out
 
 
