@@ -56,6 +56,19 @@ class Framing:
         """Frame point to canvas point."""
         return (x - self.offset_x) / self.scale, (y - self.offset_y) / self.scale
 
+    def scaled(self, factor: float) -> Framing:
+        """The same framing for the canvas resampled by ``factor`` (a preview of it): canvas sizes rounded."""
+        x0, y0, x1, y1 = self.bbox
+        return Framing(
+            self.n,
+            max(1, round(self.canvas_width * factor)),
+            max(1, round(self.canvas_height * factor)),
+            self.scale / factor,
+            self.offset_x,
+            self.offset_y,
+            (math.floor(x0 * factor), math.floor(y0 * factor), math.ceil(x1 * factor), math.ceil(y1 * factor)),
+        )
+
     def camera_input(self, horizon: float, fov: float = DEFAULT_FOV) -> tuple[float, float]:
         """The frame's camera input (horizon row h, focal length f; conventions "Camera input") for a canvas
         horizon row ``horizon`` (canvas pixels from the top edge; may lie outside the canvas) and the canvas's

@@ -13,7 +13,7 @@ import numpy as np
 
 from . import long_shadow
 from .ao_edit import apply_edits
-from .framing import CanvasShadow, frame_alpha, shadow_to_canvas
+from .framing import CanvasShadow, Framing, frame_alpha, shadow_to_canvas
 from .hemisphere import NETWORK_SHAPE, render_light_map
 from .light_map import LightMap
 from .methods import GeometricCard, ShadowMethod
@@ -62,11 +62,15 @@ class ShadowSession:
         elm = render_light_map(light_map, NETWORK_SHAPE[0])
         return self.method.render(self.mask[None], self.ao[None], elm[None], self.cameras)[0]
 
-    def to_canvas(self, frame: np.ndarray, light_map: LightMap, clip: bool = True) -> CanvasShadow:
-        """A frame shadow of ``light_map`` at canvas resolution, cropped to its visible part; a shadow that
-        reaches the frame's border continues beyond it (the geometric card's, :mod:`ssn_engine.long_shadow`)."""
+    def to_canvas(
+        self, frame: np.ndarray, light_map: LightMap, clip: bool = True, framing: Framing | None = None
+    ) -> CanvasShadow:
+        """A frame shadow of ``light_map`` at canvas resolution (or on ``framing``'s canvas: a preview's, from
+        :meth:`Framing.scaled`), cropped to its visible part; a shadow that reaches the frame's border continues
+        beyond it (the geometric card's, :mod:`ssn_engine.long_shadow`)."""
+        framing = framing or self.framing
         if not long_shadow.reaches_border(frame):
-            return shadow_to_canvas(frame, self.framing, clip=clip)
+            return shadow_to_canvas(frame, framing, clip=clip)
         card = self.method if isinstance(self.method, GeometricCard) else getattr(self.method, "card", None)
         if card is None:
             self._card = self._card or GeometricCard(self.method.resolution)
@@ -74,8 +78,15 @@ class ShadowSession:
         elm = render_light_map(light_map, NETWORK_SHAPE[0])
         wide = card.extended_shadow(self.mask, elm, camera_at(self.cameras, 0), long_shadow.MARGIN, long_shadow.CELL)
         values, origin = long_shadow.extend(frame, wide)
-        return shadow_to_canvas(values, self.framing, origin, clip)
+        return shadow_to_canvas(values, framing, origin, clip)
 
-    def render(self, light_map: LightMap) -> CanvasShadow:
-        """The shadow at canvas resolution (:meth:`render_frame`, then :meth:`to_canvas`)."""
-        return self.to_canvas(self.render_frame(light_map), light_map)
+    def render(self, light_map: LightMap, framing: Framing | None = None) -> CanvasShadow:
+        """The shadow at canvas resolution, or on ``framing``'s canvas (:meth:`render_frame`, then
+        :meth:`to_canvas`)."""
+        return self.to_canvas(self.render_frame(light_map), light_map, framing=framing)
+
+    def cover(self, framing: Framing) -> np.ndarray:
+        """The cutout's alpha (h, w) on ``framing``'s canvas, resampled from the frame: what hides the shadow
+        in a small preview when the host sends no alpha of that size."""
+        mask = shadow_to_canvas(self.mask, framing, origin=0.0)  # with an origin: no fading at the frame's edges
+        return mask.full_canvas(framing.canvas_width, framing.canvas_height)

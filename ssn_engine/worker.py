@@ -12,6 +12,7 @@ token.
 from __future__ import annotations
 
 import collections
+import dataclasses
 import ctypes
 import hmac
 import itertools
@@ -29,7 +30,7 @@ from . import __version__
 from .ao_edit import AOEditError
 from .camera import DEFAULT_FOV
 from .compositing import preview_image, shadow_layer
-from .framing import EmptyAlphaError
+from .framing import EmptyAlphaError, Framing
 from .light_map import PRESETS, LightMap, LightMapError, preset
 from .methods import LoadedMethod, ModelError
 from .protocol import (
@@ -193,26 +194,36 @@ class Worker:
         if "background" not in buffers:
             raise RequestError("BadRequest", "background: buffer missing")
         background = to_array(buffers["background"])  # uint8 (h, w, 3|4), bounded: check_request
-        canvas = (s.framing.canvas_height, s.framing.canvas_width)
-        if background.shape[:2] != canvas:
-            raise RequestError(
-                "BadRequest",
-                f"background: {background.shape[1]} x {background.shape[0]}, but the cutout is "
-                f"{canvas[1]} x {canvas[0]}",
-            )
-        cover = to_array(buffers["cover"]) if "cover" in buffers else None
-        if cover is not None and cover.shape != canvas:
-            raise RequestError("BadRequest", f"cover: expected the cutout's size {canvas[1]} x {canvas[0]}")
+        framing = self._preview_framing(s, background.shape[1], background.shape[0])
+        size = (framing.canvas_height, framing.canvas_width)
+        cover = to_array(buffers["cover"]) if "cover" in buffers else s.cover(framing)
+        if cover.shape != size:
+            raise RequestError("BadRequest", f"cover: expected the background's size {size[1]} x {size[0]}")
         horizon = header.get("horizon")
         if horizon is not None and (not isinstance(horizon, (int, float)) or not np.isfinite(horizon)):
             raise RequestError("BadRequest", f"horizon: expected a row number, got {horizon!r}")
-        shadow = s.render(light_map)
+        shadow = s.render(light_map, framing)
         color, opacity = header.get("color", (0.0, 0.0, 0.0)), float(header.get("opacity", 1.0))
         reply = {}
         reason = no_shadow_reason(light_map, shadow)
         if reason:
             reply["no_shadow"] = reason
         return reply, {"image": to_buffer(preview_image(background, shadow, cover, color, opacity, horizon))}
+
+    @staticmethod
+    def _preview_framing(s: ShadowSession, width: int, height: int) -> Framing:
+        """The cutout's framing for a preview background of ``width`` x ``height``: the cutout's canvas or the
+        canvas scaled down (its aspect kept within a pixel, as a host's thumbnail rounds it)."""
+        cw, ch = s.framing.canvas_width, s.framing.canvas_height
+        factor = width / cw
+        scaled = s.framing.scaled(factor)
+        if factor > 1.0 or abs(scaled.canvas_height - height) > 1 or min(width, height) < 1:
+            raise RequestError(
+                "BadRequest",
+                f"background: {width} x {height}, but the cutout is {cw} x {ch}: send the canvas, or the canvas "
+                "scaled down with its aspect ratio",
+            )
+        return s.framing if factor == 1.0 and height == ch else dataclasses.replace(scaled, canvas_height=height)
 
     def release(self, header: dict, buffers: dict) -> tuple[dict, dict]:
         key = header.get("cutout")

@@ -219,11 +219,37 @@ def test_preview_is_the_shadow_multiplied_onto_the_thumbnail(client):
     assert tuple(red[30, 0]) == (255, 140, 0) and tuple(red[30, 6]) != (255, 140, 0)  # dashed horizon
     dark = client.request("preview", sent, cutout=key, light_map={**_light(0.5, 0.2), "lights": []})
     assert dark[0]["no_shadow"] and (arr(dark[1]["image"]) == 200).all()
-    with pytest.raises(EngineError, match="background: 80 x 60, but the cutout is 160 x 120") as info:
-        client.request("preview", {"background": buf(background[:60, :80])}, cutout=key, preset="softbox")
+    with pytest.raises(EngineError, match="background: 80 x 40, but the cutout is 160 x 120") as info:
+        client.request("preview", {"background": buf(background[:40, :80])}, cutout=key, preset="softbox")
     assert info.value.kind == "BadRequest"
     with pytest.raises(EngineError, match="background: expected uint8"):
         client.request("preview", {"background": buf(background[..., 0])}, cutout=key, preset="softbox")
+    client.request("release", cutout=key)
+
+
+def test_a_preview_of_a_large_canvas_is_its_shadow_scaled_down(client):
+    """Krita's docker previews a light drag on a thumbnail of the whole canvas: the full-size cutout's shadow
+    (its AO, edits and camera) drawn at the thumbnail's scale, hidden under the cutout without a cover sent."""
+    alpha = drawn_alpha(800, 600)
+    key = client.request("set_cutout", {"alpha": buf(alpha)})[0]["cutout"]
+    background = np.full((150, 200, 4), 200, np.uint8)  # a quarter of the canvas
+    reply, out = client.request("preview", {"background": buf(background)}, cutout=key, preset="low-sun-left")
+    image = arr(out["image"])[..., 0].astype(np.float64)
+    assert image.shape == (150, 200) and "no_shadow" not in reply
+    layer = client.request("render", cutout=key, preset="low-sun-left", format={"dtype": "float32"})
+    x, y, w, h = (layer[0][k] for k in ("x", "y", "width", "height"))
+    full = np.zeros((600, 800), np.float64)
+    full[y : y + h, x : x + w] = arr(layer[1]["layer"])[..., 3]
+    expected = 200 * (1 - full.reshape(150, 4, 200, 4).mean(axis=(1, 3)))
+    covered = alpha.reshape(150, 4, 200, 4).min(axis=(1, 3)) == 255
+    assert (image[covered] >= 199).mean() > 0.95  # the cutout hides its shadow
+    ground = ~alpha.reshape(150, 4, 200, 4).any(axis=(1, 3))
+    assert expected[ground].min() < 150  # a real shadow to compare
+    assert np.abs(image - expected)[ground].mean() < 0.5
+    assert np.abs(image - expected)[ground].max() < 12  # at edges: the two resample differently
+    with pytest.raises(EngineError, match="scaled down with its aspect ratio") as info:
+        client.request("preview", {"background": buf(background[:100])}, cutout=key, preset="softbox")
+    assert info.value.kind == "BadRequest"
     client.request("release", cutout=key)
 
 
