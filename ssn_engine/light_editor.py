@@ -52,6 +52,11 @@ class LightMapEditor:
         self._last_wheel = -1e9
         self.message = ""  # the last refusal (e.g. too many lights), for a status line
 
+    @property
+    def dragging(self) -> bool:
+        """A grabbed light is being moved (until the release)."""
+        return self._grab is not None and self._dragged
+
     def _changed(self, live: bool, new_stroke: bool) -> None:
         if self.on_change is not None:
             self.on_change(live, new_stroke)

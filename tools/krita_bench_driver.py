@@ -1,4 +1,5 @@
-"""Runs inside Krita (kritarunner): live updates per second while a light is dragged, and Generate latency.
+"""Runs inside Krita (kritarunner): the docker's previews per second while a light is dragged, the layer after
+the release, and Generate latency.
 
 Started by ``python -m plugin_krita.benchmark``; writes JSON to $SSN_BENCH_RESULT.
 """
@@ -73,22 +74,23 @@ def spin(controller, timeout_s):
 
 
 def live_drag(doc, depth):
+    """A light dragged at the mouse's rate: the docker's previews per second, no layer writes until the
+    release, then the time from the release to the written layer."""
     c = controller_for(doc)
     messages = out.setdefault("live_messages", {})[depth] = []
     c.status.connect(lambda level, text: messages.append([level, text]) if level != "info" else None)
     c.generate()
     spin(c, 120)
-    frames = []
-    timings = out.setdefault("write_timings", {})[depth] = []
-    c.rendered.connect(lambda info: frames.append((time.perf_counter(), info["elapsed_ms"])))
-    c.rendered.connect(lambda info: timings.append([info["timing_ms"], dict(c.host.writer.last_timing)]))
+    previews, writes = [], []
+    c.previewed.connect(lambda rgb, w, h: previews.append(time.perf_counter()))
+    c.rendered.connect(lambda info: writes.append((time.perf_counter(), info)))
     light = {"i": 0}
+    editor = c.light_map.copy()
 
     def move():  # what the light map widget does on every mouse move (60 Hz)
         light["i"] += 1
-        u = 0.30 + 0.4 * ((light["i"] % 240) / 240.0)
-        c.light_map.move(0, u, 0.6)
-        c.lights_edited(light["i"] == 1)
+        editor.move(0, 0.30 + 0.4 * ((light["i"] % 240) / 240.0), 0.6)
+        c.drag_light_map(editor)
 
     timer = QTimer()
     timer.timeout.connect(move)
@@ -98,16 +100,25 @@ def live_drag(doc, depth):
     QTimer.singleShot(int(DRAG_S * 1000), loop.quit)
     loop.exec_()
     timer.stop()
+    released = time.perf_counter()
+    c.set_light_map(editor, False)
     spin(c, 30)
     t1 = time.perf_counter()
-    in_window = [f for f in frames if f[0] <= t0 + DRAG_S]
+    in_window = [t for t in previews if t <= t0 + DRAG_S]
+    gaps = sorted(b - a for a, b in zip(in_window, in_window[1:], strict=False))
+    during = [w for w in writes if w[0] <= released]
+    after = [w for w in writes if w[0] > released]
     out["live"][depth] = {
         "canvas": "2000x2000",
         "drag_s": DRAG_S,
         "mouse_moves": light["i"],
-        "layer_updates": len(in_window),
-        "updates_per_s": round(len(in_window) / DRAG_S, 2),
-        "median_latency_ms": sorted(f[1] for f in in_window)[len(in_window) // 2] if in_window else None,
+        "previews": len(in_window),
+        "previews_per_s": round(len(in_window) / DRAG_S, 2),
+        "median_preview_gap_ms": round(1e3 * gaps[len(gaps) // 2], 1) if gaps else None,
+        "layer_writes_during_drag": len(during),
+        "release_to_layer_ms": round(1e3 * (after[0][0] - released), 1) if after else None,
+        "release_undo_step": bool(after and after[0][1]["created"]),
+        "timing_ms": after[0][1]["timing_ms"] if after else None,
         "total_s": round(t1 - t0, 2),
     }
     c.engine.shutdown()

@@ -5,6 +5,13 @@ merge into one pending request, which is sent as soon as the reply arrives and
 before that reply's layer is written, so the worker computes the next frame
 while Krita writes the current one. Only SR re-runs while a light moves; the
 cutout's AO (and its edits) stay in the worker.
+
+While a light is dragged the docker shows a live preview instead: the image
+without its shadow layer as a thumbnail, with the shadow the worker multiplies
+on (coalesced the same way). Krita's scripting API can only recomposite the
+whole image, which on a large canvas allows a few layer updates a second; so
+the layer is written when the drag rests (``PAUSE_MS``) and when it ends, one
+undo step for the whole drag.
 """
 
 from __future__ import annotations
@@ -13,7 +20,7 @@ import time
 from dataclasses import dataclass
 from typing import Any
 
-from PyQt5.QtCore import QObject, pyqtSignal
+from PyQt5.QtCore import QObject, QTimer, pyqtSignal
 
 from .adapters.krita_document import SourceError
 from .adapters.pixel_format import UnsupportedFormat, shadow_color
@@ -21,6 +28,10 @@ from .engine import EngineError
 from .shared import defaults
 from .shared import light_map as lm
 from .shared import protocol
+
+
+PREVIEW_SIDE = 320  # pixels: the longer side of the docker's live preview
+PAUSE_MS = 300  # a drag that rests this long writes the layer
 
 
 def document_key(document: Any) -> str:
@@ -50,6 +61,7 @@ class ShadowController(QObject):
     aoChanged = pyqtSignal(bytes, bytes, int)  # AO map, framed mask (N x N uint8 each), N
     rendered = pyqtSignal(dict)  # {"elapsed_ms", "timing_ms", "width", "height", "created", "method"}
     engineReady = pyqtSignal(dict)
+    previewed = pyqtSignal(bytes, int, int)  # packed RGB, width, height: the live preview of a light drag
 
     def __init__(self, engine: Any, host: Any, parent: QObject | None = None) -> None:
         super().__init__(parent)
@@ -71,6 +83,14 @@ class ShadowController(QObject):
         self._edit_dirty = False
         self._busy = False
         self.renders = 0
+        self.previews = 0
+        self._layer_map: Any = None  # the light map of the last layer render sent
+        self._drag: dict | None = None  # a previewed drag: {"background": (w, h, rgba), "wrote": bool}
+        self._preview_in_flight = False
+        self._preview_pending = False
+        self._pause = QTimer(self)
+        self._pause.setSingleShot(True)
+        self._pause.timeout.connect(self._drag_rested)
         if hasattr(engine, "ready"):
             engine.ready.connect(self._on_engine_ready)
 
@@ -89,12 +109,36 @@ class ShadowController(QObject):
             self._schedule(RenderJob(new_step=stroke_started, reread=False, started=time.perf_counter()))
 
     def set_light_map(self, light_map: Any, stroke_started: bool = True) -> None:
-        """The editor's map changed (the controller keeps its own copy); a map equal to the current one, as
-        after the last move of a drag, renders nothing new."""
-        if light_map == self.light_map and not stroke_started:
-            return
+        """The editor's map changed (the controller keeps its own copy); it ends a previewed drag. A map equal
+        to the last one rendered, as after the last move of a live drag, renders nothing new."""
+        drag, self._drag = self._drag, None
+        self._pause.stop()
         self.light_map = light_map.copy()
+        if drag is not None:  # the drag's layer: its undo step unless a rest already wrote one
+            if light_map != self._layer_map or not drag["wrote"]:
+                self.lights_edited(stroke_started=stroke_started or not drag["wrote"])
+            return
+        if light_map == self._layer_map and not stroke_started:
+            return
         self.lights_edited(stroke_started=stroke_started)
+
+    def drag_light_map(self, light_map: Any) -> None:
+        """A light is being dragged: update the docker's preview (:attr:`previewed`); the layer follows when the
+        drag rests or ends (:meth:`set_light_map`). Before a first Generate, or with Live off, only the map is
+        kept."""
+        self.light_map = light_map.copy()
+        if not self.live or self.source is None:
+            return
+        if self._drag is None:
+            background = None
+            if self.cutout is not None:  # else (the worker restarted) the layer alone follows
+                try:
+                    background = self.host.preview_background(self.source, PREVIEW_SIDE)
+                except Exception as exc:  # the UI boundary: no preview, the layer still follows
+                    self.status.emit("warning", f"No live preview: {type(exc).__name__}: {exc}")
+            self._drag = {"background": background, "wrote": False}
+        self._pause.start(PAUSE_MS)
+        self._request_preview()
 
     def set_ao_edits(self, edits: list[dict], stroke_started: bool = False) -> None:
         """Replace the AO edits (the whole list); the worker re-applies them to its AO map."""
@@ -125,7 +169,49 @@ class ShadowController(QObject):
         self.engine.cancel()
         self.cutout, self._cutout_key = None, None
         self._edit_in_flight = self._edit_dirty = False
+        self._preview_in_flight = self._preview_pending = False
         self._fail("Cancelled. The shadow engine starts again with the next Generate.", "warning")
+
+    def _drag_rested(self) -> None:
+        if self._drag is not None and self.light_map != self._layer_map:
+            self.lights_edited(stroke_started=not self._drag["wrote"])
+            self._drag["wrote"] = True
+
+    def _request_preview(self) -> None:
+        drag, source = self._drag, self.source
+        if drag is None or drag["background"] is None or source is None or self.cutout is None:
+            return
+        if self._preview_in_flight:
+            self._preview_pending = True  # latest wins: sent with the map of the moment when the reply comes
+            return
+        self._preview_in_flight, self._preview_pending = True, False
+        width, height, rgba = drag["background"]
+        params: dict[str, Any] = {
+            "cutout": self.cutout,
+            "light_map": self.light_map.to_dict(),
+            "color": list(self.color),  # the thumbnail is 8-bit sRGB, whatever the document's profile
+            "opacity": self.opacity,
+        }
+        if self.camera:
+            params["horizon"] = self.camera["horizon"] * width / source.width
+        background = protocol.Buffer("uint8", (height, width, 4), rgba)
+        self.engine.request("preview", params, {"background": background}, self._on_preview, self._on_preview_error)
+
+    def _on_preview(self, reply: dict, buffers: dict) -> None:
+        self._preview_in_flight = False
+        if self._preview_pending:
+            self._request_preview()
+        image = buffers.get("image")
+        if image is not None and len(image.shape) == 3:
+            self.previews += 1
+            self.previewed.emit(bytes(image.data), int(image.shape[1]), int(image.shape[0]))
+
+    def _on_preview_error(self, error: EngineError) -> None:
+        self._preview_in_flight = self._preview_pending = False
+        if error.kind in ("UnknownCutout", "WorkerUnavailable"):
+            self.cutout, self._cutout_key = None, None  # the drag's end sends the cutout again
+        else:
+            self.status.emit("warning", f"Live preview: {error}")
 
     def forget_cutout(self) -> None:
         self.cutout, self._cutout_key, self.source = None, None, None
@@ -191,6 +277,7 @@ class ShadowController(QObject):
     def _render(self, job: RenderJob) -> None:
         source = self.source
         assert source is not None, "a job reads its source first"
+        self._layer_map = self.light_map.copy()
         params = {
             "cutout": self.cutout,
             "light_map": self.light_map.to_dict(),

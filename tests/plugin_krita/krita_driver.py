@@ -13,6 +13,7 @@ from array import array
 
 from krita import Krita, Selection
 from PyQt5.QtCore import QEventLoop, QTimer
+from PyQt5.QtGui import QImage
 from PyQt5.QtWidgets import QApplication
 
 RESULT = os.environ.get("SSN_TEST_RESULT", "/tmp/ssn_krita_result.json")
@@ -274,6 +275,59 @@ def run_case(depth, with_window):
             "scroll_range": scroll.verticalScrollBar().maximum() if hasattr(scroll, "verticalScrollBar") else 0,
         }
         docker.hide()
+
+    # A light drag (issue #14): previews of the image in the docker, the canvas left alone until the release
+    host.active_document = lambda: doc
+    doc.setSelection(Selection())
+    activate(doc, person)
+    controller.light_map = lm.preset("low-sun-left")  # shadow to the right
+    controller.generate()
+    wait_for(controller)
+    pump(0.5)
+    activate(doc, person)
+    before, documents = shadow_state(doc, depth), len(k.documents())
+    width, height, rgba = host.preview_background(controller.source, 320)
+    x0, y0, x1, y1 = OBJ
+    right = (x1 + 10, (y0 + y1) // 2, W - 10, y1 + 30)  # where the shadow falls, in document pixels
+
+    def reds(image, w, scale, channels):
+        return [
+            image[channels * (y * w + x)]
+            for y in range(int(right[1] * scale), int(right[3] * scale))
+            for x in range(int(right[0] * scale), int(right[2] * scale))
+        ]
+
+    shown = doc.projection(0, 0, W, H).convertToFormat(QImage.Format.Format_RGBA8888)
+    projected = shown.constBits().asstring(shown.sizeInBytes())
+    drag = case["drag"] = {
+        "background_size": [width, height],
+        "background_under_shadow": [min(reds(rgba, width, width / W, 4)), max(reds(rgba, width, width / W, 4))],
+        "canvas_under_shadow_min": min(reds(projected, W, 1.0, 4)),
+    }
+    previews, start, said = [], len(renders), len(messages)
+    controller.previewed.connect(lambda rgb, w, h: previews.append((rgb, w, h)))
+    editor = controller.light_map.copy()
+    for i in range(12):  # a mouse drag, faster than the rest delay
+        editor.move(0, 0.25 + 0.01 * i, editor.lights[0].v)
+        controller.drag_light_map(editor)
+        pump(0.05)
+    pump(0.1)
+    drag.update(
+        previews=len(previews),
+        preview_size=list(previews[-1][1:]) if previews else None,
+        preview_under_shadow_min=min(reds(*previews[-1][:2], previews[-1][1] / W, 3)) if previews else None,
+        writes_during=len(renders) - start,
+        canvas_unchanged_during=shadow_state(doc, depth) == before,
+        documents_unchanged=len(k.documents()) == documents,
+        shadow_visible=all(n.visible() for n in doc.rootNode().childNodes()),
+        active=doc.activeNode().name() if doc.activeNode() is not None else None,
+    )
+    controller.set_light_map(editor, False)  # the release
+    wait_for(controller)
+    drag["writes_after"] = len(renders) - start
+    drag["release_created"] = bool(renders[-1]["created"]) if len(renders) > start else None
+    drag["changed_after"] = shadow_state(doc, depth) != before
+    drag["messages"] = messages[said:]
     engine.shutdown()
     save()
 

@@ -1,4 +1,5 @@
-from krita_helpers import FakeHost, wait_until, worker_command
+from krita_helpers import FakeHost, cutout_alpha, wait_until, worker_command
+from PyQt5.QtCore import QEventLoop, QTimer
 from plugin_krita.ssn_shadow.controller import ShadowController
 from plugin_krita.ssn_shadow.engine import EngineProcess
 from ssn_engine.engine_config import EngineConfig
@@ -43,6 +44,55 @@ def test_generate_then_live_drag(qapp):
 
         c.set_ao_edits([{"op": "strength", "value": 2.0}], stroke_started=True)
         assert wait_until(lambda: not c.busy and len(aos) >= 2)
+    finally:
+        engine.shutdown()
+
+
+def _spin(ms: int) -> None:
+    loop = QEventLoop()
+    QTimer.singleShot(ms, loop.quit)
+    loop.exec_()
+
+
+def test_a_light_drag_previews_in_the_docker_and_writes_the_layer_once(qapp):
+    """While a light moves the docker shows previews and the canvas is left alone (Krita recomposites the whole
+    image per layer update); the layer is written when the drag rests and when it ends: one undo step."""
+    host = FakeHost(w=800, h=640, alpha=cutout_alpha(800, 640, (320, 160, 480, 560)))
+    c, engine, messages, _ = make(host)
+    shown = []
+    c.previewed.connect(lambda rgb, w, h: shown.append((len(rgb), w, h)))
+    try:
+        c.drag_light_map(c.light_map)  # before any Generate: nothing to preview, nothing written
+        assert not c.busy and not shown and not host.writes
+        c.set_light_map(c.light_map, False)
+        c.generate()
+        assert wait_until(lambda: not c.busy and len(host.writes) == 1)
+        for i in range(20):  # a drag, faster than the rest delay
+            c.light_map.move(0, 0.2 + 0.02 * i, 0.6)
+            c.drag_light_map(c.light_map)
+            _spin(40)
+        assert len(host.writes) == 1 and len(shown) >= 3, messages
+        assert shown[-1] == (320 * 256 * 3, 320, 256)  # the 800 x 640 image at the preview's size
+        c.set_light_map(c.light_map, False)  # the release
+        assert wait_until(lambda: not c.busy and len(host.writes) == 2)
+        assert host.writes[1][2]  # the drag's one undo step
+
+        c.light_map.move(0, 0.7, 0.5)
+        c.drag_light_map(c.light_map)
+        assert wait_until(lambda: len(host.writes) == 3, 5)  # the drag rests: the layer follows, a new step
+        assert host.writes[2][2]
+        c.light_map.move(0, 0.75, 0.5)
+        c.drag_light_map(c.light_map)
+        c.set_light_map(c.light_map, False)  # it moved on, then the release: in place, the same step
+        assert wait_until(lambda: not c.busy and len(host.writes) == 4)
+        assert not host.writes[3][2]
+        c.light_map.move(0, 0.8, 0.5)
+        c.drag_light_map(c.light_map)
+        assert wait_until(lambda: len(host.writes) == 5, 5) and host.writes[4][2]
+        c.set_light_map(c.light_map, False)  # released where it rested: nothing new
+        _spin(200)
+        assert len(host.writes) == 5 and not c.busy
+        assert not [m for m in messages if m[0] != "info"], messages
     finally:
         engine.shutdown()
 

@@ -146,3 +146,15 @@ def test_generate_in_real_krita(pykrita, tmp_path, depth):
         docker = case["docker"]
         assert docker["scrolls"] and docker["panel_height"] >= docker["panel_min_height"], docker
         assert docker["scroll_range"] > 0, docker
+    # A light drag: the docker previews it on a thumbnail of the image without the old shadow (hidden in a
+    # clone of the document), the canvas is left alone, and the release writes the layer as one undo step
+    drag = case["drag"]
+    assert drag["background_size"] == [320, 240], drag
+    low, high = drag["background_under_shadow"]
+    assert high - low <= 2 and drag["canvas_under_shadow_min"] < low - 20, drag  # the old shadow: not in it
+    assert drag["previews"] >= 2 and drag["preview_size"] == [320, 240], drag
+    assert drag["preview_under_shadow_min"] < low - 20, drag  # the new shadow on the thumbnail
+    assert drag["writes_during"] == 0 and drag["canvas_unchanged_during"], drag
+    assert drag["documents_unchanged"] and drag["shadow_visible"] and drag["active"] == "Person", drag
+    assert drag["writes_after"] == 1 and drag["release_created"] and drag["changed_after"], drag
+    assert all(level == "info" for level, _ in drag["messages"]), drag

@@ -121,6 +121,31 @@ def test_panel_state(qapp):
     assert c.light_map.lights[panel.map_widget.selected].intensity == 2.5
 
 
+def test_a_drag_on_the_map_previews_and_the_release_renders_the_layer(qapp):
+    engine = NoEngine()
+    host = FakeHost()
+    c = ShadowController(engine, host)
+    panel = ShadowPanel(c)
+    panel.resize(360, 900)
+    panel.show()
+    c.source, c.cutout = host.read_source(host.document), "c1"  # as after a Generate
+    w = panel.map_widget
+    light = w.light_map.lights[0]
+    QTest.mousePress(w, Qt.LeftButton, Qt.NoModifier, pos(w, light.u, light.v))
+    for k in range(1, 4):
+        target = QPointF(pos(w, light.u + 0.05 * k, light.v))
+        QApplication.sendEvent(w, QMouseEvent(QEvent.MouseMove, target, Qt.NoButton, Qt.LeftButton, Qt.NoModifier))
+    assert engine.sent == ["preview"]  # one in flight (this engine never answers), no layer render
+    QTest.mouseRelease(w, Qt.LeftButton, Qt.NoModifier, pos(w, light.u + 0.15, light.v))
+    assert engine.sent[1:] == ["set_cutout"]  # the layer's render (the cutout first: its key is new here)
+    assert c.light_map == w.light_map
+
+    assert not panel.drag_preview.isVisible()
+    c.previewed.emit(bytes([90, 90, 90]) * (200 * 160), 200, 160)
+    assert panel.drag_preview.isVisible() and panel.drag_preview.image.size().width() == 200
+    assert panel.drag_preview.heightForWidth(250) == 200 and panel.drag_preview.heightForWidth(400) == 220
+
+
 def test_ui_errors_are_shown_not_raised(qapp):
     c = ShadowController(NoEngine(), FakeHost())
     panel = ShadowPanel(c)

@@ -9,7 +9,7 @@ from PyQt5.QtCore import QTimer
 if TYPE_CHECKING:
     from krita import Document, Krita
 
-from .krita_document import LayerWriter, Source, WriteResult, read_source
+from .krita_document import LayerWriter, Source, WriteResult, preview_background, read_source
 
 
 class KritaHost:
@@ -33,3 +33,7 @@ class KritaHost:
             # brush stroke lands on the cutout, not on its shadow.
             QTimer.singleShot(0, lambda: source.document.setActiveNode(source.node))
         return result
+
+    def preview_background(self, source: Source, side: int) -> tuple[int, int, bytes]:
+        """The image without the source's shadow, at most ``side`` pixels a side: (width, height, RGBA)."""
+        return preview_background(source.document, source.node, side)

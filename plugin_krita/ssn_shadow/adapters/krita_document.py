@@ -156,6 +156,54 @@ def shadow_of(source_node: Node) -> Node | None:
     return None
 
 
+def preview_size(width: int, height: int, side: int) -> tuple[int, int]:
+    """A thumbnail's size for a canvas: the longer side at most ``side``, the aspect kept."""
+    k = min(1.0, side / max(width, height, 1))
+    return max(1, round(width * k)), max(1, round(height * k))
+
+
+def _path_of(node: Node) -> list[int]:
+    """Child indices from the root down to ``node``."""
+    path = []
+    parent = node.parentNode()
+    while parent is not None:
+        path.append(_index_of(parent.childNodes(), node))
+        node, parent = parent, parent.parentNode()
+    return path[::-1]
+
+
+def preview_background(document: Document, source_node: Node, side: int) -> tuple[int, int, bytes]:
+    """The image as it looks without the source's shadow layer, scaled to at most ``side`` pixels a side:
+    (width, height, packed 8-bit RGBA). The shadow is hidden in a clone of the document, so the image, its
+    canvas and its undo history never see the change."""
+    from PyQt5.QtCore import Qt
+    from PyQt5.QtGui import QImage
+
+    width, height = preview_size(document.width(), document.height(), side)
+    shadow = shadow_of(source_node)
+    clone = document.clone() if shadow is not None else None
+    try:
+        shown = document
+        if clone is not None and shadow is not None:
+            node = clone.rootNode()
+            for i in _path_of(shadow):
+                node = node.childNodes()[i]
+            node.setVisible(False)
+            clone.refreshProjection()
+            shown = clone
+        image = shown.projection(0, 0, document.width(), document.height())
+    finally:
+        if clone is not None:
+            clone.close()
+    small = image.scaled(
+        width, height, Qt.AspectRatioMode.IgnoreAspectRatio, Qt.TransformationMode.SmoothTransformation
+    ).convertToFormat(QImage.Format.Format_RGBA8888)
+    bits = small.constBits()
+    if bits is None:  # a null image: Krita could not draw the document
+        raise RuntimeError("Krita returned no image of the document")
+    return width, height, bits.asstring(small.sizeInBytes())  # 4-byte pixels: rows are packed
+
+
 @dataclass
 class WriteResult:
     node: Node

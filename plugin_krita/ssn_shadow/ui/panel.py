@@ -26,6 +26,7 @@ from ..ao_edits import AoEdits
 from ..shared import defaults
 from ..shared import light_map as lm
 from .ao_preview import AOPreview
+from .drag_preview import DragPreview
 from .light_map_widget import LightMapWidget, slider_to_softness, softness_to_slider
 
 LEVEL_COLOURS = {"info": "", "warning": "color: #d08000;", "error": "color: #d03030;"}
@@ -63,6 +64,8 @@ class ShadowPanel(QWidget):
         self.presets.addItem("Preset…")
         self.presets.addItems(list(lm.PRESETS))
         lv.addWidget(self.presets)
+        self.drag_preview = DragPreview()
+        lv.addWidget(self.drag_preview)
         self.map_widget = LightMapWidget(self.controller.light_map.copy())
         lv.addWidget(self.map_widget)
         form = QFormLayout()
@@ -150,7 +153,7 @@ class ShadowPanel(QWidget):
 
         row = QHBoxLayout()
         self.live = QCheckBox("Live")
-        self.live.setToolTip("Re-render while a light is dragged (the AO is kept)")
+        self.live.setToolTip("Follow the lights as they change: a preview above the map while a light is dragged")
         self.live.setChecked(self.controller.live)
         self.generate = QPushButton("Generate shadow")
         self.generate.setDefault(True)
@@ -205,6 +208,7 @@ class ShadowPanel(QWidget):
         c.busyChanged.connect(self._guard(self._show_busy))
         c.status.connect(self._guard(self.show_message))
         c.aoChanged.connect(self._guard(self.ao_preview.set_images))
+        c.previewed.connect(self._guard(self.drag_preview.set_image))
         c.engineReady.connect(self._guard(self._engine_ready))
         self._stroke = False
 
@@ -248,7 +252,10 @@ class ShadowPanel(QWidget):
 
     def _lights_changed(self, live: bool, new_stroke: bool) -> None:
         self._sync_light_controls()
-        self.controller.set_light_map(self.map_widget.light_map, new_stroke)  # it keeps a copy
+        if live and self.map_widget.editor.dragging:  # a preview in the docker; the layer on release
+            self.controller.drag_light_map(self.map_widget.light_map)  # it keeps a copy
+        else:
+            self.controller.set_light_map(self.map_widget.light_map, new_stroke)
 
     def _sync_light_controls(self) -> None:
         i = self.map_widget.selected
