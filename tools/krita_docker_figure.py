@@ -1,6 +1,6 @@
 """docs/img/krita-docker.png: the Krita docker's panel at the width it gets docked in a 1366 x 768 Krita window
-(340 px, Krita's 8 pt UI font), all of it (docked, the lower part scrolls), with the sample pawn's AO from the
-real engine and the horizon set from a guide (offscreen Qt grab).
+(340 px, Krita's 8 pt UI font), all of it (docked, the lower part scrolls), with the sample pawn's AO and the
+live preview of a light drag from the real engine, and the horizon set from a guide (offscreen Qt grab).
 
 usage: QT_QPA_PLATFORM=offscreen python tools/krita_docker_figure.py [--out docs/img/krita-docker.png]
 """
@@ -11,12 +11,15 @@ import argparse
 import sys
 
 import numpy as np
+from PIL import Image
 from PyQt5.QtWidgets import QApplication
 
-from plugin_krita.ssn_shadow.controller import ShadowController
+from plugin_krita.ssn_shadow.adapters.krita_document import preview_size
+from plugin_krita.ssn_shadow.controller import PREVIEW_SIDE, ShadowController
 from plugin_krita.ssn_shadow.ui.panel import ShadowPanel
 from ssn_engine.methods import load_method
-from ssn_engine.samples import pawn_cutout
+from ssn_engine.compositing import over, preview_image
+from ssn_engine.samples import pawn_cutout, studio_background
 from ssn_engine.session import ShadowSession
 
 
@@ -47,12 +50,21 @@ def main(argv: list[str] | None = None) -> int:
     font = app.font()
     font.setPointSizeF(8.0)
     app.setFont(font)
-    session = ShadowSession(pawn_cutout()[..., 3], load_method("auto").method)
+    pawn = pawn_cutout()
+    session = ShadowSession(pawn[..., 3], load_method("auto").method)
     u8 = lambda a: np.rint(np.clip(a, 0, 1) * 255).astype(np.uint8).tobytes()  # noqa: E731
     controller = ShadowController(Idle(), Host())
     panel = ShadowPanel(controller)
     panel.ao_preview.set_images(u8(session.ao), u8(session.mask), session.mask.shape[0])
     panel.from_guide.click()  # the horizon from the sample's guide (row 520, where its floor meets the wall)
+    # The live preview of a light drag, as the worker's preview command draws it
+    height, width = pawn.shape[:2]
+    pw, ph = preview_size(width, height, PREVIEW_SIDE)
+    framing = session.framing.scaled(pw / width)
+    image = Image.fromarray(over(studio_background(), pawn)).resize((pw, ph), Image.Resampling.LANCZOS)
+    shadow = session.render(controller.light_map, framing)
+    shown = preview_image(np.asarray(image), shadow, session.cover(framing), horizon=520.0 * pw / width)
+    panel.drag_preview.set_image(shown.tobytes(), pw, ph)
     panel.resize(340, panel.heightForWidth(340) if panel.hasHeightForWidth() else panel.sizeHint().height())
     panel.show()
     for _ in range(10):

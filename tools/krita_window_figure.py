@@ -70,6 +70,18 @@ def inside(*_args: object) -> None:  # pragma: no cover - runs in Krita (kritaru
     while (docker.controller.busy or docker.controller.renders == 0) and time.monotonic() < deadline:
         wait(0.2)
     say(f"rendered {docker.controller.renders}")
+    # A light dragged on the map, as with the mouse: the docker previews, the layer follows on release
+    editor = docker.panel.map_widget.editor
+    u0, v0 = editor.lights.lights[0].u, editor.lights.lights[0].v
+    editor.press(u0, v0)
+    for k in range(1, 11):
+        editor.drag(u0 + 0.004 * k, v0 - 0.006 * k)
+        wait(0.05)
+    editor.release()
+    deadline = time.monotonic() + 60
+    while (docker.controller.busy or docker.controller.renders < 2) and time.monotonic() < deadline:
+        wait(0.2)
+    say(f"dragged: {docker.controller.previews} previews, {docker.controller.renders} renders")
     wait(2.0)
     out = Path(os.environ["SSN_FIGURE_OUT"])
     QApplication.primaryScreen().grabWindow(0).save(str(out))
