@@ -34,6 +34,19 @@ def texel_weights(h: int) -> np.ndarray:
     return (band[:, None] * np.diff(azimuth)[None, :]).astype(np.float64)
 
 
+CONCENTRATED_TEXELS = 16  # a small light's energy lies in this many brightest texels of the 16 x 32 ELM
+
+
+def light_concentration(elms: np.ndarray) -> np.ndarray:
+    """The share of each ELM's (n, h, 2h) light (radiance times W_t) in its ``CONCENTRATED_TEXELS`` brightest
+    texels: near 1 for one or two small lights, about 0.1 for a broad sky; 0 for a dark map."""
+    elms = np.maximum(np.asarray(elms, np.float64), 0.0)
+    light = (elms * texel_weights(elms.shape[1])).reshape(len(elms), -1)
+    top = -np.partition(-light, CONCENTRATED_TEXELS - 1, axis=1)[:, :CONCENTRATED_TEXELS]
+    total = light.sum(axis=1)
+    return np.where(total > 0, top.sum(axis=1) / np.maximum(total, 1e-300), 0.0)
+
+
 def direction(elevation: np.ndarray, azimuth: np.ndarray) -> np.ndarray:
     """Unit vectors (..., 3) in the camera basis (right, up, forward)."""
     elevation, azimuth = np.broadcast_arrays(elevation, azimuth)

@@ -322,6 +322,12 @@ def model_card(card: dict, attribution: list[dict], command: str) -> str:
             f"- Output floor {card['output_floor']}: the engine maps s to (s - floor) / (1 - floor), clipped "
             "(removes the network's faint noise; chosen on the validation split, docs/benchmark.md)."
         )
+    if "output_floor_small_lights" in card:
+        lines.append(
+            f"- Output floor {card['output_floor_small_lights']} for one or two small lights, blended in as the "
+            "light map's energy concentrates in its 16 brightest texels (a hard shadow has no faint tails; "
+            "onnx_ssn.floor_for)."
+        )
     if card.get("mirror_average"):
         lines.append(
             "- Mirror-averaged graphs: each runs its network on the input and on its mirror image (frames "
@@ -431,6 +437,12 @@ def parse_args(argv: list[str] | None = None) -> argparse.Namespace:
         help="model.json output_floor: the engine removes shadow values below it (evaluate --floor)",
     )
     p.add_argument(
+        "--floor-small-lights",
+        type=float,
+        default=None,
+        help="model.json output_floor_small_lights: the floor for one or two small lights (default: --floor)",
+    )
+    p.add_argument(
         "--mirror-average",
         action="store_true",
         help="export each network as training.model.MirrorAverage (twice the compute, mirror-symmetric)",
@@ -469,6 +481,8 @@ def main(argv: list[str] | None = None) -> int:
         "output_floor": args.floor,
         "mirror_average": args.mirror_average,
     }
+    if args.floor_small_lights is not None:
+        card["output_floor_small_lights"] = args.floor_small_lights
     report = {}
     for module, ck_paths in (("aop", args.aop), ("sr", [args.sr])):
         if module == "aop" and reused:

@@ -7,7 +7,10 @@ A model folder holds ``model.json`` and the two graphs (docs/engine.md, "Model f
   (:meth:`ssn_engine.methods.geometric.GeometricCard.card_shadows`, traced with the camera input when given)
 The ELM goes in normalised by :func:`ssn_engine.hemisphere.network_elm`.
 ``model.json`` may set ``output_floor``: shadow values below it are the network's
-residual noise and are removed by :func:`apply_floor` (chosen on the validation split).
+residual noise and are removed by :func:`apply_floor` (chosen on the validation split);
+``output_floor_small_lights``, if set, is the floor for light maps whose light is
+concentrated in a few texels (one or two small lights: a hard-edged shadow and no
+faint tails), blended in by :func:`floor_for` (docs/training.md, "The output floor").
 Frames are N x N (N = 256); a model trained at another R is fed resampled frames.
 """
 
@@ -20,7 +23,7 @@ from typing import TYPE_CHECKING
 import numpy as np
 
 from ..frames import resample_frames
-from ..hemisphere import NETWORK_SHAPE, network_elm
+from ..hemisphere import NETWORK_SHAPE, light_concentration, network_elm
 from .base import check_batch
 from .geometric import GeometricCard, camera_at
 
@@ -47,6 +50,17 @@ def apply_floor(shadow: np.ndarray, floor: float) -> np.ndarray:
     if floor <= 0.0:
         return np.clip(shadow, 0.0, 1.0)
     return np.clip((shadow - np.float32(floor)) / np.float32(1.0 - floor), 0.0, 1.0)
+
+
+SMALL_LIGHTS = (0.2, 0.7)  # light concentration from which the small-light floor blends in, and where it is whole
+
+
+def floor_for(elms: np.ndarray, broad: float, small_lights: float) -> np.ndarray:
+    """The output floor (n,) for each ELM: ``broad`` for a sky-like map, ``small_lights`` for one or two small
+    lights, linear in :func:`ssn_engine.hemisphere.light_concentration` between ``SMALL_LIGHTS``."""
+    lo, hi = SMALL_LIGHTS
+    share = np.clip((light_concentration(elms) - lo) / (hi - lo), 0.0, 1.0)
+    return broad + (small_lights - broad) * share
 
 
 def _session(path: Path, role: str) -> ort.InferenceSession:
@@ -101,10 +115,14 @@ class OnnxSSN:
         r = meta.get("resolution")
         if not isinstance(r, int) or r < 16 or r % 16:
             raise ModelError(f"{card}: resolution must be a multiple of 16, got {r!r}")
-        floor = meta.get("output_floor", 0.0)
-        if not isinstance(floor, (int, float)) or not 0.0 <= floor < 0.5:
-            raise ModelError(f"{card}: output_floor must be a number in [0, 0.5), got {floor!r}")
-        self.meta, self.model_resolution, self.output_floor = meta, r, float(floor)
+        floors = {
+            key: meta.get(key, meta.get("output_floor", 0.0)) for key in ("output_floor", "output_floor_small_lights")
+        }
+        for key, floor in floors.items():
+            if isinstance(floor, bool) or not isinstance(floor, (int, float)) or not 0.0 <= floor < 0.5:
+                raise ModelError(f"{card}: {key} must be a number in [0, 0.5), got {floor!r}")
+        self.meta, self.model_resolution = meta, r
+        self.output_floor, self.output_floor_small_lights = (float(floors[k]) for k in floors)
         self._aop = _session(model_dir / meta.get("aop", "aop.onnx"), "aop")
         self._sr = _session(model_dir / meta.get("sr", "sr.onnx"), "sr")
         takes_card = "card" in {i.name for i in self._sr.get_inputs()}
@@ -149,6 +167,8 @@ class OnnxSSN:
         if self.card is not None:
             feeds["card"] = self.card.card_shadows(masks, elms, cameras)[:, None]
         s = _run(self._sr, "shadow", feeds)[:, 0]
-        s = apply_floor(resample_frames(s, self.resolution), self.output_floor)
+        floors = floor_for(elms, self.output_floor, self.output_floor_small_lights)
+        s = resample_frames(s, self.resolution)
+        s = np.stack([apply_floor(frame, float(f)) for frame, f in zip(s, floors, strict=True)])
         s[np.asarray(elms).max(axis=(1, 2)) <= 0] = 0.0  # no light, no shadow (conventions)
         return s

@@ -14,7 +14,10 @@ from onnx import TensorProto, helper  # noqa: E402
 
 from ssn_engine import api  # noqa: E402
 from ssn_engine.framing import frame_alpha  # noqa: E402
+from ssn_engine.hemisphere import render_light_map  # noqa: E402
+from ssn_engine.light_map import preset  # noqa: E402
 from ssn_engine.methods import GeometricCard, ModelError, OnnxSSN, load_method  # noqa: E402
+from ssn_engine.methods.onnx_ssn import floor_for  # noqa: E402
 
 OPSET = 13
 
@@ -137,6 +140,27 @@ def test_output_floor_removes_faint_values_and_keeps_full_shadow(tmp_path, monke
     assert np.allclose(f[inside], (s[inside] - 0.1) / 0.9, atol=1e-6)
 
 
+def test_one_small_light_gets_its_own_floor_and_a_broad_sky_the_general_one(tmp_path, mask):
+    """A sun's shadow is hard-edged with no faint tails, so its faint values are the network's haze: the
+    small-light floor removes more of them; a broad sky's faint tails are real and keep the lower floor."""
+    card = _card(256, output_floor=0.02, output_floor_small_lights=0.1)
+    method = OnnxSSN(make_model_dir(tmp_path / "m", 256, card))
+    masks = np.stack([mask, mask])
+    ao = np.full_like(masks, 0.95)  # 1 - ao = 0.05 everywhere: between the two floors
+    sky = render_light_map(preset("overcast"), 16)
+    sun = render_light_map(preset("high-sun"), 16)
+    s = method.render(masks, ao, np.stack([sky, sun]))
+    background = masks[0] == 0
+    assert np.allclose(s[0][background], (0.05 - 0.02) / 0.98, atol=1e-6)  # the sky: the general floor
+    assert not s[1][background].any()  # the sun: its faint values removed
+    assert np.allclose(s[:, masks[0] == 1], 1.0)  # full shadow stays full
+    floors = floor_for(np.stack([sky, render_light_map(preset("softbox"), 16), sun]), 0.02, 0.1)
+    assert floors[0] == 0.02 and 0.02 < floors[1] < 0.1 and floors[2] == pytest.approx(0.1)
+    assert (
+        OnnxSSN(make_model_dir(tmp_path / "old", 256, _card(256, output_floor=0.03))).output_floor_small_lights == 0.03
+    )
+
+
 def test_predict_frames_uses_the_installed_model(tmp_path, monkeypatch, mask):
     folder = make_model_dir(tmp_path / "m", 128)
     monkeypatch.setenv("SSN_SHADOW_MODEL_DIR", str(folder))
@@ -204,6 +228,8 @@ def test_graphs_named_in_the_card(tmp_path, monkeypatch, mask):
         (json.dumps(_card("256")), "resolution"),
         (json.dumps(_card(256, output_floor=0.7)), "output_floor"),
         (json.dumps(_card(256, output_floor="0.01")), "output_floor"),
+        (json.dumps(_card(256, output_floor_small_lights=0.5)), "output_floor_small_lights"),
+        (json.dumps(_card(256, output_floor_small_lights=True)), "output_floor_small_lights"),
     ],
 )
 def test_wrong_model_card(tmp_path, monkeypatch, card_text, fragment):
