@@ -325,8 +325,8 @@ def model_card(card: dict, attribution: list[dict], command: str) -> str:
     if "output_floor_small_lights" in card:
         lines.append(
             f"- Output floor {card['output_floor_small_lights']} for one or two small lights, blended in as the "
-            "light map's energy concentrates in its 16 brightest texels (a hard shadow has no faint tails; "
-            "onnx_ssn.floor_for)."
+            "light map's energy concentrates in its 16 brightest texels (a hard shadow has no faint tails, so "
+            "faint values there are haze; onnx_ssn.floor_for; chosen on the validation split, docs/training.md)."
         )
     if card.get("mirror_average"):
         lines.append(
