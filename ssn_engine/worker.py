@@ -12,8 +12,8 @@ token.
 from __future__ import annotations
 
 import collections
-import dataclasses
 import ctypes
+import dataclasses
 import hmac
 import itertools
 import os
@@ -216,14 +216,15 @@ class Worker:
         canvas scaled down (its aspect kept within a pixel, as a host's thumbnail rounds it)."""
         cw, ch = s.framing.canvas_width, s.framing.canvas_height
         factor = width / cw
-        scaled = s.framing.scaled(factor)
-        if factor > 1.0 or abs(scaled.canvas_height - height) > 1 or min(width, height) < 1:
+        if not 0 < factor <= 1.0 or height < 1 or abs(s.framing.scaled(factor).canvas_height - height) > 1:
             raise RequestError(
                 "BadRequest",
                 f"background: {width} x {height}, but the cutout is {cw} x {ch}: send the canvas, or the canvas "
                 "scaled down with its aspect ratio",
             )
-        return s.framing if factor == 1.0 and height == ch else dataclasses.replace(scaled, canvas_height=height)
+        if factor == 1.0 and height == ch:
+            return s.framing
+        return dataclasses.replace(s.framing.scaled(factor), canvas_height=height)
 
     def release(self, header: dict, buffers: dict) -> tuple[dict, dict]:
         key = header.get("cutout")
