@@ -216,7 +216,8 @@ class Worker:
         canvas scaled down (its aspect kept within a pixel, as a host's thumbnail rounds it)."""
         cw, ch = s.framing.canvas_width, s.framing.canvas_height
         factor = width / cw
-        if not 0 < factor <= 1.0 or height < 1 or abs(s.framing.scaled(factor).canvas_height - height) > 1:
+        scaled = s.framing.scaled(factor) if 0 < factor <= 1.0 else None
+        if scaled is None or height < 1 or abs(scaled.canvas_height - height) > 1:
             raise RequestError(
                 "BadRequest",
                 f"background: {width} x {height}, but the cutout is {cw} x {ch}: send the canvas, or the canvas "
@@ -224,7 +225,7 @@ class Worker:
             )
         if factor == 1.0 and height == ch:
             return s.framing
-        return dataclasses.replace(s.framing.scaled(factor), canvas_height=height)
+        return dataclasses.replace(scaled, canvas_height=height)
 
     def release(self, header: dict, buffers: dict) -> tuple[dict, dict]:
         key = header.get("cutout")

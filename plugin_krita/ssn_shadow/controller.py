@@ -53,6 +53,15 @@ class RenderJob:
         return RenderJob(self.new_step or other.new_step, self.reread or other.reread, self.started or other.started)
 
 
+@dataclass
+class Drag:
+    """A light drag in progress: the preview's background ((width, height, RGBA), None when there is no
+    preview) and whether the drag has written its layer yet (at a rest)."""
+
+    background: tuple[int, int, bytes] | None
+    wrote: bool = False
+
+
 class ShadowController(QObject):
     """State of one docker and the requests that realise it."""
 
@@ -85,7 +94,7 @@ class ShadowController(QObject):
         self.renders = 0
         self.previews = 0
         self._layer_map: Any = None  # the light map of the last layer render sent
-        self._drag: dict | None = None  # a previewed drag: {"background": (w, h, rgba), "wrote": bool}
+        self._drag: Drag | None = None
         self._preview_in_flight = False
         self._preview_pending = False
         self._pause = QTimer(self)
@@ -115,8 +124,8 @@ class ShadowController(QObject):
         self._pause.stop()
         self.light_map = light_map.copy()
         if drag is not None:  # the drag's layer: its undo step unless a rest already wrote one
-            if light_map != self._layer_map or not drag["wrote"]:
-                self.lights_edited(stroke_started=stroke_started or not drag["wrote"])
+            if light_map != self._layer_map or not drag.wrote:
+                self.lights_edited(stroke_started=stroke_started or not drag.wrote)
             return
         if light_map == self._layer_map and not stroke_started:
             return
@@ -136,7 +145,7 @@ class ShadowController(QObject):
                     background = self.host.preview_background(self.source, PREVIEW_SIDE)
                 except Exception as exc:  # the UI boundary: no preview, the layer still follows
                     self.status.emit("warning", f"No live preview: {type(exc).__name__}: {exc}")
-            self._drag = {"background": background, "wrote": False}
+            self._drag = Drag(background)
         self._pause.start(PAUSE_MS)
         self._request_preview()
 
@@ -174,18 +183,18 @@ class ShadowController(QObject):
 
     def _drag_rested(self) -> None:
         if self._drag is not None and self.light_map != self._layer_map:
-            self.lights_edited(stroke_started=not self._drag["wrote"])
-            self._drag["wrote"] = True
+            self.lights_edited(stroke_started=not self._drag.wrote)
+            self._drag.wrote = True
 
     def _request_preview(self) -> None:
         drag, source = self._drag, self.source
-        if drag is None or drag["background"] is None or source is None or self.cutout is None:
+        if drag is None or drag.background is None or source is None or self.cutout is None:
             return
         if self._preview_in_flight:
             self._preview_pending = True  # latest wins: sent with the map of the moment when the reply comes
             return
         self._preview_in_flight, self._preview_pending = True, False
-        width, height, rgba = drag["background"]
+        width, height, rgba = drag.background
         params: dict[str, Any] = {
             "cutout": self.cutout,
             "light_map": self.light_map.to_dict(),

@@ -20,7 +20,6 @@ is a copy of the old layer, which keeps Multiply without that command.
 from __future__ import annotations
 
 import hashlib
-import time
 from dataclasses import dataclass
 from typing import TYPE_CHECKING
 
@@ -181,19 +180,18 @@ def preview_background(document: Document, source_node: Node, side: int) -> tupl
 
     width, height = preview_size(document.width(), document.height(), side)
     shadow = shadow_of(source_node)
-    clone = document.clone() if shadow is not None else None
-    try:
-        shown = document
-        if clone is not None and shadow is not None:
+    if shadow is None:
+        image = document.projection(0, 0, document.width(), document.height())
+    else:
+        clone = document.clone()
+        try:
             node = clone.rootNode()
             for i in _path_of(shadow):
                 node = node.childNodes()[i]
             node.setVisible(False)
             clone.refreshProjection()
-            shown = clone
-        image = shown.projection(0, 0, document.width(), document.height())
-    finally:
-        if clone is not None:
+            image = clone.projection(0, 0, document.width(), document.height())
+        finally:
             clone.close()
     small = image.scaled(
         width, height, Qt.AspectRatioMode.IgnoreAspectRatio, Qt.TransformationMode.SmoothTransformation
@@ -215,7 +213,6 @@ class LayerWriter:
     """Writes shadow layers into Krita documents, undoably where Krita allows it."""
 
     def __init__(self) -> None:
-        self.last_timing: dict[str, float] = {}
         self._rects: dict[str, tuple[int, int, int, int]] = {}
 
     def write(
@@ -269,17 +266,12 @@ class LayerWriter:
             node.setPixelData(bytes(w * h * ps), x, y, w, h)
 
     def _write_in_place(self, document: Document, node: Node, pixels: bytes, rect: tuple[int, int, int, int]) -> None:
-        t0 = time.perf_counter()
         self._clear(node, self._rect_of(node))
-        t1 = time.perf_counter()
         x, y, w, h = rect
         if w > 0 and h > 0:
             node.setPixelData(pixels, x, y, w, h)
         self._rects[node_id(node)] = rect
-        t2 = time.perf_counter()
         document.refreshProjection()
-        t3 = time.perf_counter()
-        self.last_timing = {"clear": 1e3 * (t1 - t0), "write": 1e3 * (t2 - t1), "refresh": 1e3 * (t3 - t2)}
 
     def _insert_below(self, document: Document, source_node: Node, node: Node) -> str:
         parent = _parent(source_node)
