@@ -19,6 +19,13 @@ MAX_DIMS = 4
 CHUNK = 1 << 20  # bytes read at once
 
 
+def preview_size(width: int, height: int, limit: int) -> tuple[int, int, float]:
+    """The size of a ``preview`` command's background for a canvas, and its scale: the longer side at most
+    ``limit``, the aspect kept as the worker expects (each side rounded)."""
+    scale = min(1.0, limit / max(width, height, 1))
+    return max(1, round(width * scale)), max(1, round(height * scale)), scale
+
+
 class ProtocolError(RuntimeError):
     """The stream does not hold a well-formed message. ``skip``: the buffer bytes that follow a refused header,
     where it declares them consistently enough to step over (None: unknown)."""

@@ -21,10 +21,10 @@ from gi.repository import GdkPixbuf, Gimp, GimpUi, GLib, Gtk  # noqa: E402
 
 from ssn_core import ShadowError, release, settings_from_arguments, upload_cutout  # noqa: E402
 from ssn_engine_link import client as engine_client  # noqa: E402
-from ssn_engine_link import light_editor, light_map  # noqa: E402
+from ssn_engine_link import light_editor, light_map, protocol  # noqa: E402
 from ssn_gimp_host import config_values  # noqa: E402
 from ssn_light_area import LightMapArea  # noqa: E402
-from ssn_preview import preview_size, render_preview  # noqa: E402
+from ssn_preview import PREVIEW_SIZE, render_preview  # noqa: E402
 from ssn_settings import PROCEDURE_NAME, SettingsError, editor_light_map  # noqa: E402
 
 CUSTOM = "(custom)"
@@ -45,7 +45,7 @@ class ShadowPreview:
         self._values = None
         self._timer = False
         width, height = host.image.get_width(), host.image.get_height()
-        tw, th, _ = preview_size(width, height)
+        tw, th, _ = protocol.preview_size(width, height, PREVIEW_SIZE)
         try:
             self.thumbnail = host.thumbnail(tw, th)
             self.scale = self.thumbnail.width / width

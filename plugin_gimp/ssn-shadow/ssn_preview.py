@@ -28,12 +28,6 @@ class Thumbnail:
     data: bytes
 
 
-def preview_size(width: int, height: int, limit: int = PREVIEW_SIZE) -> tuple[int, int, float]:
-    """Thumbnail width, height and scale for a canvas, the longer side at most ``limit``."""
-    scale = min(1.0, limit / max(width, height, 1))
-    return max(1, round(width * scale)), max(1, round(height * scale)), scale
-
-
 def render_preview(
     engine: Engine,
     cutout_id: str,

@@ -202,10 +202,11 @@ def test_real_worker_casts_the_shadow_away_from_the_light(real_engine, precision
 def test_dialog_preview_from_the_real_worker(real_engine, precision):
     """The dialog's preview: the worker composites the thumbnail (any cutout depth, no 8-bit cut in Python),
     the cutout hides its own shadow, and a horizon setting draws the line at the thumbnail's scale."""
-    from ssn_preview import Thumbnail, preview_size, render_preview
+    from ssn_engine_link import protocol
+    from ssn_preview import PREVIEW_SIZE, Thumbnail, render_preview
 
-    assert preview_size(1024, 512) == (384, 192, 0.375)
-    assert preview_size(100, 50) == (100, 50, 1.0)
+    assert protocol.preview_size(1024, 512, PREVIEW_SIZE) == (384, 192, 0.375)
+    assert protocol.preview_size(100, 50, PREVIEW_SIZE) == (100, 50, 1.0)
     host = FakeHost(precision)
     small = host.read_cutout(host.plan)
     thumbnail = Thumbnail(W, H, 4, bytes([230, 230, 230, 255]) * (W * H))

@@ -6,8 +6,9 @@ from pathlib import Path
 
 from PyQt5.QtCore import QEventLoop, QTimer
 
-from plugin_krita.ssn_shadow.adapters.krita_document import Source, SourceError, WriteResult, preview_size
+from plugin_krita.ssn_shadow.adapters.krita_document import Source, SourceError, WriteResult
 from plugin_krita.ssn_shadow.adapters.pixel_format import pixel_format
+from ssn_engine import protocol
 from ssn_engine.engine_config import EngineConfig
 
 REPO = Path(__file__).resolve().parents[2]
@@ -89,5 +90,5 @@ class FakeHost:
 
     def preview_background(self, source, side):
         """A mid-grey image of the document's size scaled down as Krita's adapter scales it."""
-        w, h = preview_size(self.w, self.h, side)
+        w, h, _ = protocol.preview_size(self.w, self.h, side)
         return w, h, bytes([128, 128, 128, 255]) * (w * h)

@@ -26,6 +26,7 @@ from typing import TYPE_CHECKING
 if TYPE_CHECKING:
     from krita import Document, Node
 
+from ..shared import protocol
 from .pixel_format import PixelFormat, clip_rect, extract_alpha, opaque_everywhere, pixel_format, place_rows
 
 SHADOW_PREFIX = "Shadow: "
@@ -155,12 +156,6 @@ def shadow_of(source_node: Node) -> Node | None:
     return None
 
 
-def preview_size(width: int, height: int, side: int) -> tuple[int, int]:
-    """A thumbnail's size for a canvas: the longer side at most ``side``, the aspect kept."""
-    k = min(1.0, side / max(width, height, 1))
-    return max(1, round(width * k)), max(1, round(height * k))
-
-
 def _path_of(node: Node) -> list[int]:
     """Child indices from the root down to ``node``."""
     path = []
@@ -178,7 +173,7 @@ def preview_background(document: Document, source_node: Node, side: int) -> tupl
     from PyQt5.QtCore import Qt
     from PyQt5.QtGui import QImage
 
-    width, height = preview_size(document.width(), document.height(), side)
+    width, height, _ = protocol.preview_size(document.width(), document.height(), side)
     shadow = shadow_of(source_node)
     if shadow is None:
         image = document.projection(0, 0, document.width(), document.height())
