@@ -62,8 +62,9 @@ def texel_centres(h: int) -> np.ndarray:
     return direction(e[:, None], a[None, :])
 
 
-def stratified_directions(h: int, samples: int, rng: np.random.Generator) -> np.ndarray:
-    """Cosine-distributed, stratified, jittered directions in every texel.
+def stratified_directions(h: int, samples: int, rng: np.random.Generator | None = None) -> np.ndarray:
+    """Cosine-distributed, stratified directions in every texel, jittered by ``rng`` (None: each stratum's
+    centre).
 
     Returns (h, 2h, samples, 3) in the camera basis. ``samples`` must be a
     square (k x k strata in azimuth and sin^2(elevation)); each direction then
@@ -76,8 +77,12 @@ def stratified_directions(h: int, samples: int, rng: np.random.Generator) -> np.
     elevation, azimuth = texel_edges(h)
     q_hi, q_lo = np.sin(elevation[:-1]) ** 2, np.sin(elevation[1:]) ** 2
     strata = np.arange(k)
-    sq = (strata[:, None] + rng.random((h, 2 * h, k, k))) / k  # axis 2: sin^2(e) stratum
-    sa = (strata[None, :] + rng.random((h, 2 * h, k, k))) / k  # axis 3: azimuth stratum
+
+    def jitter() -> np.ndarray | float:
+        return 0.5 if rng is None else rng.random((h, 2 * h, k, k))
+
+    sq = (strata[:, None] + jitter()) / k  # axis 2: sin^2(e) stratum
+    sa = (strata[None, :] + jitter()) / k  # axis 3: azimuth stratum
     q = q_lo[:, None, None, None] + sq * (q_hi - q_lo)[:, None, None, None]
     a = azimuth[None, :-1, None, None] + sa * np.diff(azimuth)[None, :, None, None]
     e = np.arcsin(np.sqrt(np.clip(q, 0.0, 1.0)))

@@ -1,4 +1,5 @@
-"""Make the README's pictures: the demo composite, the cutout under four contrasting lights, every preset.
+"""Make the README's pictures: the demo composite, the cutout under four contrasting lights, every preset, and a
+low sun's long shadow on a wide canvas.
 
 Run: python tools/readme_figures.py [--out docs/img]
 """
@@ -8,13 +9,14 @@ from __future__ import annotations
 import argparse
 from pathlib import Path
 
+import numpy as np
 from PIL import Image, ImageDraw
 
 from ssn_engine.compositing import composite_shadow, over
 from ssn_engine.cli import DEMO_PRESET
-from ssn_engine.light_map import PRESETS, preset
+from ssn_engine.light_map import PRESETS, GaussianLight, LightMap, preset
 from ssn_engine.light_map_picture import map_rgb
-from ssn_engine.methods import load_method
+from ssn_engine.methods import ShadowMethod, load_method
 from ssn_engine.samples import pawn_cutout, studio_background
 from ssn_engine.session import ShadowSession
 
@@ -45,7 +47,33 @@ def main() -> None:
         tiles[name] = tile
     sheet(list(tiles.values()), out / "presets.png")
     sheet([tiles[name] for name in CONTRAST], out / "follow_the_light.png")
-    print(f"wrote demo.png, presets.png and follow_the_light.png in {out} with the {loaded.method.name} method")
+    long_shadows(cutout, loaded.method).save(out / "long_shadow.png", optimize=True)
+    print(
+        f"wrote demo.png, presets.png, follow_the_light.png and long_shadow.png in {out} with the "
+        f"{loaded.method.name} method"
+    )
+
+
+def long_shadows(cutout: np.ndarray, method: ShadowMethod, elevation: float = 8.0) -> Image.Image:
+    """The cutout in the middle of a canvas three times as wide under a sun ``elevation`` degrees up on the
+    left, then on the right: shadows several heights long, continued past the network's frame."""
+    h, w = cutout.shape[:2]
+    canvas = np.zeros((h, 3 * w, 4), np.uint8)
+    canvas[:, w : 2 * w] = cutout
+    background = studio_background((3 * w, h))
+    session = ShadowSession(canvas[..., 3], method)
+    rows = []
+    for u, side in ((0.25, "left"), (0.75, "right")):
+        light = LightMap([GaussianLight(u, 1.0 - elevation / 90.0, 0.002, 1.0)])
+        shadow = session.render(light).full_canvas(3 * w, h)
+        row = Image.fromarray(over(composite_shadow(background, shadow, opacity=0.85), canvas)).crop((0, 150, 3 * w, h))
+        row = row.resize((row.width * 2 // 5, row.height * 2 // 5))
+        ImageDraw.Draw(row).text((8, 6), f"sun {elevation:g} degrees up, {side}", fill=(20, 20, 20))
+        rows.append(row)
+    page = Image.new("RGB", (rows[0].width, sum(r.height for r in rows)))
+    for i, row in enumerate(rows):
+        page.paste(row, (0, i * row.height))
+    return page
 
 
 def sheet(tiles: list[Image.Image], path: Path, cols: int = 4) -> None:

@@ -25,15 +25,22 @@ import numpy as np
 from PIL import Image
 
 from ..camera import Camera, camera_for_span, fov_from_focal
-from ..hemisphere import texel_centres, texel_weights
+from ..hemisphere import stratified_directions, texel_centres, texel_weights
 from .base import check_batch
 
 INTERNAL = 128  # the card is traced at this resolution, then upsampled
 TURN = 0.5  # share of the way the card turns towards each light
 CHUNK = 64  # directions traced at once (bounds memory)
+WIDE_CHUNK = 16  # directions traced at once on the wider grid, whose many points make larger chunks slower
 CACHED_CARDS = 2  # a card traced for every texel holds 512 x P float32 (about 30 MB)
 NEGLIGIBLE = 1e-4  # share of a light map's weight whose texels a card shadow may leave out
 EXTENDED_TEXELS = 64  # at most this many texels traced beyond the frame per light map
+# Beyond the frame, a texel holding at least AREA_SHARE of the light is traced along a 3 x 3 grid of directions
+# over its area (AREA_SAMPLES): one direction per texel leaves a small light's long shadow as separate streaks, one
+# per texel, 11 degrees apart. Broad lights, whose texels each hold less, blend their streaks by themselves.
+AREA_SAMPLES = 9
+AREA_SHARE = 0.05
+WIDE_KEPT = 256  # texel shadows kept per card on the wider grid (about 100 kB each)
 
 
 def _resize(image: np.ndarray, size: int) -> np.ndarray:
@@ -46,13 +53,19 @@ class _Card:
     """The card and camera for one mask at the internal resolution."""
 
     def __init__(
-        self, mask: np.ndarray, directions: np.ndarray, weights: np.ndarray, camera: tuple[float, float] | None = None
+        self,
+        mask: np.ndarray,
+        directions: np.ndarray,
+        area_directions: np.ndarray,
+        weights: np.ndarray,
+        camera: tuple[float, float] | None = None,
     ) -> None:
         m = mask.shape[0]
         self.mask, self.directions, self.weights = mask, directions, weights
+        self.area_directions = area_directions  # (T, S, 3): directions over each texel's area
         self._ao: np.ndarray | None = None
         self._grid: tuple | None = None  # (margin, cell), ground points, valid: the wider grid of ground_grid
-        self._wide: dict[int, np.ndarray] = {}  # texel -> its hard shadow on the wider grid
+        self._wide: dict[tuple[int, bool], np.ndarray] = {}  # (texel, over its area) -> its shadow on the wider grid
         rows = np.flatnonzero((mask > 0.05).any(axis=1))
         if rows.size == 0:
             self.empty = True
@@ -66,11 +79,20 @@ class _Card:
         self.lowest_centre = float(solid[-1] if solid.size else rows[-1]) + 0.5
         horizon, focal = camera if camera is not None else (None, None)
         self.camera, self.height = camera_for_span(m, top, base, horizon, focal)
+        self.x_range = self._x_range(np.flatnonzero((mask > 0).any(axis=0)))
         ground, self.valid = self.camera.ground_points()
         self.ground = ground[self.valid].astype(np.float32)  # (P, 3)
         self._padded = np.pad(mask.astype(np.float32), 1)  # bilinear taps never leave it
         self.bases = np.zeros((len(directions), len(self.ground)), np.float32)
         self.traced = np.zeros(len(directions), bool)
+
+    def _x_range(self, cols: np.ndarray) -> tuple[float, float]:
+        """The card's horizontal coordinates x that can project onto the mask's columns ``cols`` (bilinear taps
+        included) at any height on it: col = N/2 + f x / depth, with depth linear in the height."""
+        cam, half = self.camera, 0.5 * self.mask.shape[0]
+        depths = [(h - cam.centre[1]) * cam.view[1] - cam.centre[2] * cam.view[2] for h in (0.0, 1.001 * self.height)]
+        xs = [(c - half) * d / cam.focal for c in (cols[0] - 1.0, cols[-1] + 2.0) for d in depths]
+        return float(min(xs)), float(max(xs))
 
     def _sample(self, col: np.ndarray, row: np.ndarray) -> np.ndarray:
         """The mask bilinearly interpolated at continuous (col, row) points (pixel centres at k + 0.5); 0 outside."""
@@ -100,13 +122,26 @@ class _Card:
             self._grid = ((margin, cell), ground[valid].astype(np.float32), valid)
         return self._grid[1], self._grid[2]
 
-    def wide_bases(self, texels: np.ndarray, ground: np.ndarray) -> np.ndarray:
-        """The hard shadows (k, P) of ``texels`` on the wider grid's ``ground``, each traced once and kept."""
-        todo = [t for t in texels if t not in self._wide]
-        if todo:
-            for t, row in zip(todo, self.occlusion(self.directions[todo], ground), strict=True):
-                self._wide[t] = row
-        return np.stack([self._wide[t] for t in texels])
+    def wide_bases(self, texels: np.ndarray, ground: np.ndarray, area: np.ndarray) -> np.ndarray:
+        """The hard shadows (k, P) of ``texels`` on the wider grid's ``ground``, each traced once and kept: along
+        the texel's centre direction, or where ``area`` (k,) is set the mean along its ``area_directions``."""
+        keys = [(int(t), bool(a)) for t, a in zip(texels, area, strict=True)]
+        for over_area in (False, True):
+            todo = [t for t, a in keys if a == over_area and (t, a) not in self._wide]
+            if not todo:
+                continue
+            dirs = self.area_directions[todo] if over_area else self.directions[todo][:, None]
+            per_chunk = max(1, WIDE_CHUNK // dirs.shape[1])  # texels traced at once: their (k S, P) stays in cache
+            for i in range(0, len(todo), per_chunk):
+                part = dirs[i : i + per_chunk]
+                hard = self.occlusion(part.reshape(-1, 3), ground).reshape(len(part), part.shape[1], -1)
+                for t, row in zip(todo[i : i + per_chunk], hard.mean(axis=1), strict=True):
+                    self._wide[t, over_area] = row
+        for k in keys:  # most recently used last
+            self._wide[k] = self._wide.pop(k)
+        while len(self._wide) > WIDE_KEPT:  # a light map needs at most EXTENDED_TEXELS of them
+            del self._wide[next(iter(self._wide))]
+        return np.stack([self._wide[k] for k in keys])
 
     def occlusion(self, directions: np.ndarray, ground: np.ndarray | None = None) -> np.ndarray:
         """Hard-shadow occlusion (T, P) of the card turned towards each world direction (T, 3), on the frame's
@@ -133,7 +168,8 @@ class _Card:
         gx, gz = g[None, :, 0], g[None, :, 2]
         x = (gx * dz[:, None] - gz * dx[:, None]) / det[:, None]
         h = (ax[:, None] * gz - az[:, None] * gx) / det[:, None]
-        hit = (h >= 0) & (h <= self.height * 1.001)
+        # Only rays through the card's bounding box can hit it: fewer points to project and sample.
+        hit = (h >= 0) & (h <= self.height * 1.001) & (x >= self.x_range[0]) & (x <= self.x_range[1])
         out = np.zeros(hit.shape, np.float32)
         col, row = self.camera.project_xyz(x[hit], h[hit], np.zeros(1, np.float32))
         out[hit] = self._sample(col, np.minimum(row, self.lowest_centre))
@@ -196,7 +232,9 @@ class GeometricCard:
 
     def __init__(self, resolution: int = 256, internal: int = INTERNAL) -> None:
         self.resolution, self.internal = resolution, internal
-        self._dirs = Camera(internal, 0.5).to_world(texel_centres(16)).reshape(-1, 3)
+        to_world = Camera(internal, 0.5).to_world
+        self._dirs = to_world(texel_centres(16)).reshape(-1, 3)
+        self._area_dirs = to_world(stratified_directions(16, AREA_SAMPLES)).reshape(-1, AREA_SAMPLES, 3)
         self._weights = texel_weights(16).ravel()
         self._cache: collections.OrderedDict[bytes, _Card] = collections.OrderedDict()
 
@@ -212,6 +250,7 @@ class GeometricCard:
             self._cache[key] = _Card(
                 _resize(mask, self.internal),
                 self._dirs,
+                self._area_dirs,
                 self._weights,
                 None if camera is None else (camera[0] * scale, camera[1] * scale),
             )
@@ -252,7 +291,8 @@ class GeometricCard:
         if ground is None or w.sum() <= 0:  # ground is None: the card is empty
             return out
         keep = brightest(w, 0.995, EXTENDED_TEXELS)
-        out[valid] = np.einsum("t,tp->p", (w[keep] / w[keep].sum()).astype(np.float32), card.wide_bases(keep, ground))
+        share = w[keep] / w[keep].sum()
+        out[valid] = np.einsum("t,tp->p", share.astype(np.float32), card.wide_bases(keep, ground, share >= AREA_SHARE))
         return out
 
     def predict_ao(self, masks: np.ndarray, cameras: np.ndarray | None = None) -> np.ndarray:

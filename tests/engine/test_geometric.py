@@ -7,7 +7,9 @@ import pytest
 from engine_helpers import drawn_alpha, elm_for, object_geometry, shadow_centroid
 
 from ssn_engine.ao_edit import apply_edits
+from ssn_engine.camera import Camera
 from ssn_engine.framing import frame_alpha
+from ssn_engine.hemisphere import stratified_directions, texel_weights
 from ssn_engine.methods import GeometricCard
 
 
@@ -176,3 +178,20 @@ def test_other_resolution(post_frame):
     _, base, _ = object_geometry(mask)
     assert s.shape == (128, 128)
     assert shadow_centroid(s, mask)[2] > base
+
+
+@pytest.mark.parametrize("u, v", [(0.25, 0.92), (0.7, 0.88), (0.4, 0.8)])
+def test_a_small_lights_long_shadow_beyond_the_frame_is_smooth(geometric, pawn_frame, u, v):
+    """Past the frame a texel holding much of a small light is traced over its area, not along one direction
+    (which leaves a low sun's long shadow as separate streaks 11 degrees apart): close to the texels' exact
+    area-lit shadows (64 directions each)."""
+    elm = elm_for(u, v)
+    got = geometric.extended_shadow(pawn_frame, elm)
+    card = geometric.card(pawn_frame)
+    ground, valid = card.ground_grid(1.0, 4.0 * geometric.internal / 256)
+    dirs = Camera(geometric.internal, 0.5).to_world(stratified_directions(16, 64)).reshape(512, 64, 3)
+    w = elm.ravel() * texel_weights(16).ravel()
+    lit = np.flatnonzero(w > 1e-4 * w.sum())
+    truth = np.zeros(valid.shape, np.float32)
+    truth[valid] = (w[lit] / w[lit].sum()) @ np.stack([card.occlusion(dirs[t], ground).mean(axis=0) for t in lit])
+    assert np.sqrt(np.mean((got - truth) ** 2)) < 0.12 * np.sqrt(np.mean(truth**2))

@@ -100,3 +100,19 @@ def test_sun_shadow_length_on_held_out_shapes():
     error = float(np.median([g["direction_error"] for g in geometry]))
     assert 0.7 <= ratio <= 1.4, ratio
     assert error <= 20.0, error
+
+
+@pytest.mark.parametrize("name", ["pawn", "post"])
+@pytest.mark.parametrize("u", [0.25, 0.75])
+def test_a_long_shadow_has_no_seam_where_the_network_frame_ends(wide_canvases, name, u):
+    """Past the frame's border the card continues the network's shadow; where the two disagree the join is a
+    gradual cross-fade, not a step (a straight edge across the shadow at the frame's border)."""
+    alpha = wide_canvases[name]
+    session = ShadowSession(alpha, api.default_method().method)
+    framing = session.framing
+    shadow = session.render(sun_map(u, 10.0)).full_canvas(alpha.shape[1], alpha.shape[0])
+    for edge in (0, framing.n):
+        border = framing.to_canvas(edge, 0)[0]
+        cols = np.round(border + np.arange(-20, 21) / framing.scale).astype(int)  # frame-pixel steps across it
+        across = shadow[:, np.clip(cols, 0, alpha.shape[1] - 1)]
+        assert np.abs(np.diff(across, axis=1)).max() < 0.03
