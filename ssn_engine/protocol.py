@@ -194,9 +194,10 @@ class MessageDecoder:
             if len(self._buf) < sum(s.nbytes for s in specs):
                 return out
             buffers, pos = {}, 0
-            for spec in specs:
-                buffers[spec.name] = Buffer(spec.dtype, spec.shape, bytes(self._buf[pos : pos + spec.nbytes]))
-                pos += spec.nbytes
+            with memoryview(self._buf) as view:  # one copy per buffer (a bytearray slice would make two)
+                for spec in specs:
+                    buffers[spec.name] = Buffer(spec.dtype, spec.shape, bytes(view[pos : pos + spec.nbytes]))
+                    pos += spec.nbytes
             del self._buf[:pos]
             self._pending = None
             out.append((header, buffers))

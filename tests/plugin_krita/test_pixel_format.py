@@ -8,6 +8,7 @@ from plugin_krita.ssn_shadow.adapters.pixel_format import (
     extract_alpha,
     pixel_format,
     place_rows,
+    rect_difference,
     shadow_color,
 )
 
@@ -72,3 +73,23 @@ def test_opaque_everywhere_in_every_depth(dtype, fmt):
     half_transparent = struct.pack(f"<{100}{fmt}", *([one] * 99 + [one * 0.4 if fmt in "ef" else int(one * 0.4)]))
     assert opaque_everywhere(opaque, dtype)
     assert not opaque_everywhere(holed, dtype) and not opaque_everywhere(half_transparent, dtype)
+
+
+def _cells(rect):
+    x, y, w, h = rect
+    return {(i, j) for i in range(x, x + w) for j in range(y, y + h)}
+
+
+@pytest.mark.parametrize(
+    "new",
+    [(2, 2, 3, 3), (0, 0, 6, 5), (-3, 1, 5, 2), (4, -2, 9, 3), (7, 7, 2, 2), (1, 1, 0, 4), (-1, -1, 9, 9)],
+)
+def test_a_rewritten_shadow_clears_only_the_old_pixels_it_does_not_cover(new):
+    """The Krita layer writer clears the previous shadow's rect minus the new one (the new pixels overwrite the
+    rest): exactly those pixels, each once."""
+    old = (0, 0, 6, 5)
+    parts = rect_difference(old, new)
+    cells = [c for p in parts for c in _cells(p)]
+    assert len(cells) == len(set(cells))  # no pixel written twice
+    assert set(cells) == _cells(old) - _cells(new)
+    assert all(w > 0 and h > 0 for _x, _y, w, h in parts)

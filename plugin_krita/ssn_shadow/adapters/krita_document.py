@@ -27,7 +27,16 @@ if TYPE_CHECKING:
     from krita import Document, Node
 
 from ..shared import protocol
-from .pixel_format import PixelFormat, clip_rect, extract_alpha, opaque_everywhere, pixel_format, place_rows
+from .pixel_format import (
+    PixelFormat,
+    Rect,
+    clip_rect,
+    extract_alpha,
+    opaque_everywhere,
+    pixel_format,
+    place_rows,
+    rect_difference,
+)
 
 SHADOW_PREFIX = "Shadow: "
 
@@ -208,14 +217,14 @@ class LayerWriter:
     """Writes shadow layers into Krita documents, undoably where Krita allows it."""
 
     def __init__(self) -> None:
-        self._rects: dict[str, tuple[int, int, int, int]] = {}
+        self._rects: dict[str, Rect] = {}
 
     def write(
         self,
         document: Document,
         source_node: Node,
         pixels: bytes,
-        rect: tuple[int, int, int, int],
+        rect: Rect,
         new_step: bool,
     ) -> WriteResult:
         """Show ``pixels`` (rect x, y, w, h, in the document's pixel format) as the source's shadow.
@@ -231,7 +240,7 @@ class LayerWriter:
             # A copy keeps Multiply without the extra undo command setBlendingMode would add.
             node = existing.duplicate()
             node.setName(shadow_name(source_node.name()))
-            self._clear(node, self._rect_of(existing))
+            self._clear(node, self._rect_of(existing), rect)
         else:
             node = document.createNode(shadow_name(source_node.name()), "paintlayer")
             node.setBlendingMode("multiply")
@@ -246,7 +255,7 @@ class LayerWriter:
         document.setActiveNode(source_node)  # Krita makes an added layer active; keep the source active
         return WriteResult(node, True, notice)
 
-    def _rect_of(self, node: Node) -> tuple[int, int, int, int]:
+    def _rect_of(self, node: Node) -> Rect:
         rect = self._rects.get(node_id(node))
         if rect is None:
             b = node.bounds()
@@ -254,14 +263,16 @@ class LayerWriter:
         return rect
 
     @staticmethod
-    def _clear(node: Node, rect: tuple[int, int, int, int]) -> None:
-        x, y, w, h = rect
-        if w > 0 and h > 0:
-            ps = len(bytes(node.pixelData(0, 0, 1, 1)))
+    def _clear(node: Node, old: Rect, new: Rect) -> None:
+        """Clear the ``old`` rect of ``node`` where the ``new`` one, written next, does not cover it (the new
+        pixels overwrite the rest: on float documents a whole clear costs as much as the write)."""
+        ps = 0
+        for x, y, w, h in rect_difference(old, new):
+            ps = ps or len(bytes(node.pixelData(0, 0, 1, 1)))
             node.setPixelData(bytes(w * h * ps), x, y, w, h)
 
-    def _write_in_place(self, document: Document, node: Node, pixels: bytes, rect: tuple[int, int, int, int]) -> None:
-        self._clear(node, self._rect_of(node))
+    def _write_in_place(self, document: Document, node: Node, pixels: bytes, rect: Rect) -> None:
+        self._clear(node, self._rect_of(node), rect)
         x, y, w, h = rect
         if w > 0 and h > 0:
             node.setPixelData(pixels, x, y, w, h)

@@ -97,11 +97,33 @@ def opaque_everywhere(alpha: bytes, dtype: str) -> bool:
     return not top.translate(None, bytes(range(lo, hi + 1)))  # nothing left: every top byte in range
 
 
-def clip_rect(x: int, y: int, w: int, h: int, canvas_w: int, canvas_h: int) -> tuple[int, int, int, int]:
+Rect = tuple[int, int, int, int]  # x, y, width, height
+
+
+def clip_rect(x: int, y: int, w: int, h: int, canvas_w: int, canvas_h: int) -> Rect:
     """A rectangle clipped to the canvas (width or height 0 when outside)."""
     x0, y0 = max(0, x), max(0, y)
     x1, y1 = min(canvas_w, x + w), min(canvas_h, y + h)
     return x0, y0, max(0, x1 - x0), max(0, y1 - y0)
+
+
+def rect_difference(a: Rect, b: Rect) -> list[Rect]:
+    """The parts of rect ``a`` outside rect ``b``: at most four non-empty rects (bands above and below ``b``,
+    then left and right of it)."""
+    ax, ay, aw, ah = a
+    if aw <= 0 or ah <= 0:
+        return []
+    bx, by, bw, bh = b
+    x0, y0, x1, y1 = max(ax, bx), max(ay, by), min(ax + aw, bx + bw), min(ay + ah, by + bh)
+    if bw <= 0 or bh <= 0 or x1 <= x0 or y1 <= y0:
+        return [a]
+    parts = [
+        (ax, ay, aw, y0 - ay),
+        (ax, y1, aw, ay + ah - y1),
+        (ax, y0, x0 - ax, y1 - y0),
+        (x1, y0, ax + aw - x1, y1 - y0),
+    ]
+    return [p for p in parts if p[2] > 0 and p[3] > 0]
 
 
 def srgb_to_linear(c: float) -> float:
