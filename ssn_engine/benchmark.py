@@ -18,6 +18,7 @@ from .light_map import GaussianLight, LightMap, preset
 from .methods import GeometricCard, load_method
 from .samples import pawn_cutout
 from .session import ShadowSession
+from .worker import tune_malloc
 
 
 T = TypeVar("T")
@@ -70,7 +71,10 @@ def big_cutout(width: int = 4000, height: int = 3000) -> np.ndarray:
 
 
 def run_benchmark(repeats: int = 20, method: str = "auto") -> dict[str, np.ndarray]:
-    """Time the stages and print a table (milliseconds); returns the raw timings."""
+    """Time the stages and print a table (milliseconds); returns the raw timings. The process's allocator is
+    tuned as the worker's is (:func:`ssn_engine.worker.tune_malloc`), so canvas-sized work is timed as the
+    plug-ins get it."""
+    tune_malloc()
     loaded = load_method(method)
     m = loaded.method
     machine = f"{platform.processor() or platform.machine()}, {os.cpu_count()} cores"
