@@ -76,9 +76,7 @@ class ShadowSession:
             self._card = self._card or GeometricCard(self.method.resolution)
             card = self._card
         elm = render_light_map(light_map, NETWORK_SHAPE[0])
-        resolve = getattr(self.method, "cameras_for", None)  # a model's own reading of a blind call's camera
-        cameras = resolve(self.mask[None], self.cameras) if resolve else self.cameras
-        wide = card.extended_shadow(self.mask, elm, camera_at(cameras, 0), long_shadow.MARGIN, long_shadow.CELL)
+        wide = card.extended_shadow(self.mask, elm, camera_at(self.cameras, 0), long_shadow.MARGIN, long_shadow.CELL)
         values, origin = long_shadow.extend(frame, wide)
         return shadow_to_canvas(values, framing, origin, clip)
 

@@ -5,9 +5,6 @@ A model folder holds ``model.json`` and the two graphs (docs/engine.md, "Model f
 - sr.onnx: "mask" [b, 1, R, R], "ao" [b, 1, R, R], "elm" [b, 16, 32] -> "shadow" [b, 1, R, R]; a
   geometry-guided SR also takes "card" [b, 1, R, R], the geometric card's shadow for the same ELM
   (:meth:`ssn_engine.methods.geometric.GeometricCard.card_shadows`, traced with the camera input when given)
-- camera.onnx (optional, with a geometry-guided SR; ``model.json`` "camera"): "mask" [b, 1, 64, 64] -> "camera"
-  [b, 2], the camera input read from the mask (:mod:`ssn_engine.methods.camera_estimate`), used to trace the
-  card when a call gives no camera input
 The ELM goes in normalised by :func:`ssn_engine.hemisphere.network_elm`.
 ``model.json`` may set ``output_floor``: shadow values below it are the network's
 residual noise and are removed by :func:`apply_floor` (chosen on the validation split);
@@ -19,7 +16,6 @@ Frames are N x N (N = 256); a model trained at another R is fed resampled frames
 
 from __future__ import annotations
 
-import hashlib
 import json
 from pathlib import Path
 from typing import TYPE_CHECKING
@@ -29,7 +25,6 @@ import numpy as np
 from ..frames import resample_frames
 from ..hemisphere import NETWORK_SHAPE, light_concentration, network_elm
 from .base import check_batch
-from .camera_estimate import estimate_cameras
 from .geometric import GeometricCard, camera_at
 
 if TYPE_CHECKING:  # imported where a model loads: the engine runs without onnxruntime until then
@@ -38,7 +33,6 @@ if TYPE_CHECKING:  # imported where a model loads: the engine runs without onnxr
 MODEL_FORMAT = "ssn-shadow-model"
 MODEL_VERSION = 1
 FRAME = 256
-KEPT_ESTIMATES = 64  # masks whose estimated camera input is kept
 
 
 class ModelError(RuntimeError):
@@ -47,7 +41,6 @@ class ModelError(RuntimeError):
 
 _EXPECTED = {
     "aop": [({"mask": 4}, {"ao": 4})],
-    "camera": [({"mask": 4}, {"camera": 2})],
     "sr": [({"mask": 4, "ao": 4, "elm": 3}, {"shadow": 4}), ({"mask": 4, "ao": 4, "elm": 3, "card": 4}, {"shadow": 4})],
 }
 
@@ -134,24 +127,7 @@ class OnnxSSN:
         self._sr = _session(model_dir / meta.get("sr", "sr.onnx"), "sr")
         takes_card = "card" in {i.name for i in self._sr.get_inputs()}
         self.card = GeometricCard(FRAME, internal=r) if takes_card else None
-        self._camera = _session(model_dir / meta["camera"], "camera") if takes_card and "camera" in meta else None
-        self._estimates: dict[bytes, np.ndarray] = {}  # mask digest -> its estimated camera input
         self._check_run()
-
-    def cameras_for(self, masks: np.ndarray, cameras: np.ndarray | None) -> np.ndarray | None:
-        """The camera inputs to use: the given ones, else the camera estimator's reading of each mask (kept for
-        the masks seen last), else None (the conventions' default camera)."""
-        if cameras is not None or self._camera is None:
-            return cameras
-        out = np.empty((len(masks), 2))
-        for b, mask in enumerate(masks):
-            key = hashlib.blake2b(np.ascontiguousarray(mask, np.float32).tobytes(), digest_size=16).digest()
-            if key not in self._estimates:
-                self._estimates[key] = estimate_cameras(self._camera, mask[None])[0]
-                while len(self._estimates) > KEPT_ESTIMATES:
-                    del self._estimates[next(iter(self._estimates))]
-            out[b] = self._estimates[key]
-        return out
 
     def _check_run(self) -> None:
         """Run both graphs once so that a graph that loads but cannot run fails now."""
@@ -175,7 +151,6 @@ class OnnxSSN:
         m = resample_frames(masks, self.model_resolution)[:, None]
         ao = _run(self._aop, "ao", {"mask": m})[:, 0]
         if self.card is not None:
-            cameras = self.cameras_for(masks, cameras)
             for b, mask in enumerate(masks):
                 self.card.card(mask, camera_at(cameras, b))
         return np.clip(resample_frames(ao, self.resolution), 0.0, 1.0)
@@ -190,7 +165,7 @@ class OnnxSSN:
             "elm": network_elm(elms),
         }
         if self.card is not None:
-            feeds["card"] = self.card.card_shadows(masks, elms, self.cameras_for(masks, cameras))[:, None]
+            feeds["card"] = self.card.card_shadows(masks, elms, cameras)[:, None]
         s = _run(self._sr, "shadow", feeds)[:, 0]
         floors = floor_for(elms, self.output_floor, self.output_floor_small_lights)
         s = resample_frames(s, self.resolution)

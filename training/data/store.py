@@ -87,11 +87,6 @@ class ViewStore:
             self._arrays[m] = arrays
         return arrays
 
-    def mask(self, i: int) -> np.ndarray:
-        """The mask (N, N) float32 of view ``i`` alone (no occlusion bases unpacked)."""
-        m, k = self._views[i]
-        return np.asarray(self._mesh_arrays(m)["mask"][k], np.float32)
-
     def load(self, i: int) -> View:
         """Mask, AO, occlusion bases and info of view ``i``."""
         m, k = self._views[i]
