@@ -12,10 +12,10 @@ of the wider grid.
 
 from __future__ import annotations
 
+import functools
+
 import numpy as np
 from PIL import Image
-
-import functools
 
 from .framing import EDGE_FADE, edge_fade, without_edge_haze
 
