@@ -72,7 +72,7 @@ def to_array(buffer: Buffer) -> np.ndarray:
 def to_buffer(array: np.ndarray) -> Buffer:
     """The array as a protocol buffer: a view of its bytes (little-endian), not a copy."""
     array = np.ascontiguousarray(array.astype(array.dtype.newbyteorder("<"), copy=False))
-    return Buffer(array.dtype.name, array.shape, memoryview(array).cast("B"))
+    return Buffer(array.dtype.name, array.shape, array.data.cast("B"))
 
 
 def _u8(image: np.ndarray) -> Buffer:
