@@ -328,6 +328,13 @@ def model_card(card: dict, attribution: list[dict], command: str) -> str:
             "light map's energy concentrates in its 16 brightest texels (a hard shadow has no faint tails, so "
             "faint values there are haze; onnx_ssn.floor_for; chosen on the validation split, docs/training.md)."
         )
+    if card.get("shadow_reach"):
+        lines.append(
+            f"- Shadow reach {card['shadow_reach']} pixels (N = 256): for one or two small lights the engine keeps "
+            "the network's shadow within that distance of the card's shadow and of the cutout and fades it out "
+            "beyond, where no occluder can cast and what the network leaves is haze (onnx_ssn.reach_weights; "
+            "chosen on the validation split, docs/training.md)."
+        )
     if card.get("mirror_average"):
         lines.append(
             "- Mirror-averaged graphs: each runs its network on the input and on its mirror image (frames "
@@ -443,6 +450,13 @@ def parse_args(argv: list[str] | None = None) -> argparse.Namespace:
         help="model.json output_floor_small_lights: the floor for one or two small lights (default: --floor)",
     )
     p.add_argument(
+        "--shadow-reach",
+        type=float,
+        default=0.0,
+        help="model.json shadow_reach: keep the shadow within this many pixels (N = 256) of the card's shadow "
+        "and the cutout (a geometry-guided SR only; 0: off)",
+    )
+    p.add_argument(
         "--mirror-average",
         action="store_true",
         help="export each network as training.model.MirrorAverage (twice the compute, mirror-symmetric)",
@@ -483,6 +497,8 @@ def main(argv: list[str] | None = None) -> int:
     }
     if args.floor_small_lights is not None:
         card["output_floor_small_lights"] = args.floor_small_lights
+    if args.shadow_reach:
+        card["shadow_reach"] = args.shadow_reach
     report = {}
     for module, ck_paths in (("aop", args.aop), ("sr", [args.sr])):
         if module == "aop" and reused:

@@ -11,6 +11,10 @@ residual noise and are removed by :func:`apply_floor` (chosen on the validation 
 ``output_floor_small_lights``, if set, is the floor for light maps whose light is
 concentrated in a few texels (one or two small lights: a hard-edged shadow and no
 faint tails), blended in by :func:`floor_for` (docs/training.md, "The output floor").
+``shadow_reach`` (a geometry-guided model only), if set, keeps the shadow of one or two small lights within
+that many frame pixels (N = 256) of the card's shadow and of the cutout and fades it out beyond
+(:func:`reach_weights`, blended in by :func:`small_lights_share`): no occluder can cast a shadow far from both,
+so what the network leaves there is haze.
 Frames are N x N (N = 256); a model trained at another R is fed resampled frames.
 """
 
@@ -21,6 +25,7 @@ from pathlib import Path
 from typing import TYPE_CHECKING
 
 import numpy as np
+from scipy import ndimage
 
 from ..frames import resample_frames
 from ..hemisphere import NETWORK_SHAPE, light_concentration, network_elm
@@ -52,15 +57,36 @@ def apply_floor(shadow: np.ndarray, floor: float) -> np.ndarray:
     return np.clip((shadow - np.float32(floor)) / np.float32(1.0 - floor), 0.0, 1.0)
 
 
+CARD_SUPPORT = 0.01  # card shadow above this counts as where an occluder casts
+
+
+def reach_weights(card: np.ndarray, masks: np.ndarray, reach: float) -> np.ndarray:
+    """Weights (b, R, R) in [0, 1] that keep a shadow within ``reach`` pixels of the card's shadow (above
+    ``CARD_SUPPORT``) and of the cutout (mask above 0.5), both (b, R, R), and fade it out beyond: the support grown
+    by ``reach`` pixels (4-connected steps), blurred by half of it and doubled, so the weight is 1 well inside."""
+    out = np.empty(card.shape, np.float32)
+    steps = max(1, int(round(reach)))
+    for b in range(len(card)):
+        support = (card[b] > CARD_SUPPORT) | (masks[b] > 0.5)
+        grown = ndimage.binary_dilation(support, iterations=steps).astype(np.float32)
+        out[b] = np.minimum(ndimage.gaussian_filter(grown, steps / 2) * 2, 1.0)
+    return out
+
+
 SMALL_LIGHTS = (0.2, 0.7)  # light concentration from which the small-light floor blends in, and where it is whole
+
+
+def small_lights_share(elms: np.ndarray) -> np.ndarray:
+    """How much each ELM (n,) is one or two small lights: 0 for a sky-like map, 1 for small lights, linear in
+    :func:`ssn_engine.hemisphere.light_concentration` between ``SMALL_LIGHTS``."""
+    lo, hi = SMALL_LIGHTS
+    return np.clip((light_concentration(elms) - lo) / (hi - lo), 0.0, 1.0)
 
 
 def floor_for(elms: np.ndarray, broad: float, small_lights: float) -> np.ndarray:
     """The output floor (n,) for each ELM: ``broad`` for a sky-like map, ``small_lights`` for one or two small
-    lights, linear in :func:`ssn_engine.hemisphere.light_concentration` between ``SMALL_LIGHTS``."""
-    lo, hi = SMALL_LIGHTS
-    share = np.clip((light_concentration(elms) - lo) / (hi - lo), 0.0, 1.0)
-    return broad + (small_lights - broad) * share
+    lights, blended by :func:`small_lights_share`."""
+    return broad + (small_lights - broad) * small_lights_share(elms)
 
 
 def _session(path: Path, role: str) -> ort.InferenceSession:
@@ -121,6 +147,10 @@ class OnnxSSN:
         for key, floor in floors.items():
             if isinstance(floor, bool) or not isinstance(floor, (int, float)) or not 0.0 <= floor < 0.5:
                 raise ModelError(f"{card}: {key} must be a number in [0, 0.5), got {floor!r}")
+        reach = meta.get("shadow_reach", 0.0)
+        if isinstance(reach, bool) or not isinstance(reach, (int, float)) or not 0.0 <= reach <= FRAME:
+            raise ModelError(f"{card}: shadow_reach must be a number of pixels in [0, {FRAME}], got {reach!r}")
+        self.shadow_reach = float(reach)
         self.meta, self.model_resolution = meta, r
         self.output_floor, self.output_floor_small_lights = (float(floors[k]) for k in floors)
         self._aop = _session(model_dir / meta.get("aop", "aop.onnx"), "aop")
@@ -167,6 +197,12 @@ class OnnxSSN:
         if self.card is not None:
             feeds["card"] = self.card.card_shadows(masks, elms, cameras)[:, None]
         s = _run(self._sr, "shadow", feeds)[:, 0]
+        if self.card is not None and self.shadow_reach > 0:
+            # For small lights only: a broad sky's soft shadow spreads from the whole 3D object, well past the
+            # flat card's (on the test split the reach cost broad skies DSSIM at pitch 30).
+            share = small_lights_share(elms)[:, None, None]
+            reach = self.shadow_reach * self.model_resolution / FRAME
+            s = s * (1.0 - share * (1.0 - reach_weights(feeds["card"][:, 0], feeds["mask"][:, 0], reach)))
         floors = floor_for(elms, self.output_floor, self.output_floor_small_lights)
         s = resample_frames(s, self.resolution)
         s = np.stack([apply_floor(frame, float(f)) for frame, f in zip(s, floors, strict=True)])

@@ -17,7 +17,7 @@ from ssn_engine.framing import frame_alpha  # noqa: E402
 from ssn_engine.hemisphere import render_light_map  # noqa: E402
 from ssn_engine.light_map import preset  # noqa: E402
 from ssn_engine.methods import GeometricCard, ModelError, OnnxSSN, load_method  # noqa: E402
-from ssn_engine.methods.onnx_ssn import floor_for  # noqa: E402
+from ssn_engine.methods.onnx_ssn import floor_for, reach_weights  # noqa: E402
 
 OPSET = 13
 
@@ -230,6 +230,8 @@ def test_graphs_named_in_the_card(tmp_path, monkeypatch, mask):
         (json.dumps(_card(256, output_floor="0.01")), "output_floor"),
         (json.dumps(_card(256, output_floor_small_lights=0.5)), "output_floor_small_lights"),
         (json.dumps(_card(256, output_floor_small_lights=True)), "output_floor_small_lights"),
+        (json.dumps(_card(256, shadow_reach=-4)), "shadow_reach"),
+        (json.dumps(_card(256, shadow_reach="16")), "shadow_reach"),
     ],
 )
 def test_wrong_model_card(tmp_path, monkeypatch, card_text, fragment):
@@ -272,3 +274,17 @@ def test_model_that_loads_but_gives_the_wrong_shape(tmp_path, monkeypatch):
     )
     _save(pool, folder / "sr.onnx")
     _expect_model_error(folder, monkeypatch, "shape")
+
+
+def test_reach_weights_keep_the_shadow_near_the_card_and_the_cutout_only():
+    """Full weight near where the card casts or the cutout stands, none far from both, falling in between."""
+    card = np.zeros((1, 128, 128), np.float32)
+    card[0, 60:70, 20:40] = 0.5  # where the card's shadow falls
+    masks = np.zeros_like(card)
+    masks[0, 20:60, 90:100] = 1.0  # the cutout
+    w = reach_weights(card, masks, 8.0)[0]
+    assert w.shape == (128, 128) and w.dtype == np.float32 and w.min() >= 0.0 and w.max() <= 1.0
+    assert (w[58:72, 18:42] == 1.0).all() and (w[18:62, 88:102] == 1.0).all()  # 2 pixels around both
+    assert w[0:5, 0:5].max() == 0.0 and w[120:, 60:80].max() == 0.0  # far from both
+    row = w[65, 40:64]  # leaving the card's shadow sideways: never rising, from 1 to nothing
+    assert row[0] == 1.0 and row[-1] < 0.005 and (np.diff(row) <= 1e-6).all()

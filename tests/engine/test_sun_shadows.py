@@ -11,12 +11,14 @@ from pathlib import Path
 
 import numpy as np
 import pytest
+from scipy import ndimage
 from engine_helpers import drawn_alpha
 
 from ssn_engine import api
+from ssn_engine.frames import resample_frames
 from ssn_engine.framing import frame_alpha
 from ssn_engine.hemisphere import render_light_map
-from ssn_engine.light_map import GaussianLight, LightMap
+from ssn_engine.light_map import GaussianLight, LightMap, preset
 from ssn_engine.session import ShadowSession
 from training.metrics import shadow_direction, shadow_extent, sun_geometry, zncc
 
@@ -116,3 +118,20 @@ def test_a_long_shadow_has_no_seam_where_the_network_frame_ends(wide_canvases, n
         cols = np.round(border + np.arange(-20, 21) / framing.scale).astype(int)  # frame-pixel steps across it
         across = shadow[:, np.clip(cols, 0, alpha.shape[1] - 1)]
         assert np.abs(np.diff(across, axis=1)).max() < 0.03
+
+
+@pytest.mark.parametrize("preset_name", ["high-sun", "low-sun-left"])
+def test_no_haze_far_from_the_cutout_and_its_cast_shadow(preset_name):
+    """No occluder casts far from both the cutout and the card's shadow: under a small light the shipped model
+    leaves nothing there (before its shadow reach, up to 0.09 of haze: 22 levels of an 8-bit layer)."""
+    method = api.default_method().method
+    masks = np.load(FIXTURE)["masks"].astype(np.float32) / 255
+    elms = np.repeat(render_light_map(preset(preset_name), 16)[None], len(masks), 0)
+    shadows = method.render(masks, method.predict_ao(masks), elms)
+    r = method.model_resolution
+    support = (method.card.card_shadows(masks, elms) > 0.01) | (resample_frames(masks, r) > 0.5)
+    reach = method.shadow_reach * r / 256
+    far = np.stack([ndimage.distance_transform_edt(~s) > 3 * reach for s in support])
+    far = far.repeat(256 // r, axis=1).repeat(256 // r, axis=2)
+    assert far.mean() > 0.1  # a good part of the frames is far from both
+    assert shadows[far].max() == 0.0
