@@ -12,7 +12,7 @@ import time
 import numpy as np
 
 from ssn_engine.methods import OnnxSSN
-from ssn_engine.methods.onnx_ssn import apply_floor, floor_for
+from ssn_engine.methods.onnx_ssn import apply_floor, floor_for, small_lights_share
 from training.data.store import ViewStore
 from training.evaluate_families import KINDS, family_lights
 from training.metrics import all_metrics, sun_geometry
@@ -46,8 +46,9 @@ def main(argv: list[str] | None = None) -> int:
             elm_hb, elm16 = family_lights(args.seed, j, family, 1, rows_hb)
             truth = store.shadow(view.occlusion, elm_hb[0])
             raw = model.render(view.mask[None], ao, elm16)[0]
+            share = small_lights_share(elm16)
             for pair in pairs:
-                s = apply_floor(raw, float(floor_for(elm16, *pair)[0]))
+                s = apply_floor(raw, float(floor_for(share, *pair)[0]))
                 scores[family, pair].append(all_metrics(s, truth))
                 if family == "sun":
                     geometry[pair].append(sun_geometry(s, truth, view.mask))

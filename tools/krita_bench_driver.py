@@ -129,7 +129,7 @@ def live_drag(doc, depth):
         spin(c, 30)
         if len(writes) > start:
             at, info = writes[start]
-            releases.append((1e3 * (at - released), write_ms[-1], sum(info["timing_ms"].values()), info["created"]))
+            releases.append((1e3 * (at - released), write_ms[start], sum(info["timing_ms"].values()), info["created"]))
     out["live"][depth] = {
         "canvas": "2000x2000",
         "drag_s": DRAG_S,

@@ -83,10 +83,10 @@ def small_lights_share(elms: np.ndarray) -> np.ndarray:
     return np.clip((light_concentration(elms) - lo) / (hi - lo), 0.0, 1.0)
 
 
-def floor_for(elms: np.ndarray, broad: float, small_lights: float) -> np.ndarray:
-    """The output floor (n,) for each ELM: ``broad`` for a sky-like map, ``small_lights`` for one or two small
-    lights, blended by :func:`small_lights_share`."""
-    return broad + (small_lights - broad) * small_lights_share(elms)
+def floor_for(share: np.ndarray, broad: float, small_lights: float) -> np.ndarray:
+    """The output floor (n,) for ELMs whose :func:`small_lights_share` is ``share`` (n,): ``broad`` for a
+    sky-like map, ``small_lights`` for one or two small lights, blended between."""
+    return broad + (small_lights - broad) * share
 
 
 def _session(path: Path, role: str) -> ort.InferenceSession:
@@ -197,13 +197,14 @@ class OnnxSSN:
         if self.card is not None:
             feeds["card"] = self.card.card_shadows(masks, elms, cameras)[:, None]
         s = _run(self._sr, "shadow", feeds)[:, 0]
-        if self.card is not None and self.shadow_reach > 0:
+        share = small_lights_share(elms)
+        if self.card is not None and self.shadow_reach > 0 and share.any():
             # For small lights only: a broad sky's soft shadow spreads from the whole 3D object, well past the
             # flat card's (on the test split the reach cost broad skies DSSIM at pitch 30).
-            share = small_lights_share(elms)[:, None, None]
             reach = self.shadow_reach * self.model_resolution / FRAME
-            s = s * (1.0 - share * (1.0 - reach_weights(feeds["card"][:, 0], feeds["mask"][:, 0], reach)))
-        floors = floor_for(elms, self.output_floor, self.output_floor_small_lights)
+            weights = reach_weights(feeds["card"][:, 0], feeds["mask"][:, 0], reach)
+            s = s * (1.0 - share[:, None, None] * (1.0 - weights))
+        floors = floor_for(share, self.output_floor, self.output_floor_small_lights)
         s = resample_frames(s, self.resolution)
         s = np.stack([apply_floor(frame, float(f)) for frame, f in zip(s, floors, strict=True)])
         s[np.asarray(elms).max(axis=(1, 2)) <= 0] = 0.0  # no light, no shadow (conventions)
