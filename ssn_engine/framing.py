@@ -208,21 +208,56 @@ def shadow_to_canvas(
     if x1 <= x0 or y1 <= y0:
         return CanvasShadow(np.zeros((0, 0), np.float32), 0, 0)
     s = framing.scale
-    # A pure scale and offset: PIL's separable resize over a box of the frame
-    # samples it at canvas pixel centres (and antialiases when shrinking).
-    pad = math.ceil(s) + 1  # zero margin so the box never leaves the padded frame
-    image = Image.fromarray(np.pad(np.asarray(shadow, np.float32), pad), "F")
-    left, right = x0 * s + framing.offset_x + pad - origin, x1 * s + framing.offset_x + pad - origin
-    top = framing.offset_y + pad - origin
-    out = np.empty((y1 - y0, x1 - x0), np.float32)
-
-    # In stripes of rows: the same samples, but a large canvas is made without canvas-sized temporaries
-    # (PIL's own buffers are reused), several times faster on big layers, and on every core.
-    def resample(rows: slice) -> None:
-        box = (left, rows.start * s + top, right, rows.stop * s + top)
-        part = image.resize((x1 - x0, rows.stop - rows.start), Image.Resampling.BILINEAR, box=box)
-        out[rows.start - y0 : rows.stop - y0] = np.asarray(part)
-
-    for_each_stripe(resample, y0, y1, x1 - x0)
-    # Bilinear and antialiasing weights are non-negative and sum to 1: values stay in [0, 1] (no clip pass).
+    pad = math.ceil(s) + 1  # zero margin so the samples never leave the padded frame
+    padded = np.pad(np.asarray(shadow, np.float32), pad)
+    left, top = x0 * s + framing.offset_x + pad - origin, y0 * s + framing.offset_y + pad - origin
+    resample = _enlarge if s < 1.0 else _shrink
+    out = resample(padded, (left, top), s, (x1 - x0, y1 - y0))
+    # Bilinear and antialiasing weights are non-negative and sum to 1: values stay in [0, 1] to float rounding
+    # (the layers and composites clip them).
     return CanvasShadow(out, x0, y0)
+
+
+def _shrink(frame: np.ndarray, corner: tuple[float, float], s: float, size: tuple[int, int]) -> np.ndarray:
+    """The (height, width) canvas pixels whose top-left corner lies at frame point ``corner``, at ``s`` frame
+    pixels per canvas pixel (s >= 1): PIL's separable resize (samples at canvas pixel centres, antialiased)."""
+    (left, top), (width, height) = corner, size
+    image = Image.fromarray(frame, "F")
+    out = np.empty((height, width), np.float32)
+
+    # In stripes of rows: the same samples, but without canvas-sized temporaries (PIL's own buffers are
+    # reused), and on every core.
+    def resample(rows: slice) -> None:
+        box = (left, top + rows.start * s, left + width * s, top + rows.stop * s)
+        out[rows] = np.asarray(image.resize((width, rows.stop - rows.start), Image.Resampling.BILINEAR, box=box))
+
+    for_each_stripe(resample, 0, height, width)
+    return out
+
+
+def _enlarge(frame: np.ndarray, corner: tuple[float, float], s: float, size: tuple[int, int]) -> np.ndarray:
+    """:func:`_shrink` for s < 1: the same bilinear samples (within float rounding), several times faster. PIL
+    interpolates along x only the few frame rows needed; down the canvas, each run of canvas rows between the
+    same two frame rows is one broadcast multiply-add (PIL's vertical pass over a large canvas was most of a
+    light change's time)."""
+    (left, top), (width, height) = corner, size
+    y = top + (np.arange(height) + 0.5) * s - 0.5  # the frame row at each canvas row's centre
+    below = np.floor(y).astype(np.intp)
+    first, last = int(below[0]), int(below[-1]) + 2
+    frac = (y - below).astype(np.float32)[:, None]
+    band = Image.fromarray(frame[first:last], "F")
+    box = (left, 0.0, left + width * s, float(last - first))
+    across = np.asarray(band.resize((width, last - first), Image.Resampling.BILINEAR, box=box))
+    step = np.diff(across, axis=0)
+    starts = np.flatnonzero(np.r_[True, below[1:] != below[:-1]])
+    ends = np.r_[starts[1:], height]
+    out = np.empty((height, width), np.float32)
+
+    def lerp(runs: slice) -> None:
+        for a, b in zip(starts[runs], ends[runs], strict=True):
+            k = below[a] - first
+            np.multiply(frac[a:b], step[k], out=out[a:b])
+            out[a:b] += across[k]
+
+    for_each_stripe(lerp, 0, starts.size, width * height // starts.size)  # stripes of runs, ~equal in pixels
+    return out

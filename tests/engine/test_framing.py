@@ -14,6 +14,7 @@ from ssn_engine.framing import (
     EmptyAlphaError,
     alpha_bbox,
     edge_fade,
+    fade_at_edges,
     frame_alpha,
     shadow_to_canvas,
 )
@@ -199,6 +200,41 @@ def test_shadow_to_canvas_is_clipped_to_the_canvas():
     assert out.y + out.values.shape[0] <= 100 and out.x + out.values.shape[1] <= 100
     assert out.x >= 0 and out.y >= 0
     assert out.values.max() <= 1.0
+
+
+@pytest.mark.parametrize("canvas_hw", [(3000, 4000), (40, 60)])
+@pytest.mark.parametrize("origin", [None, -64.0])
+def test_enlarged_shadow_is_the_bilinear_sample_at_each_canvas_pixel(canvas_hw, origin):
+    """A canvas larger than the frame (the fast path) samples the frame bilinearly at canvas pixel centres,
+    exactly as a plain bilinear resize of the padded frame would (a canvas smaller than the frame is that
+    resize)."""
+    h, w = canvas_hw
+    alpha = _place((h // 2, w // 3), canvas_hw, (h // 4, w // 3), np.uint8)
+    _, framing = frame_alpha(alpha, 128)
+    rng = np.random.default_rng(3)
+    n = 128 if origin is None else 256
+    shadow = rng.random((n, n)).astype(np.float32)
+    out = shadow_to_canvas(shadow, framing, origin)
+    assert framing.scale < 1 or h < 128
+    # the reference: every canvas pixel's centre mapped to the frame, interpolated between the four nearest
+    # frame pixels (with zeros outside), after the same edge fade
+    faded = fade_at_edges(shadow) if origin is None else shadow
+    start = 0.0 if origin is None else origin
+    ys = (np.arange(out.y, out.y + out.values.shape[0]) + 0.5) * framing.scale + framing.offset_y - start - 0.5
+    xs = (np.arange(out.x, out.x + out.values.shape[1]) + 0.5) * framing.scale + framing.offset_x - start - 0.5
+    padded = np.pad(faded, 1)
+    y0, x0 = np.floor(ys).astype(int), np.floor(xs).astype(int)
+    fy, fx = (ys - y0)[:, None], (xs - x0)[None, :]
+    y0, x0 = y0 + 1, x0 + 1
+
+    def at(dy: int, dx: int) -> np.ndarray:
+        return padded[np.clip(y0 + dy, 0, n + 1)[:, None], np.clip(x0 + dx, 0, n + 1)[None, :]]
+
+    expected = (1 - fy) * ((1 - fx) * at(0, 0) + fx * at(0, 1)) + fy * ((1 - fx) * at(1, 0) + fx * at(1, 1))
+    if h < 128:  # shrinking: antialiased, so only close to the point samples
+        assert np.abs(out.values - expected).mean() < 0.2
+    else:
+        np.testing.assert_allclose(out.values, expected, atol=1e-4)
 
 
 def test_shadow_to_canvas_empty_and_invisible_shadows():
