@@ -107,13 +107,13 @@ def run_benchmark(repeats: int = 20, method: str = "auto") -> dict[str, np.ndarr
 
     def end_to_end() -> None:  # a new alpha each time (made here, not kept: 12 MB each)
         session = ShadowSession(_cropped_top(cutout[..., 3], top + 6 * variant()), m)
-        shadow_layer(session.render(light).values)
+        shadow_layer(session.render(light))
 
     session = ShadowSession(cutout[..., 3], m)
     e2e_repeats = max(3, repeats // 4)
     results["end to end 4000x3000 (frame+AO+SR+layer)"] = _time(end_to_end, e2e_repeats, warmup=1)
     results["light moved 4000x3000 (SR+to canvas+layer)"] = _time(
-        lambda: shadow_layer(session.render(light).values), e2e_repeats, warmup=1
+        lambda: shadow_layer(session.render(light)), e2e_repeats, warmup=1
     )
     print(f"{'stage':44s} {'median ms':>9s} {'p95 ms':>9s}")
     for name, ms in results.items():

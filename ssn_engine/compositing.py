@@ -50,13 +50,15 @@ def from_unit_float(image: np.ndarray, dtype: str | np.dtype) -> np.ndarray:
 
 
 def shadow_layer(
-    shadow: np.ndarray,
+    shadow: np.ndarray | CanvasShadow,
     color: Sequence[float] = (0.0, 0.0, 0.0),
     opacity: float = 1.0,
     dtype: str = "uint8",
     channels: str = "rgba",
+    out: np.ndarray | None = None,
 ) -> np.ndarray:
-    """The shadow (h, w) as an RGBA or BGRA layer (h, w, 4) of the given dtype."""
+    """The shadow (h, w) as an RGBA or BGRA layer (h, w, 4) of the given dtype, made in ``out`` when given (an
+    (h, w, 4) array of that dtype, for example a view into a larger layer)."""
     if channels not in ("rgba", "bgra"):
         raise ValueError(f"channels: expected 'rgba' or 'bgra', got {channels!r}")
     if dtype not in LAYER_DTYPES:
@@ -64,19 +66,21 @@ def shadow_layer(
     c = _colour(color)
     if channels == "bgra":
         c = c[::-1]
-    opacity = _opacity(opacity)
-    out = np.empty(shadow.shape + (4,), dtype)
+    if not isinstance(shadow, CanvasShadow):
+        shadow = CanvasShadow(np.asarray(shadow), 0, 0)
+    if out is None:
+        out = np.empty(shadow.shape + (4,), dtype)
+    elif out.shape != shadow.shape + (4,) or out.dtype != dtype:
+        raise ValueError(f"out: expected {dtype} {shadow.shape + (4,)}, got {out.dtype} {out.shape}")
     colour_bytes = from_unit_float(c, dtype)
+    top = _INT_MAX.get(dtype)
+    scale = _opacity(opacity) * (top or 1.0)
 
-    # In stripes, in place on one float32 buffer each: this runs on every light change, over the whole visible
-    # shadow, and stripes keep the temporaries small (and use every core).
+    # In stripes (this runs on every light change, over the whole visible shadow): the stripe's alpha is made
+    # scaled, and for integers offset by a half so that the cast rounds it.
     def fill(rows: slice) -> None:
-        alpha = np.clip(shadow[rows], 0.0, 1.0, dtype=np.float32)
-        alpha *= np.float32(opacity)
-        if dtype in _INT_MAX:
-            alpha *= np.float32(_INT_MAX[dtype])
-            np.rint(alpha, out=alpha)
-        a = alpha.astype(dtype)
+        alpha = shadow.rows(rows, scale, 0.5 if top else 0.0)
+        a = alpha.astype(dtype) if top else np.minimum(alpha, np.float32(scale), out=alpha).astype(dtype, copy=False)
         part = out[rows]
         if np.little_endian:
             _fill_words(part, a, colour_bytes)
@@ -96,15 +100,17 @@ def _fill_words(part: np.ndarray, alpha: np.ndarray, colour: np.ndarray) -> None
     bits = alpha.view(f"u{k}")
     r, g, b = (int(v) for v in colour.view(f"u{k}"))
     if k == 4:  # (R, G) then (B, A) as two 64-bit words
-        words = part.view(np.uint64).reshape(*alpha.shape, 2)
+        words = part.view(np.uint64)
         words[..., 0] = r | g << 32
         np.left_shift(bits, 32, out=words[..., 1], dtype=np.uint64)
-        words[..., 1] |= np.uint64(b)
+        if b:
+            words[..., 1] |= np.uint64(b)
         return
     word = np.dtype(f"u{4 * k}")
-    words = part.view(word).reshape(alpha.shape)
+    words = part.view(word)[..., 0]
     np.left_shift(bits, 24 * k, out=words, dtype=word)
-    words |= word.type(r | g << 8 * k | b << 16 * k)
+    if r or g or b:  # a black shadow (the default) is its alpha alone
+        words |= word.type(r | g << 8 * k | b << 16 * k)
 
 
 def composite_shadow(
@@ -142,13 +148,8 @@ def layer_image(
     out[..., :3] = from_unit_float(_colour(color), "uint8")
     out[..., 3] = 0
     if not shadow.is_empty:
-        h, w = shadow.values.shape
-        cols = slice(shadow.x, shadow.x + w)
-
-        def fill(rows: slice) -> None:
-            out[rows, cols] = shadow_layer(shadow.values[rows.start - shadow.y : rows.stop - shadow.y], color, opacity)
-
-        for_each_stripe(fill, shadow.y, shadow.y + h, w)
+        h, w = shadow.shape
+        shadow_layer(shadow, color, opacity, out=out[shadow.y : shadow.y + h, shadow.x : shadow.x + w])
     return out
 
 
@@ -165,11 +166,11 @@ def composite_image(
         raise ValueError("cutout must be RGBA and the same size as the background")
     background = np.require(background, requirements="W")
     if not shadow.is_empty:
-        h, w = shadow.values.shape
+        h, w = shadow.shape
         cols = slice(shadow.x, shadow.x + w)
 
         def multiply(rows: slice) -> None:
-            part = shadow.values[rows.start - shadow.y : rows.stop - shadow.y]
+            part = shadow.rows(slice(rows.start - shadow.y, rows.stop - shadow.y))
             background[rows, cols] = composite_shadow(background[rows, cols], part, color, opacity)
 
         for_each_stripe(multiply, shadow.y, shadow.y + h, w)
@@ -204,11 +205,11 @@ def preview_image(
     h, w = background.shape[:2]
     rgb = background[..., :3].astype(np.float32)
     if not shadow.is_empty:
-        sh, sw = shadow.values.shape
+        sh, sw = shadow.shape
         x0, y0, x1, y1 = max(shadow.x, 0), max(shadow.y, 0), min(shadow.x + sw, w), min(shadow.y + sh, h)
         if x0 < x1 and y0 < y1:
-            s = np.clip(shadow.values[y0 - shadow.y : y1 - shadow.y, x0 - shadow.x : x1 - shadow.x], 0.0, 1.0)
-            s = s * np.float32(_opacity(opacity))
+            rows = shadow.rows(slice(y0 - shadow.y, y1 - shadow.y), _opacity(opacity))
+            s = rows[:, x0 - shadow.x : x1 - shadow.x]
             if cover is not None:
                 s = s * (1.0 - to_unit_float(cover[y0:y1, x0:x1]))
             rgb[y0:y1, x0:x1] *= 1.0 - s[..., None] * (1.0 - _colour(color))

@@ -79,21 +79,72 @@ class Framing:
 
 
 @dataclass(frozen=True)
-class CanvasShadow:
-    """A shadow at canvas resolution: ``values`` (h, w) in [0, 1] placed at (x, y) on the canvas."""
+class _Enlarged:
+    """Canvas rows sampled bilinearly from a frame seen larger than itself: the frame rows needed, already
+    interpolated across (``across`` (k, w)), the one above each canvas row's centre (``above`` (h,), into
+    ``across``) and the share of the one below (``below_share`` (h, 1))."""
 
-    values: np.ndarray
-    x: int
-    y: int
+    across: np.ndarray
+    above: np.ndarray
+    below_share: np.ndarray
+
+    def rows(self, rows: slice, scale: float, offset: float) -> np.ndarray:
+        """Canvas rows ``rows`` (h', w), times ``scale`` plus ``offset``: the two frame rows around each canvas
+        row mixed by its share (the scale and offset applied to the few frame rows, not the canvas rows)."""
+        above = self.above[rows]
+        first, last = int(above[0]), int(above[-1]) + 2
+        span = np.clip(self.across[first:last], 0.0, 1.0) * np.float32(scale)
+        step = np.diff(span, axis=0)
+        span += np.float32(offset)
+        out = np.take(step, above - first, axis=0)
+        out *= self.below_share[rows]
+        out += np.take(span, above - first, axis=0)
+        return out
+
+
+class CanvasShadow:
+    """A shadow at canvas resolution: (h, w) values in [0, 1] placed at (x, y) on the canvas. It holds them as an
+    array, or (a frame enlarged onto the canvas, from :func:`shadow_to_canvas`) as the frame rows they are
+    sampled from, so that a layer is made a band of rows at a time (:meth:`rows`) without a canvas-sized float
+    array; :attr:`values` makes them all."""
+
+    def __init__(self, values: np.ndarray | _Enlarged, x: int, y: int) -> None:
+        self.x, self.y = x, y
+        if isinstance(values, _Enlarged):
+            self._source: np.ndarray | _Enlarged = values
+            self.shape = (values.above.size, values.across.shape[1])
+        else:
+            self._source = self.values = values
+            self.shape = values.shape
+
+    @functools.cached_property
+    def values(self) -> np.ndarray:
+        """The (h, w) values (float32), made on first use."""
+        out = np.empty(self.shape, np.float32)
+
+        def fill(rows: slice) -> None:
+            out[rows] = self.rows(rows)
+
+        for_each_stripe(fill, 0, self.shape[0], self.shape[1])
+        return out
 
     @property
     def is_empty(self) -> bool:
-        return self.values.size == 0
+        return self.shape[0] * self.shape[1] == 0
+
+    def rows(self, rows: slice, scale: float = 1.0, offset: float = 0.0) -> np.ndarray:
+        """Rows ``rows`` (of the shadow, not the canvas) of the values clipped to [0, 1], times ``scale`` plus
+        ``offset``: a new float32 array."""
+        if isinstance(self._source, _Enlarged):
+            return self._source.rows(rows, scale, offset)
+        out = np.multiply(np.clip(self._source[rows], 0.0, 1.0), np.float32(scale), dtype=np.float32)
+        out += np.float32(offset)
+        return out
 
     def full_canvas(self, width: int, height: int) -> np.ndarray:
         """The shadow pasted into a zero canvas of the given size."""
         out = np.zeros((height, width), np.float32)
-        h, w = self.values.shape
+        h, w = self.shape
         out[self.y : self.y + h, self.x : self.x + w] = self.values
         return out
 
@@ -179,7 +230,7 @@ def fade_at_edges(shadow: np.ndarray) -> np.ndarray:
 
 
 def shadow_to_canvas(
-    shadow: np.ndarray, framing: Framing, origin: float | None = None, clip: bool = True
+    shadow: np.ndarray, framing: Framing, origin: tuple[float, float] | None = None, clip: bool = True
 ) -> CanvasShadow:
     """Resample a frame shadow to the canvas, cropped to its visible part.
 
@@ -189,18 +240,19 @@ def shadow_to_canvas(
     past the canvas: for hosts whose layers can); it may reach well beyond
     the alpha's bounding box. A frame shadow (n, n) that
     runs out of the frame fades out (:func:`fade_at_edges`) instead of
-    ending in a hard edge. With ``origin``, ``shadow`` is a larger array whose top-left
-    corner lies at frame coordinates (origin, origin) and that fades out by
+    ending in a hard edge. With ``origin``, ``shadow`` is an array whose top-left
+    corner lies at frame coordinates ``origin`` (x, y) and that fades out by
     itself (:func:`ssn_engine.long_shadow.extend`).
     """
     if origin is None:
-        shadow, origin = fade_at_edges(shadow), 0.0
+        shadow, origin = fade_at_edges(shadow), (0.0, 0.0)
+    ox, oy = origin
     visible = shadow > SHADOW_FLOOR
     rows, cols = np.flatnonzero(visible.any(axis=1)), np.flatnonzero(visible.any(axis=0))
     if rows.size == 0:
         return CanvasShadow(np.zeros((0, 0), np.float32), 0, 0)
-    cx0, cy0 = framing.to_canvas(cols[0] + origin, rows[0] + origin)
-    cx1, cy1 = framing.to_canvas(cols[-1] + 1 + origin, rows[-1] + 1 + origin)
+    cx0, cy0 = framing.to_canvas(cols[0] + ox, rows[0] + oy)
+    cx1, cy1 = framing.to_canvas(cols[-1] + 1 + ox, rows[-1] + 1 + oy)
     x0, y0, x1, y1 = math.floor(cx0), math.floor(cy0), math.ceil(cx1), math.ceil(cy1)
     if clip:
         x0, y0 = max(0, x0), max(0, y0)
@@ -210,12 +262,12 @@ def shadow_to_canvas(
     s = framing.scale
     pad = math.ceil(s) + 1  # zero margin so the samples never leave the padded frame
     padded = np.pad(np.asarray(shadow, np.float32), pad)
-    left, top = x0 * s + framing.offset_x + pad - origin, y0 * s + framing.offset_y + pad - origin
-    resample = _enlarge if s < 1.0 else _shrink
-    out = resample(padded, (left, top), s, (x1 - x0, y1 - y0))
-    # Bilinear and antialiasing weights are non-negative and sum to 1: values stay in [0, 1] to float rounding
-    # (the layers and composites clip them).
-    return CanvasShadow(out, x0, y0)
+    left, top = x0 * s + framing.offset_x + pad - ox, y0 * s + framing.offset_y + pad - oy
+    size = (x1 - x0, y1 - y0)
+    if s < 1.0:
+        return CanvasShadow(_enlarge(padded, (left, top), s, size), x0, y0)
+    # Bilinear and antialiasing weights are non-negative and sum to 1: values stay in [0, 1].
+    return CanvasShadow(_shrink(padded, (left, top), s, size), x0, y0)
 
 
 def _shrink(frame: np.ndarray, corner: tuple[float, float], s: float, size: tuple[int, int]) -> np.ndarray:
@@ -235,29 +287,15 @@ def _shrink(frame: np.ndarray, corner: tuple[float, float], s: float, size: tupl
     return out
 
 
-def _enlarge(frame: np.ndarray, corner: tuple[float, float], s: float, size: tuple[int, int]) -> np.ndarray:
-    """:func:`_shrink` for s < 1: the same bilinear samples (within float rounding), several times faster. PIL
-    interpolates along x only the few frame rows needed; down the canvas, each run of canvas rows between the
-    same two frame rows is one broadcast multiply-add (PIL's vertical pass over a large canvas was most of a
-    light change's time)."""
+def _enlarge(frame: np.ndarray, corner: tuple[float, float], s: float, size: tuple[int, int]) -> _Enlarged:
+    """:func:`_shrink`'s samples for s < 1, made on demand (within float rounding) and several times faster: PIL
+    interpolates along x only the few frame rows needed; down the canvas each canvas row mixes the two frame
+    rows around its centre (PIL's vertical pass over a large canvas was most of a light change's time)."""
     (left, top), (width, height) = corner, size
     y = top + (np.arange(height) + 0.5) * s - 0.5  # the frame row at each canvas row's centre
-    below = np.floor(y).astype(np.intp)
-    first, last = int(below[0]), int(below[-1]) + 2
-    frac = (y - below).astype(np.float32)[:, None]
+    above = np.floor(y).astype(np.intp)
+    first, last = int(above[0]), int(above[-1]) + 2
     band = Image.fromarray(frame[first:last], "F")
     box = (left, 0.0, left + width * s, float(last - first))
     across = np.asarray(band.resize((width, last - first), Image.Resampling.BILINEAR, box=box))
-    step = np.diff(across, axis=0)
-    starts = np.flatnonzero(np.r_[True, below[1:] != below[:-1]])
-    ends = np.r_[starts[1:], height]
-    out = np.empty((height, width), np.float32)
-
-    def lerp(runs: slice) -> None:
-        for a, b in zip(starts[runs], ends[runs], strict=True):
-            k = below[a] - first
-            np.multiply(frac[a:b], step[k], out=out[a:b])
-            out[a:b] += across[k]
-
-    for_each_stripe(lerp, 0, starts.size, width * height // starts.size)  # stripes of runs, ~equal in pixels
-    return out
+    return _Enlarged(across, above - first, (y - above).astype(np.float32)[:, None])

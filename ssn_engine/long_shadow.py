@@ -13,6 +13,7 @@ of the wider grid.
 from __future__ import annotations
 
 import functools
+import math
 
 import numpy as np
 from PIL import Image
@@ -33,19 +34,39 @@ def reaches_border(shadow: np.ndarray) -> bool:
     return max(float(e.max()) for e in edges) > VISIBLE
 
 
-def extend(shadow: np.ndarray, wide: np.ndarray, margin: float = MARGIN) -> tuple[np.ndarray, float]:
+def extend(
+    shadow: np.ndarray,
+    wide: np.ndarray,
+    margin: float = MARGIN,
+    window: tuple[float, float, float, float] | None = None,
+) -> tuple[np.ndarray, tuple[float, float]]:
     """Join a frame shadow (N, N) and the card's shadow on the wider grid (M, M) covering frame coordinates
     [-margin N, (1 + margin) N): returns the joined shadow at frame resolution and its origin, the frame
-    coordinate of its top-left corner (the same on both axes)."""
+    coordinates (x, y) of its top-left corner. With ``window`` (x0, y0, x1, y1) in frame coordinates (a clipped
+    canvas's), only the part that covers it is made: a canvas sees a fraction of a long shadow's reach."""
     n = shadow.shape[0]
     pad = int(round(margin * n))
     size = n + 2 * pad
-    out = np.asarray(Image.fromarray(wide.astype(np.float32), "F").resize((size, size), Image.Resampling.BILINEAR))
-    out = np.clip(out, 0.0, 1.0) * edge_fade(size)
-    weight = frame_weight(n)
-    inside = out[pad : pad + n, pad : pad + n]
-    inside += weight * (without_edge_haze(shadow) - inside)
-    return out.astype(np.float32, copy=False), -float(pad)
+    c0, r0, c1, r1 = 0, 0, size, size
+    if window is not None:  # in pixels of the joined array, one more on each side for the canvas's bilinear samples
+        c0, r0 = (max(0, min(size, math.floor(v + pad) - 1)) for v in window[:2])
+        c1, r1 = (max(0, min(size, math.ceil(v + pad) + 1)) for v in window[2:])
+        if c1 <= c0 or r1 <= r0:  # the window misses the joined shadow
+            return np.zeros((0, 0), np.float32), (0.0, 0.0)
+    cell = wide.shape[0] / size
+    out = np.asarray(
+        Image.fromarray(wide.astype(np.float32), "F").resize(
+            (c1 - c0, r1 - r0), Image.Resampling.BILINEAR, box=(c0 * cell, r0 * cell, c1 * cell, r1 * cell)
+        )
+    )
+    out = np.clip(out, 0.0, 1.0) * edge_fade(size)[r0:r1, c0:c1]
+    # where the window covers the frame: frame rows [fr0, fr1) and columns [fc0, fc1)
+    fr0, fr1, fc0, fc1 = max(r0 - pad, 0), min(r1 - pad, n), max(c0 - pad, 0), min(c1 - pad, n)
+    if fr0 < fr1 and fc0 < fc1:
+        inside = out[fr0 + pad - r0 : fr1 + pad - r0, fc0 + pad - c0 : fc1 + pad - c0]
+        weight = frame_weight(n)[fr0:fr1, fc0:fc1]
+        inside += weight * (without_edge_haze(shadow)[fr0:fr1, fc0:fc1] - inside)
+    return out.astype(np.float32, copy=False), (float(c0 - pad), float(r0 - pad))
 
 
 @functools.lru_cache(maxsize=4)

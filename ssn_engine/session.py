@@ -77,7 +77,8 @@ class ShadowSession:
             card = self._card
         elm = render_light_map(light_map, NETWORK_SHAPE[0])
         wide = card.extended_shadow(self.mask, elm, camera_at(self.cameras, 0), long_shadow.MARGIN, long_shadow.CELL)
-        values, origin = long_shadow.extend(frame, wide)
+        window = (*framing.to_frame(0, 0), *framing.to_frame(framing.canvas_width, framing.canvas_height))
+        values, origin = long_shadow.extend(frame, wide, window=window if clip else None)
         return shadow_to_canvas(values, framing, origin, clip)
 
     def render(self, light_map: LightMap, framing: Framing | None = None) -> CanvasShadow:
@@ -88,5 +89,5 @@ class ShadowSession:
     def cover(self, framing: Framing) -> np.ndarray:
         """The cutout's alpha (h, w) on ``framing``'s canvas, resampled from the frame: what hides the shadow
         in a small preview when the host sends no alpha of that size."""
-        mask = shadow_to_canvas(self.mask, framing, origin=0.0)  # with an origin: no fading at the frame's edges
+        mask = shadow_to_canvas(self.mask, framing, origin=(0.0, 0.0))  # with an origin: no fading at the frame's edges
         return mask.full_canvas(framing.canvas_width, framing.canvas_height)

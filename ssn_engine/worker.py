@@ -173,7 +173,7 @@ class Worker:
             reply["no_shadow"] = reason
         else:
             layer = shadow_layer(
-                shadow.values,
+                shadow,
                 header.get("color", (0.0, 0.0, 0.0)),
                 float(header.get("opacity", 1.0)),
                 fmt.get("dtype", "uint8"),

@@ -194,12 +194,16 @@ class _Card:
             return out
         used = brightest(weights, 1.0 - NEGLIGIBLE)
         self.trace(used)
-        w = np.zeros(len(weights), np.float32)
-        w[used] = weights[used] / weights[used].sum()
+        w = (weights / weights[used].sum()).astype(np.float32)
         # einsum, not a BLAS product: BLAS threads left spinning after the call slow the network run that follows
-        # by more than the product costs. Few texels: just their rows; many: the whole matrix (no row copy).
-        rows = used if len(used) <= len(weights) // 8 else slice(None)
-        out[self.valid] = np.einsum("t,tp->p", w[rows], self.bases[rows])
+        # by more than the product costs. Over runs of consecutive texels (a light covers a few ELM rows): only
+        # the rows of the texels used are read, without copying them.
+        cut = np.flatnonzero(np.diff(used) != 1) + 1
+        total = np.zeros(self.bases.shape[1], np.float32)
+        for run in np.split(used, cut):
+            a, b = int(run[0]), int(run[-1]) + 1
+            total += np.einsum("t,tp->p", w[a:b], self.bases[a:b])
+        out[self.valid] = total
         return np.clip(out, 0.0, 1.0)
 
     @property
@@ -242,8 +246,8 @@ class GeometricCard:
         """The card for a frame mask (camera input in frame pixels, or None: the default camera) at the internal
         resolution; recent cards are cached. Its hard shadows (``card.bases`` (T, P), T = 512 texel directions
         on the P ground pixels ``card.valid`` of the internal grid) are traced when first needed."""
-        key = hashlib.blake2b(
-            np.ascontiguousarray(mask, np.float32).tobytes() + repr(camera).encode(), digest_size=16
+        key = hashlib.sha1(
+            np.ascontiguousarray(mask, np.float32).tobytes() + repr(camera).encode(), usedforsecurity=False
         ).digest()
         if key not in self._cache:
             scale = self.internal / mask.shape[0]

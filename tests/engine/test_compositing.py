@@ -14,7 +14,7 @@ from ssn_engine.compositing import (
     shadow_layer,
     to_unit_float,
 )
-from ssn_engine.framing import CanvasShadow
+from ssn_engine.framing import CanvasShadow, frame_alpha, shadow_to_canvas
 
 
 def _shadow():
@@ -47,6 +47,30 @@ def test_default_layer_is_black_uint8_rgba():
     layer = shadow_layer(np.array([[0.0, 1.0]], np.float32))
     assert layer.dtype == np.uint8
     assert layer.tolist() == [[[0, 0, 0, 0], [0, 0, 0, 255]]]
+
+
+@pytest.mark.parametrize("dtype, top", [("uint8", 255), ("uint16", 65535), ("float16", 1.0), ("float32", 1.0)])
+@pytest.mark.parametrize("color", [(0.0, 0.0, 0.0), (0.1, 0.3, 0.9)])
+def test_a_large_canvas_layer_is_made_from_the_frame_as_from_its_values(dtype, top, color):
+    """A frame enlarged onto a large canvas makes its layer band by band from the frame rows (no canvas-sized
+    float array): the same layer, within one step of rounding, as the one made from all its values."""
+    alpha = np.zeros((1500, 2000), np.uint8)
+    alpha[300:1200, 800:1300] = 255
+    _, framing = frame_alpha(alpha, 128)
+    frame = np.random.default_rng(1).random((128, 128)).astype(np.float32)
+    shadow = shadow_to_canvas(frame, framing)
+    assert framing.scale < 1 and shadow.shape[0] > 1000
+    layer = shadow_layer(shadow, color, 0.7, dtype, "bgra")
+    expected = shadow_layer(shadow.values.copy(), color, 0.7, dtype, "bgra")
+    assert layer.dtype == expected.dtype and layer.shape == shadow.shape + (4,)
+    step = 1.0 if top > 1 else (1e-3 if dtype == "float16" else 1e-6)
+    assert np.abs(layer.astype(np.float64) - expected.astype(np.float64)).max() <= step
+    # and into a view of a larger layer, leaving the rest alone
+    big = np.zeros((shadow.shape[0] + 4, shadow.shape[1] + 6, 4), dtype)
+    shadow_layer(shadow, color, 0.7, dtype, "bgra", out=big[2:-2, 3:-3])
+    assert np.array_equal(big[2:-2, 3:-3], layer) and not big[:2].any() and not big[:, :3].any()
+    with pytest.raises(ValueError, match="out"):
+        shadow_layer(shadow, color, 0.7, dtype, out=big)
 
 
 @pytest.mark.parametrize(

@@ -203,7 +203,7 @@ def test_shadow_to_canvas_is_clipped_to_the_canvas():
 
 
 @pytest.mark.parametrize("canvas_hw", [(3000, 4000), (40, 60)])
-@pytest.mark.parametrize("origin", [None, -64.0])
+@pytest.mark.parametrize("origin", [None, (-64.0, -40.0)])
 def test_enlarged_shadow_is_the_bilinear_sample_at_each_canvas_pixel(canvas_hw, origin):
     """A canvas larger than the frame (the fast path) samples the frame bilinearly at canvas pixel centres,
     exactly as a plain bilinear resize of the padded frame would (a canvas smaller than the frame is that
@@ -219,9 +219,9 @@ def test_enlarged_shadow_is_the_bilinear_sample_at_each_canvas_pixel(canvas_hw, 
     # the reference: every canvas pixel's centre mapped to the frame, interpolated between the four nearest
     # frame pixels (with zeros outside), after the same edge fade
     faded = fade_at_edges(shadow) if origin is None else shadow
-    start = 0.0 if origin is None else origin
-    ys = (np.arange(out.y, out.y + out.values.shape[0]) + 0.5) * framing.scale + framing.offset_y - start - 0.5
-    xs = (np.arange(out.x, out.x + out.values.shape[1]) + 0.5) * framing.scale + framing.offset_x - start - 0.5
+    ox, oy = (0.0, 0.0) if origin is None else origin
+    ys = (np.arange(out.y, out.y + out.values.shape[0]) + 0.5) * framing.scale + framing.offset_y - oy - 0.5
+    xs = (np.arange(out.x, out.x + out.values.shape[1]) + 0.5) * framing.scale + framing.offset_x - ox - 0.5
     padded = np.pad(faded, 1)
     y0, x0 = np.floor(ys).astype(int), np.floor(xs).astype(int)
     fy, fx = (ys - y0)[:, None], (xs - x0)[None, :]

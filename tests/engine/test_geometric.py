@@ -9,7 +9,8 @@ from engine_helpers import drawn_alpha, elm_for, object_geometry, shadow_centroi
 from ssn_engine.ao_edit import apply_edits
 from ssn_engine.camera import Camera
 from ssn_engine.framing import frame_alpha
-from ssn_engine.hemisphere import stratified_directions, texel_weights
+from ssn_engine.hemisphere import render_light_map, stratified_directions, texel_weights
+from ssn_engine.light_map import GaussianLight, LightMap
 from ssn_engine.methods import GeometricCard
 
 
@@ -92,6 +93,20 @@ def test_u_0_and_u_1_are_the_same_light(geometric, pawn_frame):
     a = _render(geometric, pawn_frame, elm_for(0.0, 0.6))
     b = _render(geometric, pawn_frame, elm_for(1.0, 0.6))
     assert np.allclose(a, b, atol=1e-6)
+
+
+@pytest.mark.parametrize(
+    "lights", [[(0.3, 0.6, 0.002)], [(0.2, 0.5, 0.02), (0.8, 0.3, 0.05)], [(0.5, 0.2, 0.1), (0.1, 0.8, 0.1)]]
+)
+def test_the_card_shadow_is_the_light_weighted_mean_of_its_hard_shadows(pawn_frame, lights):
+    """The weighted sum read over the texels a light uses equals the plain mean over every texel's shadow."""
+    card = GeometricCard(resolution=256).card(pawn_frame)
+    elm = render_light_map(LightMap([GaussianLight(u, v, softness, 1.0) for u, v, softness in lights]))
+    weights = elm.ravel() * texel_weights(16).ravel()
+    card.trace()
+    expected = np.zeros(card.mask.shape, np.float32)
+    expected[card.valid] = (weights / weights.sum()) @ card.bases.astype(np.float64)
+    np.testing.assert_allclose(card.shadow(weights), np.clip(expected, 0, 1), atol=2e-4)
 
 
 def test_all_zero_elm_gives_no_shadow(geometric, frame):

@@ -6,6 +6,7 @@ import numpy as np
 import pytest
 from engine_helpers import drawn_alpha, one_light
 
+from ssn_engine import long_shadow
 from ssn_engine.framing import EmptyAlphaError
 from ssn_engine.light_map import preset
 from ssn_engine.methods import GeometricCard
@@ -133,3 +134,18 @@ def test_an_unclipped_shadow_reaches_past_the_canvas():
         clipped.x - whole.x : clipped.x - whole.x + clipped.values.shape[1],
     ]
     np.testing.assert_allclose(inside, clipped.values, atol=1e-5)  # the same shadow where both cover it
+
+
+def test_a_canvas_joins_only_the_part_of_a_long_shadow_it_sees():
+    """The frame's shadow joined to the card's over a window (a clipped canvas's) is the whole join, cropped."""
+    rng = np.random.default_rng(5)
+    frame, wide = rng.random((64, 64)).astype(np.float32), rng.random((48, 48)).astype(np.float32)
+    whole, (ox, oy) = long_shadow.extend(frame, wide)
+    assert whole.shape == (192, 192) and (ox, oy) == (-64.0, -64.0)
+    for window in [(-20.3, 10.0, 90.5, 70.2), (-64.0, -64.0, 128.0, 128.0), (70.0, -50.0, 100.0, -10.0)]:
+        part, (px, py) = long_shadow.extend(frame, wide, window=window)
+        x0, y0 = int(px - ox), int(py - oy)
+        assert px <= window[0] and py <= window[1]
+        assert px + part.shape[1] >= min(window[2], 128) and py + part.shape[0] >= min(window[3], 128)
+        np.testing.assert_allclose(part, whole[y0 : y0 + part.shape[0], x0 : x0 + part.shape[1]], atol=1e-6)
+    assert long_shadow.extend(frame, wide, window=(200.0, 0.0, 300.0, 50.0))[0].size == 0  # beyond its reach
