@@ -23,7 +23,7 @@ from typing import Any
 from PyQt5.QtCore import QObject, QTimer, pyqtSignal
 
 from .adapters.krita_document import SourceError
-from .adapters.pixel_format import UnsupportedFormat, shadow_color
+from .adapters.pixel_format import UnsupportedFormat, blend_mode, shadow_color
 from .engine import EngineError
 from .shared import defaults
 from .shared import light_map as lm
@@ -294,16 +294,17 @@ class ShadowController(QObject):
             "opacity": self.opacity,
             "format": source.layer_format.render_format(),
         }
+        blend = blend_mode(self.color)  # the mode of the colour rendered, whatever the colour is by the reply
         self.engine.request(
             "render",
             params,
             None,
-            lambda reply, buffers: self._on_rendered(job, source, reply, buffers),
+            lambda reply, buffers: self._on_rendered(job, source, blend, reply, buffers),
             lambda e: self._on_error(e, job),
         )
 
     # -- replies --------------------------------------------------------------------
-    def _on_rendered(self, job: RenderJob, source: Any, reply: dict, buffers: dict) -> None:
+    def _on_rendered(self, job: RenderJob, source: Any, blend: str, reply: dict, buffers: dict) -> None:
         nxt, self._pending = self._pending, None
         self._in_flight = False
         if nxt is not None:
@@ -311,7 +312,8 @@ class ShadowController(QObject):
         rect = (int(reply["x"]), int(reply["y"]), int(reply["width"]), int(reply["height"]))
         layer = buffers.get("layer")
         try:
-            result = self.host.write(source, bytes(layer.data) if layer is not None else b"", rect, job.new_step)
+            pixels = bytes(layer.data) if layer is not None else b""
+            result = self.host.write(source, pixels, rect, job.new_step, blend)
         except Exception as exc:  # the UI boundary
             self._fail(f"Soft Shadow could not write the shadow layer: {type(exc).__name__}: {exc}")
             return

@@ -180,7 +180,7 @@ def run_case(depth, with_window):
     case["undo_available"] = undo is not None
     if undo is not None:
         steps = case["undo_steps"] = []
-        for _ in range(4):
+        for _ in range(3):  # the second shadow, the first one back, and no shadow: one undo step each
             text = undo.text()
             undo.trigger()
             doc.waitForDone()
@@ -328,6 +328,22 @@ def run_case(depth, with_window):
     drag["release_created"] = bool(renders[-1]["created"]) if len(renders) > start else None
     drag["changed_after"] = shadow_state(doc, depth) != before
     drag["messages"] = messages[said:]
+
+    # A black shadow's layer is Normal; in Multiply (a coloured shadow's mode) it composites the same
+    shadow_node = next(n for n in doc.rootNode().childNodes() if n.name() == "Shadow: Person")
+    modes = case["black_shadow_modes"] = {}
+    for mode in ("normal", "multiply"):
+        modes[mode] = {"mode": shadow_node.blendingMode()}
+        shadow_node.setBlendingMode(mode)
+        doc.refreshProjection()
+        doc.waitForDone()
+        image = doc.projection(0, 0, W, H).convertToFormat(QImage.Format.Format_RGBA8888)
+        modes[mode]["reds"] = reds(image.constBits().asstring(image.sizeInBytes()), W, 1.0, 4)
+    # a coloured shadow is written as a Multiply layer, which tints what lies under it
+    controller.color = (0.2, 0.3, 0.9)
+    controller.generate()
+    wait_for(controller)
+    case["coloured"] = shadow_state(doc, depth)
     engine.shutdown()
     save()
 

@@ -60,6 +60,7 @@ class FakeHost:
         self.alpha = alpha if alpha is not None else cutout_alpha(w, h)
         self.fail = fail
         self.writes: list[tuple] = []
+        self.blends: list[str] = []
         self.reads = 0
         self.document = FakeDocument("a.kra")
 
@@ -84,8 +85,9 @@ class FakeHost:
             "sRGB-elle-V2-srgbtrc.icc",
         )
 
-    def write(self, source, pixels, rect, new_step):
+    def write(self, source, pixels, rect, new_step, blend):
         self.writes.append((rect, len(pixels), new_step))
+        self.blends.append(blend)
         return WriteResult("shadow-node", new_step)
 
     def preview_background(self, source, side):

@@ -14,6 +14,25 @@ def make(host, command=worker_command):
     return c, engine, messages, aos
 
 
+def test_the_layer_mode_follows_the_shadow_colour(qapp):
+    """A black shadow is written as a Normal layer (the same composite, faster in Krita), a coloured one as a
+    Multiply layer: in the mode of the colour it was rendered with, even if the colour changes meanwhile."""
+    host = FakeHost()
+    c, engine, messages, _ = make(host)
+    try:
+        c.generate()
+        assert wait_until(lambda: not c.busy and len(host.writes) == 1), messages
+        c.color = (0.3, 0.1, 0.6)
+        c.generate()
+        c.color = (0.0, 0.0, 0.0)
+        assert wait_until(lambda: not c.busy and len(host.writes) == 2), messages
+        c.generate()
+        assert wait_until(lambda: not c.busy and len(host.writes) == 3), messages
+        assert host.blends == ["normal", "multiply", "normal"]
+    finally:
+        engine.stop()
+
+
 def test_generate_then_live_drag(qapp):
     host = FakeHost()
     c, engine, messages, aos = make(host)

@@ -82,7 +82,7 @@ def _check_shadow(state: dict, side: str) -> None:
     names = state["names"]
     assert names.count("Shadow: Person") == 1, names
     assert state["shadow_index"] == state["source_index"] - 1, names  # directly below the source
-    assert state["blend"] == "multiply" and state["type"] == "paintlayer"
+    assert state["blend"] == "normal" and state["type"] == "paintlayer"  # black: Normal, the same as Multiply
     assert state["below"]["sum"] > 100, state  # shadow on the ground in front of the object
     assert state[side]["sum"] > 100, state  # and beside it, away from the light
     other = "left" if side == "right" else "right"
@@ -158,3 +158,11 @@ def test_generate_in_real_krita(pykrita, tmp_path, depth):
     assert drag["documents_unchanged"] and drag["shadow_visible"] and drag["active"] == "Person", drag
     assert drag["writes_after"] == 1 and drag["release_created"] and drag["changed_after"], drag
     assert all(level == "info" for level, _ in drag["messages"]), drag
+    # the black shadow's Normal layer gives the picture a Multiply layer gives (within one 8-bit step), and a
+    # coloured shadow is written in Multiply
+    modes = case["black_shadow_modes"]
+    assert modes["normal"]["mode"] == "normal"
+    normal, multiply = modes["normal"]["reds"], modes["multiply"]["reds"]
+    assert min(normal) < max(normal) - 20 and max(abs(a - b) for a, b in zip(normal, multiply, strict=True)) <= 1
+    coloured = case["coloured"]
+    assert coloured["blend"] == "multiply" and coloured["names"].count("Shadow: Person") == 1, coloured

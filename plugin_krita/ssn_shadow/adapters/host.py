@@ -25,8 +25,10 @@ class KritaHost:
     def read_source(self, document: Document | None) -> Source:
         return read_source(document)
 
-    def write(self, source: Source, pixels: bytes, rect: tuple[int, int, int, int], new_step: bool) -> WriteResult:
-        result = self.writer.write(source.document, source.node, pixels, rect, new_step)
+    def write(
+        self, source: Source, pixels: bytes, rect: tuple[int, int, int, int], new_step: bool, blend: str
+    ) -> WriteResult:
+        result = self.writer.write(source.document, source.node, pixels, rect, new_step, blend)
         if result.created:
             # With a view, Krita makes the added layer active through a queued signal, after the writer's
             # setActiveNode: set the source active again once the event loop has delivered it, so the next

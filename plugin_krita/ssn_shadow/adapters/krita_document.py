@@ -12,9 +12,11 @@ shadow layer by a new one in the same place (remove + add: two undo steps,
 the first of which leaves no shadow, the second brings the previous one back).
 Live updates during one drag write in place into the layer that drag added,
 so they do not flood the undo stack. ``Node.setBlendingMode`` is an undo
-command of its own, even on a detached node: a first shadow therefore costs
-two undo steps (the layer, then an invisible blend-mode step); a replacement
-is a copy of the old layer, which keeps Multiply without that command.
+command of its own, even on a detached node: a new layer is Normal, right for
+a black shadow (:func:`pixel_format.blend_mode`), so a first black shadow is
+one undo step; a coloured one adds an invisible blend-mode step. A
+replacement is a copy of the old layer, which keeps its mode unless the
+colour needs the other of Normal and Multiply (a mode the user picked is kept).
 """
 
 from __future__ import annotations
@@ -226,8 +228,10 @@ class LayerWriter:
         pixels: bytes,
         rect: Rect,
         new_step: bool,
+        blend: str = "multiply",
     ) -> WriteResult:
-        """Show ``pixels`` (rect x, y, w, h, in the document's pixel format) as the source's shadow.
+        """Show ``pixels`` (rect x, y, w, h, in the document's pixel format) as the source's shadow, in the blend
+        mode ``blend`` ("normal" or "multiply": :func:`pixel_format.blend_mode` of its colour).
 
         ``new_step``: make this an undo step (a new layer replacing the old one); otherwise
         write in place into the existing shadow layer (live updates within one drag).
@@ -237,13 +241,14 @@ class LayerWriter:
             self._write_in_place(document, existing, pixels, rect)
             return WriteResult(existing, False)
         if existing is not None:
-            # A copy keeps Multiply without the extra undo command setBlendingMode would add.
+            # A copy keeps its mode without the extra undo command setBlendingMode would add.
             node = existing.duplicate()
             node.setName(shadow_name(source_node.name()))
             self._clear(node, self._rect_of(existing), rect)
         else:
             node = document.createNode(shadow_name(source_node.name()), "paintlayer")
-            node.setBlendingMode("multiply")
+        if node.blendingMode() in ("normal", "multiply") and node.blendingMode() != blend:
+            node.setBlendingMode(blend)
         x, y, w, h = rect
         if w > 0 and h > 0:
             node.setPixelData(pixels, x, y, w, h)
