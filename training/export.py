@@ -335,6 +335,12 @@ def model_card(card: dict, attribution: list[dict], command: str) -> str:
             "beyond, where no occluder can cast and what the network leaves is haze (onnx_ssn.reach_weights; "
             "chosen on the validation split, docs/training.md)."
         )
+    if card.get("ao_gamma", 1.0) != 1.0:
+        lines.append(
+            f"- AO gamma {card['ao_gamma']}: the engine uses the predicted AO map raised to this power, lighter "
+            "where the AOP darkens objects more than their true AO; the SR gains on every light family "
+            "(chosen on the validation split, docs/training.md)."
+        )
     if card.get("mirror_average"):
         lines.append(
             "- Mirror-averaged graphs: each runs its network on the input and on its mirror image (frames "
@@ -457,6 +463,12 @@ def parse_args(argv: list[str] | None = None) -> argparse.Namespace:
         "and the cutout (a geometry-guided SR only; 0: off)",
     )
     p.add_argument(
+        "--ao-gamma",
+        type=float,
+        default=1.0,
+        help="model.json ao_gamma: the engine raises the predicted AO map to this power (1: as predicted)",
+    )
+    p.add_argument(
         "--mirror-average",
         action="store_true",
         help="export each network as training.model.MirrorAverage (twice the compute, mirror-symmetric)",
@@ -499,6 +511,8 @@ def main(argv: list[str] | None = None) -> int:
         card["output_floor_small_lights"] = args.floor_small_lights
     if args.shadow_reach:
         card["shadow_reach"] = args.shadow_reach
+    if args.ao_gamma != 1.0:
+        card["ao_gamma"] = args.ao_gamma
     report = {}
     for module, ck_paths in (("aop", args.aop), ("sr", [args.sr])):
         if module == "aop" and reused:

@@ -15,6 +15,8 @@ faint tails), blended in by :func:`floor_for` (docs/training.md, "The output flo
 that many frame pixels (N = 256) of the card's shadow and of the cutout and fades it out beyond
 (:func:`reach_weights`, blended in by :func:`small_lights_share`): no occluder can cast a shadow far from both,
 so what the network leaves there is haze.
+``ao_gamma``, if set, calibrates the predicted AO map: ``ao ** ao_gamma`` (below 1 lightens it; chosen on the
+validation split: docs/training.md, "The AO's gamma").
 Frames are N x N (N = 256); a model trained at another R is fed resampled frames.
 """
 
@@ -152,6 +154,10 @@ class OnnxSSN:
         if isinstance(reach, bool) or not isinstance(reach, (int, float)) or not 0.0 <= reach <= FRAME:
             raise ModelError(f"{card}: shadow_reach must be a number of pixels in [0, {FRAME}], got {reach!r}")
         self.shadow_reach = float(reach)
+        gamma = meta.get("ao_gamma", 1.0)
+        if isinstance(gamma, bool) or not isinstance(gamma, (int, float)) or not 0.1 <= gamma <= 10.0:
+            raise ModelError(f"{card}: ao_gamma must be a number in [0.1, 10], got {gamma!r}")
+        self.ao_gamma = float(gamma)
         self.meta, self.model_resolution = meta, r
         self.output_floor, self.output_floor_small_lights = (float(floors[k]) for k in floors)
         self._aop = _session(model_dir / meta.get("aop", "aop.onnx"), "aop")
@@ -184,7 +190,8 @@ class OnnxSSN:
         if self.card is not None:
             for b, mask in enumerate(masks):
                 self.card.card(mask, camera_at(cameras, b))
-        return np.clip(resample_frames(ao, self.resolution), 0.0, 1.0)
+        ao = np.clip(resample_frames(ao, self.resolution), 0.0, 1.0)
+        return ao if self.ao_gamma == 1.0 else ao**self.ao_gamma
 
     def render(
         self, masks: np.ndarray, ao: np.ndarray, elms: np.ndarray, cameras: np.ndarray | None = None

@@ -140,6 +140,19 @@ def test_output_floor_removes_faint_values_and_keeps_full_shadow(tmp_path, monke
     assert np.allclose(f[inside], (s[inside] - 0.1) / 0.9, atol=1e-6)
 
 
+def test_ao_gamma_lightens_the_predicted_ao_the_renderer_gets(tmp_path, mask):
+    """``ao_gamma`` calibrates the AOP's map (ao ** gamma); an AO map given to the renderer is used as it is."""
+    plain = OnnxSSN(make_model_dir(tmp_path / "plain", 256))
+    lighter = OnnxSSN(make_model_dir(tmp_path / "lighter", 256, _card(256, ao_gamma=0.5)))
+    masks = np.stack([mask])
+    ao, calibrated = plain.predict_ao(masks), lighter.predict_ao(masks)
+    np.testing.assert_allclose(calibrated, ao**0.5, atol=1e-6)
+    inside = masks[0] == 1.0
+    assert np.allclose(ao[0][inside], 0.5, atol=1e-5) and np.allclose(calibrated[0][inside], 0.5**0.5, atol=1e-5)
+    elms = elm_for(0.5, 0.3)[None]
+    np.testing.assert_array_equal(lighter.render(masks, ao, elms), plain.render(masks, ao, elms))
+
+
 def test_one_small_light_gets_its_own_floor_and_a_broad_sky_the_general_one(tmp_path, mask):
     """A sun's shadow is hard-edged with no faint tails, so its faint values are the network's haze: the
     small-light floor removes more of them; a broad sky's faint tails are real and keep the lower floor."""
@@ -232,6 +245,8 @@ def test_graphs_named_in_the_card(tmp_path, monkeypatch, mask):
         (json.dumps(_card(256, output_floor_small_lights=True)), "output_floor_small_lights"),
         (json.dumps(_card(256, shadow_reach=-4)), "shadow_reach"),
         (json.dumps(_card(256, shadow_reach="16")), "shadow_reach"),
+        (json.dumps(_card(256, ao_gamma=0)), "ao_gamma"),
+        (json.dumps(_card(256, ao_gamma=False)), "ao_gamma"),
     ],
 )
 def test_wrong_model_card(tmp_path, monkeypatch, card_text, fragment):

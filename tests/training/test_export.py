@@ -30,7 +30,7 @@ def exported(tmp_path_factory):
     for module in ("aop", "sr"):
         assert train_main(["--module", module, "--run", str(tmp / module), *TINY], store=FakeStore(res=32)) == 0
     out = tmp / "model"
-    assert export([tmp / "aop" / "last.pt"], tmp / "sr" / "last.pt", out, tmp / "no-data", "--floor", "0.01") == 0
+    assert export([tmp / "aop" / "last.pt"], tmp / "sr" / "last.pt", out, tmp / "no-data", "--floor", "0.01", "--ao-gamma", "0.6") == 0
     return out
 
 
@@ -58,7 +58,7 @@ def test_parity_is_recorded_and_within_bound(exported):
         assert report[module]["weights"] in ("float16", "float32")
     assert report["timing"]["sr_at_R_ms"] > 0
     card = (exported / "MODEL_CARD.md").read_text()
-    assert "# SSN shadow model" in card and "Output floor 0.01" in card
+    assert "# SSN shadow model" in card and "Output floor 0.01" in card and "AO gamma 0.6" in card
 
 
 def test_the_engine_loads_the_export(exported):
@@ -66,6 +66,7 @@ def test_the_engine_loads_the_export(exported):
 
     method = OnnxSSN(exported)
     assert method.output_floor == 0.01  # export --floor reaches the engine through model.json
+    assert method.ao_gamma == 0.6  # and --ao-gamma
     masks = np.zeros((2, 256, 256), np.float32)
     masks[:, 60:200, 100:150] = 1
     ao = method.predict_ao(masks)
