@@ -30,7 +30,8 @@ def exported(tmp_path_factory):
     for module in ("aop", "sr"):
         assert train_main(["--module", module, "--run", str(tmp / module), *TINY], store=FakeStore(res=32)) == 0
     out = tmp / "model"
-    assert export([tmp / "aop" / "last.pt"], tmp / "sr" / "last.pt", out, tmp / "no-data", "--floor", "0.01", "--ao-gamma", "0.6") == 0
+    options = ("--floor", "0.01", "--ao-gamma", "0.6")
+    assert export([tmp / "aop" / "last.pt"], tmp / "sr" / "last.pt", out, tmp / "no-data", *options) == 0
     return out
 
 
