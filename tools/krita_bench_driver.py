@@ -69,6 +69,34 @@ def controller_for(doc):
     return ShadowController(EngineProcess(), host)
 
 
+def trace_replies(engine):
+    """Per request of each command: when it was sent, when its reply's first and last bytes arrived, and in how
+    many reads (the reply's bytes come through the worker's pipe as Krita's event loop reads them)."""
+    traced, sent, state = {}, {}, {"first": None, "chunks": 0}
+    request, feed = engine.request, engine._decoder.feed
+
+    def traced_request(cmd, *args, **kwargs):
+        t = time.perf_counter()
+        rid = request(cmd, *args, **kwargs)
+        sent[rid] = (cmd, t)
+        return rid
+
+    def traced_feed(data):
+        t = time.perf_counter()
+        state["first"] = state["first"] or t
+        state["chunks"] += 1
+        messages = feed(data)
+        for header, _ in messages:
+            cmd, at = sent.pop(header.get("id"), (None, None))
+            if cmd is not None:
+                traced.setdefault(cmd, []).append((at, max(state["first"], at), time.perf_counter(), state["chunks"]))
+            state["first"], state["chunks"] = None, 0
+        return messages
+
+    engine.request, engine._decoder.feed = traced_request, traced_feed
+    return traced
+
+
 def spin(controller, timeout_s):
     loop = QEventLoop()
     QTimer.singleShot(int(timeout_s * 1000), loop.quit)
@@ -99,6 +127,7 @@ def live_drag(doc, depth):
         return result
 
     c.host.write = timed_write
+    replies = trace_replies(c.engine)
     light = {"i": 0}
     editor = c.light_map.copy()
 
@@ -129,7 +158,11 @@ def live_drag(doc, depth):
         spin(c, 30)
         if len(writes) > start:
             at, info = writes[start]
-            releases.append((1e3 * (at - released), write_ms[start], sum(info["timing_ms"].values()), info["created"]))
+            sent, first, done, chunks = replies["render"][-1]
+            releases.append(
+                (1e3 * (at - released), write_ms[start], sum(info["timing_ms"].values()), info["created"])
+                + (1e3 * (sent - released), 1e3 * (done - first), chunks)
+            )
     out["live"][depth] = {
         "canvas": "2000x2000",
         "drag_s": DRAG_S,
@@ -143,6 +176,9 @@ def live_drag(doc, depth):
         "release_write_ms": _median([r[1] for r in releases]),
         "release_worker_ms": _median([r[2] for r in releases]),
         "release_undo_steps": all(r[3] for r in releases) and bool(releases),
+        "release_request_after_ms": _median([r[4] for r in releases]),
+        "release_reply_transfer_ms": _median([r[5] for r in releases]),
+        "release_reply_chunks": _median([r[6] for r in releases]),
         "total_s": round(time.perf_counter() - t0, 2),
     }
     c.engine.shutdown()

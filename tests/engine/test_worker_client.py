@@ -87,6 +87,18 @@ def test_hello(client):
     assert reply["presets"] == list(PRESETS)
 
 
+@pytest.mark.skipif(not sys.platform.startswith("linux"), reason="pipe sizes are Linux's")
+def test_the_worker_widens_its_reply_pipe(client):
+    """A layer's megabytes reach the plug-in through a 1 MiB pipe (Krita reads a reply in a few reads, not
+    hundreds of 64 KiB ones)."""
+    import fcntl
+
+    from ssn_engine.worker import PIPE_SIZE
+
+    client.request("hello")
+    assert fcntl.fcntl(client._proc.stdout.fileno(), fcntl.F_GETPIPE_SZ) == PIPE_SIZE >= 1 << 20
+
+
 @pytest.mark.parametrize("dtype", [np.uint8, np.uint16, np.float32, np.float16])
 def test_set_cutout_with_every_alpha_dtype(client, dtype):
     alpha = canvas_alpha(dtype)
