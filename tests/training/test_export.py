@@ -190,3 +190,37 @@ def test_geometry_guided_sr_exports_with_the_card_input_and_the_engine_feeds_it(
     seen = method.render(mask, ao, elm, np.array([[-300.0, 300.0]]))
     assert blind.shape == (1, 256, 256) and 0 <= blind.min() and blind.max() <= 1
     assert np.abs(blind - seen).max() > 0.05  # the camera input reaches the network through the card
+
+
+def test_a_checkpoint_rebuilt_from_the_graph_fine_tunes(exported, tmp_path):
+    """`training.onnx_weights`: an exported network's weights come back as a checkpoint that reproduces the graph
+    and that `training.train --init-from` starts from; a wrong U-Net is refused with a message."""
+    from training import checkpoint
+    from training.onnx_weights import main as rebuild_main
+
+    out = tmp_path / "rebuilt.pt"
+    assert rebuild_main([str(exported / "sr.onnx"), "--out", str(out), "--groups", "2"]) == 0
+    ck = checkpoint.load(out)
+    assert ck["parity"] <= 1e-4 and ck["unet"] == {"widths": [4, 8, 8], "groups": 2, "resolution": 32, "card": False}
+    run = tmp_path / "finetune"
+    args = ["--module", "sr", "--run", str(run), *TINY, "--init-from", str(out)]
+    assert train_main(args, store=FakeStore(res=32)) == 0
+    with pytest.raises(SystemExit, match="off the graph"):
+        rebuild_main([str(exported / "sr.onnx"), "--out", str(tmp_path / "bad.pt"), "--groups", "1"])
+    assert rebuild_main([str(exported / "aop.onnx"), "--out", str(tmp_path / "aop.pt"), "--groups", "2"]) == 0
+    assert checkpoint.load(tmp_path / "aop.pt")["module"] == "aop"
+
+
+def test_the_shipped_sr_can_be_fine_tuned_without_its_runs(tmp_path):
+    """The installed SR graph rebuilds into a geometry-guided checkpoint within the export's parity bound; the
+    installed AOP (the mean of two networks) is refused with a message."""
+    from training import checkpoint
+    from training.onnx_weights import main as rebuild_main
+
+    from ssn_engine.methods import MODEL_DIR as models
+
+    assert rebuild_main([str(models / "sr.onnx"), "--out", str(tmp_path / "sr.pt")]) == 0
+    ck = checkpoint.load(tmp_path / "sr.pt")
+    assert ck["parity"] <= 1e-4 and ck["module"] == "sr" and ck["unet"]["card"] is True
+    with pytest.raises(SystemExit, match="no single U-Net"):
+        rebuild_main([str(models / "aop.onnx"), "--out", str(tmp_path / "aop.pt")])

@@ -1,0 +1,115 @@
+"""A training checkpoint rebuilt from an exported ONNX graph, so that a shipped model can be fine-tuned where its
+training runs are gone: ``python -m training.onnx_weights ssn_engine/models/sr.onnx --out runs/sr_v34/last.pt``.
+
+The exporter (:mod:`training.export`) keeps the convolutions' names (``net.<parameter>``) and folds each
+GroupNorm's weight and bias into two anonymous constants, in the order the forward pass uses them; the network's
+own GroupNorms, in module order, take them back. The rebuilt network is checked against the graph on random
+inputs (``--tol``).
+"""
+
+from __future__ import annotations
+
+import argparse
+import re
+from pathlib import Path
+
+import numpy as np
+import onnx
+import torch
+from onnx import numpy_helper
+
+from . import checkpoint
+from .export import parity
+from .model import UNetConfig, build
+
+PREFIX = "net."  # training.export.Clamped's attribute
+TOL = 1e-4
+
+
+def _serial(name: str) -> int:
+    """The exporter's running number of an anonymous constant (``onnx::Mul_1935`` -> 1935)."""
+    found = re.search(r"_(\d+)$", name)
+    if found is None:
+        raise ValueError(f"unexpected constant {name!r} in the graph")
+    return int(found.group(1))
+
+
+def graph_config(model: onnx.ModelProto, groups: int = 8) -> tuple[str, UNetConfig]:
+    """The module ("aop" or "sr") and the U-Net configuration of an exported graph (``groups``: the GroupNorm
+    groups it was trained with, which the graph keeps only inside its reshapes)."""
+    inputs = {i.name: i for i in model.graph.input}
+    module = "sr" if "elm" in inputs else "aop"
+    r = inputs["mask"].type.tensor_type.shape.dim[-1].dim_value
+    convs = [i for i in model.graph.initializer if re.fullmatch(r"net\.unet\.encoder\.\d+\.0\.0\.weight", i.name)]
+    if not convs:
+        raise ValueError("the graph holds no single U-Net (the shipped AOP is the mean of two: not supported)")
+    widths = tuple(int(i.dims[0]) for i in sorted(convs, key=lambda i: int(i.name.split(".")[3])))
+    return module, UNetConfig(widths=widths, groups=groups, resolution=int(r), card="card" in inputs)
+
+
+def state_dict_from_graph(model: onnx.ModelProto, net: torch.nn.Module) -> dict[str, torch.Tensor]:
+    """``net``'s state dict with the graph's weights (shapes checked; every parameter must be found)."""
+    inits = model.graph.initializer
+    named = {i.name[len(PREFIX) :]: numpy_helper.to_array(i) for i in inits if i.name.startswith(PREFIX)}
+    folded = [
+        numpy_helper.to_array(i).reshape(-1)
+        for i in sorted((i for i in inits if not i.name.startswith(PREFIX)), key=lambda i: _serial(i.name))
+    ]
+    target = net.state_dict()
+    norms = [k for k in target if k not in named]  # the GroupNorms' weight and bias, in module order
+    if len(norms) != len(folded):
+        raise ValueError(f"the graph folds {len(folded)} normalisation tensors, the network has {len(norms)}")
+    out = {}
+    for key, array in [*named.items(), *zip(norms, folded, strict=True)]:
+        if key not in target or target[key].numel() != array.size:
+            raise ValueError(f"{key}: the graph's {array.shape} does not fit the network")
+        out[key] = torch.from_numpy(np.array(array, np.float32)).reshape(target[key].shape)
+    return out
+
+
+def rebuild(path: Path, groups: int = 8, tol: float = TOL) -> tuple[torch.nn.Module, dict]:
+    """The network of an exported graph and a checkpoint dict that ``training.train --init-from`` accepts."""
+    model = onnx.load(str(path))
+    module, config = graph_config(model, groups)
+    net = build(module, config)
+    net.load_state_dict(state_dict_from_graph(model, net))
+    net.eval()
+    rng = np.random.default_rng(0)
+    r = config.resolution
+    mask = (rng.random((4, 1, r, r)) > 0.5).astype(np.float32)
+    elm = rng.random((4, 16, 32)).astype(np.float32)
+    x = {"mask": mask, "ao": rng.random(mask.shape, np.float32), "elm": elm / elm.max(), "card": mask * 0.5}
+    diff = parity(path, net, module, x)
+    if diff > tol:
+        raise ValueError(f"the rebuilt network is {diff:.2e} off the graph (tolerance {tol:g}; --groups?)")
+    ck = {
+        "model": net.state_dict(),
+        "step": 0,
+        "samples": 0,
+        "module": module,
+        "target": "shadow",  # what training.train records for both modules by default
+        "unet": config.to_dict(),
+        "rebuilt_from": str(path),
+        "parity": diff,
+    }
+    return net, ck
+
+
+def main(argv: list[str] | None = None) -> int:
+    p = argparse.ArgumentParser(prog="python -m training.onnx_weights", description=__doc__.splitlines()[0])
+    p.add_argument("graph", type=Path, help="aop.onnx or sr.onnx")
+    p.add_argument("--out", type=Path, required=True, help="checkpoint to write")
+    p.add_argument("--groups", type=int, default=8, help="GroupNorm groups of the trained network")
+    p.add_argument("--tol", type=float, default=TOL, help="largest difference allowed from the graph")
+    args = p.parse_args(argv)
+    try:
+        _, ck = rebuild(args.graph, args.groups, args.tol)
+    except ValueError as exc:
+        raise SystemExit(f"{args.graph}: {exc}") from None
+    checkpoint.save(args.out, ck)
+    print(f"{args.out}: {ck['module']} {ck['unet']}, {ck['parity']:.1e} off {args.graph}")
+    return 0
+
+
+if __name__ == "__main__":
+    raise SystemExit(main())
