@@ -18,7 +18,7 @@ import numpy as np
 from ssn_engine.hemisphere import stratified_directions, texel_weights
 from training.data import meshes, sources, spans
 from training.data import render_bases as rb
-from training.data.generate import view_specs
+from training.data.views import view_specs
 
 
 def pick_items(count: int) -> list[sources.Item]:

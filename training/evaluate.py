@@ -25,6 +25,7 @@ import torch
 
 from ssn_engine.frames import resample_frames
 
+from .data.views import pitch_groups
 from .batches import irradiance_to_shadow, view_key
 from .checkpoint import load_models
 from .elm import render_lights, sample_lights
@@ -215,9 +216,10 @@ def evaluate(args: argparse.Namespace, store=None) -> dict:
             prog.update(j + 1, group)
         prog.close()
         by_pitch = {}
-        for q in sorted(set(pitches)):
-            rows = [b for b, x in enumerate(pitches) if x == q]
-            by_pitch[f"{q:g}"] = {
+        labels = pitch_groups(pitches)
+        for q in sorted(set(labels), key=lambda g: float(g.split("-")[0])):
+            rows = [b for b, x in enumerate(labels) if x == q]
+            by_pitch[q] = {
                 "images": len(rows),
                 "metrics": {m: mean_metrics([per[m][b] for b in rows]) for m in methods},
             }
@@ -260,7 +262,7 @@ class AOFailures:
 
 
 def pitch_table(results: dict) -> list[str]:
-    """ZNCC and DSSIM per camera pitch (the views' pitch: 0, 15, 30 degrees)."""
+    """ZNCC and DSSIM per camera pitch (the views' pitch, 0, 15 or 30 degrees, or its range: ``pitch_groups``)."""
     methods = results["methods"]
     lines = [
         "### By camera pitch (ZNCC / DSSIM)\n",

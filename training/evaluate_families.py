@@ -18,6 +18,7 @@ from pathlib import Path
 
 import numpy as np
 
+from .data.views import pitch_groups
 from .batches import camera_input
 from .elm import FAMILIES, render_lights, sample_family
 from .metrics import NAMES, all_metrics, mean_metrics, sun_geometry
@@ -169,9 +170,10 @@ def summarise(records: list[dict], labels: list[str], families: list[str]) -> di
             part = [r for r in recs if r["kind"] == kind]
             if part:
                 fam["kinds"][kind] = {"images": len(part), **_means(part, labels)}
-        for pitch in sorted({r["pitch"] for r in recs}):
-            part = [r for r in recs if r["pitch"] == pitch]
-            fam["pitches"][f"{pitch:g}"] = {"images": len(part), **_means(part, labels)}
+        groups = pitch_groups([r["pitch"] for r in recs])
+        for group in sorted(set(groups), key=lambda g: float(g.split("-")[0])):
+            part = [r for r, g in zip(recs, groups, strict=True) if g == group]
+            fam["pitches"][group] = {"images": len(part), **_means(part, labels)}
         if family == "sun":
             fam["geometry"] = {}
             for lab in labels:

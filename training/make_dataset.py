@@ -19,6 +19,7 @@ import traceback
 from pathlib import Path
 
 from training.data import writer
+from training.data.views import FOV_RANGE, PITCH_RANGE, PITCHES, VIEWS, YAWS
 from training.progress import Progress
 from training.data.sources import SOURCES, all_items
 from training.data.store import DATASET_JSON
@@ -41,6 +42,13 @@ def parse_args(argv: list[str] | None = None) -> argparse.Namespace:
     p.add_argument("--limit", type=int, default=0, help="only the first LIMIT items of the ordered list")
     p.add_argument("--only", default="", help="comma list of item ids to render")
     p.add_argument("--threads", type=int, default=0, help="numba threads per worker (0: cores / workers)")
+    p.add_argument(
+        "--cameras",
+        choices=["paper", "continuous"],
+        default="paper",
+        help="the paper's 15 views (yaw 0, +-45, +-90 x pitch 0, 15, 30) or 15 views at uniformly drawn yaw "
+        "(any angle) and pitch (0 to 30 degrees)",
+    )
     p.add_argument("--no-card", action="store_true", help="skip the dataset card and contact sheet")
     p.add_argument("--card-only", action="store_true", help="only rewrite the card and contact sheet")
     return p.parse_args(argv)
@@ -55,9 +63,9 @@ def _init_worker(threads: int) -> None:
 def _run_item(job: tuple) -> dict:
     from training.data.generate import render_item
 
-    item, root, res, elm_rows, samples, seed = job
+    item, root, res, elm_rows, samples, seed, cameras = job
     try:
-        return render_item(item, root, res, elm_rows, samples, seed)
+        return render_item(item, root, res, elm_rows, samples, seed, cameras)
     except Exception:  # one broken shape must not stop the run; it is reported and retried next run
         return {"id": item.id, "error": traceback.format_exc()}
 
@@ -70,10 +78,11 @@ def _dataset_meta(args: argparse.Namespace) -> dict:
         "elm_rows": args.elm_rows,
         "samples_per_texel": args.samples,
         "seed": args.seed,
-        "views_per_mesh": 15,
-        "yaws": [0, 45, -45, 90, -90],
-        "pitches": [0, 15, 30],
-        "fov_range": [35, 55],
+        "views_per_mesh": VIEWS,
+        "cameras": args.cameras,
+        "yaws": list(YAWS) if args.cameras == "paper" else "uniform in [-180, 180)",
+        "pitches": list(PITCHES) if args.cameras == "paper" else f"uniform in {list(PITCH_RANGE)}",
+        "fov_range": list(FOV_RANGE),
     }
 
 
@@ -81,7 +90,8 @@ def _check_meta(root: Path, meta: dict) -> None:
     path = root / DATASET_JSON
     if path.exists():
         old = json.loads(path.read_text())
-        for key in ("res", "elm_rows", "samples_per_texel", "seed", "version"):
+        old.setdefault("cameras", "paper")  # sets made before the setting existed
+        for key in ("res", "elm_rows", "samples_per_texel", "seed", "version", "cameras"):
             if old.get(key) != meta[key]:
                 sys.exit(f"{path}: {key} is {old.get(key)!r}, this run asks for {meta[key]!r}; use another --out")
     else:
@@ -115,7 +125,7 @@ def main(argv: list[str] | None = None) -> int:
             file=sys.stderr,
             flush=True,
         )
-        jobs = [(it, root, args.res, args.elm_rows, args.samples, args.seed) for it in todo]
+        jobs = [(it, root, args.res, args.elm_rows, args.samples, args.seed, args.cameras) for it in todo]
         threads = args.threads or max(1, (os.cpu_count() or 1) // max(args.workers, 1))
         start = time.time()
         progress, done, views = Progress(len(jobs), every=1), 0, 0

@@ -108,6 +108,29 @@ def test_mismatched_settings_are_refused(dataset):
         make_dataset.main(["--out", str(dataset), *ARGS[:-6], "--res", "64", "--workers", "1"])
 
 
+def test_continuous_cameras(dataset, tmp_path):
+    """--cameras continuous: 15 views a shape at drawn yaws (any angle) and pitches (0 to 30 degrees), each
+    rendered with its own camera; the paper's set refuses to be continued with them; tables group its pitches."""
+    with pytest.raises(SystemExit, match="cameras"):
+        make_dataset.main(["--out", str(dataset), *ARGS, "--limit", "4", "--cameras", "continuous"])
+    assert make_dataset.main(["--out", str(tmp_path), *ARGS, "--limit", "2", "--cameras", "continuous"]) == 0
+    store = ViewStore(tmp_path)
+    infos = [store.info(i) for i in range(len(store))]
+    yaws, pitches = np.array([v["yaw"] for v in infos]), np.array([v["pitch"] for v in infos])
+    assert len(infos) == 30 and len(set(pitches)) == 30 and len(set(yaws)) == 30
+    assert pitches.min() >= 0 and pitches.max() <= 30 and yaws.min() >= -180 and yaws.max() < 180
+    assert np.abs(yaws).max() > 90  # beyond the paper's +-90
+    assert json.loads((tmp_path / "dataset.json").read_text())["cameras"] == "continuous"
+    assert "pitch uniform in [0, 30]" in (tmp_path / "card.md").read_text()
+    from training.data.views import pitch_groups
+
+    assert pitch_groups([0.0, 15.0, 30.0]) == ["0", "15", "30"]
+    assert pitch_groups([0.0, 12.5, 29.0, 30.0]) == ["0-10", "10-20", "20-30", "20-30"]
+    # the same shape seen from a drawn, not a gridded, camera: a different mask
+    paper = ViewStore(dataset)
+    assert not any(np.array_equal(store.load(0).mask, paper.load(i).mask) for i in range(len(paper)))
+
+
 def test_spans_round_trip_and_quantisation():
     rng = np.random.default_rng(1)
     occ = (rng.random((5, 40, 40)) < 0.1) * rng.integers(1, 256, (5, 40, 40))

@@ -8,6 +8,11 @@ from pathlib import Path
 
 from .store import ViewStore
 
+VIEWS_TEXT = {
+    "paper": "yaw 0, +-45, +-90 x pitch 0, 15, 30",
+    "continuous": "yaw uniform in [-180, 180), pitch uniform in [0, 30]",
+}
+
 
 def summarise(root: Path) -> dict:
     """Figures of the finished meshes under ``root``."""
@@ -36,6 +41,7 @@ def summarise(root: Path) -> dict:
         "elm_grid": [store.meta["elm_rows"], 2 * store.meta["elm_rows"]],
         "samples_per_texel": store.meta["samples_per_texel"],
         "seed": store.meta["seed"],
+        "cameras": store.meta.get("cameras", "paper"),
         "meshes": len(meshes),
         "views": n_views,
         "meshes_per_split": dict(Counter(m["split"] for m in meshes)),
@@ -64,7 +70,7 @@ def write_card(root: Path) -> dict:
         "",
         f"- frame N = {s['res']}, basis grid {s['elm_grid'][0]} x {s['elm_grid'][1]}, "
         f"{s['samples_per_texel']} stratified jittered directions per texel, seed {s['seed']}",
-        f"- meshes {s['meshes']}, views {s['views']} (15 per mesh: yaw 0, +-45, +-90 x pitch 0, 15, 30; "
+        f"- meshes {s['meshes']}, views {s['views']} (15 per mesh: {VIEWS_TEXT[s.get('cameras', 'paper')]}; "
         "fov uniform in 35..55)",
         f"- size {s['bytes'] / 2**30:.2f} GiB, {s['bytes_per_view'] / 2**20:.2f} MiB per view",
         f"- render time {s['render_cpu_seconds'] / 3600:.2f} h in one worker, "

@@ -12,31 +12,26 @@ from .items import Item, stable_hash
 from .render_bases import render_view
 from .sources import build_mesh
 from .spans import quantise_counts
-
-YAWS = (0.0, 45.0, -45.0, 90.0, -90.0)
-PITCHES = (0.0, 15.0, 30.0)
-FOV_RANGE = (35.0, 55.0)
-
-
-def view_specs() -> list[tuple[float, float]]:
-    """The paper's 15 views: (yaw, pitch) for yaw in 0, 45, -45, 90, -90 and pitch in 0, 15, 30."""
-    return [(yaw, pitch) for yaw in YAWS for pitch in PITCHES]
+from .views import VIEWS, draw_view
 
 
 def view_rng(seed: int, uid: str, k: int) -> np.random.Generator:
-    """The generator of view k of item ``uid``: draws the field of view, then the texel jitter."""
+    """The generator of view k of item ``uid``: draws the camera (:func:`~.views.draw_view`), then the texel jitter."""
     return np.random.default_rng([seed, stable_hash(uid), k])
 
 
-def render_item(item: Item, root: Path, res: int, elm_rows: int, samples: int, seed: int) -> dict:
-    """Render the 15 views of ``item`` into ``root``; returns a summary (views, seconds, bytes)."""
+def render_item(
+    item: Item, root: Path, res: int, elm_rows: int, samples: int, seed: int, cameras: str = "paper"
+) -> dict:
+    """Render the 15 views of ``item`` into ``root`` (cameras: :func:`draw_view`); returns a summary (views,
+    seconds, bytes)."""
     t0 = time.perf_counter()
     mesh = build_mesh(item)
     topo = meshes.topology(mesh)
     masks, aos, occs, records = [], [], [], []
-    for k, (yaw, pitch) in enumerate(view_specs()):
+    for k in range(VIEWS):
         rng = view_rng(seed, item.id, k)
-        fov = float(rng.uniform(*FOV_RANGE))
+        yaw, pitch, fov = draw_view(k, rng, cameras)
         t = time.perf_counter()
         r = render_view(mesh, topo, yaw, pitch, fov, res, elm_rows, samples, rng)
         occs.append(quantise_counts(r.counts.reshape(-1, res, res), samples))
@@ -62,6 +57,7 @@ def render_item(item: Item, root: Path, res: int, elm_rows: int, samples: int, s
         "elm_rows": elm_rows,
         "samples": samples,
         "seed": seed,
+        "cameras": cameras,
     }
     nbytes = writer.write_mesh(root, item.id, masks, aos, occs, info)
     return {"id": item.id, "views": len(records), "seconds": seconds, "bytes": nbytes}
