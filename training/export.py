@@ -384,7 +384,9 @@ def model_card(card: dict, attribution: list[dict], command: str) -> str:
 
 def training_summary(path: Path, ck: dict) -> str:
     """How long a checkpoint trained (from its run's log.csv), following ``--init-from`` back to the run it was
-    fine-tuned from."""
+    fine-tuned from (a checkpoint rebuilt from a graph, :mod:`training.onnx_weights`, carries its record)."""
+    if "rebuilt_from" in ck:
+        return ck.get("training") or f"the network of {ck['rebuilt_from']}"
     log = path.with_name("log.csv")
     rows = log.read_text().splitlines()[1:] if log.is_file() else []
     minutes = f"{float(rows[-1].split(',')[5]) / 60:.0f} min of training time, " if rows else ""

@@ -10,6 +10,7 @@ inputs (``--tol``).
 from __future__ import annotations
 
 import argparse
+import json
 import re
 from pathlib import Path
 
@@ -67,6 +68,17 @@ def state_dict_from_graph(model: onnx.ModelProto, net: torch.nn.Module) -> dict[
     return out
 
 
+def _training_record(path: Path, module: str) -> str | None:
+    """How the graph's network was trained, from the model.json beside it (the SR's record), if any."""
+    meta = path.with_name("model.json")
+    if module != "sr" or not meta.is_file():
+        return None
+    try:
+        return json.loads(meta.read_text()).get("sr_training")
+    except (OSError, json.JSONDecodeError):
+        return None
+
+
 def rebuild(path: Path, groups: int = 8, tol: float = TOL) -> tuple[torch.nn.Module, dict]:
     """The network of an exported graph and a checkpoint dict that ``training.train --init-from`` accepts."""
     model = onnx.load(str(path))
@@ -91,6 +103,7 @@ def rebuild(path: Path, groups: int = 8, tol: float = TOL) -> tuple[torch.nn.Mod
         "unet": config.to_dict(),
         "rebuilt_from": str(path),
         "parity": diff,
+        "training": _training_record(path, module),
     }
     return net, ck
 

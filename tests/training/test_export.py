@@ -222,5 +222,6 @@ def test_the_shipped_sr_can_be_fine_tuned_without_its_runs(tmp_path):
     assert rebuild_main([str(models / "sr.onnx"), "--out", str(tmp_path / "sr.pt")]) == 0
     ck = checkpoint.load(tmp_path / "sr.pt")
     assert ck["parity"] <= 1e-4 and ck["module"] == "sr" and ck["unet"]["card"] is True
+    assert ck["training"] == json.loads((models / "model.json").read_text())["sr_training"]  # for the next card
     with pytest.raises(SystemExit, match="no single U-Net"):
         rebuild_main([str(models / "aop.onnx"), "--out", str(tmp_path / "aop.pt")])
