@@ -19,7 +19,7 @@ import traceback
 from pathlib import Path
 
 from training.data import writer
-from training.data.views import FOV_RANGE, PITCH_RANGE, PITCHES, VIEWS, YAWS
+from training.data.views import CAMERAS, FOV_RANGE, PITCH_RANGE, PITCHES, VIEWS, YAWS
 from training.progress import Progress
 from training.data.sources import SOURCES, all_items
 from training.data.store import DATASET_JSON
@@ -44,7 +44,7 @@ def parse_args(argv: list[str] | None = None) -> argparse.Namespace:
     p.add_argument("--threads", type=int, default=0, help="numba threads per worker (0: cores / workers)")
     p.add_argument(
         "--cameras",
-        choices=["paper", "continuous"],
+        choices=CAMERAS,
         default="paper",
         help="the paper's 15 views (yaw 0, +-45, +-90 x pitch 0, 15, 30) or 15 views at uniformly drawn yaw "
         "(any angle) and pitch (0 to 30 degrees)",
