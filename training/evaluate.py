@@ -216,9 +216,7 @@ def evaluate(args: argparse.Namespace, store=None) -> dict:
             prog.update(j + 1, group)
         prog.close()
         by_pitch = {}
-        labels = pitch_groups(pitches)
-        for q in sorted(set(labels), key=lambda g: float(g.split("-")[0])):
-            rows = [b for b, x in enumerate(labels) if x == q]
+        for q, rows in pitch_groups(pitches).items():
             by_pitch[q] = {
                 "images": len(rows),
                 "metrics": {m: mean_metrics([per[m][b] for b in rows]) for m in methods},

@@ -170,9 +170,8 @@ def summarise(records: list[dict], labels: list[str], families: list[str]) -> di
             part = [r for r in recs if r["kind"] == kind]
             if part:
                 fam["kinds"][kind] = {"images": len(part), **_means(part, labels)}
-        groups = pitch_groups([r["pitch"] for r in recs])
-        for group in sorted(set(groups), key=lambda g: float(g.split("-")[0])):
-            part = [r for r, g in zip(recs, groups, strict=True) if g == group]
+        for group, rows in pitch_groups([r["pitch"] for r in recs]).items():
+            part = [recs[i] for i in rows]
             fam["pitches"][group] = {"images": len(part), **_means(part, labels)}
         if family == "sun":
             fam["geometry"] = {}

@@ -19,7 +19,7 @@ import traceback
 from pathlib import Path
 
 from training.data import writer
-from training.data.views import CAMERAS, FOV_RANGE, PITCH_RANGE, PITCHES, VIEWS, YAWS
+from training.data.views import CAMERA_TEXT, CAMERAS, FOV_RANGE, PITCH_RANGE, PITCHES, VIEWS, YAW_RANGE, YAWS
 from training.progress import Progress
 from training.data.sources import SOURCES, all_items
 from training.data.store import DATASET_JSON
@@ -46,8 +46,7 @@ def parse_args(argv: list[str] | None = None) -> argparse.Namespace:
         "--cameras",
         choices=CAMERAS,
         default="paper",
-        help="the paper's 15 views (yaw 0, +-45, +-90 x pitch 0, 15, 30) or 15 views at uniformly drawn yaw "
-        "(any angle) and pitch (0 to 30 degrees)",
+        help=f"the 15 views of each shape: paper ({CAMERA_TEXT['paper']}) or continuous ({CAMERA_TEXT['continuous']})",
     )
     p.add_argument("--no-card", action="store_true", help="skip the dataset card and contact sheet")
     p.add_argument("--card-only", action="store_true", help="only rewrite the card and contact sheet")
@@ -80,7 +79,7 @@ def _dataset_meta(args: argparse.Namespace) -> dict:
         "seed": args.seed,
         "views_per_mesh": VIEWS,
         "cameras": args.cameras,
-        "yaws": list(YAWS) if args.cameras == "paper" else "uniform in [-180, 180)",
+        "yaws": list(YAWS) if args.cameras == "paper" else f"uniform in {list(YAW_RANGE)}",
         "pitches": list(PITCHES) if args.cameras == "paper" else f"uniform in {list(PITCH_RANGE)}",
         "fov_range": list(FOV_RANGE),
     }

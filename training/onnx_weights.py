@@ -1,5 +1,6 @@
 """A training checkpoint rebuilt from an exported ONNX graph, so that a shipped model can be fine-tuned where its
-training runs are gone: ``python -m training.onnx_weights ssn_engine/models/sr.onnx --out runs/sr_v34/last.pt``.
+training runs are gone: ``python -m training.onnx_weights ssn_engine/models/sr.onnx --out runs/sr_v34/base.pt``
+(then ``--init-from`` it; not a run folder's ``last.pt``, which ``training.train`` would try to resume).
 
 The exporter (:mod:`training.export`) keeps the convolutions' names (``net.<parameter>``) and folds each
 GroupNorm's weight and bias into two anonymous constants, in the order the forward pass uses them; the network's
@@ -20,11 +21,10 @@ import torch
 from onnx import numpy_helper
 
 from . import checkpoint
-from .export import parity
+from .export import TOL, parity
 from .model import UNetConfig, build
 
 PREFIX = "net."  # training.export.Clamped's attribute
-TOL = 1e-4
 
 
 def _serial(name: str) -> int:

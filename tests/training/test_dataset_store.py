@@ -124,8 +124,8 @@ def test_continuous_cameras(dataset, tmp_path):
     assert "pitch uniform in [0, 30]" in (tmp_path / "card.md").read_text()
     from training.data.views import pitch_groups
 
-    assert pitch_groups([0.0, 15.0, 30.0]) == ["0", "15", "30"]
-    assert pitch_groups([0.0, 12.5, 29.0, 30.0]) == ["0-10", "10-20", "20-30", "20-30"]
+    assert pitch_groups([15.0, 0.0, 30.0, 0.0]) == {"0": [1, 3], "15": [0], "30": [2]}
+    assert pitch_groups([29.0, 0.0, 12.5, 30.0]) == {"0-10": [1], "10-20": [2], "20-30": [0, 3]}
     # the same shape seen from a drawn, not a gridded, camera: a different mask
     paper = ViewStore(dataset)
     assert not any(np.array_equal(store.load(0).mask, paper.load(i).mask) for i in range(len(paper)))

@@ -7,11 +7,7 @@ from collections import Counter
 from pathlib import Path
 
 from .store import ViewStore
-
-VIEWS_TEXT = {
-    "paper": "yaw 0, +-45, +-90 x pitch 0, 15, 30",
-    "continuous": "yaw uniform in [-180, 180), pitch uniform in [0, 30]",
-}
+from .views import CAMERA_TEXT
 
 
 def summarise(root: Path) -> dict:
@@ -70,7 +66,7 @@ def write_card(root: Path) -> dict:
         "",
         f"- frame N = {s['res']}, basis grid {s['elm_grid'][0]} x {s['elm_grid'][1]}, "
         f"{s['samples_per_texel']} stratified jittered directions per texel, seed {s['seed']}",
-        f"- meshes {s['meshes']}, views {s['views']} (15 per mesh: {VIEWS_TEXT[s.get('cameras', 'paper')]}; "
+        f"- meshes {s['meshes']}, views {s['views']} (15 per mesh: {CAMERA_TEXT[s.get('cameras', 'paper')]}; "
         "fov uniform in 35..55)",
         f"- size {s['bytes'] / 2**30:.2f} GiB, {s['bytes_per_view'] / 2**20:.2f} MiB per view",
         f"- render time {s['render_cpu_seconds'] / 3600:.2f} h in one worker, "
