@@ -56,14 +56,21 @@ def camera_input(info: dict, n: int) -> tuple[float, float]:
     return horizon_row(n, info["focal"], info["pitch"], info["shift"]), float(info["focal"])
 
 
-def card_bases(card: GeometricCard, mask: np.ndarray, camera: tuple[float, float] | None) -> np.ndarray:
-    """The card's hard-shadow bases of a frame mask on the full R x R grid, (T, R*R) uint8 (x 255)."""
+def card_bases(
+    card: GeometricCard, mask: np.ndarray, camera: tuple[float, float] | None, resolution: int
+) -> np.ndarray:
+    """The hard-shadow bases of a frame mask's card (or proxy) on the full R x R grid, (T, R*R) uint8 (x 255); a
+    card traced on a coarser grid is resampled as the engine resamples its shadows (the resampling is linear, so
+    the bases' weighted sum is the engine's resampled shadow)."""
     traced = card.card(mask, camera)
     traced.trace()
-    out = np.zeros((texel_weights(16).size, card.internal**2), np.uint8)
+    m = card.internal
+    full = np.zeros((texel_weights(16).size, m * m), np.float32)
     if not traced.empty:
-        out[:, traced.valid.ravel()] = np.rint(traced.bases * 255)
-    return out
+        full[:, traced.valid.ravel()] = traced.bases
+    if m != resolution:
+        full = resample_frames(full.reshape(-1, m, m), resolution).reshape(len(full), -1)
+    return np.rint(np.clip(full, 0.0, 1.0) * 255).astype(np.uint8)
 
 
 def view_key(store, i: int) -> tuple:
@@ -73,10 +80,11 @@ def view_key(store, i: int) -> tuple:
 
 
 def load_view(
-    store, i: int, resolution: int, with_occ: bool = True, with_card: bool = False, predict_ao=None
+    store, i: int, resolution: int, with_occ: bool = True, card: GeometricCard | None = None, predict_ao=None
 ) -> CachedView:
     """Load view ``i`` of ``store`` and bring it to ``resolution`` (``with_occ`` False: no bases, for AOP;
-    ``with_card``: the card's bases for the default and the true camera; ``predict_ao``: a function of masks
+    ``card``: the bases of this card method (the geometric card, or the height proxy) for the default and the
+    true camera; ``predict_ao``: a function of masks
     (B, R, R) -> AO maps whose prediction the view keeps)."""
     v = store.load(i)
     t = v.occlusion.shape[0] * v.occlusion.shape[1]
@@ -88,10 +96,10 @@ def load_view(
     mask = resample_frames(v.mask[None], resolution)[0]
     ao = resample_frames(v.ao[None], resolution)[0]
     cards = None
-    if with_card:
-        card = GeometricCard(internal=resolution)
+    if card is not None:
         n = v.mask.shape[-1]
-        cards = (card_bases(card, v.mask, None), card_bases(card, v.mask, camera_input(v.info, n)))
+        true_camera = camera_input(v.info, n)
+        cards = (card_bases(card, v.mask, None, resolution), card_bases(card, v.mask, true_camera, resolution))
     ao_pred = None if predict_ao is None else predict_ao(mask[None])[0]
     return CachedView(view_key(store, i), mask, np.clip(ao, 0.0, 1.0), occ, cards, ao_pred)
 
@@ -134,11 +142,11 @@ class ViewCache:
         kind: str | None = None,
         with_occ: bool = True,
         balance_kinds: bool = False,
-        with_card: bool = False,
+        card: GeometricCard | None = None,
         predict_ao=None,
     ):
         self.resolution, self.max_views, self.split, self.kind = resolution, max_views, split, kind
-        self.with_occ, self.balance_kinds, self.with_card = with_occ, balance_kinds, with_card
+        self.with_occ, self.balance_kinds, self.card = with_occ, balance_kinds, card
         self.predict_ao = predict_ao
         self.views: dict[tuple, CachedView] = {}
         self.open(store)
@@ -183,7 +191,7 @@ class ViewCache:
             self.views[k] = self._load(k)
 
     def _load(self, key: tuple) -> CachedView:
-        return load_view(self.store, self.keys[key], self.resolution, self.with_occ, self.with_card, self.predict_ao)
+        return load_view(self.store, self.keys[key], self.resolution, self.with_occ, self.card, self.predict_ao)
 
     def get(self, key: tuple) -> CachedView:
         if key not in self.views:

@@ -53,6 +53,13 @@ def add_arguments(p: argparse.ArgumentParser) -> None:
         help="--families: also evaluate NAME (a --model name or 'geometric') with the true camera",
     )
     p.add_argument(
+        "--proxy-of",
+        action="append",
+        default=[],
+        metavar="NAME",
+        help="--families: also evaluate model NAME's height proxy alone (its hard shadows summed, as the card's are)",
+    )
+    p.add_argument(
         "--with-gt-ao",
         action="append",
         default=[],
@@ -79,6 +86,7 @@ class Row:
 
 def build_rows(args: argparse.Namespace, n: int) -> list[Row]:
     from ssn_engine.methods import GeometricCard, OnnxSSN
+    from ssn_engine.methods.height_proxy import HeightProxy
 
     methods = {"geometric": GeometricCard(resolution=n)}
     for spec in args.model:
@@ -88,6 +96,11 @@ def build_rows(args: argparse.Namespace, n: int) -> list[Row]:
         methods[name] = OnnxSSN(folder)
         if methods[name].resolution != n:
             raise SystemExit(f"{folder} renders {methods[name].resolution}-pixel frames; the data has N = {n}")
+    for name in args.proxy_of:
+        proxy = getattr(methods[name], "card", None)
+        if not isinstance(proxy, HeightProxy):
+            raise SystemExit(f"--proxy-of {name}: that model has no height graph")
+        methods[f"{name} proxy"] = proxy
     rows = [Row(name, m) for name, m in methods.items()]
     for name in args.with_camera:
         rows.append(Row(f"{name} + camera", methods[name], camera=True))

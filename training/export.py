@@ -64,18 +64,22 @@ def _swap_group_norms(module: nn.Module) -> None:
             _swap_group_norms(child)
 
 
+def for_export(net: nn.Module) -> nn.Module:
+    """A copy of ``net`` with :class:`TwoPassGroupNorm` in place of every GroupNorm."""
+    import copy
+
+    net = copy.deepcopy(net)
+    _swap_group_norms(net)
+    return net
+
+
 class Clamped(nn.Module):
     """The network with its output clamped to [0, 1] (the contract's range); ``export_form`` swaps in
     :class:`TwoPassGroupNorm` (on a copy)."""
 
     def __init__(self, net: nn.Module, export_form: bool = False):
         super().__init__()
-        if export_form:
-            import copy
-
-            net = copy.deepcopy(net)
-            _swap_group_norms(net)
-        self.net = net
+        self.net = for_export(net) if export_form else net
 
     def forward(self, *inputs: torch.Tensor) -> torch.Tensor:
         return self.net(*inputs).clamp(0.0, 1.0)
@@ -310,6 +314,15 @@ def model_card(card: dict, attribution: list[dict], command: str) -> str:
             f"- {m.upper()}: {mean}{runs}{reused}, {r['weights']} weights, "
             f"{r['bytes'] / 1e6:.2f} MB, max abs diff to torch {r['max_abs_diff']:.1e}"
         )
+    if card.get("height"):
+        lines.append(
+            f"- Height proxy ({card['height']}, {ex['height']['bytes'] / 1e6:.2f} MB, "
+            f"from `{ex['height']['source']}`): "
+            "a U-Net reads the near and far pixel heights of every masked pixel and the camera (horizon row, "
+            "focal length) from the mask; the cutout becomes the volume between those two surfaces, placed with "
+            f"the camera input or, blind, the estimate, and its hard shadows are traced on a {card['proxy_internal']} "
+            "grid (`ssn_engine.methods.height_proxy`). The SR takes that proxy's shadow where a flat card's was."
+        )
     if card.get("card_input"):
         lines.append(
             "- Geometry-guided SR: it also takes the engine's geometric card shadow for the same light map "
@@ -481,6 +494,14 @@ def parse_args(argv: list[str] | None = None) -> argparse.Namespace:
         help="with an installed, mirror-averaged aop.onnx as --aop: reuse it without its mirror average "
         "(each network once; half the AOP's compute)",
     )
+    p.add_argument(
+        "--height",
+        help="a HeightNet checkpoint (python -m training.heights train) or its graph: ships as height.onnx, and "
+        "the engine feeds the SR the height proxy's shadow in the card's place (an SR trained with --proxy)",
+    )
+    p.add_argument(
+        "--proxy-internal", type=int, default=64, help="--height: model.json proxy_internal, the proxy's tracing grid"
+    )
     p.add_argument("--install", help="copy the model here (e.g. ssn_engine/models)")
     p.add_argument(
         "--command",
@@ -566,6 +587,21 @@ def main(argv: list[str] | None = None) -> int:
         )
     sr_ck = load_models([args.sr])[1][0]
     card["card_input"] = bool(sr_ck["unet"].get("card"))
+    if bool(sr_ck["args"].get("proxy")) != bool(args.height):
+        trained = "on the height proxy (train --proxy)" if sr_ck["args"].get("proxy") else "on the flat card"
+        must = "must" if args.height is None else "must not"
+        print(f"{args.sr} was trained {trained}: --height {must} be given", file=sys.stderr)
+        return 1
+    if args.height:
+        from .heights import export as export_height
+
+        graph = out / "height.onnx"
+        if args.height.endswith(".onnx"):
+            shutil.copy(args.height, graph)
+        else:
+            report["height_parity_fp32"] = export_height(Path(args.height), graph)
+        card["height"], card["proxy_internal"] = graph.name, args.proxy_internal
+        report["height"] = {"source": args.height, "bytes": graph.stat().st_size}
     on = f", on {args.trained_on}" if args.trained_on else ""
     card["sr_training"] = training_summary(Path(args.sr), sr_ck) + on
     lights = sr_ck["args"].get("lights", "table1")
@@ -585,8 +621,11 @@ def main(argv: list[str] | None = None) -> int:
     if args.install:
         dst = Path(args.install)
         dst.mkdir(parents=True, exist_ok=True)
-        for name in ("aop.onnx", "sr.onnx", "model.json", "MODEL_CARD.md"):
-            shutil.copy(out / name, dst / name)
+        for name in ("aop.onnx", "sr.onnx", "height.onnx", "model.json", "MODEL_CARD.md"):
+            if (out / name).is_file():
+                shutil.copy(out / name, dst / name)
+            else:
+                (dst / name).unlink(missing_ok=True)  # a model without a height graph replaces one with it
         print(f"installed into {dst}")
     return 0
 

@@ -93,6 +93,12 @@ def parse_args(argv: list[str] | None = None) -> argparse.Namespace:
         "same light map is an input and the base of the output (training.model.SRNet)",
     )
     p.add_argument(
+        "--proxy",
+        help="SR --card: a HeightNet graph (python -m training.heights export): the card is the height proxy's "
+        "shadow (ssn_engine.methods.height_proxy) instead of the flat card's",
+    )
+    p.add_argument("--proxy-internal", type=int, default=64, help="--proxy: the grid its hard shadows are traced on")
+    p.add_argument(
         "--true-camera",
         type=float,
         default=0.5,
@@ -230,6 +236,22 @@ class OnnxAOP:
         return torch.from_numpy(self.session.run(["ao"], {"mask": mask.numpy().astype(np.float32)})[0])
 
 
+def card_method(args: argparse.Namespace):
+    """The card an SR --card run traces for its views: the flat card, or the height proxy of --proxy."""
+    if not args.card:
+        return None
+    from ssn_engine.methods.geometric import GeometricCard
+
+    if not args.proxy:
+        return GeometricCard(internal=args.resolution)
+    from ssn_engine.methods.height_proxy import HeightProxy
+
+    from .export import session
+
+    graph = session(Path(args.proxy))
+    return HeightProxy(lambda m: graph.run(None, {"mask": m})[0], args.resolution, internal=args.proxy_internal)
+
+
 def load_aop(paths: list[str]):
     """The AO predictor --ao-from names, checkpoints (their ensemble) or one exported aop.onnx graph, as a
     function of masks (B, R, R) -> AO maps (B, R, R) for the view cache (each view's AO is predicted once)."""
@@ -336,10 +358,11 @@ def build_val(store, args, weights_rows: int, run: Path | None = None):
         if saved is not None:
             saved.write_text(json.dumps({"split": split, "views": [list(view_key(store, i)) for i in chosen]}))
     views = {}
+    card = card_method(args)
     for i in chosen:
         k = view_key(store, i)
         if k not in views:
-            views[k] = load_view(store, i, args.resolution, with_occ=lit is not None, with_card=args.card)
+            views[k] = load_view(store, i, args.resolution, with_occ=lit is not None, card=card)
     vs = [views[view_key(store, i)] for i in chosen]
     rng = np.random.default_rng([args.seed, 104729])
     lights = sample_mixture(rng, len(vs), TRAIN_MIX) if args.lights == "mix" else sample_lights(rng, len(vs))
@@ -634,7 +657,7 @@ def train_cache(args: argparse.Namespace, store: Any) -> ViewCache:
         max_views=100000 if lit is None else args.cache_views,
         with_occ=lit is not None,
         balance_kinds=args.balance_kinds,
-        with_card=args.card,
+        card=card_method(args),
         predict_ao=predict_ao,
     )
 

@@ -250,18 +250,17 @@ class GeometricCard:
             np.ascontiguousarray(mask, np.float32).tobytes() + repr(camera).encode(), usedforsecurity=False
         ).digest()
         if key not in self._cache:
-            scale = self.internal / mask.shape[0]
-            self._cache[key] = _Card(
-                _resize(mask, self.internal),
-                self._dirs,
-                self._area_dirs,
-                self._weights,
-                None if camera is None else (camera[0] * scale, camera[1] * scale),
-            )
+            self._cache[key] = self._build(mask, camera)
             while len(self._cache) > CACHED_CARDS:
                 self._cache.popitem(last=False)
         self._cache.move_to_end(key)
         return self._cache[key]
+
+    def _build(self, mask: np.ndarray, camera: tuple[float, float] | None) -> _Card:
+        """The card of a frame mask at the internal resolution (camera input in frame pixels, or None)."""
+        scale = self.internal / mask.shape[0]
+        internal_camera = None if camera is None else (camera[0] * scale, camera[1] * scale)
+        return _Card(_resize(mask, self.internal), self._dirs, self._area_dirs, self._weights, internal_camera)
 
     def card_shadows(self, masks: np.ndarray, elms: np.ndarray, cameras: np.ndarray | None = None) -> np.ndarray:
         """The card's shadows (n, internal, internal) for frame masks (n, N, N) and ELMs (n, 16, 32)."""

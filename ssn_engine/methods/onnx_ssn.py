@@ -5,6 +5,9 @@ A model folder holds ``model.json`` and the two graphs (docs/engine.md, "Model f
 - sr.onnx: "mask" [b, 1, R, R], "ao" [b, 1, R, R], "elm" [b, 16, 32] -> "shadow" [b, 1, R, R]; a
   geometry-guided SR also takes "card" [b, 1, R, R], the geometric card's shadow for the same ELM
   (:meth:`ssn_engine.methods.geometric.GeometricCard.card_shadows`, traced with the camera input when given)
+- height.onnx (optional, named by ``height``): "mask" [b, 1, R, R] -> "heights" [b, 4, R, R]; with it the SR's
+  "card" is the shadow of the height proxy instead (:class:`ssn_engine.methods.height_proxy.HeightProxy`,
+  traced on a ``proxy_internal`` grid)
 The ELM goes in normalised by :func:`ssn_engine.hemisphere.network_elm`.
 ``model.json`` may set ``output_floor``: shadow values below it are the network's
 residual noise and are removed by :func:`apply_floor` (chosen on the validation split);
@@ -33,6 +36,7 @@ from ..frames import resample_frames
 from ..hemisphere import NETWORK_SHAPE, light_concentration, network_elm
 from .base import check_batch
 from .geometric import GeometricCard, camera_at
+from .height_proxy import HeightProxy
 
 if TYPE_CHECKING:  # imported where a model loads: the engine runs without onnxruntime until then
     import onnxruntime as ort
@@ -49,6 +53,7 @@ class ModelError(RuntimeError):
 _EXPECTED = {
     "aop": [({"mask": 4}, {"ao": 4})],
     "sr": [({"mask": 4, "ao": 4, "elm": 3}, {"shadow": 4}), ({"mask": 4, "ao": 4, "elm": 3, "card": 4}, {"shadow": 4})],
+    "height": [({"mask": 4}, {"heights": 4})],
 }
 
 
@@ -163,11 +168,17 @@ class OnnxSSN:
         self._aop = _session(model_dir / meta.get("aop", "aop.onnx"), "aop")
         self._sr = _session(model_dir / meta.get("sr", "sr.onnx"), "sr")
         takes_card = "card" in {i.name for i in self._sr.get_inputs()}
-        self.card = GeometricCard(FRAME, internal=r) if takes_card else None
+        self.card: GeometricCard | None = GeometricCard(FRAME, internal=r) if takes_card else None
+        if takes_card and meta.get("height"):
+            internal = meta.get("proxy_internal", 64)
+            if not isinstance(internal, int) or isinstance(internal, bool) or not 16 <= internal <= r:
+                raise ModelError(f"{card}: proxy_internal must be whole pixels in [16, {r}], got {internal!r}")
+            height = _session(model_dir / meta["height"], "height")
+            self.card = HeightProxy(lambda m: _run(height, "heights", {"mask": m}), r, FRAME, internal)
         self._check_run()
 
     def _check_run(self) -> None:
-        """Run both graphs once so that a graph that loads but cannot run fails now."""
+        """Run the graphs once so that a graph that loads but cannot run fails now."""
         mask = np.zeros((1, 1, self.model_resolution, self.model_resolution), np.float32)
         try:
             ao = _run(self._aop, "ao", {"mask": mask})
@@ -175,6 +186,8 @@ class OnnxSSN:
             if self.card is not None:
                 feeds["card"] = mask
             s = _run(self._sr, "shadow", feeds)
+            if isinstance(self.card, HeightProxy):
+                self.card.predict(mask)
         except Exception as exc:
             raise ModelError(
                 f"model in {self.meta.get('aop')} / {self.meta.get('sr')} failed a test run: {exc}"

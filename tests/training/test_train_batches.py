@@ -160,7 +160,7 @@ def test_the_card_channel_is_the_engines_card_shadow():
     from training.batches import camera_input, make_batch
 
     store = FakeStore(res=32)
-    view = load_view(store, 0, 16, with_card=True)
+    view = load_view(store, 0, 16, card=GeometricCard(internal=16))
     lights = sample_lights(np.random.default_rng(3), 2)
     batch = make_batch([view, view], lights, 4, store._weights, "shadow", np.array([False, True]))
     elm16 = render_lights(lights, 16)
