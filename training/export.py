@@ -496,8 +496,8 @@ def parse_args(argv: list[str] | None = None) -> argparse.Namespace:
     )
     p.add_argument(
         "--height",
-        help="a HeightNet checkpoint (python -m training.heights train) or its graph: ships as height.onnx, and "
-        "the engine feeds the SR the height proxy's shadow in the card's place (an SR trained with --proxy)",
+        help="a HeightNet graph (python -m training.heights export): ships as height.onnx, and the engine feeds "
+        "the SR the height proxy's shadow in the card's place (an SR trained with --proxy)",
     )
     p.add_argument(
         "--proxy-internal", type=int, default=64, help="--height: model.json proxy_internal, the proxy's tracing grid"
@@ -519,6 +519,8 @@ def main(argv: list[str] | None = None) -> int:
     reused = len(args.aop) == 1 and args.aop[0].endswith(".onnx")
     if args.aop_without_mirror and not reused:
         raise SystemExit("--aop-without-mirror rewrites an installed aop.onnx: give one as --aop")
+    if args.height and not args.height.endswith(".onnx"):
+        raise SystemExit(f"--height {args.height}: give the graph of python -m training.heights export (.onnx)")
     out = Path(args.out)
     out.mkdir(parents=True, exist_ok=True)
     card: dict = {
@@ -593,13 +595,8 @@ def main(argv: list[str] | None = None) -> int:
         print(f"{args.sr} was trained {trained}: --height {must} be given", file=sys.stderr)
         return 1
     if args.height:
-        from .heights import export as export_height
-
         graph = out / "height.onnx"
-        if args.height.endswith(".onnx"):
-            shutil.copy(args.height, graph)
-        else:
-            report["height_parity_fp32"] = export_height(Path(args.height), graph)
+        shutil.copy(args.height, graph)
         card["height"], card["proxy_internal"] = graph.name, args.proxy_internal
         report["height"] = {"source": args.height, "bytes": graph.stat().st_size}
     on = f", on {args.trained_on}" if args.trained_on else ""
