@@ -13,6 +13,7 @@ Schedule: Adam, learning rate ``--lr`` (1e-3), linear warm-up over
 from __future__ import annotations
 
 import argparse
+import contextlib
 import csv
 import json
 import os
@@ -197,9 +198,13 @@ class Prefetcher:
         return item
 
     def close(self) -> None:
+        """Stop and join the thread: left running in native code at interpreter exit, it can abort the process
+        ("terminate called without an active exception"), and a restarted stream must not share the sampler."""
         self.stop = True
-        while not self.q.empty():
-            self.q.get_nowait()
+        while self.thread.is_alive():
+            with contextlib.suppress(queue.Empty):
+                self.q.get(timeout=0.05)  # frees a put the thread may be blocked on
+        self.thread.join()
 
 
 def to_tensors(batch, device: torch.device) -> dict[str, torch.Tensor]:
