@@ -47,7 +47,7 @@ class Camera:
     def __post_init__(self) -> None:
         p = np.radians(self.pitch)
         self.view = np.cos(p) * FORWARD - np.sin(p) * UP
-        self.up = np.cross(RIGHT, self.view)
+        self.up = np.array([0.0, -self.view[2], self.view[1]])  # RIGHT x view; np.cross costs more than a card's fit
         self.centre = np.array([0.0, self.target_height, 0.0]) - DISTANCE * self.view
         self.focal = 0.5 * self.n / np.tan(np.radians(self.fov) / 2)
 
