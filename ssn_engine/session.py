@@ -76,7 +76,9 @@ class ShadowSession:
             self._card = self._card or GeometricCard(self.method.resolution)
             card = self._card
         elm = render_light_map(light_map, NETWORK_SHAPE[0])
-        wide = card.extended_shadow(self.mask, elm, camera_at(self.cameras, 0), long_shadow.MARGIN, long_shadow.CELL)
+        resolve = getattr(self.method, "cameras_for", None)  # a model's own reading of a blind call's camera
+        cameras = resolve(self.mask[None], self.cameras) if resolve else self.cameras
+        wide = card.extended_shadow(self.mask, elm, camera_at(cameras, 0), long_shadow.MARGIN, long_shadow.CELL)
         window = (*framing.to_frame(0, 0), *framing.to_frame(framing.canvas_width, framing.canvas_height))
         values, origin = long_shadow.extend(frame, wide, window=window if clip else None)
         return shadow_to_canvas(values, framing, origin, clip)

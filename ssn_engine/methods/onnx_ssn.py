@@ -8,6 +8,9 @@ A model folder holds ``model.json`` and the two graphs (docs/engine.md, "Model f
 - height.onnx (optional, named by ``height``): "mask" [b, 1, R, R] -> "heights" [b, 4, R, R]; with it the SR's
   "card" is the shadow of the height proxy instead (:class:`ssn_engine.methods.height_proxy.HeightProxy`,
   traced on a ``proxy_internal`` grid)
+- camera.onnx (optional, with a geometry-guided SR; named by ``camera``): "mask" [b, 1, 64, 64] -> "camera"
+  [b, 2], the camera input read from the mask (:mod:`ssn_engine.methods.camera_estimate`), used when a call
+  gives none
 The ELM goes in normalised by :func:`ssn_engine.hemisphere.network_elm`.
 ``model.json`` may set ``output_floor``: shadow values below it are the network's
 residual noise and are removed by :func:`apply_floor` (chosen on the validation split);
@@ -25,6 +28,7 @@ Frames are N x N (N = 256); a model trained at another R is fed resampled frames
 
 from __future__ import annotations
 
+import hashlib
 import json
 from pathlib import Path
 from typing import TYPE_CHECKING
@@ -35,6 +39,7 @@ from scipy import ndimage
 from ..frames import resample_frames
 from ..hemisphere import NETWORK_SHAPE, light_concentration, network_elm
 from .base import check_batch
+from .camera_estimate import estimate_cameras
 from .geometric import GeometricCard, camera_at
 from .height_proxy import HeightProxy
 
@@ -44,6 +49,7 @@ if TYPE_CHECKING:  # imported where a model loads: the engine runs without onnxr
 MODEL_FORMAT = "ssn-shadow-model"
 MODEL_VERSION = 1
 FRAME = 256
+KEPT_ESTIMATES = 4  # masks whose estimated camera input is kept (a session needs one; a batch past it reads again)
 
 
 class ModelError(RuntimeError):
@@ -54,6 +60,7 @@ _EXPECTED = {
     "aop": [({"mask": 4}, {"ao": 4})],
     "sr": [({"mask": 4, "ao": 4, "elm": 3}, {"shadow": 4}), ({"mask": 4, "ao": 4, "elm": 3, "card": 4}, {"shadow": 4})],
     "height": [({"mask": 4}, {"heights": 4})],
+    "camera": [({"mask": 4}, {"camera": 2})],
 }
 
 
@@ -175,7 +182,24 @@ class OnnxSSN:
                 raise ModelError(f"{card}: proxy_internal must be whole pixels in [16, {r}], got {internal!r}")
             height = _session(model_dir / meta["height"], "height")
             self.card = HeightProxy(lambda m: _run(height, "heights", {"mask": m}), r, FRAME, internal)
+        self._camera = _session(model_dir / meta["camera"], "camera") if takes_card and meta.get("camera") else None
+        self._estimates: dict[bytes, np.ndarray] = {}  # mask digest -> its estimated camera input
         self._check_run()
+
+    def cameras_for(self, masks: np.ndarray, cameras: np.ndarray | None) -> np.ndarray | None:
+        """The camera inputs a call uses: the given ones, else the camera estimator's reading of each mask (kept
+        for the masks seen last, so moving a light does not read it again), else None (the default camera)."""
+        if cameras is not None or self._camera is None:
+            return cameras
+        out = np.empty((len(masks), 2))
+        for b, mask in enumerate(masks):
+            key = hashlib.blake2b(np.ascontiguousarray(mask, np.float32).tobytes(), digest_size=16).digest()
+            if key not in self._estimates:
+                self._estimates[key] = estimate_cameras(self._camera, mask[None])[0]
+                while len(self._estimates) > KEPT_ESTIMATES:
+                    del self._estimates[next(iter(self._estimates))]
+            out[b] = self._estimates[key]
+        return out
 
     def _check_run(self) -> None:
         """Run the graphs once so that a graph that loads but cannot run fails now."""
@@ -188,6 +212,8 @@ class OnnxSSN:
             s = _run(self._sr, "shadow", feeds)
             if isinstance(self.card, HeightProxy):
                 self.card.predict(mask)
+            if self._camera is not None:
+                estimate_cameras(self._camera, np.zeros((1, FRAME, FRAME), np.float32))
         except Exception as exc:
             raise ModelError(
                 f"model in {self.meta.get('aop')} / {self.meta.get('sr')} failed a test run: {exc}"
@@ -201,6 +227,7 @@ class OnnxSSN:
         m = resample_frames(masks, self.model_resolution)[:, None]
         ao = _run(self._aop, "ao", {"mask": m})[:, 0]
         if self.card is not None:
+            cameras = self.cameras_for(masks, cameras)
             for b, mask in enumerate(masks):
                 self.card.card(mask, camera_at(cameras, b))
         ao = np.clip(resample_frames(ao, self.resolution), 0.0, 1.0)
@@ -216,7 +243,7 @@ class OnnxSSN:
             "elm": network_elm(elms),
         }
         if self.card is not None:
-            feeds["card"] = self.card.card_shadows(masks, elms, cameras)[:, None]
+            feeds["card"] = self.card.card_shadows(masks, elms, self.cameras_for(masks, cameras))[:, None]
         s = _run(self._sr, "shadow", feeds)[:, 0]
         share = small_lights_share(elms)
         if self.card is not None and self.shadow_reach > 0 and share.any():

@@ -19,6 +19,7 @@ from ssn_engine.frames import resample_frames
 from ssn_engine.framing import frame_alpha
 from ssn_engine.hemisphere import render_light_map
 from ssn_engine.light_map import GaussianLight, LightMap, preset
+from ssn_engine.methods import GeometricCard
 from ssn_engine.session import ShadowSession
 from training.metrics import shadow_direction, shadow_extent, sun_geometry, zncc
 
@@ -135,3 +136,21 @@ def test_no_haze_far_from_the_cutout_and_its_cast_shadow(preset_name):
     far = far.repeat(256 // r, axis=1).repeat(256 // r, axis=2)
     assert far.mean() > 0.1  # a good part of the frames is far from both
     assert shadows[far].max() == 0.0
+
+
+def test_a_blind_call_reads_the_camera_from_the_mask():
+    """With no camera input the shipped model reads one from each mask (camera.onnx): on the twelve held-out
+    views its horizon row lies closer to the true one than the conventions' default camera's does, and a blind
+    call renders exactly what a call given that camera renders."""
+    data = np.load(FIXTURE)
+    masks = data["masks"].astype(np.float32) / 255
+    method = api.default_method().method
+    estimated = method.cameras_for(masks, None)
+    default = GeometricCard(256, internal=method.model_resolution)
+    scale = 256 / method.model_resolution
+    default_horizons = np.array([default.card(m).camera.horizon * scale for m in masks])
+    truth = data["cameras"][:, 0]
+    assert np.median(np.abs(estimated[:, 0] - truth)) < 0.6 * np.median(np.abs(default_horizons - truth))
+    elms = np.stack([sun(0.3, 25.0)] * 3)
+    blind = api.predict_frames(masks[:3], elms)
+    np.testing.assert_array_equal(blind, api.predict_frames(masks[:3], elms, cameras=estimated[:3]))

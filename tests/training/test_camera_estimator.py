@@ -1,0 +1,89 @@
+"""The camera estimator (training.camera_estimator): its graph's reading, training, export and installation."""
+
+from __future__ import annotations
+
+import json
+import shutil
+from pathlib import Path
+
+import numpy as np
+import pytest
+
+from training.data import meshes
+from training.data.procedural import box
+from training.heights import view_heights
+
+torch = pytest.importorskip("torch")
+
+ROOT = Path(__file__).resolve().parents[2]
+
+
+def test_the_graph_reads_the_median_of_its_horizon_distribution(monkeypatch):
+    """Bins 3 and 4 share the mass 1 : 3, so the median lies a third of the way into bin 4; the focal length
+    comes back de-standardised."""
+    from training.camera_estimator import EDGES, FOCAL_MEAN, FOCAL_STD, CameraNet
+
+    net = CameraNet(width=8).eval()
+    logits = torch.full((1, len(EDGES)), -1e4)
+    logits[0, 3], logits[0, 4] = 0.0, float(np.log(3.0))
+    logits[0, -1] = 0.5  # the standardised focal length
+    monkeypatch.setattr(net, "raw", lambda x: logits.expand(len(x), -1))
+    horizon, focal = net(torch.zeros(2, 1, 64, 64))[0].tolist()
+    width = EDGES[1] - EDGES[0]
+    assert horizon == pytest.approx(EDGES[4] + width / 3, abs=1e-5)
+    assert focal == pytest.approx(FOCAL_MEAN + 0.5 * FOCAL_STD)
+
+
+def _box_views(tmp_path: Path) -> None:
+    """A box seen from a few cameras, as `training.heights make` writes views, for both splits."""
+    mesh = meshes.normalise(box((0.5, 0.35, 0.3), (0.0, 0.175, 0.0)))
+    topo = meshes.topology(mesh)
+    views = [view_heights(mesh, topo, yaw, pitch, 45.0) for yaw, pitch in ((0.0, 0.0), (60.0, 15.0), (120.0, 30.0))]
+    data = {key: np.stack([v[key] for v in views]).astype(np.float16) for key in ("mask", "front", "back")}
+    data |= {"camera": np.array([v["camera"] for v in views]), "kind": np.zeros(3, int), "pitch": np.array([0, 15, 30])}
+    for split in ("train", "val"):
+        np.savez(tmp_path / f"{split}_box.npz", **data)
+
+
+def test_the_estimator_trains_exports_and_installs_into_a_model(tmp_path):
+    """A short run exports a graph that matches the network; installed into a copy of the shipped model, a blind
+    call reads its camera from the mask and renders what a call given that camera renders."""
+    from ssn_engine.methods import OnnxSSN
+    from training.camera_estimator import CameraNet, examples, main
+
+    _box_views(tmp_path)
+    run = tmp_path / "run"
+    main(["--data", str(tmp_path), "--out", str(run), "--minutes", "0.05", "--batch", "4", "--val-every", "1"])
+    summary = json.loads((run / "camera.json").read_text())
+    assert summary["train_views"] == 3 and summary["history"]
+    net = CameraNet()
+    net.load_state_dict(torch.load(run / "camera.pt"))
+    x, _, _ = examples(tmp_path, "val")
+    import onnxruntime as ort
+
+    graph = ort.InferenceSession(str(run / "camera.onnx"), providers=["CPUExecutionProvider"])
+    with torch.no_grad():
+        expected = net.eval()(torch.from_numpy(x[:, None])).numpy()
+    np.testing.assert_allclose(graph.run(["camera"], {"mask": x[:, None]})[0], expected, atol=1e-4)
+
+    folder = tmp_path / "model"
+    shutil.copytree(ROOT / "ssn_engine" / "models", folder)
+    main(["--out", str(run), "--minutes", "0", "--install", str(folder)])
+    assert json.loads((folder / "model.json").read_text())["camera"] == "camera.onnx"
+    assert (folder / "MODEL_CARD.md").read_text().count("## Camera estimator") == 1
+    model = OnnxSSN(folder)
+    mask = np.zeros((1, 256, 256), np.float32)
+    mask[0, 60:200, 110:150] = 1.0
+    cameras = model.cameras_for(mask, None)
+    assert cameras.shape == (1, 2) and np.isfinite(cameras).all()
+    elm = np.zeros((1, 16, 32), np.float32)
+    elm[0, 10, 20] = 1.0
+    blind = model.render(mask, model.predict_ao(mask), elm)
+    np.testing.assert_array_equal(blind, model.render(mask, model.predict_ao(mask, cameras), elm, cameras))
+
+
+def test_a_missing_split_is_named(tmp_path):
+    from training.camera_estimator import main
+
+    with pytest.raises(SystemExit, match="no train"):
+        main(["--data", str(tmp_path), "--out", str(tmp_path / "run"), "--minutes", "0.01"])
