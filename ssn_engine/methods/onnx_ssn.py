@@ -39,7 +39,7 @@ from scipy import ndimage
 from ..frames import resample_frames
 from ..hemisphere import NETWORK_SHAPE, light_concentration, network_elm
 from .base import check_batch
-from .camera_estimate import estimate_cameras
+from .camera_estimate import INPUT, estimate_cameras
 from .geometric import GeometricCard, camera_at
 from .height_proxy import HeightProxy
 
@@ -212,8 +212,8 @@ class OnnxSSN:
             s = _run(self._sr, "shadow", feeds)
             if isinstance(self.card, HeightProxy):
                 self.card.predict(mask)
-            if self._camera is not None:
-                estimate_cameras(self._camera, np.zeros((1, FRAME, FRAME), np.float32))
+            if self._camera is not None:  # (an empty frame would not reach the graph)
+                _run(self._camera, "camera", {"mask": np.zeros((1, 1, INPUT, INPUT), np.float32)})
         except Exception as exc:
             raise ModelError(
                 f"model in {self.meta.get('aop')} / {self.meta.get('sr')} failed a test run: {exc}"

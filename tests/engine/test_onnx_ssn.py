@@ -4,6 +4,7 @@ from __future__ import annotations
 
 import json
 import os
+from pathlib import Path
 
 import numpy as np
 import pytest
@@ -218,6 +219,18 @@ def test_graph_with_wrong_input_names(tmp_path, monkeypatch):
     folder = make_model_dir(tmp_path / "m", aop_input="image")
     message = _expect_model_error(folder, monkeypatch, str(folder / "aop.onnx"), "contract")
     assert "image" in message and "mask" in message
+
+
+def test_a_bad_camera_estimator_is_named_and_the_card_falls_back(tmp_path, monkeypatch):
+    """The shipped model with its camera graph missing, or replaced by a graph of another contract."""
+    import shutil
+
+    folder = tmp_path / "m"
+    shutil.copytree(Path(api.__file__).parent / "models", folder)
+    (folder / "camera.onnx").unlink()
+    _expect_model_error(folder, monkeypatch, "missing", str(folder / "camera.onnx"))
+    shutil.copy(folder / "aop.onnx", folder / "camera.onnx")
+    _expect_model_error(folder, monkeypatch, str(folder / "camera.onnx"), "camera contract")
 
 
 def test_graphs_named_in_the_card(tmp_path, monkeypatch, mask):
