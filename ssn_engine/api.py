@@ -36,8 +36,10 @@ def predict_frames(
     Optional ``ao`` (n, N, N) replaces the predicted AO maps (e.g. ground
     truth or user-edited). Optional ``cameras`` (n, 2) gives each frame's
     horizon row and focal length in frame pixels (conventions, "Camera
-    input"); without it the conventions' default camera is assumed (45
-    degree field of view, 15 degree pitch). Uses the default shipped model,
+    input"); without it the shipped model reads each frame's camera from its
+    mask (its camera estimator), and a model without one or the geometric
+    card assume the conventions' default camera (45 degree field of view,
+    15 degree pitch). Uses the default shipped model,
     or the geometric card method while no trained model is installed.
 
     No visible shadow is exactly zero: a frame whose mask has no pixel above

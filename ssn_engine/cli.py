@@ -397,7 +397,8 @@ def _add_shadow_options(p: argparse.ArgumentParser) -> None:
         type=float,
         metavar="ROW",
         help="the image's horizon: canvas row (pixels from the top; may be negative or past the bottom) "
-        "where the ground plane meets the sky; default: a camera pitched 15 degrees down",
+        "where the ground plane meets the sky; default: the camera the model reads from the cutout's outline "
+        "(--method geometric: a camera pitched 15 degrees down)",
     )
     p.add_argument(
         "--fov",

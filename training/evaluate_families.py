@@ -3,10 +3,11 @@
 Every test view is lit by ``--per-view`` light maps of each family of :mod:`training.elm` (``sun``: one small
 light, ``two``: two small lights, ``sky``: 3 to 8 broad lights, ``table1``: the paper's sampling), drawn from a
 generator seeded per view and family. Rows: the geometric card and each installed model folder (the engine's
-ONNX graphs, exactly as ``predict_frames`` runs them), blind (the conventions' default camera) and, with
-``--with-camera`` / ``--with-gt-ao``, given the view's true camera input or its ground-truth AO. Metrics on s
-at the dataset's N (256 for the engine's frames) per family x kind (object, human, animal) x pitch; for
-``sun`` also the cast shadow's direction error and length ratio (:func:`training.metrics.sun_geometry`).
+ONNX graphs, exactly as ``predict_frames`` runs them), blind (no camera input: a model's camera estimator,
+else the conventions' default camera) and, with ``--with-camera`` / ``--with-gt-ao``, given the view's true
+camera input or its ground-truth AO. Metrics on s at the dataset's N (256 for the engine's frames) per family x
+kind (object, human, animal) x pitch; for ``sun`` also the cast shadow's direction error and length ratio
+(:func:`training.metrics.sun_geometry`).
 """
 
 from __future__ import annotations

@@ -65,7 +65,7 @@ ARGUMENTS: tuple[ArgSpec, ...] = (
         "use-horizon",
         "boolean",
         "Set the image's _horizon",
-        "Cast with the image's camera (horizon row and field of view); off: a camera looking 15 degrees down",
+        "Cast with the image's camera (horizon row and field of view); off: the camera read from the cutout's outline",
         False,
     ),
     ArgSpec(

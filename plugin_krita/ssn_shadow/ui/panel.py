@@ -117,7 +117,7 @@ class ShadowPanel(QWidget):
         camera_box = QGroupBox("Camera")
         cv = QVBoxLayout(camera_box)
         self.use_horizon = QCheckBox("The image's horizon is at")
-        self.use_horizon.setToolTip("Without it the engine assumes a camera looking 15 degrees down")
+        self.use_horizon.setToolTip("Without it the engine reads the camera from the cutout's outline")
         hrow = QHBoxLayout()
         self.horizon = QSpinBox()
         self.horizon.setRange(-100000, 100000)
