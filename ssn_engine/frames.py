@@ -2,8 +2,16 @@
 
 from __future__ import annotations
 
+import hashlib
+
 import numpy as np
 from PIL import Image
+
+
+def frame_key(frame: np.ndarray, extra: bytes = b"") -> bytes:
+    """A digest of a frame's float32 values (and ``extra``): the key of caches of work done per mask."""
+    data = np.ascontiguousarray(frame, np.float32).tobytes() + extra
+    return hashlib.blake2b(data, digest_size=16).digest()
 
 
 def resample_frames(frames: np.ndarray, size: int) -> np.ndarray:

@@ -48,15 +48,27 @@ def check_batch(
 HORIZON_REACH = 100  # camera input: horizon rows within this many frames above or below the frame
 
 
+def camera_limits(n: int) -> tuple[tuple[float, float], tuple[float, float]]:
+    """The camera input's bounds for frames of ``n`` pixels: horizon rows within ``HORIZON_REACH`` frames of the
+    frame, focal lengths of a field of view from 1 to 170 degrees; ((horizon lo, hi), (focal lo, hi))."""
+    return (n / 2 - HORIZON_REACH * n, n / 2 + HORIZON_REACH * n), (focal_from_fov(n, 170.0), focal_from_fov(n, 1.0))
+
+
+def clamp_cameras(cameras: np.ndarray, n: int) -> np.ndarray:
+    """Camera inputs (b, 2) moved inside :func:`camera_limits`."""
+    (h_lo, h_hi), (f_lo, f_hi) = camera_limits(n)
+    return np.stack([np.clip(cameras[:, 0], h_lo, h_hi), np.clip(cameras[:, 1], f_lo, f_hi)], axis=1)
+
+
 def check_cameras(cameras: np.ndarray, count: int, n: int) -> None:
-    """Camera inputs for frames of ``n`` pixels: shape (count, 2); horizon rows within ``HORIZON_REACH`` frames
-    of the frame; focal lengths of a field of view from 1 to 170 degrees."""
+    """Camera inputs for frames of ``n`` pixels: shape (count, 2), inside :func:`camera_limits`."""
     if cameras.shape != (count, 2):
         raise ValueError(f"cameras: expected shape ({count}, 2) (horizon row, focal length), got {cameras.shape}")
-    lo, hi = focal_from_fov(n, 170.0), focal_from_fov(n, 1.0)
+    (h_lo, h_hi), (lo, hi) = camera_limits(n)
     if (
         not np.all(np.isfinite(cameras))
-        or np.any(np.abs(cameras[:, 0] - n / 2) > HORIZON_REACH * n)
+        or np.any(cameras[:, 0] < h_lo)
+        or np.any(cameras[:, 0] > h_hi)
         or np.any(cameras[:, 1] < lo)
         or np.any(cameras[:, 1] > hi)
     ):

@@ -20,7 +20,7 @@ import numpy as np
 
 from ..camera import DEFAULT_FOV, focal_from_fov
 from ..framing import EmptyAlphaError, Framing, frame_alpha
-from .base import HORIZON_REACH
+from .base import clamp_cameras
 
 if TYPE_CHECKING:
     import onnxruntime as ort
@@ -69,7 +69,4 @@ def estimate_cameras(session: ort.InferenceSession, masks: np.ndarray) -> np.nda
         predicted = session.run(["camera"], {"mask": np.stack(inputs)[:, None].astype(np.float32)})[0] * n
         for b, (h, f), framing in zip(rows, predicted, framings, strict=True):
             out[b] = from_canonical((float(h), float(f)), framing)
-    # within the camera input's bounds (ssn_engine.methods.base.check_cameras), whatever the network says
-    out[:, 0] = np.clip(out[:, 0], -HORIZON_REACH * n + 0.5 * n, HORIZON_REACH * n + 0.5 * n)
-    out[:, 1] = np.clip(out[:, 1], focal_from_fov(n, 170.0), focal_from_fov(n, 1.0))
-    return out
+    return clamp_cameras(out, n)  # within the camera input's bounds, whatever the network says

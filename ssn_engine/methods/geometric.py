@@ -19,12 +19,12 @@ scaled by the edited over the card's ambient visibility (A = AO^3).
 from __future__ import annotations
 
 import collections
-import hashlib
 
 import numpy as np
 from PIL import Image
 
 from ..camera import Camera, camera_for_span, fov_from_focal
+from ..frames import frame_key
 from ..hemisphere import stratified_directions, texel_centres, texel_weights
 from .base import check_batch
 
@@ -246,9 +246,7 @@ class GeometricCard:
         """The card for a frame mask (camera input in frame pixels, or None: the default camera) at the internal
         resolution; recent cards are cached. Its hard shadows (``card.bases`` (T, P), T = 512 texel directions
         on the P ground pixels ``card.valid`` of the internal grid) are traced when first needed."""
-        key = hashlib.sha1(
-            np.ascontiguousarray(mask, np.float32).tobytes() + repr(camera).encode(), usedforsecurity=False
-        ).digest()
+        key = frame_key(mask, repr(camera).encode())
         if key not in self._cache:
             self._cache[key] = self._build(mask, camera)
             while len(self._cache) > CACHED_CARDS:

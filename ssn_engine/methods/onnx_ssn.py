@@ -28,7 +28,6 @@ Frames are N x N (N = 256); a model trained at another R is fed resampled frames
 
 from __future__ import annotations
 
-import hashlib
 import json
 from pathlib import Path
 from typing import TYPE_CHECKING
@@ -36,7 +35,7 @@ from typing import TYPE_CHECKING
 import numpy as np
 from scipy import ndimage
 
-from ..frames import resample_frames
+from ..frames import frame_key, resample_frames
 from ..hemisphere import NETWORK_SHAPE, light_concentration, network_elm
 from .base import check_batch
 from .camera_estimate import INPUT, estimate_cameras
@@ -193,7 +192,7 @@ class OnnxSSN:
             return cameras
         out = np.empty((len(masks), 2))
         for b, mask in enumerate(masks):
-            key = hashlib.blake2b(np.ascontiguousarray(mask, np.float32).tobytes(), digest_size=16).digest()
+            key = frame_key(mask)
             if key not in self._estimates:
                 self._estimates[key] = estimate_cameras(self._camera, mask[None])[0]
                 while len(self._estimates) > KEPT_ESTIMATES:
