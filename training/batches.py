@@ -10,8 +10,9 @@ with uncached ones.
 A geometry-guided SR also gets the geometric card's shadow for the same light map
 (:class:`ssn_engine.methods.geometric.GeometricCard`, traced at R exactly as the
 engine traces it): each cached view holds the card's 512 hard-shadow bases twice,
-for the conventions' default camera (what the engine assumes blind) and for the
-view's true camera input (horizon row, focal length).
+for a blind camera and for the view's true camera input (horizon row, focal length).
+The blind camera is the conventions' default camera, or (``camera_error``) the true
+camera moved as the camera estimator's reading of a mask misses it (:func:`blind_camera`).
 
 Targets, for a light map rendered to ``L`` on the dataset's Hb x 2Hb grid and
 ``L16`` on the network's 16 x 32 grid (``peak = max L16``):
@@ -30,6 +31,7 @@ import numpy as np
 from ssn_engine.camera import horizon_row
 from ssn_engine.frames import resample_frames
 from ssn_engine.hemisphere import network_elm, texel_weights
+from ssn_engine.methods.base import clamp_cameras
 from ssn_engine.methods.geometric import GeometricCard
 
 from .elm import LightBatch, render_lights, sample_lights, sample_mixture
@@ -46,7 +48,7 @@ class CachedView:
     mask: np.ndarray  # (R, R) float32
     ao: np.ndarray  # (R, R) float32
     occ: np.ndarray  # (T, R*R) uint8, occ * 255
-    cards: tuple[np.ndarray, np.ndarray] | None = None  # card bases (T, R*R) uint8: default camera, true camera
+    cards: tuple[np.ndarray, np.ndarray] | None = None  # card bases (T, R*R) uint8: blind camera, true camera
     ao_pred: np.ndarray | None = None  # (R, R) float32: an AOP's prediction from the mask (train --ao-from)
 
 
@@ -54,6 +56,21 @@ def camera_input(info: dict, n: int) -> tuple[float, float]:
     """A view's camera input (conventions, "Camera input"): horizon row and focal length, in pixels of the
     dataset's N x N frame."""
     return horizon_row(n, info["focal"], info["pitch"], info["shift"]), float(info["focal"])
+
+
+def blind_camera(
+    info: dict, n: int, error: tuple[float, float] | None, rng: np.random.Generator
+) -> tuple[float, float] | None:
+    """The camera a view's blind card is traced with: None (the conventions' default camera), or, given
+    ``error`` = (horizon scale in frames, log focal length scale), the view's true camera moved by Laplace noise
+    of those scales, within the camera input's bounds: a blind call's camera as an estimate from the mask
+    misses it."""
+    if error is None:
+        return None
+    horizon, focal = camera_input(info, n)
+    moved = np.array([[horizon + n * rng.laplace(0.0, error[0]), focal * np.exp(rng.laplace(0.0, error[1]))]])
+    h, f = clamp_cameras(moved, n)[0]
+    return float(h), float(f)
 
 
 def card_bases(
@@ -80,12 +97,19 @@ def view_key(store, i: int) -> tuple:
 
 
 def load_view(
-    store, i: int, resolution: int, with_occ: bool = True, card: GeometricCard | None = None, predict_ao=None
+    store,
+    i: int,
+    resolution: int,
+    with_occ: bool = True,
+    card: GeometricCard | None = None,
+    predict_ao=None,
+    camera_error: tuple[float, float] | None = None,
+    rng: np.random.Generator | None = None,
 ) -> CachedView:
     """Load view ``i`` of ``store`` and bring it to ``resolution`` (``with_occ`` False: no bases, for AOP;
-    ``card``: the bases of this card method (the geometric card, or the height proxy) for the default and the
-    true camera; ``predict_ao``: a function of masks
-    (B, R, R) -> AO maps whose prediction the view keeps)."""
+    ``card``: the bases of this card method (the geometric card, or the height proxy) for the blind camera
+    (:func:`blind_camera` of ``camera_error``, drawn with ``rng``) and the true camera; ``predict_ao``: a
+    function of masks (B, R, R) -> AO maps whose prediction the view keeps)."""
     v = store.load(i)
     t = v.occlusion.shape[0] * v.occlusion.shape[1]
     if with_occ:
@@ -99,7 +123,8 @@ def load_view(
     if card is not None:
         n = v.mask.shape[-1]
         true_camera = camera_input(v.info, n)
-        cards = (card_bases(card, v.mask, None, resolution), card_bases(card, v.mask, true_camera, resolution))
+        blind = blind_camera(v.info, n, camera_error, rng if rng is not None else np.random.default_rng(i))
+        cards = (card_bases(card, v.mask, blind, resolution), card_bases(card, v.mask, true_camera, resolution))
     ao_pred = None if predict_ao is None else predict_ao(mask[None])[0]
     return CachedView(view_key(store, i), mask, np.clip(ao, 0.0, 1.0), occ, cards, ao_pred)
 
@@ -144,10 +169,13 @@ class ViewCache:
         balance_kinds: bool = False,
         card: GeometricCard | None = None,
         predict_ao=None,
+        camera_error: tuple[float, float] | None = None,
+        seed: int = 0,
     ):
         self.resolution, self.max_views, self.split, self.kind = resolution, max_views, split, kind
         self.with_occ, self.balance_kinds, self.card = with_occ, balance_kinds, card
-        self.predict_ao = predict_ao
+        self.predict_ao, self.camera_error = predict_ao, camera_error
+        self.rng = np.random.default_rng([seed, 2027])  # the blind cards' camera errors
         self.views: dict[tuple, CachedView] = {}
         self.open(store)
 
@@ -191,7 +219,16 @@ class ViewCache:
             self.views[k] = self._load(k)
 
     def _load(self, key: tuple) -> CachedView:
-        return load_view(self.store, self.keys[key], self.resolution, self.with_occ, self.card, self.predict_ao)
+        return load_view(
+            self.store,
+            self.keys[key],
+            self.resolution,
+            self.with_occ,
+            self.card,
+            self.predict_ao,
+            self.camera_error,
+            self.rng,
+        )
 
     def get(self, key: tuple) -> CachedView:
         if key not in self.views:

@@ -171,3 +171,34 @@ def test_the_card_channel_is_the_engines_card_shadow():
     np.testing.assert_allclose(batch.card[0], blind, atol=2 / 255)
     np.testing.assert_allclose(batch.card[1], seen, atol=2 / 255)
     assert np.abs(seen - engine.card_shadows(mask[None], elm16[1:])[0]).max() > 0.05  # the camera matters
+
+
+def test_blind_cards_can_carry_the_camera_estimators_error():
+    """--blind-camera-error: the blind card is traced with the true camera moved by Laplace noise of the given
+    scales (a reading of the camera from the mask misses it so), inside the camera input's bounds."""
+    from ssn_engine.methods import GeometricCard
+    from ssn_engine.methods.base import camera_limits
+    from training.batches import blind_camera, camera_input, make_batch
+
+    store = FakeStore(res=32)
+    info, n = store.info(0), 32
+    truth = np.array(camera_input(info, n))
+    assert blind_camera(info, n, None, np.random.default_rng(0)) is None  # the conventions' default camera
+    rng = np.random.default_rng(1)
+    drawn = np.array([blind_camera(info, n, (0.2, 0.1), rng) for _ in range(4000)])
+    (h_lo, h_hi), (f_lo, f_hi) = camera_limits(n)
+    assert np.all((drawn[:, 0] >= h_lo) & (drawn[:, 0] <= h_hi) & (drawn[:, 1] >= f_lo) & (drawn[:, 1] <= f_hi))
+    # a Laplace variable of scale b has median |x| = b ln 2
+    assert np.median(np.abs(drawn[:, 0] - truth[0])) / n == pytest.approx(0.2 * np.log(2), rel=0.1)
+    assert np.median(np.abs(np.log(drawn[:, 1] / truth[1]))) == pytest.approx(0.1 * np.log(2), rel=0.1)
+
+    view = load_view(
+        store, 0, 16, card=GeometricCard(internal=16), camera_error=(0.2, 0.1), rng=np.random.default_rng(5)
+    )
+    camera = blind_camera(info, n, (0.2, 0.1), np.random.default_rng(5))
+    lights = sample_lights(np.random.default_rng(3), 1)
+    batch = make_batch([view], lights, 4, store._weights, "shadow", np.array([False]))
+    elm16 = render_lights(lights, 16)
+    engine = GeometricCard(internal=16)
+    expected = engine.card_shadows(store.load(0).mask[None], elm16, np.array([camera]))[0]
+    np.testing.assert_allclose(batch.card[0], expected, atol=2 / 255)
