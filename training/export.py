@@ -31,6 +31,7 @@ from .elm import TRAIN_MIX
 from .model import MirrorAverage
 
 TOL = 1e-4
+MIX_RECORD = "the family mixture"  # model.json "lights" of an SR trained with --lights mix
 
 
 class TwoPassGroupNorm(nn.Module):
@@ -301,9 +302,10 @@ def model_card(card: dict, attribution: list[dict], command: str) -> str:
     ]
     for m in ("aop", "sr"):
         r = ex[m]
+        rebuilt = r.get("rebuilt_from") or [None] * len(r["checkpoints"])
         runs = " and ".join(
-            f"U-Net widths {w}, {st} steps ({n} samples, `{p}`)"
-            for p, w, st, n in zip(r["checkpoints"], r["widths"], r["steps"], r["samples"], strict=True)
+            f"U-Net widths {w}, " + (f"the network of `{g}` (`{p}`)" if g else f"{st} steps ({n} samples, `{p}`)")
+            for p, w, st, n, g in zip(r["checkpoints"], r["widths"], r["steps"], r["samples"], rebuilt, strict=True)
         )
         mean = f"the mean of {len(r['checkpoints'])} networks, " if len(r["checkpoints"]) > 1 else ""
         reused = ""
@@ -356,9 +358,10 @@ def model_card(card: dict, attribution: list[dict], command: str) -> str:
             "(chosen on the validation split, docs/training.md)."
         )
     if card.get("mirror_average"):
+        which = "the SR graph" if ex["aop"].get("reused_from") else "each graph"  # a reused AOP keeps its own
         lines.append(
-            "- Mirror-averaged graphs: each runs its network on the input and on its mirror image (frames "
-            "in x, the ELM in azimuth) and averages (training.model.MirrorAverage)."
+            f"- Mirror average: {which} runs its network on the input and on its mirror image (frames in x, the "
+            "ELM in azimuth) and averages the two (training.model.MirrorAverage)."
         )
     if card.get("sr_training"):
         lines.append(f"- SR training: {card['sr_training']}.")
@@ -576,6 +579,7 @@ def main(argv: list[str] | None = None) -> int:
             "steps": [ck["step"] for ck in cks],
             "samples": [ck["samples"] for ck in cks],
             "widths": [ck["unet"]["widths"] for ck in cks],
+            "rebuilt_from": [ck.get("rebuilt_from") for ck in cks],  # training.onnx_weights: a graph's network
             "weights": dtype,
             "max_abs_diff": diff,
             "bytes": (out / f"{module}.onnx").stat().st_size,
@@ -603,7 +607,7 @@ def main(argv: list[str] | None = None) -> int:
     on = f", on {args.trained_on}" if args.trained_on else ""
     card["sr_training"] = training_summary(Path(args.sr), sr_ck) + on
     lights = sr_ck["args"].get("lights", "table1")
-    card["lights"] = f"the family mixture {TRAIN_MIX}" if lights == "mix" else "the paper's Table 1"
+    card["lights"] = f"{MIX_RECORD} {TRAIN_MIX}" if lights == "mix" else "the paper's Table 1"
     report["timing"] = time_sr(out / "sr.onnx", card["resolution"])
     print(
         f"SR median latency (onnxruntime, this CPU): {report['timing']['sr_at_R_ms']:.1f} ms at R = "

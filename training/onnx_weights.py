@@ -4,8 +4,9 @@ training runs are gone: ``python -m training.onnx_weights ssn_engine/models/sr.o
 
 The exporter (:mod:`training.export`) keeps the convolutions' names (``net.<parameter>``) and folds each
 GroupNorm's weight and bias into two anonymous constants, in the order the forward pass uses them; the network's
-own GroupNorms, in module order, take them back. The rebuilt network is checked against the graph on random
-inputs (``--tol``).
+own GroupNorms, in module order, take them back. A mirror-averaged graph (``export --mirror-average``, names
+``net.net.<parameter>``) gives back the network inside the average. The rebuilt network is checked against the
+graph on random inputs (``--tol``).
 """
 
 from __future__ import annotations
@@ -21,10 +22,17 @@ import torch
 from onnx import numpy_helper
 
 from . import checkpoint
-from .export import TOL, parity
+from .export import MIX_RECORD, TOL, parity
 from .model import UNetConfig, build
+from .model.mirror import MirrorAverage
 
 PREFIX = "net."  # training.export.Clamped's attribute
+MIRRORED = PREFIX + "net."  # ... around training.model.MirrorAverage's
+
+
+def weights_prefix(model: onnx.ModelProto) -> str:
+    """The prefix of the graph's parameter names: MIRRORED for a mirror-averaged graph, else PREFIX."""
+    return MIRRORED if any(i.name.startswith(MIRRORED + "unet.") for i in model.graph.initializer) else PREFIX
 
 
 def _serial(name: str) -> int:
@@ -41,20 +49,21 @@ def graph_config(model: onnx.ModelProto, groups: int = 8) -> tuple[str, UNetConf
     inputs = {i.name: i for i in model.graph.input}
     module = "sr" if "elm" in inputs else "aop"
     r = inputs["mask"].type.tensor_type.shape.dim[-1].dim_value
-    convs = [i for i in model.graph.initializer if re.fullmatch(r"net\.unet\.encoder\.\d+\.0\.0\.weight", i.name)]
+    pattern = re.escape(weights_prefix(model)) + r"unet\.encoder\.(\d+)\.0\.0\.weight"
+    convs = {int(m.group(1)): i for i in model.graph.initializer if (m := re.fullmatch(pattern, i.name))}
     if not convs:
         raise ValueError("the graph holds no single U-Net (the shipped AOP is the mean of two: not supported)")
-    widths = tuple(int(i.dims[0]) for i in sorted(convs, key=lambda i: int(i.name.split(".")[3])))
+    widths = tuple(int(convs[k].dims[0]) for k in sorted(convs))
     return module, UNetConfig(widths=widths, groups=groups, resolution=int(r), card="card" in inputs)
 
 
 def state_dict_from_graph(model: onnx.ModelProto, net: torch.nn.Module) -> dict[str, torch.Tensor]:
     """``net``'s state dict with the graph's weights (shapes checked; every parameter must be found)."""
-    inits = model.graph.initializer
-    named = {i.name[len(PREFIX) :]: numpy_helper.to_array(i) for i in inits if i.name.startswith(PREFIX)}
+    inits, prefix = model.graph.initializer, weights_prefix(model)
+    named = {i.name[len(prefix) :]: numpy_helper.to_array(i) for i in inits if i.name.startswith(prefix)}
     folded = [
         numpy_helper.to_array(i).reshape(-1)
-        for i in sorted((i for i in inits if not i.name.startswith(PREFIX)), key=lambda i: _serial(i.name))
+        for i in sorted((i for i in inits if not i.name.startswith(prefix)), key=lambda i: _serial(i.name))
     ]
     target = net.state_dict()
     norms = [k for k in target if k not in named]  # the GroupNorms' weight and bias, in module order
@@ -68,15 +77,15 @@ def state_dict_from_graph(model: onnx.ModelProto, net: torch.nn.Module) -> dict[
     return out
 
 
-def _training_record(path: Path, module: str) -> str | None:
-    """How the graph's network was trained, from the model.json beside it (the SR's record), if any."""
+def _model_json(path: Path, module: str) -> dict:
+    """The model.json beside an SR graph (its training record), or {}."""
     meta = path.with_name("model.json")
     if module != "sr" or not meta.is_file():
-        return None
+        return {}
     try:
-        return json.loads(meta.read_text()).get("sr_training")
+        return json.loads(meta.read_text())
     except (OSError, json.JSONDecodeError):
-        return None
+        return {}
 
 
 def rebuild(path: Path, groups: int = 8, tol: float = TOL) -> tuple[torch.nn.Module, dict]:
@@ -86,14 +95,16 @@ def rebuild(path: Path, groups: int = 8, tol: float = TOL) -> tuple[torch.nn.Mod
     net = build(module, config)
     net.load_state_dict(state_dict_from_graph(model, net))
     net.eval()
+    mirrored = weights_prefix(model) == MIRRORED
     rng = np.random.default_rng(0)
     r = config.resolution
     mask = (rng.random((4, 1, r, r)) > 0.5).astype(np.float32)
     elm = rng.random((4, 16, 32)).astype(np.float32)
     x = {"mask": mask, "ao": rng.random(mask.shape, np.float32), "elm": elm / elm.max(), "card": mask * 0.5}
-    diff = parity(path, net, module, x)
+    diff = parity(path, MirrorAverage(net).eval() if mirrored else net, module, x)
     if diff > tol:
         raise ValueError(f"the rebuilt network is {diff:.2e} off the graph (tolerance {tol:g}; --groups?)")
+    meta = _model_json(path, module)
     ck = {
         "model": net.state_dict(),
         "step": 0,
@@ -103,7 +114,13 @@ def rebuild(path: Path, groups: int = 8, tol: float = TOL) -> tuple[torch.nn.Mod
         "unet": config.to_dict(),
         "rebuilt_from": str(path),
         "parity": diff,
-        "training": _training_record(path, module),
+        "training": meta.get("sr_training"),
+        # the training options the exporter reads (training.export: the card's light maps, the proxy check)
+        "args": {
+            "lights": "mix" if meta.get("lights", "").startswith(MIX_RECORD) else "table1",
+            "proxy": meta.get("height"),
+        },
+        "mirror_average": mirrored,
     }
     return net, ck
 

@@ -106,7 +106,7 @@ def test_mirror_averaged_export_is_mirror_symmetric(exported):
     assert export([runs / "aop" / "last.pt"], runs / "sr" / "last.pt", out, runs / "no-data", "--mirror-average") == 0
     card = json.loads((out / "model.json").read_text())
     assert card["mirror_average"] is True and card["export"]["sr"]["max_abs_diff"] <= 1e-4
-    assert "Mirror-averaged" in (out / "MODEL_CARD.md").read_text()
+    assert "- Mirror average: each graph runs its network" in (out / "MODEL_CARD.md").read_text()
     assert _sr_mirror_gap(exported) > 1e-3  # the plain network is not symmetric ...
     assert _sr_mirror_gap(out) < 1e-5  # ... its mirror average is
 
@@ -212,8 +212,9 @@ def test_a_checkpoint_rebuilt_from_the_graph_fine_tunes(exported, tmp_path):
 
 
 def test_the_shipped_sr_can_be_fine_tuned_without_its_runs(tmp_path):
-    """The installed SR graph rebuilds into a geometry-guided checkpoint within the export's parity bound; the
-    installed AOP (the mean of two networks) is refused with a message."""
+    """The installed SR graph (mirror-averaged) rebuilds into a geometry-guided checkpoint within the export's
+    parity bound, with the light maps it was trained on; the installed AOP (the mean of two networks) is refused
+    with a message."""
     from training import checkpoint
     from training.onnx_weights import main as rebuild_main
 
@@ -222,6 +223,9 @@ def test_the_shipped_sr_can_be_fine_tuned_without_its_runs(tmp_path):
     assert rebuild_main([str(models / "sr.onnx"), "--out", str(tmp_path / "sr.pt")]) == 0
     ck = checkpoint.load(tmp_path / "sr.pt")
     assert ck["parity"] <= 1e-4 and ck["module"] == "sr" and ck["unet"]["card"] is True
-    assert ck["training"] == json.loads((models / "model.json").read_text())["sr_training"]  # for the next card
+    meta = json.loads((models / "model.json").read_text())
+    assert ck["training"] == meta["sr_training"]  # for the next card
+    assert ck["mirror_average"] == meta["mirror_average"]  # the network inside the graph's mirror average
+    assert ck["args"]["lights"] == "mix" and meta["lights"].startswith("the family mixture")
     with pytest.raises(SystemExit, match="no single U-Net"):
         rebuild_main([str(models / "aop.onnx"), "--out", str(tmp_path / "aop.pt")])
