@@ -5,7 +5,8 @@ training runs are gone: ``python -m training.onnx_weights ssn_engine/models/sr.o
 The exporter (:mod:`training.export`) keeps the convolutions' names (``net.<parameter>``) and folds each
 GroupNorm's weight and bias into two anonymous constants, in the order the forward pass uses them; the network's
 own GroupNorms, in module order, take them back. A mirror-averaged graph (``export --mirror-average``, names
-``net.net.<parameter>``) gives back the network inside the average. The rebuilt network is checked against the
+``net.net.<parameter>``) gives back the network inside the average; a graph of the mean of several networks (the
+shipped AOP, ``nets.<k>.``) gives back the one of ``--member k``. The rebuilt network is checked against the
 graph on random inputs (``--tol``).
 """
 
@@ -24,15 +25,39 @@ from onnx import numpy_helper
 from . import checkpoint
 from .export import MIX_RECORD, TOL, parity
 from .model import UNetConfig, build
+from .model.ensemble import Ensemble
 from .model.mirror import MirrorAverage
 
-PREFIX = "net."  # training.export.Clamped's attribute
-MIRRORED = PREFIX + "net."  # ... around training.model.MirrorAverage's
+HEAD = re.compile(r"((?:net\.)+)(?:nets\.(\d+)\.)?unet\.encoder\.0\.0\.0\.weight")  # a U-Net's first weight
 
 
-def weights_prefix(model: onnx.ModelProto) -> str:
-    """The prefix of the graph's parameter names: MIRRORED for a mirror-averaged graph, else PREFIX."""
-    return MIRRORED if any(i.name.startswith(MIRRORED + "unet.") for i in model.graph.initializer) else PREFIX
+def _heads(model: onnx.ModelProto) -> tuple[str, int]:
+    """The graph's parameter-name head (``net.`` from training.export.Clamped, ``net.net.`` inside a
+    MirrorAverage) and how many networks' mean it is (training.model.Ensemble's ``nets.<k>.``; 0: one network)."""
+    found = [m for i in model.graph.initializer if (m := HEAD.fullmatch(i.name))]
+    if not found:
+        raise ValueError("the graph holds no U-Net")
+    return found[0].group(1), len({m.group(2) for m in found if m.group(2) is not None})
+
+
+def weights_prefix(model: onnx.ModelProto, member: int | None = None) -> str:
+    """The prefix of one network's parameter names: the graph's only network, or ``member`` of an ensemble."""
+    head, count = _heads(model)
+    if count == 0:
+        if member is not None:
+            raise ValueError("the graph holds a single network: leave out --member")
+        return head
+    if member is None or not 0 <= member < count:
+        raise ValueError(f"the graph is the mean of {count} networks: give --member 0 to {count - 1}")
+    return f"{head}nets.{member}."
+
+
+def mirror_averaged(model: onnx.ModelProto) -> bool:
+    """Whether the graph runs its network on its input and the input's mirror image: a Concat of the input and a
+    Slice of it (as :func:`training.export.without_mirror_average` finds it)."""
+    source = model.graph.input[0].name
+    slices = {o for n in model.graph.node if n.op_type == "Slice" and n.input[0] == source for o in n.output}
+    return any(n.op_type == "Concat" and list(n.input)[:2] in ([source, s] for s in slices) for n in model.graph.node)
 
 
 def _serial(name: str) -> int:
@@ -43,30 +68,35 @@ def _serial(name: str) -> int:
     return int(found.group(1))
 
 
-def graph_config(model: onnx.ModelProto, groups: int = 8) -> tuple[str, UNetConfig]:
-    """The module ("aop" or "sr") and the U-Net configuration of an exported graph (``groups``: the GroupNorm
-    groups it was trained with, which the graph keeps only inside its reshapes)."""
+def graph_config(model: onnx.ModelProto, groups: int = 8, member: int | None = None) -> tuple[str, UNetConfig]:
+    """The module ("aop" or "sr") and the U-Net configuration of an exported graph's network (``member`` of an
+    ensemble; ``groups``: the GroupNorm groups it was trained with, which the graph keeps only inside its
+    reshapes)."""
     inputs = {i.name: i for i in model.graph.input}
     module = "sr" if "elm" in inputs else "aop"
     r = inputs["mask"].type.tensor_type.shape.dim[-1].dim_value
-    pattern = re.escape(weights_prefix(model)) + r"unet\.encoder\.(\d+)\.0\.0\.weight"
+    pattern = re.escape(weights_prefix(model, member)) + r"unet\.encoder\.(\d+)\.0\.0\.weight"
     convs = {int(m.group(1)): i for i in model.graph.initializer if (m := re.fullmatch(pattern, i.name))}
-    if not convs:
-        raise ValueError("the graph holds no single U-Net (the shipped AOP is the mean of two: not supported)")
     widths = tuple(int(convs[k].dims[0]) for k in sorted(convs))
     return module, UNetConfig(widths=widths, groups=groups, resolution=int(r), card="card" in inputs)
 
 
-def state_dict_from_graph(model: onnx.ModelProto, net: torch.nn.Module) -> dict[str, torch.Tensor]:
-    """``net``'s state dict with the graph's weights (shapes checked; every parameter must be found)."""
-    inits, prefix = model.graph.initializer, weights_prefix(model)
+def state_dict_from_graph(
+    model: onnx.ModelProto, net: torch.nn.Module, member: int | None = None
+) -> dict[str, torch.Tensor]:
+    """``net``'s state dict with the weights of the graph's network (``member`` of an ensemble, whose members run
+    one after the other; shapes checked; every parameter must be found)."""
+    inits, prefix = model.graph.initializer, weights_prefix(model, member)
+    head, count = _heads(model)
     named = {i.name[len(prefix) :]: numpy_helper.to_array(i) for i in inits if i.name.startswith(prefix)}
     folded = [
         numpy_helper.to_array(i).reshape(-1)
-        for i in sorted((i for i in inits if not i.name.startswith(prefix)), key=lambda i: _serial(i.name))
+        for i in sorted((i for i in inits if not i.name.startswith(head)), key=lambda i: _serial(i.name))
     ]
     target = net.state_dict()
     norms = [k for k in target if k not in named]  # the GroupNorms' weight and bias, in module order
+    if count:
+        folded = folded[(member or 0) * len(norms) : ((member or 0) + 1) * len(norms)]
     if len(norms) != len(folded):
         raise ValueError(f"the graph folds {len(folded)} normalisation tensors, the network has {len(norms)}")
     out = {}
@@ -88,20 +118,28 @@ def _model_json(path: Path, module: str) -> dict:
         return {}
 
 
-def rebuild(path: Path, groups: int = 8, tol: float = TOL) -> tuple[torch.nn.Module, dict]:
-    """The network of an exported graph and a checkpoint dict that ``training.train --init-from`` accepts."""
+def rebuild(path: Path, groups: int = 8, tol: float = TOL, member: int | None = None) -> tuple[torch.nn.Module, dict]:
+    """The network of an exported graph (``member`` of an ensemble graph) and a checkpoint dict that
+    ``training.train --init-from`` accepts. An ensemble is checked whole: every member rebuilt, their mean against
+    the graph."""
     model = onnx.load(str(path))
-    module, config = graph_config(model, groups)
-    net = build(module, config)
-    net.load_state_dict(state_dict_from_graph(model, net))
-    net.eval()
-    mirrored = weights_prefix(model) == MIRRORED
+    count = _heads(model)[1]
+    weights_prefix(model, member)  # refuses a missing or needless --member
+    nets = []
+    for k in range(count) if count else [None]:
+        module, config = graph_config(model, groups, k)
+        net = build(module, config)
+        net.load_state_dict(state_dict_from_graph(model, net, k))
+        nets.append(net.eval())
+    checked = Ensemble(nets).eval() if count else nets[0]
+    mirrored = mirror_averaged(model)
+    net = nets[member or 0]
     rng = np.random.default_rng(0)
     r = config.resolution
     mask = (rng.random((4, 1, r, r)) > 0.5).astype(np.float32)
     elm = rng.random((4, 16, 32)).astype(np.float32)
     x = {"mask": mask, "ao": rng.random(mask.shape, np.float32), "elm": elm / elm.max(), "card": mask * 0.5}
-    diff = parity(path, MirrorAverage(net).eval() if mirrored else net, module, x)
+    diff = parity(path, MirrorAverage(checked).eval() if mirrored else checked, module, x)
     if diff > tol:
         raise ValueError(f"the rebuilt network is {diff:.2e} off the graph (tolerance {tol:g}; --groups?)")
     meta = _model_json(path, module)
@@ -110,7 +148,7 @@ def rebuild(path: Path, groups: int = 8, tol: float = TOL) -> tuple[torch.nn.Mod
         "step": 0,
         "samples": 0,
         "module": module,
-        "target": "shadow",  # what training.train records for both modules by default
+        "target": "ao" if module == "aop" else "shadow",  # what training.train records (an SR's by default)
         "unet": config.to_dict(),
         "rebuilt_from": str(path),
         "parity": diff,
@@ -121,6 +159,7 @@ def rebuild(path: Path, groups: int = 8, tol: float = TOL) -> tuple[torch.nn.Mod
             "proxy": meta.get("height"),
         },
         "mirror_average": mirrored,
+        "member": member,
     }
     return net, ck
 
@@ -131,9 +170,10 @@ def main(argv: list[str] | None = None) -> int:
     p.add_argument("--out", type=Path, required=True, help="checkpoint to write")
     p.add_argument("--groups", type=int, default=8, help="GroupNorm groups of the trained network")
     p.add_argument("--tol", type=float, default=TOL, help="largest difference allowed from the graph")
+    p.add_argument("--member", type=int, help="of a graph that is the mean of several networks (the AOP): which one")
     args = p.parse_args(argv)
     try:
-        _, ck = rebuild(args.graph, args.groups, args.tol)
+        _, ck = rebuild(args.graph, args.groups, args.tol, args.member)
     except ValueError as exc:
         raise SystemExit(f"{args.graph}: {exc}") from None
     checkpoint.save(args.out, ck)

@@ -209,12 +209,14 @@ def test_a_checkpoint_rebuilt_from_the_graph_fine_tunes(exported, tmp_path):
         rebuild_main([str(exported / "sr.onnx"), "--out", str(tmp_path / "bad.pt"), "--groups", "1"])
     assert rebuild_main([str(exported / "aop.onnx"), "--out", str(tmp_path / "aop.pt"), "--groups", "2"]) == 0
     assert checkpoint.load(tmp_path / "aop.pt")["module"] == "aop"
+    aop_run = ["--module", "aop", "--run", str(tmp_path / "aop_ft"), *TINY, "--init-from", str(tmp_path / "aop.pt")]
+    assert train_main(aop_run, store=FakeStore(res=32)) == 0  # an AOP fine-tunes from its graph too
 
 
 def test_the_shipped_sr_can_be_fine_tuned_without_its_runs(tmp_path):
     """The installed SR graph (mirror-averaged) rebuilds into a geometry-guided checkpoint within the export's
-    parity bound, with the light maps it was trained on; the installed AOP (the mean of two networks) is refused
-    with a message."""
+    parity bound, with the light maps it was trained on; the installed AOP (the mean of two networks) rebuilds
+    one member at a time (``--member``), and without one is refused with a message."""
     from training import checkpoint
     from training.onnx_weights import main as rebuild_main
 
@@ -227,5 +229,13 @@ def test_the_shipped_sr_can_be_fine_tuned_without_its_runs(tmp_path):
     assert ck["training"] == meta["sr_training"]  # for the next card
     assert ck["mirror_average"] == meta["mirror_average"]  # the network inside the graph's mirror average
     assert ck["args"]["lights"] == "mix" and meta["lights"].startswith("the family mixture")
-    with pytest.raises(SystemExit, match="no single U-Net"):
+    with pytest.raises(SystemExit, match="mean of 2 networks: give --member"):
         rebuild_main([str(models / "aop.onnx"), "--out", str(tmp_path / "aop.pt")])
+    for k in (0, 1):  # the installed AOP's members: their mean rebuilt is checked against the graph
+        assert rebuild_main([str(models / "aop.onnx"), "--member", str(k), "--out", str(tmp_path / f"aop{k}.pt")]) == 0
+        ck = checkpoint.load(tmp_path / f"aop{k}.pt")
+        assert ck["parity"] <= 1e-4 and ck["module"] == "aop" and ck["member"] == k
+    first, second = (checkpoint.load(tmp_path / f"aop{k}.pt")["model"] for k in (0, 1))
+    assert any(not torch.equal(first[key], second[key]) for key in first)  # two different networks
+    with pytest.raises(SystemExit, match="single network"):
+        rebuild_main([str(models / "sr.onnx"), "--member", "0", "--out", str(tmp_path / "sr0.pt")])
