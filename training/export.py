@@ -357,6 +357,12 @@ def model_card(card: dict, attribution: list[dict], command: str) -> str:
             "where the AOP darkens objects more than their true AO; the SR gains on every light family "
             "(chosen on the validation split, docs/training.md)."
         )
+    if card.get("card_blur"):
+        lines.append(
+            f"- Card blur {card['card_blur']} pixels (R): the engine blurs the card's shadow by a Gaussian of this "
+            "size before the SR sees it; the card's aliased steps at a wedge's tip made the SR leave speckles "
+            "(onnx_ssn.blur_frames; checked on the validation split, docs/training.md)."
+        )
     if card.get("mirror_average"):
         which = "the SR graph" if ex["aop"].get("reused_from") else "each graph"  # a reused AOP keeps its own
         lines.append(
@@ -488,6 +494,12 @@ def parse_args(argv: list[str] | None = None) -> argparse.Namespace:
         help="model.json ao_gamma: the engine raises the predicted AO map to this power (1: as predicted)",
     )
     p.add_argument(
+        "--card-blur",
+        type=float,
+        help="model.json card_blur: blur the card's shadow by a Gaussian of this many pixels (R) before the SR "
+        "(a geometry-guided SR only; 0: off; default: the SR's training option, train --card-blur)",
+    )
+    p.add_argument(
         "--mirror-average",
         action="store_true",
         help="export each network as training.model.MirrorAverage (twice the compute, mirror-symmetric)",
@@ -606,6 +618,9 @@ def main(argv: list[str] | None = None) -> int:
         report["height"] = {"source": args.height, "bytes": graph.stat().st_size}
     on = f", on {args.trained_on}" if args.trained_on else ""
     card["sr_training"] = training_summary(Path(args.sr), sr_ck) + on
+    blur = sr_ck["args"].get("card_blur", 0.0) if args.card_blur is None else args.card_blur
+    if blur:
+        card["card_blur"] = blur
     lights = sr_ck["args"].get("lights", "table1")
     card["lights"] = f"{MIX_RECORD} {TRAIN_MIX}" if lights == "mix" else "the paper's Table 1"
     report["timing"] = time_sr(out / "sr.onnx", card["resolution"])

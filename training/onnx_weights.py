@@ -153,10 +153,11 @@ def rebuild(path: Path, groups: int = 8, tol: float = TOL, member: int | None = 
         "rebuilt_from": str(path),
         "parity": diff,
         "training": meta.get("sr_training"),
-        # the training options the exporter reads (training.export: the card's light maps, the proxy check)
+        # the training options the exporter reads (training.export: the card's light maps and blur, the proxy check)
         "args": {
             "lights": "mix" if meta.get("lights", "").startswith(MIX_RECORD) else "table1",
             "proxy": meta.get("height"),
+            "card_blur": meta.get("card_blur", 0.0),
         },
         "mirror_average": mirrored,
         "member": member,

@@ -32,6 +32,7 @@ from torch.nn import functional as F
 
 from . import checkpoint
 from ssn_engine.hemisphere import texel_weights
+from ssn_engine.methods.onnx_ssn import MAX_CARD_BLUR, blur_frames
 
 from .batches import BatchSampler, ViewCache, make_batch
 from .elm import TRAIN_MIX, sample_lights, sample_mixture
@@ -116,6 +117,13 @@ def parse_args(argv: list[str] | None = None) -> argparse.Namespace:
         "split (docs/training.md); default: the conventions' default camera",
     )
     p.add_argument(
+        "--card-blur",
+        type=float,
+        default=0.0,
+        help="SR --card: blur the card's shadow by a Gaussian of this many pixels (R), as the engine does for a model "
+        "whose model.json sets card_blur (training.export takes it from the checkpoint)",
+    )
+    p.add_argument(
         "--lights",
         choices=["table1", "mix"],
         default="table1",
@@ -153,6 +161,10 @@ def parse_args(argv: list[str] | None = None) -> argparse.Namespace:
         p.error("--through-sr trains an AOP (--module aop)")
     if (args.card or args.lights != "table1") and args.module != "sr":
         p.error("--card and --lights apply to SR (--module sr)")
+    if args.card_blur and not args.card:
+        p.error("--card-blur blurs the card: give --card")
+    if not 0.0 <= args.card_blur <= MAX_CARD_BLUR:
+        p.error(f"--card-blur must be in [0, {MAX_CARD_BLUR}] pixels")
     args.widths = tuple(int(w) for w in str(args.widths).split(","))
     return args
 
@@ -216,7 +228,8 @@ class Prefetcher:
         self.thread.join()
 
 
-def to_tensors(batch, device: torch.device) -> dict[str, torch.Tensor]:
+def to_tensors(batch, device: torch.device, card_blur: float = 0.0) -> dict[str, torch.Tensor]:
+    """A batch's arrays as tensors on ``device``; the card's shadow blurred by ``card_blur`` pixels."""
     t = lambda a: torch.from_numpy(np.ascontiguousarray(a)).to(device)
     out = {
         "mask": t(batch.mask[:, None]),
@@ -225,7 +238,7 @@ def to_tensors(batch, device: torch.device) -> dict[str, torch.Tensor]:
         "target": t(batch.target[:, None]),
     }
     if batch.card is not None:
-        out["card"] = t(batch.card[:, None])
+        out["card"] = t(blur_frames(batch.card, card_blur)[:, None])
     if batch.ao_pred is not None:
         out["ao_pred"] = t(batch.ao_pred[:, None])
     return out
@@ -708,7 +721,7 @@ def build_data(args: argparse.Namespace, proc: Process, store: Any, run: Path, r
     sampler = batch_sampler(args, cache)
     rows = store.meta["elm_rows"]
     val_batch, val_split = build_val(store, args, rows, run) if proc.is_main else (None, None)
-    val = to_tensors(val_batch, proc.device) if val_batch is not None else None
+    val = to_tensors(val_batch, proc.device, args.card_blur) if val_batch is not None else None
     if proc.is_main:
         print(
             f"train views: {len(cache)} (cache {args.cache_views}), val: {args.val_samples} samples from the "
@@ -830,7 +843,7 @@ def train(
     net.parallel.train()
     while net.step < args.steps and not stop["flag"]:
         lr = lr_at(net.step, args)
-        x = to_tensors(stream.next(), proc.device)
+        x = to_tensors(stream.next(), proc.device, args.card_blur)
         loss = train_step(net, args.module, objective, x, ao_input(args, x, stream.gen), lr)
         net.step += 1
         net.samples += args.batch * proc.world

@@ -23,6 +23,9 @@ that many frame pixels (N = 256) of the card's shadow and of the cutout and fade
 so what the network leaves there is haze.
 ``ao_gamma``, if set, calibrates the predicted AO map: ``ao ** ao_gamma`` (below 1 lightens it; chosen on the
 validation split: docs/training.md, "The AO's gamma").
+``card_blur`` (a geometry-guided model only), if set, blurs the card's shadow by a Gaussian of that many model
+pixels before the SR sees it: the card is traced on the model's grid, and at a wedge's tip its aliased steps made
+the SR leave speckles (docs/training.md, "The card blurred").
 Frames are N x N (N = 256); a model trained at another R is fed resampled frames.
 """
 
@@ -84,6 +87,16 @@ def reach_weights(card: np.ndarray, masks: np.ndarray, reach: float) -> np.ndarr
         grown = ndimage.binary_dilation(support, iterations=steps).astype(np.float32)
         out[b] = np.minimum(ndimage.gaussian_filter(grown, steps / 2) * 2, 1.0)
     return out
+
+
+MAX_CARD_BLUR = 4.0  # model pixels
+
+
+def blur_frames(frames: np.ndarray, sigma: float) -> np.ndarray:
+    """Frames (b, R, R) blurred by a Gaussian of ``sigma`` pixels in both axes (0: as they are)."""
+    if sigma <= 0.0:
+        return frames
+    return ndimage.gaussian_filter(frames, (0.0, sigma, sigma), mode="nearest").astype(np.float32)
 
 
 SMALL_LIGHTS = (0.2, 0.7)  # light concentration from which the small-light floor blends in, and where it is whole
@@ -169,6 +182,10 @@ class OnnxSSN:
         if isinstance(gamma, bool) or not isinstance(gamma, (int, float)) or not 0.1 <= gamma <= 10.0:
             raise ModelError(f"{card}: ao_gamma must be a number in [0.1, 10], got {gamma!r}")
         self.ao_gamma = float(gamma)
+        blur = meta.get("card_blur", 0.0)
+        if isinstance(blur, bool) or not isinstance(blur, (int, float)) or not 0.0 <= blur <= MAX_CARD_BLUR:
+            raise ModelError(f"{card}: card_blur must be a number of pixels in [0, {MAX_CARD_BLUR}], got {blur!r}")
+        self.card_blur = float(blur)
         self.meta, self.model_resolution = meta, r
         self.output_floor, self.output_floor_small_lights = (float(floors[k]) for k in floors)
         self._aop = _session(model_dir / meta.get("aop", "aop.onnx"), "aop")
@@ -241,15 +258,17 @@ class OnnxSSN:
             "ao": resample_frames(ao, self.model_resolution)[:, None],
             "elm": network_elm(elms),
         }
+        card = None
         if self.card is not None:
-            feeds["card"] = self.card.card_shadows(masks, elms, self.cameras_for(masks, cameras))[:, None]
+            card = self.card.card_shadows(masks, elms, self.cameras_for(masks, cameras))
+            feeds["card"] = blur_frames(card, self.card_blur)[:, None]
         s = _run(self._sr, "shadow", feeds)[:, 0]
         share = small_lights_share(elms)
-        if self.card is not None and self.shadow_reach > 0 and share.any():
+        if card is not None and self.shadow_reach > 0 and share.any():
             # For small lights only: a broad sky's soft shadow spreads from the whole 3D object, well past the
             # flat card's (on the test split the reach cost broad skies DSSIM at pitch 30).
             reach = self.shadow_reach * self.model_resolution / FRAME
-            weights = reach_weights(feeds["card"][:, 0], feeds["mask"][:, 0], reach)
+            weights = reach_weights(card, feeds["mask"][:, 0], reach)
             s = s * (1.0 - share[:, None, None] * (1.0 - weights))
         floors = floor_for(share, self.output_floor, self.output_floor_small_lights)
         s = resample_frames(s, self.resolution)

@@ -18,7 +18,7 @@ from ssn_engine.framing import frame_alpha  # noqa: E402
 from ssn_engine.hemisphere import render_light_map  # noqa: E402
 from ssn_engine.light_map import preset  # noqa: E402
 from ssn_engine.methods import GeometricCard, ModelError, OnnxSSN, load_method  # noqa: E402
-from ssn_engine.methods.onnx_ssn import floor_for, reach_weights, small_lights_share  # noqa: E402
+from ssn_engine.methods.onnx_ssn import floor_for, blur_frames, reach_weights, small_lights_share  # noqa: E402
 
 OPSET = 13
 
@@ -260,6 +260,9 @@ def test_graphs_named_in_the_card(tmp_path, monkeypatch, mask):
         (json.dumps(_card(256, shadow_reach="16")), "shadow_reach"),
         (json.dumps(_card(256, ao_gamma=0)), "ao_gamma"),
         (json.dumps(_card(256, ao_gamma=False)), "ao_gamma"),
+        (json.dumps(_card(256, card_blur=-1)), "card_blur"),
+        (json.dumps(_card(256, card_blur="1")), "card_blur"),
+        (json.dumps(_card(256, card_blur=9.0)), "card_blur"),
     ],
 )
 def test_wrong_model_card(tmp_path, monkeypatch, card_text, fragment):
@@ -316,3 +319,17 @@ def test_reach_weights_keep_the_shadow_near_the_card_and_the_cutout_only():
     assert w[0:5, 0:5].max() == 0.0 and w[120:, 60:80].max() == 0.0  # far from both
     row = w[65, 40:64]  # leaving the card's shadow sideways: never rising, from 1 to nothing
     assert row[0] == 1.0 and row[-1] < 0.005 and (np.diff(row) <= 1e-6).all()
+
+
+def test_blur_frames_softens_the_cards_steps_and_keeps_its_shadow():
+    """A blurred card keeps its amount of shadow and its place, loses its one-pixel steps; sigma 0 changes nothing."""
+    card = np.zeros((2, 64, 64), np.float32)
+    card[0, 30:34, 10:50] = 1.0
+    card[0, 29, 10:50:2] = 1.0  # a stepped edge, as the card's wedge tips are traced
+    card[1, 5:20, 40:60] = 0.5
+    assert blur_frames(card, 0.0) is card
+    soft = blur_frames(card, 0.8)
+    assert soft.shape == card.shape and soft.dtype == np.float32
+    np.testing.assert_allclose(soft.sum(axis=(1, 2)), card.sum(axis=(1, 2)), rtol=1e-4)
+    assert np.abs(np.diff(soft[0, 29, 10:50])).max() < 0.5 * np.abs(np.diff(card[0, 29, 10:50])).max()
+    assert soft[1, 12, 50] == pytest.approx(0.5, abs=1e-3) and soft[1, 40, 10] == 0.0  # inside, far from it

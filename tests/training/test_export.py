@@ -164,23 +164,28 @@ def test_two_aops_export_as_one_graph_of_their_mean(exported):
 
 
 def test_geometry_guided_sr_exports_with_the_card_input_and_the_engine_feeds_it(exported, tmp_path):
-    """A --card SR ships beside a reused AOP graph; the engine traces the card (with the camera when given)."""
+    """A --card SR ships beside a reused AOP graph; the engine traces the card (with the camera when given) and
+    blurs it as the SR was trained (train --card-blur)."""
     from ssn_engine.methods import OnnxSSN
 
     run = tmp_path / "sr_card"
     assert (
-        train_main(["--module", "sr", "--card", "--lights", "mix", "--run", str(run), *TINY], store=FakeStore(res=32))
+        train_main(
+            ["--module", "sr", "--card", "--lights", "mix", "--card-blur", "1.0", "--run", str(run), *TINY],
+            store=FakeStore(res=32),
+        )
         == 0
     )
     out = tmp_path / "model"
-    assert export([exported / "aop.onnx"], run / "last.pt", out, tmp_path / "no-data") == 0
+    assert export([exported / "aop.onnx"], run / "last.pt", out, tmp_path / "no-data") == 0  # blur as trained
     card = json.loads((out / "model.json").read_text())
+    assert card["card_blur"] == 1.0 and "Card blur 1.0" in (out / "MODEL_CARD.md").read_text()
     assert card["export"]["sr"]["max_abs_diff"] <= 1e-4
     assert card["export"]["aop"]["reused_from"] == str(exported / "aop.onnx")
     sr_inputs = {i.name for i in ort.InferenceSession(str(out / "sr.onnx")).get_inputs()}
     assert sr_inputs == {"mask", "ao", "elm", "card"}
     method = OnnxSSN(out)
-    assert method.card is not None and method.card.internal == 32
+    assert method.card is not None and method.card.internal == 32 and method.card_blur == 1.0
     mask = np.zeros((1, 256, 256), np.float32)
     mask[0, 8:136, 100:156] = 1.0
     elm = np.zeros((1, 16, 32), np.float32)
@@ -215,8 +220,8 @@ def test_a_checkpoint_rebuilt_from_the_graph_fine_tunes(exported, tmp_path):
 
 def test_the_shipped_sr_can_be_fine_tuned_without_its_runs(tmp_path):
     """The installed SR graph (mirror-averaged) rebuilds into a geometry-guided checkpoint within the export's
-    parity bound, with the light maps it was trained on; the installed AOP (the mean of two networks) rebuilds
-    one member at a time (``--member``), and without one is refused with a message."""
+    parity bound, with the light maps it was trained on and its card blur; the installed AOP (the mean of two
+    networks) rebuilds one member at a time (``--member``), and without one is refused with a message."""
     from training import checkpoint
     from training.onnx_weights import main as rebuild_main
 
@@ -229,6 +234,7 @@ def test_the_shipped_sr_can_be_fine_tuned_without_its_runs(tmp_path):
     assert ck["training"] == meta["sr_training"]  # for the next card
     assert ck["mirror_average"] == meta["mirror_average"]  # the network inside the graph's mirror average
     assert ck["args"]["lights"] == "mix" and meta["lights"].startswith("the family mixture")
+    assert ck["args"]["card_blur"] == meta["card_blur"] > 0  # an export of it blurs the card as the engine did
     with pytest.raises(SystemExit, match="mean of 2 networks: give --member"):
         rebuild_main([str(models / "aop.onnx"), "--out", str(tmp_path / "aop.pt")])
     for k in (0, 1):  # the installed AOP's members: their mean rebuilt is checked against the graph

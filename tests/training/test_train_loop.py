@@ -258,3 +258,11 @@ def test_evaluation_by_light_family_on_the_standin(tmp_path):
     assert (tmp_path / "fam" / "sun_grid.png").is_file()
     with pytest.raises(SystemExit, match="moon"):
         eval_main(["--families", "sun,moon", "--out", str(tmp_path / "x")])
+
+
+@pytest.mark.parametrize(
+    "extra", [["--card-blur", "1"], ["--card", "--card-blur", "-1"], ["--card", "--card-blur", "9"]]
+)
+def test_a_card_blur_needs_the_card_and_a_sensible_size(tmp_path, extra):
+    with pytest.raises(SystemExit):
+        _run(tmp_path, "sr", 1, extra)
