@@ -21,6 +21,7 @@ import shutil
 import sys
 import time
 from pathlib import Path
+from typing import TYPE_CHECKING
 
 import numpy as np
 import torch
@@ -29,6 +30,9 @@ from torch import nn
 from .checkpoint import load_models
 from .elm import TRAIN_MIX
 from .model import MirrorAverage
+
+if TYPE_CHECKING:
+    import onnx
 
 TOL = 1e-4
 MIX_RECORD = "the family mixture"  # model.json "lights" of an SR trained with --lights mix
@@ -144,6 +148,16 @@ def to_fp16_weights(src: Path, dst: Path) -> None:
     onnx.save(model, str(dst))
 
 
+def mirror_concat(model: onnx.ModelProto) -> onnx.NodeProto | None:
+    """The node of a graph exported from :class:`training.model.MirrorAverage` that doubles its batch: the one
+    Concat of the first input and a Slice of it (its mirror image); None if the graph has no such node."""
+    g = model.graph
+    source = g.input[0].name
+    starts = [n for n in g.node if n.op_type == "Concat" and list(n.input)[:1] == [source]]
+    slices = {o for n in g.node if n.op_type == "Slice" and n.input[0] == source for o in n.output}
+    return starts[0] if len(starts) == 1 and len(starts[0].input) > 1 and starts[0].input[1] in slices else None
+
+
 def without_mirror_average(src: Path, dst: Path) -> None:
     """Rewrite a graph exported from :class:`training.model.MirrorAverage` (its network run on ``cat([x,
     flip(x)])``, the halves averaged) into the network run once on ``x``: half the compute. The shipped AOP's
@@ -167,11 +181,11 @@ def without_mirror_average(src: Path, dst: Path) -> None:
     mul = made_by(clip.input[0], "Mul")
     first_half = made_by(made_by(mul.input[0], "Add").input[0], "Slice")
     network_out = first_half.input[0]
-    doubled = [n for n in g.node if n.op_type == "Concat" and list(n.input)[:1] == [source]]
-    if len(doubled) != 1 or made_by(doubled[0].input[1], "Slice").input[0] != source:
+    doubled = mirror_concat(model)
+    if doubled is None:
         raise ValueError(f"{src} is not a mirror-averaged graph: no Concat of {source!r} and its mirror image")
     for node in g.node:
-        node.input[:] = [source if name == doubled[0].output[0] else name for name in node.input]
+        node.input[:] = [source if name == doubled.output[0] else name for name in node.input]
     clip.input[0] = network_out
     rewired = dst.with_suffix(".rewired.onnx")
     onnx.save(model, str(rewired))

@@ -23,7 +23,7 @@ import torch
 from onnx import numpy_helper
 
 from . import checkpoint
-from .export import MIX_RECORD, TOL, parity
+from .export import MIX_RECORD, TOL, mirror_concat, parity
 from .model import UNetConfig, build
 from .model.ensemble import Ensemble
 from .model.mirror import MirrorAverage
@@ -50,14 +50,6 @@ def weights_prefix(model: onnx.ModelProto, member: int | None = None) -> str:
     if member is None or not 0 <= member < count:
         raise ValueError(f"the graph is the mean of {count} networks: give --member 0 to {count - 1}")
     return f"{head}nets.{member}."
-
-
-def mirror_averaged(model: onnx.ModelProto) -> bool:
-    """Whether the graph runs its network on its input and the input's mirror image: a Concat of the input and a
-    Slice of it (as :func:`training.export.without_mirror_average` finds it)."""
-    source = model.graph.input[0].name
-    slices = {o for n in model.graph.node if n.op_type == "Slice" and n.input[0] == source for o in n.output}
-    return any(n.op_type == "Concat" and list(n.input)[:2] in ([source, s] for s in slices) for n in model.graph.node)
 
 
 def _serial(name: str) -> int:
@@ -132,7 +124,7 @@ def rebuild(path: Path, groups: int = 8, tol: float = TOL, member: int | None = 
         net.load_state_dict(state_dict_from_graph(model, net, k))
         nets.append(net.eval())
     checked = Ensemble(nets).eval() if count else nets[0]
-    mirrored = mirror_averaged(model)
+    mirrored = mirror_concat(model) is not None  # its network runs on the input and its mirror
     net = nets[member or 0]
     rng = np.random.default_rng(0)
     r = config.resolution
