@@ -54,7 +54,12 @@ def parse_args(argv: list[str] | None = None) -> argparse.Namespace:
         default="shadow",
         help="SR target: the conventions' shadow s (SSN) or raw irradiance E (Non-inv-SSN ablation)",
     )
-    p.add_argument("--data", default="data/ssn128", help="dataset root (training.data.store.ViewStore)")
+    p.add_argument(
+        "--data",
+        nargs="+",
+        default=["data/ssn128"],
+        help="dataset roots (training.data.store.ViewStore), read as one (e.g. one shape set at two camera sets)",
+    )
     p.add_argument("--run", required=True, help="run directory (checkpoints, logs)")
     p.add_argument("--resolution", type=int, default=128)
     p.add_argument("--widths", default="8,16,32,64,96,128", help="channels per U-Net stage")
@@ -782,7 +787,7 @@ def save_checkpoint(path: Path, net: Network, args: argparse.Namespace, elm_rows
             "unet": net.config.to_dict(),
             "args": args_record(args),
             "elm_rows": elm_rows,
-            "data": str(args.data),
+            "data": [str(d) for d in args.data],
         },
     )
 

@@ -129,6 +129,18 @@ def test_continuous_cameras(dataset, tmp_path):
     # the same shape seen from a drawn, not a gridded, camera: a different mask
     paper = ViewStore(dataset)
     assert not any(np.array_equal(store.load(0).mask, paper.load(i).mask) for i in range(len(paper)))
+    # both camera sets of the same shapes read as one store (a fine-tune mixing them), each view from its own root
+    both = ViewStore([dataset, tmp_path])
+    assert len(both) == 90 and both.view_ids(None) == list(range(90))
+    np.testing.assert_array_equal(both.load(60).mask, store.load(0).mask)
+    np.testing.assert_array_equal(both.load(59).occlusion, paper.load(59).occlusion)
+    assert both.info(60)["mesh_id"] == both.info(0)["mesh_id"] and both.info(60)["yaw"] == store.info(0)["yaw"]
+
+
+def test_stores_of_other_resolutions_are_not_merged(dataset, tmp_path):
+    assert make_dataset.main(["--out", str(tmp_path), "--res", "16", *ARGS[2:], "--limit", "1"]) == 0
+    with pytest.raises(ValueError, match="res 16"):
+        ViewStore([dataset, tmp_path])
 
 
 def test_spans_round_trip_and_quantisation():

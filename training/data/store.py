@@ -11,6 +11,7 @@ from __future__ import annotations
 
 import json
 from dataclasses import dataclass
+from collections.abc import Sequence
 from pathlib import Path
 
 import numpy as np
@@ -38,24 +39,37 @@ class ViewStore:
 
     View ids are positions in the list of (mesh uid, view index) sorted by uid,
     fixed for a given set of finished meshes (a store opened while generation
-    still runs sees the meshes finished at that moment).
+    still runs sees the meshes finished at that moment). Several roots (the same
+    shapes at other cameras, say) are read as one store, root after root.
     """
 
-    def __init__(self, root: str | Path):
-        self.root = Path(root)
+    def __init__(self, root: str | Path | Sequence[str | Path]):
+        roots = [Path(root)] if isinstance(root, (str, Path)) else [Path(r) for r in root]
+        self.root = roots[0]
         self.meta: dict = json.loads((self.root / DATASET_JSON).read_text())
         self.meshes: list[dict] = []
+        self._dirs: list[Path] = []
         self._views: list[tuple[int, int]] = []
-        for d in sorted((self.root / VIEWS).iterdir()) if (self.root / VIEWS).is_dir() else []:
-            if d.name.startswith(".") or not (d / INFO).is_file():
-                continue
-            info = json.loads((d / INFO).read_text())
-            m = len(self.meshes)
-            self.meshes.append(info)
-            self._views.extend((m, k) for k in range(len(info["views"])))
+        for r in roots:
+            self._check_compatible(r)
+            for d in sorted((r / VIEWS).iterdir()) if (r / VIEWS).is_dir() else []:
+                if d.name.startswith(".") or not (d / INFO).is_file():
+                    continue
+                info = json.loads((d / INFO).read_text())
+                m = len(self.meshes)
+                self.meshes.append(info)
+                self._dirs.append(d)
+                self._views.extend((m, k) for k in range(len(info["views"])))
         self._arrays: dict[int, dict[str, np.ndarray]] = {}
         hb = self.meta["elm_rows"]
         self._weights = texel_weights(hb).astype(np.float64)
+
+    def _check_compatible(self, root: Path) -> None:
+        """Several roots are read as one store only if their views and bases have the same layout."""
+        meta = json.loads((root / DATASET_JSON).read_text())
+        for key in ("res", "elm_rows"):
+            if meta[key] != self.meta[key]:
+                raise ValueError(f"{root} has {key} {meta[key]}, {self.root} has {self.meta[key]}: not one store")
 
     def __len__(self) -> int:
         return len(self._views)
@@ -79,7 +93,7 @@ class ViewStore:
     def _mesh_arrays(self, m: int) -> dict[str, np.ndarray]:
         arrays = self._arrays.get(m)
         if arrays is None:
-            d = self.root / VIEWS / self.meshes[m]["mesh"]["id"]
+            d = self._dirs[m]
             arrays = {
                 name: np.load(d / f"{name}.npy", mmap_mode="r")
                 for name in ("mask", "ao", "occ_spans", "occ_data", "occ_offsets")
