@@ -110,9 +110,9 @@ def load_view(
     ``card``: the bases of this card method (the geometric card, or the height proxy) for the blind camera
     (:func:`blind_camera` of ``camera_error``, drawn with ``rng``) and the true camera; ``predict_ao``: a
     function of masks (B, R, R) -> AO maps whose prediction the view keeps)."""
-    v = store.load(i)
-    t = v.occlusion.shape[0] * v.occlusion.shape[1]
+    v = store.load(i, with_occ)
     if with_occ:
+        t = v.occlusion.shape[0] * v.occlusion.shape[1]
         occ = area_downsample(np.asarray(v.occlusion).reshape(t, *v.occlusion.shape[2:]), resolution)
         occ = np.rint(occ).astype(np.uint8).reshape(t, -1)
     else:

@@ -44,6 +44,8 @@ def test_store_contract(dataset):
     assert v.ao.dtype == np.float32 and v.ao.max() <= 1
     assert min(store.load(i).ao.min() for i in range(0, 60, 5)) < 0.5
     assert v.occlusion.shape == (16, 32, 32, 32) and v.occlusion.dtype == np.uint8 and v.occlusion.max() > 0
+    light = store.load(ids[0], with_occ=False)  # the AOP's views: no bases unpacked
+    assert light.occlusion.size == 0 and np.array_equal(light.mask, v.mask) and np.array_equal(light.ao, v.ao)
     assert set(v.info) >= {"mesh_id", "split", "kind", "category", "yaw", "pitch", "fov", "source"}
     assert v.info["source"] == "procedural" and 35 <= v.info["fov"] <= 55
     # AO is A^(1/3) with A = 1 - sum_t W_t occ_t / pi (up to the uint8 rounding of occ)

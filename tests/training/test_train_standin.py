@@ -77,7 +77,7 @@ class FakeStore:
     def info(self, i):
         return dict(self._views[i].info)
 
-    def load(self, i):
+    def load(self, i, with_occ=True):
         return self._views[i]
 
     def shadow(self, occlusion, elm):

@@ -101,13 +101,15 @@ class ViewStore:
             self._arrays[m] = arrays
         return arrays
 
-    def load(self, i: int) -> View:
-        """Mask, AO, occlusion bases and info of view ``i``."""
+    def load(self, i: int, with_occ: bool = True) -> View:
+        """Mask, AO, occlusion bases (``with_occ`` False: an empty array, for the AOP) and info of view ``i``."""
         m, k = self._views[i]
         a = self._mesh_arrays(m)
         n, hb = self.meta["res"], self.meta["elm_rows"]
-        data = a["occ_data"][a["occ_offsets"][k] : a["occ_offsets"][k + 1]]
-        occ = spanlib.unpack(np.asarray(a["occ_spans"][k]), data, n).reshape(hb, 2 * hb, n, n)
+        occ = np.zeros((0, 2 * hb, n, n), np.uint8)
+        if with_occ:
+            data = a["occ_data"][a["occ_offsets"][k] : a["occ_offsets"][k + 1]]
+            occ = spanlib.unpack(np.asarray(a["occ_spans"][k]), data, n).reshape(hb, 2 * hb, n, n)
         return View(np.asarray(a["mask"][k], np.float32), np.asarray(a["ao"][k], np.float32), occ, self.info(i))
 
     def shadow(self, occlusion: np.ndarray, elm: np.ndarray) -> np.ndarray:
