@@ -10,8 +10,8 @@ See ``training/data/README.md`` for the on-disk layout.
 from __future__ import annotations
 
 import json
-from dataclasses import dataclass
 from collections.abc import Sequence
+from dataclasses import dataclass
 from pathlib import Path
 
 import numpy as np
