@@ -50,8 +50,9 @@ class ViewStore:
         self.meshes: list[dict] = []
         self._dirs: list[Path] = []
         self._views: list[tuple[int, int]] = []
+        for other in roots[1:]:
+            self._check_compatible(other)
         for r in roots:
-            self._check_compatible(r)
             for d in sorted((r / VIEWS).iterdir()) if (r / VIEWS).is_dir() else []:
                 if d.name.startswith(".") or not (d / INFO).is_file():
                     continue
