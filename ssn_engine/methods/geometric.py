@@ -5,9 +5,11 @@ camera of the conventions, its lowest mask row touching the ground. The
 camera is the conventions' default (45 degree field of view, 15 degree
 pitch) or, given the camera input (horizon row and focal length), the one
 whose horizon lies on that row (:func:`ssn_engine.camera.camera_for_span`).
-Every texel of the 16 x 32 ELM casts one hard shadow of the card along its
-centre direction; the shadow is their sum with the conventions' weights
-L_t W_t. The AO map is the card's own ambient occlusion (the same sum under
+Every texel of the 16 x 32 ELM casts the card's shadow from its area: the
+mean of the hard shadows along a 3 x 3 grid of directions over it (one
+direction per texel left a small light's shadow as separate streaks, one per
+texel, 11 degrees apart); the shadow is their sum with the conventions'
+weights L_t W_t. The AO map is the card's own ambient occlusion (the same sum under
 a uniform sky). Each texel's hard shadow is traced the first time a light
 needs it and kept (like the training data's bases), so moving a light costs
 one weighted sum plus the texels it newly reaches.
@@ -35,10 +37,10 @@ WIDE_CHUNK = 16  # directions traced at once on the wider grid, whose many point
 CACHED_CARDS = 2  # a card traced for every texel holds 512 x P float32 (about 30 MB)
 NEGLIGIBLE = 1e-4  # share of a light map's weight whose texels a card shadow may leave out
 EXTENDED_TEXELS = 64  # at most this many texels traced beyond the frame per light map
-# Beyond the frame, a texel holding at least AREA_SHARE of the light is traced along a 3 x 3 grid of directions
-# over its area (AREA_SAMPLES): one direction per texel leaves a small light's long shadow as separate streaks, one
-# per texel, 11 degrees apart. Broad lights, whose texels each hold less, blend their streaks by themselves.
-AREA_SAMPLES = 9
+AREA_SAMPLES = 9  # directions over each texel's area (3 x 3 strata), whose hard shadows make the texel's shadow
+# Beyond the frame, only a texel holding at least AREA_SHARE of the light is traced over its area, the others along
+# their centre direction: the wider grid has more points, and broad lights, whose texels each hold less, blend their
+# streaks by themselves.
 AREA_SHARE = 0.05
 WIDE_KEPT = 256  # texel shadows kept per card on the wider grid (about 100 kB each)
 
@@ -176,13 +178,17 @@ class _Card:
         return out
 
     def trace(self, texels: np.ndarray | None = None) -> None:
-        """Trace the hard shadows of ``texels`` (indices; None: all) not traced yet into ``self.bases`` (T, P)."""
+        """Trace the shadows of ``texels`` (indices; None: all) not traced yet into ``self.bases`` (T, P): each the
+        mean of the hard shadows along the texel's ``area_directions``, as the texel's light comes from its area."""
         if self.empty:
             return
         todo = np.flatnonzero(~self.traced) if texels is None else texels[~self.traced[texels]]
-        for i in range(0, len(todo), CHUNK):
-            part = todo[i : i + CHUNK]
-            self.bases[part] = self.occlusion(self.directions[part])
+        samples = self.area_directions.shape[1]
+        per_chunk = max(1, CHUNK // samples)
+        for i in range(0, len(todo), per_chunk):
+            part = todo[i : i + per_chunk]
+            hard = self.occlusion(self.area_directions[part].reshape(-1, 3))
+            self.bases[part] = hard.reshape(len(part), samples, -1).mean(axis=1)
         self.traced[todo] = True
 
     def shadow(self, weights: np.ndarray) -> np.ndarray:
