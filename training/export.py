@@ -428,7 +428,10 @@ def training_summary(path: Path, ck: dict) -> str:
     rows = log.read_text().splitlines()[1:] if log.is_file() else []
     minutes = f"{float(rows[-1].split(',')[5]) / 60:.0f} min of training time, " if rows else ""
     args = ck.get("args") or {}
-    loss = f" (loss: L2 + {args['ssim_weight']:g} x DSSIM)" if args.get("ssim_weight") else ""
+    terms = [
+        f"{args[k]:g} x {name}" for k, name in (("ssim_weight", "DSSIM"), ("zncc_weight", "(1 - ZNCC)")) if args.get(k)
+    ]
+    loss = f" (loss: L2 + {' + '.join(terms)})" if terms else ""
     text = f"{minutes}{ck['step']} steps, {ck['samples']} samples{loss}"
     parent = args.get("init_from")
     if parent and Path(parent).is_file():

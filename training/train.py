@@ -147,6 +147,12 @@ def parse_args(argv: list[str] | None = None) -> argparse.Namespace:
         default=0.0,
         help="SR: add this x DSSIM (7 x 7 windows, as the benchmark's metric) to the per-pixel L2",
     )
+    p.add_argument(
+        "--zncc-weight",
+        type=float,
+        default=0.0,
+        help="SR: add this x (1 - ZNCC), each image on its own, to the per-pixel L2",
+    )
     p.add_argument("--ckpt-minutes", type=float, default=4.0)
     p.add_argument("--refresh-minutes", type=float, default=10.0, help="re-open the store (growing dataset)")
     p.add_argument("--val-every", type=int, default=250)
@@ -333,8 +339,19 @@ def dssim_loss(pred: torch.Tensor, target: torch.Tensor, window: int = 7) -> tor
     return (1.0 - ssim).mean() / 2.0
 
 
+def zncc_loss(pred: torch.Tensor, target: torch.Tensor, eps: float = 1e-6) -> torch.Tensor:
+    """Mean 1 - ZNCC of (B, 1, H, W) maps, each image on its own (as :func:`training.metrics.zncc`; ``eps`` keeps a
+    shadowless target finite): every image counts alike, where L2 lets the large dark shadows of low suns and broad
+    skies outweigh a high sun's small one."""
+    p = pred.flatten(1) - pred.flatten(1).mean(dim=1, keepdim=True)
+    t = target.flatten(1) - target.flatten(1).mean(dim=1, keepdim=True)
+    corr = (p * t).sum(dim=1) / (p.norm(dim=1) * t.norm(dim=1) + eps)
+    return (1.0 - corr).mean()
+
+
 class Objective:
-    """The loss: per-pixel L2 to the module's target, plus ``ssim_weight`` x its DSSIM; for AOP with a frozen SR
+    """The loss: per-pixel L2 to the module's target, plus ``ssim_weight`` x its DSSIM and ``zncc_weight`` x its
+    1 - ZNCC; for AOP with a frozen SR
     network (``--through-sr``), plus ``shadow_weight`` x the L2 of the shadow SR renders from the predicted AO,
     so the AO errors that cost most in the shadow cost most in training."""
 
@@ -344,14 +361,18 @@ class Objective:
         sr_net: torch.nn.Module | None = None,
         shadow_weight: float = 1.0,
         ssim_weight: float = 0.0,
+        zncc_weight: float = 0.0,
     ):
-        self.module, self.sr, self.shadow_weight, self.ssim_weight = module, sr_net, shadow_weight, ssim_weight
+        self.module, self.sr, self.shadow_weight = module, sr_net, shadow_weight
+        self.ssim_weight, self.zncc_weight = ssim_weight, zncc_weight
 
     def __call__(self, pred: torch.Tensor, x: dict[str, torch.Tensor]) -> torch.Tensor:
         target = target_of(self.module, x)
         loss = F.mse_loss(pred, target)
         if self.ssim_weight:
             loss = loss + self.ssim_weight * dssim_loss(pred, target)
+        if self.zncc_weight:
+            loss = loss + self.zncc_weight * zncc_loss(pred, target)
         if self.sr is not None:
             shadow = self.sr(x["mask"], pred.clamp(0.0, 1.0), x["elm"])
             loss = loss + self.shadow_weight * F.mse_loss(shadow, x["target"])
@@ -601,10 +622,10 @@ def start_process(args: argparse.Namespace) -> Process:
 
 
 def make_objective(args: argparse.Namespace, device: torch.device) -> Objective:
-    """Per-pixel L2 to the target (plus --ssim-weight x DSSIM); with --through-sr (AOP), plus the L2 of the shadow
-    a frozen SR renders."""
+    """Per-pixel L2 to the target (plus --ssim-weight x DSSIM, --zncc-weight x 1 - ZNCC); with --through-sr (AOP),
+    plus the L2 of the shadow a frozen SR renders."""
     sr_net = frozen_sr(args.through_sr, device) if args.through_sr else None
-    return Objective(args.module, sr_net, args.shadow_weight, args.ssim_weight)
+    return Objective(args.module, sr_net, args.shadow_weight, args.ssim_weight, args.zncc_weight)
 
 
 def open_run(args: argparse.Namespace) -> Path:
@@ -794,7 +815,11 @@ def save_checkpoint(path: Path, net: Network, args: argparse.Namespace, elm_rows
 
 def loss_title(args: argparse.Namespace, run: Path) -> str:
     """The title of ``loss.png``: module, target, run and loss."""
-    loss = f"per-pixel L2 + {args.ssim_weight:g} x DSSIM" if args.ssim_weight else "per-pixel L2"
+    loss = "per-pixel L2"
+    if args.ssim_weight:
+        loss += f" + {args.ssim_weight:g} x DSSIM"
+    if args.zncc_weight:
+        loss += f" + {args.zncc_weight:g} x (1 - ZNCC)"
     return f"{args.module.upper()} ({args.target}) {run.name}: {loss}"
 
 

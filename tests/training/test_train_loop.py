@@ -224,6 +224,30 @@ def test_ssim_term_is_the_benchmark_dssim_and_punishes_faint_haze():
     assert plain < 1e-3 and weighted - plain > 20 * plain
 
 
+def test_zncc_term_is_the_benchmark_zncc_and_counts_a_small_shadow_like_a_large_one():
+    import numpy as np
+
+    from training.metrics import zncc
+    from training.train import Objective, zncc_loss
+
+    rng = np.random.default_rng(1)
+    large = np.zeros((32, 32), np.float32)
+    large[8:30, 2:30] = 0.8  # a low sun's long shadow
+    small = np.zeros((32, 32), np.float32)
+    small[26:29, 12:18] = 0.8  # a high sun's small pool
+    t = lambda a: torch.tensor(np.stack(a))[:, None]  # noqa: E731
+    preds = [a + 0.05 * rng.random(a.shape).astype(np.float32) for a in (large, small)]
+    want = 1 - np.mean([zncc(p, g) for p, g in zip(preds, (large, small), strict=True)])
+    assert zncc_loss(t(preds), t([large, small])).item() == pytest.approx(want, abs=1e-5)
+    # the small shadow moved by 4 pixels: a fraction of the large shadow's L2 error, the same ZNCC cost
+    moved = [np.roll(large, 4, axis=1), np.roll(small, 4, axis=1)]
+    l2 = [Objective("sr")(t([m]), {"target": t([g])}).item() for m, g in zip(moved, (large, small), strict=True)]
+    cost = [zncc_loss(t([m]), t([g])).item() for m, g in zip(moved, (large, small), strict=True)]
+    assert l2[1] < 0.5 * l2[0] and cost[1] > cost[0]
+    weighted = Objective("sr", zncc_weight=0.1)(t([moved[1]]), {"target": t([small])}).item()
+    assert weighted == pytest.approx(l2[1] + 0.1 * cost[1], rel=1e-5)
+
+
 def test_aop_trains_through_a_frozen_sr(tmp_path):
     from training.train import frozen_sr
 
