@@ -9,8 +9,10 @@ with uncached ones.
 
 A geometry-guided SR also gets the geometric card's shadow for the same light map
 (:class:`ssn_engine.methods.geometric.GeometricCard`, traced at R exactly as the
-engine traces it): each cached view holds the card's 512 hard-shadow bases twice,
-for a blind camera and for the view's true camera input (horizon row, focal length).
+engine traces it): each cached view holds the card's 512 texel shadows, along each
+texel's centre direction and over its area (the engine takes the area's for a texel
+holding at least 5 % of the light), for a blind camera and for the view's true camera
+input (horizon row, focal length).
 The blind camera is the conventions' default camera, or (``camera_error``) the true
 camera moved as the camera estimator's reading of a mask misses it (:func:`blind_camera`).
 
@@ -32,7 +34,7 @@ from ssn_engine.camera import horizon_row
 from ssn_engine.frames import resample_frames
 from ssn_engine.hemisphere import network_elm, texel_weights
 from ssn_engine.methods.base import clamp_cameras
-from ssn_engine.methods.geometric import GeometricCard
+from ssn_engine.methods.geometric import AREA_SHARE, GeometricCard
 
 from .elm import LightBatch, render_lights, sample_lights, sample_mixture
 from .frames import area_downsample
@@ -48,7 +50,7 @@ class CachedView:
     mask: np.ndarray  # (R, R) float32
     ao: np.ndarray  # (R, R) float32
     occ: np.ndarray  # (T, R*R) uint8, occ * 255
-    cards: tuple[np.ndarray, np.ndarray] | None = None  # card bases (T, R*R) uint8: blind camera, true camera
+    cards: tuple[np.ndarray, np.ndarray] | None = None  # card bases (2, T, R*R) uint8: blind camera, true camera
     ao_pred: np.ndarray | None = None  # (R, R) float32: an AOP's prediction from the mask (train --ao-from)
 
 
@@ -76,18 +78,34 @@ def blind_camera(
 def card_bases(
     card: GeometricCard, mask: np.ndarray, camera: tuple[float, float] | None, resolution: int
 ) -> np.ndarray:
-    """The hard-shadow bases of a frame mask's card (or proxy) on the full R x R grid, (T, R*R) uint8 (x 255); a
-    card traced on a coarser grid is resampled as the engine resamples its shadows (the resampling is linear, so
-    the bases' weighted sum is the engine's resampled shadow)."""
+    """The shadow bases of a frame mask's card (or proxy) on the full R x R grid, (2, T, R*R) uint8 (x 255): every
+    texel's shadow along its centre direction and over its area (:func:`card_shadow` picks one per texel, as the
+    engine does); a card traced on a coarser grid is resampled as the engine resamples its shadows (the resampling
+    is linear, so the bases' weighted sum is the engine's resampled shadow)."""
     traced = card.card(mask, camera)
-    traced.trace()
+    texels = np.arange(texel_weights(16).size)
     m = card.internal
-    full = np.zeros((texel_weights(16).size, m * m), np.float32)
+    full = np.zeros((2, len(texels), m * m), np.float32)
     if not traced.empty:
-        full[:, traced.valid.ravel()] = traced.bases
+        traced.trace()
+        full[0][:, traced.valid.ravel()] = traced.bases
+        full[1][:, traced.valid.ravel()] = traced.area_bases(texels)
     if m != resolution:
-        full = resample_frames(full.reshape(-1, m, m), resolution).reshape(len(full), -1)
+        full = resample_frames(full.reshape(-1, m, m), resolution).reshape(2, len(texels), -1)
     return np.rint(np.clip(full, 0.0, 1.0) * 255).astype(np.uint8)
+
+
+def card_shadow(bases: np.ndarray, elm16: np.ndarray, weights: np.ndarray) -> np.ndarray:
+    """The card's shadows (m, P) under light maps ``elm16`` (m, 16, 32) from :func:`card_bases` (2, T, P): each
+    texel's shadow over its area where it holds at least ``AREA_SHARE`` of the light, else along its centre."""
+    w = elm16.reshape(len(elm16), -1).astype(np.float64) * weights.reshape(1, -1)
+    total = w.sum(axis=1, keepdims=True)
+    w = np.where(total > 0, w / np.where(total > 0, total, 1.0), 0.0)
+    bright = w >= AREA_SHARE
+    lit = np.flatnonzero(bright.any(axis=0))  # the few texels some light map traces over their areas
+    centre = (np.where(bright, 0.0, w) / 255.0).astype(np.float32) @ bases[0].astype(np.float32)
+    area = (np.where(bright, w, 0.0)[:, lit] / 255.0).astype(np.float32) @ bases[1][lit].astype(np.float32)
+    return np.clip(centre + area, 0.0, 1.0)
 
 
 def view_key(store, i: int) -> tuple:
@@ -307,7 +325,7 @@ def make_batch(
         for b, v in enumerate(views):  # one conversion of the uint8 bases per view and camera
             groups.setdefault((id(v), bool(true_camera[b])), []).append(b)
         for (_, true), idx in groups.items():
-            card[idx] = targets_for(views[idx[0]].cards[int(true)], elm16[idx], peak[idx], w16, "shadow")
+            card[idx] = card_shadow(views[idx[0]].cards[int(true)], elm16[idx], w16)
         card = card.reshape(len(views), r, r)
     return Batch(
         mask=np.stack([v.mask for v in views]),

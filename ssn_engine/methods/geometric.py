@@ -5,11 +5,13 @@ camera of the conventions, its lowest mask row touching the ground. The
 camera is the conventions' default (45 degree field of view, 15 degree
 pitch) or, given the camera input (horizon row and focal length), the one
 whose horizon lies on that row (:func:`ssn_engine.camera.camera_for_span`).
-Every texel of the 16 x 32 ELM casts the card's shadow from its area: the
-mean of the hard shadows along a 3 x 3 grid of directions over it (one
-direction per texel left a small light's shadow as separate streaks, one per
-texel, 11 degrees apart); the shadow is their sum with the conventions'
-weights L_t W_t. The AO map is the card's own ambient occlusion (the same sum under
+Every texel of the 16 x 32 ELM casts one hard shadow of the card along its
+centre direction, and a texel holding at least ``AREA_SHARE`` of the light
+the mean of the hard shadows along a 3 x 3 grid of directions over its area
+(one direction per texel leaves a small light's shadow as separate streaks,
+one per texel, 11 degrees apart; broad lights, whose texels each hold less,
+blend their streaks by themselves); the shadow is their sum with the
+conventions' weights L_t W_t. The AO map is the card's own ambient occlusion (the same sum under
 a uniform sky). Each texel's hard shadow is traced the first time a light
 needs it and kept (like the training data's bases), so moving a light costs
 one weighted sum plus the texels it newly reaches.
@@ -37,11 +39,8 @@ WIDE_CHUNK = 16  # directions traced at once on the wider grid, whose many point
 CACHED_CARDS = 2  # a card traced for every texel holds 512 x P float32 (about 30 MB)
 NEGLIGIBLE = 1e-4  # share of a light map's weight whose texels a card shadow may leave out
 EXTENDED_TEXELS = 64  # at most this many texels traced beyond the frame per light map
-AREA_SAMPLES = 9  # directions over each texel's area (3 x 3 strata), whose hard shadows make the texel's shadow
-# Beyond the frame, only a texel holding at least AREA_SHARE of the light is traced over its area, the others along
-# their centre direction: the wider grid has more points, and broad lights, whose texels each hold less, blend their
-# streaks by themselves.
-AREA_SHARE = 0.05
+AREA_SAMPLES = 9  # directions over a texel's area (3 x 3 strata) whose hard shadows make a bright texel's shadow
+AREA_SHARE = 0.05  # share of a light map's weight from which a texel's shadow is traced over its area
 WIDE_KEPT = 256  # texel shadows kept per card on the wider grid (about 100 kB each)
 
 
@@ -68,6 +67,7 @@ class _Card:
         self._ao: np.ndarray | None = None
         self._grid: tuple | None = None  # (margin, cell), ground points, valid: the wider grid of ground_grid
         self._wide: dict[tuple[int, bool], np.ndarray] = {}  # (texel, over its area) -> its shadow on the wider grid
+        self._area: dict[int, np.ndarray] = {}  # texel -> its shadow over its area on the frame's ground points
         rows = np.flatnonzero((mask > 0.05).any(axis=1))
         if rows.size == 0:
             self.empty = True
@@ -124,21 +124,40 @@ class _Card:
             self._grid = ((margin, cell), ground[valid].astype(np.float32), valid)
         return self._grid[1], self._grid[2]
 
+    def texel_shadows(self, texels: list[int], over_area: bool, ground: np.ndarray | None = None) -> np.ndarray:
+        """The shadows (k, P) of ``texels`` on the frame's ground points or on ``ground``: each the hard shadow along
+        the texel's centre direction, or (``over_area``) the mean of those along its ``area_directions``."""
+        dirs = self.area_directions[texels] if over_area else self.directions[texels][:, None]
+        # texels traced at once: their (k S, P) stays in cache
+        per_chunk = max(1, (CHUNK if ground is None else WIDE_CHUNK) // dirs.shape[1])
+        points = len(self.ground if ground is None else ground)
+        out = np.zeros((len(texels), points), np.float32)
+        for i in range(0, len(texels), per_chunk):
+            part = dirs[i : i + per_chunk]
+            out[i : i + per_chunk] = (
+                self.occlusion(part.reshape(-1, 3), ground).reshape(len(part), part.shape[1], -1).mean(axis=1)
+            )
+        return out
+
+    def area_bases(self, texels: np.ndarray) -> np.ndarray:
+        """The shadows (k, P) of ``texels`` over their areas on the frame's ground points, each traced once and kept."""
+        todo = [int(t) for t in texels if int(t) not in self._area]
+        for t, row in zip(todo, self.texel_shadows(todo, True), strict=True):
+            self._area[t] = row
+        return (
+            np.stack([self._area[int(t)] for t in texels])
+            if len(texels)
+            else np.zeros((0, len(self.ground)), np.float32)
+        )
+
     def wide_bases(self, texels: np.ndarray, ground: np.ndarray, area: np.ndarray) -> np.ndarray:
-        """The hard shadows (k, P) of ``texels`` on the wider grid's ``ground``, each traced once and kept: along
-        the texel's centre direction, or where ``area`` (k,) is set the mean along its ``area_directions``."""
+        """The shadows (k, P) of ``texels`` on the wider grid's ``ground``, each traced once and kept: along the
+        texel's centre direction, or where ``area`` (k,) is set over its area."""
         keys = [(int(t), bool(a)) for t, a in zip(texels, area, strict=True)]
         for over_area in (False, True):
             todo = [t for t, a in keys if a == over_area and (t, a) not in self._wide]
-            if not todo:
-                continue
-            dirs = self.area_directions[todo] if over_area else self.directions[todo][:, None]
-            per_chunk = max(1, WIDE_CHUNK // dirs.shape[1])  # texels traced at once: their (k S, P) stays in cache
-            for i in range(0, len(todo), per_chunk):
-                part = dirs[i : i + per_chunk]
-                hard = self.occlusion(part.reshape(-1, 3), ground).reshape(len(part), part.shape[1], -1)
-                for t, row in zip(todo[i : i + per_chunk], hard.mean(axis=1), strict=True):
-                    self._wide[t, over_area] = row
+            for t, row in zip(todo, self.texel_shadows(todo, over_area, ground), strict=True):
+                self._wide[t, over_area] = row
         for k in keys:  # most recently used last
             self._wide[k] = self._wide.pop(k)
         while len(self._wide) > WIDE_KEPT:  # a light map needs at most EXTENDED_TEXELS of them
@@ -178,37 +197,38 @@ class _Card:
         return out
 
     def trace(self, texels: np.ndarray | None = None) -> None:
-        """Trace the shadows of ``texels`` (indices; None: all) not traced yet into ``self.bases`` (T, P): each the
-        mean of the hard shadows along the texel's ``area_directions``, as the texel's light comes from its area."""
+        """Trace the hard shadows of ``texels`` (indices; None: all) not traced yet into ``self.bases`` (T, P)."""
         if self.empty:
             return
         todo = np.flatnonzero(~self.traced) if texels is None else texels[~self.traced[texels]]
-        samples = self.area_directions.shape[1]
-        per_chunk = max(1, CHUNK // samples)
-        for i in range(0, len(todo), per_chunk):
-            part = todo[i : i + per_chunk]
-            hard = self.occlusion(self.area_directions[part].reshape(-1, 3))
-            self.bases[part] = hard.reshape(len(part), samples, -1).mean(axis=1)
+        self.bases[todo] = self.texel_shadows(list(todo), False)
         self.traced[todo] = True
 
     def shadow(self, weights: np.ndarray) -> np.ndarray:
-        """The weighted mean (m, m) of the hard shadows, weights (T,) >= 0. Only the texels that hold all but
-        ``NEGLIGIBLE`` of the weight count; those not traced yet are traced now (a light drag traces a few)."""
+        """The weighted mean (m, m) of the texels' shadows, weights (T,) >= 0: over their areas for the texels
+        holding at least ``AREA_SHARE`` of the weight, along their centre directions for the others. Only the
+        texels that hold all but ``NEGLIGIBLE`` of the weight count; those not traced yet are traced now (a light
+        drag traces a few)."""
         m = self.mask.shape[0]
         out = np.zeros((m, m), np.float32)
         if self.empty or float(weights.sum()) <= 0:
             return out
         used = brightest(weights, 1.0 - NEGLIGIBLE)
-        self.trace(used)
         w = (weights / weights[used].sum()).astype(np.float32)
+        bright = used[w[used] >= AREA_SHARE]
+        self.trace(used[w[used] < AREA_SHARE])
         # einsum, not a BLAS product: BLAS threads left spinning after the call slow the network run that follows
         # by more than the product costs. Over runs of consecutive texels (a light covers a few ELM rows): only
         # the rows of the texels used are read, without copying them.
         cut = np.flatnonzero(np.diff(used) != 1) + 1
+        centre = w.copy()
+        centre[bright] = 0.0
         total = np.zeros(self.bases.shape[1], np.float32)
         for run in np.split(used, cut):
             a, b = int(run[0]), int(run[-1]) + 1
-            total += np.einsum("t,tp->p", w[a:b], self.bases[a:b])
+            total += np.einsum("t,tp->p", centre[a:b], self.bases[a:b])
+        if bright.size:
+            total += np.einsum("t,tp->p", w[bright], self.area_bases(bright))
         out[self.valid] = total
         return np.clip(out, 0.0, 1.0)
 

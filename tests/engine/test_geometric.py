@@ -12,6 +12,7 @@ from ssn_engine.framing import frame_alpha
 from ssn_engine.hemisphere import render_light_map, stratified_directions, texel_weights
 from ssn_engine.light_map import GaussianLight, LightMap
 from ssn_engine.methods import GeometricCard
+from ssn_engine.methods.geometric import AREA_SHARE
 
 
 @pytest.fixture(scope="module")
@@ -99,13 +100,19 @@ def test_u_0_and_u_1_are_the_same_light(geometric, pawn_frame):
     "lights", [[(0.3, 0.6, 0.002)], [(0.2, 0.5, 0.02), (0.8, 0.3, 0.05)], [(0.5, 0.2, 0.1), (0.1, 0.8, 0.1)]]
 )
 def test_the_card_shadow_is_the_light_weighted_mean_of_its_hard_shadows(pawn_frame, lights):
-    """The weighted sum read over the texels a light uses equals the plain mean over every texel's shadow."""
+    """The weighted sum read over the texels a light uses equals the plain mean over every texel's shadow: along
+    its centre direction, or over its area for a texel holding at least AREA_SHARE of the light."""
     card = GeometricCard(resolution=256).card(pawn_frame)
     elm = render_light_map(LightMap([GaussianLight(u, v, softness, 1.0) for u, v, softness in lights]))
     weights = elm.ravel() * texel_weights(16).ravel()
     card.trace()
+    w = weights / weights.sum()
+    bright = np.flatnonzero(w >= AREA_SHARE)
+    assert (bright.size > 0) == (lights[0][2] < 0.01)  # a small light's texels are traced over their areas
+    centre = w.copy()
+    centre[bright] = 0.0
     expected = np.zeros(card.mask.shape, np.float32)
-    expected[card.valid] = (weights / weights.sum()) @ card.bases.astype(np.float64)
+    expected[card.valid] = centre @ card.bases.astype(np.float64) + w[bright] @ card.area_bases(bright)
     np.testing.assert_allclose(card.shadow(weights), np.clip(expected, 0, 1), atol=2e-4)
 
 
@@ -224,8 +231,8 @@ def test_a_small_lights_long_shadow_beyond_the_frame_is_smooth(geometric, pawn_f
 
 @pytest.mark.parametrize("u, v", [(0.25, 0.92), (0.4, 0.8), (0.55, 0.5), (0.3, 0.3)])
 def test_a_small_lights_shadow_in_the_frame_is_smooth(geometric, pawn_frame, u, v):
-    """In the frame every texel casts the card's shadow from its area: within 4 % of the texels' exact area-lit
-    shadows (1 to 2 % here; one direction a texel, the streaks, is 7 to 12 % off)."""
+    """In the frame a small light's bright texels cast the card's shadow from their areas: within 4 % of the texels'
+    exact area-lit shadows (one direction a texel, the streaks, is 7 to 12 % off)."""
     elm = elm_for(u, v)
     card = geometric.card(pawn_frame)
     truth = np.zeros(card.mask.shape, np.float32)

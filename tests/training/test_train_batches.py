@@ -18,7 +18,7 @@ from training.batches import (
     mirror,
     targets_for,
 )
-from training.elm import render_lights, sample_lights
+from training.elm import render_lights, sample_family, sample_lights
 from training.frames import area_downsample
 
 
@@ -161,15 +161,16 @@ def test_the_card_channel_is_the_engines_card_shadow():
 
     store = FakeStore(res=32)
     view = load_view(store, 0, 16, card=GeometricCard(internal=16))
-    lights = sample_lights(np.random.default_rng(3), 2)
-    batch = make_batch([view, view], lights, 4, store._weights, "shadow", np.array([False, True]))
-    elm16 = render_lights(lights, 16)
     mask = store.load(0).mask
     engine = GeometricCard(internal=16)
-    blind = engine.card_shadows(mask[None], elm16[:1])[0]
-    seen = engine.card_shadows(mask[None], elm16[1:], np.array([camera_input(store.info(0), 32)]))[0]
-    np.testing.assert_allclose(batch.card[0], blind, atol=2 / 255)
-    np.testing.assert_allclose(batch.card[1], seen, atol=2 / 255)
+    for family in ("table1", "sun"):  # a sun's bright texels are traced over their areas
+        lights = sample_family(np.random.default_rng(3), 2, family)
+        batch = make_batch([view, view], lights, 4, store._weights, "shadow", np.array([False, True]))
+        elm16 = render_lights(lights, 16)
+        blind = engine.card_shadows(mask[None], elm16[:1])[0]
+        seen = engine.card_shadows(mask[None], elm16[1:], np.array([camera_input(store.info(0), 32)]))[0]
+        np.testing.assert_allclose(batch.card[0], blind, atol=2 / 255)
+        np.testing.assert_allclose(batch.card[1], seen, atol=2 / 255)
     assert np.abs(seen - engine.card_shadows(mask[None], elm16[1:])[0]).max() > 0.05  # the camera matters
 
 
