@@ -124,7 +124,9 @@ class _Card:
             self._grid = ((margin, cell), ground[valid].astype(np.float32), valid)
         return self._grid[1], self._grid[2]
 
-    def texel_shadows(self, texels: list[int], over_area: bool, ground: np.ndarray | None = None) -> np.ndarray:
+    def texel_shadows(
+        self, texels: np.ndarray | list[int], over_area: bool, ground: np.ndarray | None = None
+    ) -> np.ndarray:
         """The shadows (k, P) of ``texels`` on the frame's ground points or on ``ground``: each the hard shadow along
         the texel's centre direction, or (``over_area``) the mean of those along its ``area_directions``."""
         dirs = self.area_directions[texels] if over_area else self.directions[texels][:, None]
@@ -201,7 +203,7 @@ class _Card:
         if self.empty:
             return
         todo = np.flatnonzero(~self.traced) if texels is None else texels[~self.traced[texels]]
-        self.bases[todo] = self.texel_shadows(list(todo), False)
+        self.bases[todo] = self.texel_shadows(todo, False)
         self.traced[todo] = True
 
     def shadow(self, weights: np.ndarray) -> np.ndarray:
