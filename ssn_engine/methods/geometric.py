@@ -11,10 +11,10 @@ the mean of the hard shadows along a 3 x 3 grid of directions over its area
 (one direction per texel leaves a small light's shadow as separate streaks,
 one per texel, 11 degrees apart; broad lights, whose texels each hold less,
 blend their streaks by themselves); the shadow is their sum with the
-conventions' weights L_t W_t. The AO map is the card's own ambient occlusion (the same sum under
-a uniform sky). Each texel's hard shadow is traced the first time a light
-needs it and kept (like the training data's bases), so moving a light costs
-one weighted sum plus the texels it newly reaches.
+conventions' weights L_t W_t. The AO map is the card's own ambient
+occlusion (the same sum under a uniform sky). Each texel's shadow is traced
+the first time a light needs it and kept (like the training data's bases),
+so moving a light costs one weighted sum plus the texels it newly reaches.
 
 Edited AO maps steer the result near contact points: the received light is
 scaled by the edited over the card's ambient visibility (A = AO^3).
