@@ -343,17 +343,16 @@ def zncc_loss(pred: torch.Tensor, target: torch.Tensor, eps: float = 1e-6) -> to
     """Mean 1 - ZNCC of (B, 1, H, W) maps, each image on its own (as :func:`training.metrics.zncc`; ``eps`` keeps a
     shadowless target finite): every image counts alike, where L2 lets the large dark shadows of low suns and broad
     skies outweigh a high sun's small one."""
-    p = pred.flatten(1) - pred.flatten(1).mean(dim=1, keepdim=True)
-    t = target.flatten(1) - target.flatten(1).mean(dim=1, keepdim=True)
+    p, t = pred.flatten(1), target.flatten(1)
+    p, t = p - p.mean(dim=1, keepdim=True), t - t.mean(dim=1, keepdim=True)
     corr = (p * t).sum(dim=1) / (p.norm(dim=1) * t.norm(dim=1) + eps)
     return (1.0 - corr).mean()
 
 
 class Objective:
     """The loss: per-pixel L2 to the module's target, plus ``ssim_weight`` x its DSSIM and ``zncc_weight`` x its
-    1 - ZNCC; for AOP with a frozen SR
-    network (``--through-sr``), plus ``shadow_weight`` x the L2 of the shadow SR renders from the predicted AO,
-    so the AO errors that cost most in the shadow cost most in training."""
+    1 - ZNCC; for AOP with a frozen SR network (``--through-sr``), plus ``shadow_weight`` x the L2 of the shadow SR
+    renders from the predicted AO, so the AO errors that cost most in the shadow cost most in training."""
 
     def __init__(
         self,

@@ -217,8 +217,9 @@ class _Card:
             return out
         used = brightest(weights, 1.0 - NEGLIGIBLE)
         w = (weights / weights[used].sum()).astype(np.float32)
-        bright = used[w[used] >= AREA_SHARE]
-        self.trace(used[w[used] < AREA_SHARE])
+        over_area = w[used] >= AREA_SHARE
+        bright = used[over_area]
+        self.trace(used[~over_area])
         # einsum, not a BLAS product: BLAS threads left spinning after the call slow the network run that follows
         # by more than the product costs. Over runs of consecutive texels (a light covers a few ELM rows): only
         # the rows of the texels used are read, without copying them.
