@@ -42,11 +42,13 @@ class TwoPassGroupNorm(nn.Module):
     """GroupNorm as the same function in plain ONNX reductions: the mean, then the mean of squared deviations,
     each reduced over width, then height, then the group's channels (at most R values per sum). onnxruntime's
     InstanceNormalization (the exporter's form) and one-shot ReduceMean over 128 x 128 values ran up to
-    ~5e-4 off float64; torch float32 keeps ~1e-6."""
+    ~5e-4 off float64; torch float32 keeps ~1e-6. ``shape`` (channels, height, width) is the input's, fixed at
+    export, so the graph holds no shape arithmetic; the weight is folded into each group's inverse deviation
+    (one full-size multiply fewer). Together 0.5 to 0.8 ms of the mirror-averaged SR's 12.5 at R = 128."""
 
-    def __init__(self, gn: nn.GroupNorm):
+    def __init__(self, gn: nn.GroupNorm, shape: tuple[int, int, int]):
         super().__init__()
-        self.groups, self.eps = gn.num_groups, gn.eps
+        self.groups, self.eps, self.shape = gn.num_groups, gn.eps, shape
         self.weight, self.bias = gn.weight, gn.bias
 
     @staticmethod
@@ -54,37 +56,45 @@ class TwoPassGroupNorm(nn.Module):
         return t.mean(dim=-1, keepdim=True).mean(dim=-2, keepdim=True).mean(dim=-3, keepdim=True)
 
     def forward(self, x: torch.Tensor) -> torch.Tensor:
-        c = x.shape[1]
-        g = x.reshape(x.shape[0], self.groups, c // self.groups, x.shape[2], x.shape[3])
-        d = g - self._mean(g)
-        y = (d * torch.rsqrt(self._mean(d * d) + self.eps)).reshape(x.shape)
-        return y * self.weight[None, :, None, None] + self.bias[None, :, None, None]
+        c, h, w = self.shape
+        d = x.reshape(-1, self.groups, c // self.groups, h, w)
+        d = d - self._mean(d)
+        inverse = torch.rsqrt(self._mean(d * d) + self.eps)  # (b, groups, 1, 1, 1)
+        scale = inverse.reshape(-1, self.groups, 1) * self.weight.reshape(1, self.groups, -1)
+        return d.reshape(-1, c, h, w) * scale.reshape(-1, c, 1, 1) + self.bias.reshape(1, c, 1, 1)
 
 
-def _swap_group_norms(module: nn.Module) -> None:
-    for name, child in module.named_children():
-        if isinstance(child, nn.GroupNorm):
-            setattr(module, name, TwoPassGroupNorm(child))
-        else:
-            _swap_group_norms(child)
-
-
-def for_export(net: nn.Module) -> nn.Module:
-    """A copy of ``net`` with :class:`TwoPassGroupNorm` in place of every GroupNorm."""
+def for_export(net: nn.Module, *inputs: torch.Tensor) -> nn.Module:
+    """A copy of ``net`` with :class:`TwoPassGroupNorm` in place of every GroupNorm, each fixed to the shape it
+    sees when the copy runs on ``inputs``."""
     import copy
 
-    net = copy.deepcopy(net)
-    _swap_group_norms(net)
+    net = copy.deepcopy(net).eval()
+    shapes: dict[nn.Module, tuple[int, int, int]] = {}
+    norms = [m for m in net.modules() if isinstance(m, nn.GroupNorm)]
+    hooks = [m.register_forward_pre_hook(lambda m, a: shapes.__setitem__(m, tuple(a[0].shape[1:]))) for m in norms]
+    with torch.no_grad():
+        net(*inputs)
+    for hook in hooks:
+        hook.remove()
+
+    def swap(module: nn.Module) -> None:
+        for name, child in module.named_children():
+            if isinstance(child, nn.GroupNorm):
+                setattr(module, name, TwoPassGroupNorm(child, shapes[child]))
+            else:
+                swap(child)
+
+    swap(net)
     return net
 
 
 class Clamped(nn.Module):
-    """The network with its output clamped to [0, 1] (the contract's range); ``export_form`` swaps in
-    :class:`TwoPassGroupNorm` (on a copy)."""
+    """The network with its output clamped to [0, 1] (the contract's range)."""
 
-    def __init__(self, net: nn.Module, export_form: bool = False):
+    def __init__(self, net: nn.Module):
         super().__init__()
-        self.net = for_export(net) if export_form else net
+        self.net = net
 
     def forward(self, *inputs: torch.Tensor) -> torch.Tensor:
         return self.net(*inputs).clamp(0.0, 1.0)
@@ -105,7 +115,7 @@ def export_graph(net: nn.Module, module: str, resolution: int, path: Path, opset
             args, names = args + (torch.rand(2, 1, resolution, resolution),), names + ["card"]
     axes = {n: {0: "batch"} for n in names + out}
     torch.onnx.export(
-        Clamped(net, export_form=True).eval(),
+        Clamped(for_export(net, *args)).eval(),
         args,
         str(path),
         input_names=names,

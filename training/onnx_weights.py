@@ -8,6 +8,10 @@ own GroupNorms, in module order, take them back. A mirror-averaged graph (``expo
 ``net.net.<parameter>``) gives back the network inside the average; a graph of the mean of several networks (the
 shipped AOP, ``nets.<k>.``) gives back the one of ``--member k``. The rebuilt network is checked against the
 graph on random inputs (``--tol``).
+
+``--reexport GRAPH`` writes the whole function (every member, the mirror average) again in the exporter's current
+form instead: ``python -m training.onnx_weights ssn_engine/models/sr.onnx --reexport runs/sr.onnx`` gave the
+shipped graphs of earlier exporters GroupNorms with fixed shapes (docs/engine.md, "Speed").
 """
 
 from __future__ import annotations
@@ -23,7 +27,7 @@ import torch
 from onnx import numpy_helper
 
 from . import checkpoint
-from .export import MIX_RECORD, TOL, mirror_concat, parity
+from .export import MIX_RECORD, TOL, export_graph, mirror_concat, parity, session
 from .model import UNetConfig, build
 from .model.ensemble import Ensemble
 from .model.mirror import MirrorAverage
@@ -110,30 +114,45 @@ def _model_json(path: Path, module: str) -> dict:
         return {}
 
 
-def rebuild(path: Path, groups: int = 8, tol: float = TOL, member: int | None = None) -> tuple[torch.nn.Module, dict]:
-    """The network of an exported graph (``member`` of an ensemble graph) and a checkpoint dict that
-    ``training.train --init-from`` accepts. An ensemble is checked whole: every member rebuilt, their mean against
-    the graph."""
+def graph_network(
+    path: Path, groups: int = 8, tol: float = TOL
+) -> tuple[str, list[torch.nn.Module], torch.nn.Module, float]:
+    """The module, the networks (one, or an ensemble's members) and the whole function of an exported graph (the
+    members' :class:`~training.model.Ensemble`, inside a :class:`~training.model.MirrorAverage` where the graph
+    averages its input's mirror image), checked against the graph on random inputs: the largest difference, at most
+    ``tol``."""
     model = onnx.load(str(path))
     count = _heads(model)[1]
-    weights_prefix(model, member)  # refuses a missing or needless --member
     nets = []
     for k in range(count) if count else [None]:
         module, config = graph_config(model, groups, k)
         net = build(module, config)
         net.load_state_dict(state_dict_from_graph(model, net, k))
         nets.append(net.eval())
-    checked = Ensemble(nets).eval() if count else nets[0]
-    mirrored = mirror_concat(model) is not None  # its network runs on the input and its mirror
-    net = nets[member or 0]
-    rng = np.random.default_rng(0)
-    r = config.resolution
-    mask = (rng.random((4, 1, r, r)) > 0.5).astype(np.float32)
-    elm = rng.random((4, 16, 32)).astype(np.float32)
-    x = {"mask": mask, "ao": rng.random(mask.shape, np.float32), "elm": elm / elm.max(), "card": mask * 0.5}
-    diff = parity(path, MirrorAverage(checked).eval() if mirrored else checked, module, x)
+    whole = Ensemble(nets).eval() if count else nets[0]
+    if mirror_concat(model) is not None:  # its network runs on the input and its mirror
+        whole = MirrorAverage(whole).eval()
+    diff = parity(path, whole, module, random_inputs(config.resolution))
     if diff > tol:
         raise ValueError(f"the rebuilt network is {diff:.2e} off the graph (tolerance {tol:g}; --groups?)")
+    return module, nets, whole, diff
+
+
+def random_inputs(r: int) -> dict[str, np.ndarray]:
+    """Four random masks, AO maps, light maps and cards at R = ``r`` (every graph input of the contract)."""
+    rng = np.random.default_rng(0)
+    mask = (rng.random((4, 1, r, r)) > 0.5).astype(np.float32)
+    elm = rng.random((4, 16, 32)).astype(np.float32)
+    return {"mask": mask, "ao": rng.random(mask.shape, np.float32), "elm": elm / elm.max(), "card": mask * 0.5}
+
+
+def rebuild(path: Path, groups: int = 8, tol: float = TOL, member: int | None = None) -> tuple[torch.nn.Module, dict]:
+    """The network of an exported graph (``member`` of an ensemble graph) and a checkpoint dict that
+    ``training.train --init-from`` accepts. An ensemble is checked whole: every member rebuilt, their mean against
+    the graph."""
+    weights_prefix(onnx.load(str(path)), member)  # refuses a missing or needless --member
+    module, nets, whole, diff = graph_network(path, groups, tol)
+    net = nets[member or 0]
     meta = _model_json(path, module)
     ck = {
         "model": net.state_dict(),
@@ -141,7 +160,7 @@ def rebuild(path: Path, groups: int = 8, tol: float = TOL, member: int | None = 
         "samples": 0,
         "module": module,
         "target": "ao" if module == "aop" else "shadow",  # what training.train records (an SR's by default)
-        "unet": config.to_dict(),
+        "unet": net.config.to_dict(),
         "rebuilt_from": str(path),
         "parity": diff,
         "training": meta.get("sr_training"),
@@ -151,21 +170,42 @@ def rebuild(path: Path, groups: int = 8, tol: float = TOL, member: int | None = 
             "proxy": meta.get("height"),
             "card_blur": meta.get("card_blur", 0.0),
         },
-        "mirror_average": mirrored,
+        "mirror_average": isinstance(whole, MirrorAverage),
         "member": member,
     }
     return net, ck
 
 
+def reexport(path: Path, out: Path, groups: int = 8, tol: float = TOL) -> float:
+    """Write the function of an exported graph again to ``out``, in :mod:`training.export`'s current form (a graph
+    from an earlier exporter gets today's faster GroupNorms); returns the largest difference between the two
+    graphs on random inputs, at most ``tol``."""
+    module, nets, whole, _ = graph_network(path, groups, tol)
+    export_graph(whole, module, nets[0].config.resolution, out)
+    old, new = session(path), session(out)
+    x = random_inputs(nets[0].config.resolution)
+    feeds = {i.name: x[i.name] for i in old.get_inputs()}
+    diff = float(np.abs(new.run(None, feeds)[0] - old.run(None, feeds)[0]).max())
+    if diff > tol:
+        raise ValueError(f"the re-exported graph is {diff:.2e} off the graph (tolerance {tol:g})")
+    return diff
+
+
 def main(argv: list[str] | None = None) -> int:
     p = argparse.ArgumentParser(prog="python -m training.onnx_weights", description=__doc__.splitlines()[0])
     p.add_argument("graph", type=Path, help="aop.onnx or sr.onnx")
-    p.add_argument("--out", type=Path, required=True, help="checkpoint to write")
+    to = p.add_mutually_exclusive_group(required=True)
+    to.add_argument("--out", type=Path, help="checkpoint to write")
+    to.add_argument("--reexport", type=Path, help="graph to write: the same function in the current export form")
     p.add_argument("--groups", type=int, default=8, help="GroupNorm groups of the trained network")
     p.add_argument("--tol", type=float, default=TOL, help="largest difference allowed from the graph")
     p.add_argument("--member", type=int, help="of a graph that is the mean of several networks (the AOP): which one")
     args = p.parse_args(argv)
     try:
+        if args.reexport:
+            diff = reexport(args.graph, args.reexport, args.groups, args.tol)
+            print(f"{args.reexport}: {diff:.1e} off {args.graph}")
+            return 0
         _, ck = rebuild(args.graph, args.groups, args.tol, args.member)
     except ValueError as exc:
         raise SystemExit(f"{args.graph}: {exc}") from None

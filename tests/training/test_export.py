@@ -83,7 +83,7 @@ def test_two_pass_group_norm_is_group_norm():
         gn.weight.uniform_(0.5, 2)
         gn.bias.uniform_(-1, 1)
     x = torch.randn(3, 8, 16, 12) * 5 + 2
-    torch.testing.assert_close(TwoPassGroupNorm(gn)(x), gn(x), atol=2e-5, rtol=1e-5)
+    torch.testing.assert_close(TwoPassGroupNorm(gn, (8, 16, 12))(x), gn(x), atol=2e-5, rtol=1e-5)
 
 
 def _sr_mirror_gap(model_dir) -> float:
@@ -216,6 +216,33 @@ def test_a_checkpoint_rebuilt_from_the_graph_fine_tunes(exported, tmp_path):
     assert checkpoint.load(tmp_path / "aop.pt")["module"] == "aop"
     aop_run = ["--module", "aop", "--run", str(tmp_path / "aop_ft"), *TINY, "--init-from", str(tmp_path / "aop.pt")]
     assert train_main(aop_run, store=FakeStore(res=32)) == 0  # an AOP fine-tunes from its graph too
+
+
+def test_a_graph_is_reexported_as_the_same_function_without_shape_arithmetic(exported, tmp_path):
+    """`training.onnx_weights --reexport`: a graph comes back as the same function in the exporter's current form,
+    whose GroupNorms reshape to shapes fixed at export (no shape arithmetic to run); the shipped graphs are in that
+    form; a wrong U-Net is refused with a message."""
+    import onnx
+    from training.onnx_weights import main as rebuild_main
+
+    from ssn_engine.methods import MODEL_DIR as models
+
+    for graph in ("sr.onnx", "aop.onnx"):
+        out = tmp_path / graph
+        assert rebuild_main([str(exported / graph), "--reexport", str(out), "--groups", "2"]) == 0
+        feeds = {"mask": np.random.default_rng(0).random((3, 1, 32, 32), dtype=np.float32)}
+        if graph == "sr.onnx":
+            feeds |= {"ao": feeds["mask"][::-1].copy(), "elm": np.ones((3, 16, 32), np.float32)}
+        old, new = (ort.InferenceSession(str(p), providers=["CPUExecutionProvider"]) for p in (exported / graph, out))
+        np.testing.assert_allclose(new.run(None, feeds)[0], old.run(None, feeds)[0], atol=1e-5)
+    for graph in (tmp_path / "sr.onnx", tmp_path / "aop.onnx", models / "sr.onnx", models / "aop.onnx"):
+        g = onnx.load(str(graph)).graph
+        fixed = {i.name for i in g.initializer} | {o for n in g.node if n.op_type == "Constant" for o in n.output}
+        reduced = {n.input[0] for n in g.node if n.op_type == "ReduceMean"}
+        norms = [n for n in g.node if n.op_type == "Reshape" and n.output[0] in reduced]
+        assert norms and all(n.input[1] in fixed for n in norms), graph
+    with pytest.raises(SystemExit, match="off the graph"):
+        rebuild_main([str(exported / "sr.onnx"), "--reexport", str(tmp_path / "bad.onnx"), "--groups", "1"])
 
 
 def test_the_shipped_sr_can_be_fine_tuned_without_its_runs(tmp_path):
