@@ -9,9 +9,12 @@ from PIL import Image
 
 
 def frame_key(frame: np.ndarray, extra: bytes = b"") -> bytes:
-    """A digest of a frame's float32 values (and ``extra``): the key of caches of work done per mask."""
-    data = np.ascontiguousarray(frame, np.float32).tobytes() + extra
-    return hashlib.blake2b(data, digest_size=16).digest()
+    """A digest of a frame's float32 values (and ``extra``): the key of caches of work done per mask. SHA-1 (not
+    against an adversary, only to tell masks apart) runs in hardware: 0.14 ms for a 256 x 256 frame against
+    BLAKE2b's 0.28, twice on every light change."""
+    digest = hashlib.sha1(memoryview(np.ascontiguousarray(frame, np.float32)).cast("B"))
+    digest.update(extra)
+    return digest.digest()
 
 
 def resample_frames(frames: np.ndarray, size: int) -> np.ndarray:
