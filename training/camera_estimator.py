@@ -29,16 +29,17 @@ from torch import nn
 from ssn_engine.camera import TOP_MARGIN
 from ssn_engine.methods.camera_estimate import INPUT, canonical_input, to_canonical
 
-from .heights import load
+from .heights import KIND_NAMES, load
 
 EDGES = np.linspace(-0.9, 0.4, 27)  # horizon bins, rows over N of the canonical frame (data: -0.83 to 0.31)
 LABEL_SIGMA = 0.04  # the soft labels' spread, over N
 FOCAL_MEAN, FOCAL_STD = 1.3, 0.35  # focal length over N in the canonical frame (data: median 1.25)
 
 
-def examples(root: Path, split: str) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
-    """Inputs (n, INPUT, INPUT), targets (n, 2) (canonical horizon row and focal length over N) and pitches (n,)
-    of a split's views in a ``training.heights make`` folder."""
+def examples(root: Path, split: str) -> tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray]:
+    """Inputs (n, INPUT, INPUT), targets (n, 2) (canonical horizon row and focal length over N), pitches (n,) and
+    kinds (n,; indices into ``training.heights.KIND_NAMES``) of a split's views in a ``training.heights make``
+    folder (every ``<split>*.npz``: the dataset's views and any others drawn with ``make --view-seed``)."""
     paths = sorted(root.glob(f"{split}*.npz"))
     if not paths:
         raise SystemExit(f"no {split}*.npz in {root}: make them with `python -m training.heights make`")
@@ -49,7 +50,13 @@ def examples(root: Path, split: str) -> tuple[np.ndarray, np.ndarray, np.ndarray
         x, framing = canonical_input(mask.astype(np.float32))
         xs.append(x)
         ys.append(np.array(to_canonical(tuple(camera), framing)) / n)
-    return np.stack(xs).astype(np.float32), np.stack(ys).astype(np.float32), data["pitch"]
+    return np.stack(xs).astype(np.float32), np.stack(ys).astype(np.float32), data["pitch"], data["kind"]
+
+
+def sampling_weights(kinds: np.ndarray, kind_weights: tuple[float, ...]) -> torch.Tensor:
+    """Per-view sampling weights (n,) that draw each kind (object, human, animal) ``kind_weights`` times as often
+    as its share of the views."""
+    return torch.tensor(np.asarray(kind_weights, np.float64)[kinds])
 
 
 def _block(cin: int, cout: int) -> nn.Sequential:
@@ -128,18 +135,19 @@ def loss_of(net: CameraNet, x: torch.Tensor, y: torch.Tensor) -> torch.Tensor:
     return horizon + F.smooth_l1_loss(out[:, -1], (y[:, 1] - FOCAL_MEAN) / FOCAL_STD)
 
 
-def errors_by_pitch(pred: np.ndarray, truth: np.ndarray, pitches: np.ndarray, n: int = 256) -> dict:
-    """Median absolute errors in frame pixels (N = n) of the horizon row and focal length: all views, and the
-    paper's pitches 0, 15 and 30 (continuous pitches within 2.5 degrees of them)."""
+def errors_by_group(pred: np.ndarray, truth: np.ndarray, pitches: np.ndarray, kinds: np.ndarray, n: int = 256) -> dict:
+    """Median absolute errors in frame pixels (N = n) of the horizon row and focal length: all views, the paper's
+    pitches 0, 15 and 30 (continuous pitches within 2.5 degrees of them) and each kind of shape."""
+    groups = [("all", np.ones(len(pitches), bool))]
+    groups += [(f"pitch {p}", np.abs(pitches - p) < 2.5) for p in (0, 15, 30)]
+    groups += [(f"{name}s", kinds == k) for k, name in enumerate(KIND_NAMES)]
     out = {}
-    for name, keep in [("all", np.ones(len(pitches), bool))] + [
-        (f"pitch {p}", np.abs(pitches - p) < 2.5) for p in (0, 15, 30)
-    ]:
+    for name, keep in groups:
         err = np.abs(pred[keep] - truth[keep]) * n
         out[name] = {
             "views": int(keep.sum()),
-            "horizon_px": float(np.median(err[:, 0])),
-            "focal_px": float(np.median(err[:, 1])),
+            "horizon_px": float(np.median(err[:, 0])) if keep.any() else float("nan"),
+            "focal_px": float(np.median(err[:, 1])) if keep.any() else float("nan"),
         }
     return out
 
@@ -154,8 +162,9 @@ def train(args: argparse.Namespace) -> None:
     torch.manual_seed(args.seed)
     torch.set_num_threads(args.threads)
     t0 = time.monotonic()
-    x, y, _ = examples(Path(args.data), "train")
-    xv, yv, pv = examples(Path(args.data), "val")
+    x, y, _, kinds = examples(Path(args.data), "train")
+    xv, yv, pv, kv = examples(Path(args.data), "val")
+    weights = sampling_weights(kinds, args.kind_weights)
     print(f"{len(x)} train and {len(xv)} val views read in {time.monotonic() - t0:.0f} s", flush=True)
     net = CameraNet(args.width)
     opt = torch.optim.AdamW(net.parameters(), lr=args.lr, weight_decay=1e-4)
@@ -169,7 +178,7 @@ def train(args: argparse.Namespace) -> None:
         for group in opt.param_groups:  # linear decay over the time budget
             group["lr"] = args.lr * max(0.02, 1 - elapsed / budget)
         net.train()
-        idx = torch.randint(0, len(xt), (args.batch,), generator=generator)
+        idx = torch.multinomial(weights, args.batch, replacement=True, generator=generator)
         xb, yb = jittered(xt[idx], yt[idx], generator)
         flip = torch.rand(len(xb), generator=generator) < 0.5  # mirrored: the same camera
         xb = torch.where(flip[:, None, None, None], torch.flip(xb, [3]), xb)
@@ -179,7 +188,7 @@ def train(args: argparse.Namespace) -> None:
         opt.step()
         step += 1
         if step % args.val_every == 0:
-            val = errors_by_pitch(predict(net, xv), yv, pv)["all"]
+            val = errors_by_group(predict(net, xv), yv, pv, kv)["all"]
             history.append({"step": step, "minutes": round(elapsed / 60, 1), "loss": loss.item(), **val})
             print(json.dumps(history[-1]), flush=True)
             score = val["horizon_px"] + 0.5 * val["focal_px"]
@@ -189,7 +198,7 @@ def train(args: argparse.Namespace) -> None:
     if best_state is None:
         raise SystemExit("--minutes too short for one validation; nothing to export")
     net.load_state_dict(best_state)
-    report = errors_by_pitch(predict(net, xv), yv, pv)
+    report = errors_by_group(predict(net, xv), yv, pv, kv)
     torch.onnx.export(
         net.eval(),
         (torch.from_numpy(xv[:1, None]),),
@@ -205,6 +214,7 @@ def train(args: argparse.Namespace) -> None:
         "best_step": min(history, key=lambda h: h["horizon_px"] + 0.5 * h["focal_px"])["step"],
         "steps": step,
         "train_views": len(x),
+        "kind_weights": list(args.kind_weights),
         "minutes": round((time.monotonic() - start) / 60, 1),
         "history": history,
     }
@@ -224,8 +234,10 @@ def install(run: Path, models: Path) -> None:
     meta = json.loads(meta_path.read_text())
     val = summary["val"]
     meta["camera"] = "camera.onnx"
+    weights = summary.get("kind_weights", [1.0, 1.0, 1.0])
+    drawn = "" if weights == [1.0, 1.0, 1.0] else f", objects, people and animals drawn {weights} times their share"
     meta["camera_training"] = (
-        f"{summary['train_views']} train views of both camera sets (mirrored and rescaled at random), "
+        f"{summary['train_views']} train views of both camera sets (mirrored and rescaled at random{drawn}), "
         f"{summary['steps']} steps in {summary['minutes']} minutes on this project's 2-core CPU build machine, the "
         f"step with the lowest validation error kept ({summary['best_step']}); validation median errors: horizon "
         f"{val['all']['horizon_px']:.1f} px, focal length {val['all']['focal_px']:.1f} px (canonical frame, N = 256)"
@@ -267,6 +279,14 @@ def main(argv: list[str] | None = None) -> None:
     parser.add_argument("--val-every", type=int, default=250)
     parser.add_argument("--threads", type=int, default=2)
     parser.add_argument("--seed", type=int, default=0)
+    parser.add_argument(
+        "--kind-weights",
+        type=float,
+        nargs=3,
+        default=(1.0, 1.0, 1.0),
+        metavar=("OBJECT", "HUMAN", "ANIMAL"),
+        help="draw views of each kind this many times as often as their share",
+    )
     parser.add_argument("--install", help="then install the estimator into this model folder (ssn_engine/models)")
     args = parser.parse_args(argv)
     if args.minutes > 0:

@@ -60,8 +60,17 @@ def view_heights(mesh: meshes.Mesh, topo: meshes.Topology, yaw: float, pitch: fl
     }
 
 
-def make(split: str, cameras: list[str], out: Path, seed: int = 0, procedural: int = 36, humans: int = 48) -> None:
-    """Write every view of ``split`` under each camera set to ``out`` (npz, float16 maps)."""
+def make(
+    split: str,
+    cameras: list[str],
+    out: Path,
+    seed: int = 0,
+    procedural: int = 36,
+    humans: int = 48,
+    view_seed: int | None = None,
+) -> None:
+    """Write every view of ``split`` under each camera set to ``out`` (npz, float16 maps). ``view_seed`` (default:
+    ``seed``, the dataset's own views) draws other views of the same items."""
     items = [it for it in all_items(("mesh", "procedural", "anny"), procedural, humans, seed) if it.split == split]
     rec: dict[str, list] = {"mask": [], "front": [], "back": [], "camera": [], "kind": [], "pitch": []}
     prog = Progress(len(items) * len(cameras))
@@ -70,7 +79,7 @@ def make(split: str, cameras: list[str], out: Path, seed: int = 0, procedural: i
             mesh = build_mesh(item)
             topo = meshes.topology(mesh)
             for k in range(VIEWS):
-                yaw, pitch, fov = draw_view(k, view_rng(seed, item.id, k), which)
+                yaw, pitch, fov = draw_view(k, view_rng(seed if view_seed is None else view_seed, item.id, k), which)
                 view = view_heights(mesh, topo, yaw, pitch, fov)
                 for key in ("mask", "front", "back"):
                     rec[key].append(view[key].astype(np.float16))
@@ -171,9 +180,10 @@ def export(checkpoint: Path, path: Path) -> float:
     net.load_state_dict(torch.load(checkpoint, weights_only=False)["net"])
     net.eval()
     path.parent.mkdir(parents=True, exist_ok=True)
+    example = torch.rand(2, 1, R, R)
     torch.onnx.export(
-        for_export(net).eval(),
-        (torch.rand(2, 1, R, R),),
+        for_export(net, example),
+        (example,),
         str(path),
         input_names=["mask"],
         output_names=["heights"],
@@ -198,7 +208,10 @@ def main(argv: list[str] | None = None) -> None:
     m.add_argument("--split", required=True, choices=("train", "val", "test"))
     m.add_argument("--cameras", nargs="+", default=["continuous"], choices=CAMERAS)
     m.add_argument("--out", required=True)
-    m.add_argument("--seed", type=int, default=0)
+    m.add_argument("--seed", type=int, default=0, help="the items' seed (procedural shapes and people)")
+    m.add_argument(
+        "--view-seed", type=int, help="draw other views of the same items (default: --seed, the dataset's views)"
+    )
     t = sub.add_parser("train", help="train HeightNet (resumes from RUN/last.pt)")
     t.add_argument("--data", required=True, help="folder of make's train*.npz and val*.npz")
     t.add_argument("--run", required=True)
@@ -215,7 +228,7 @@ def main(argv: list[str] | None = None) -> None:
     e.add_argument("--out", required=True, help="the graph's path (a model folder's height.onnx)")
     args = p.parse_args(argv)
     if args.command == "make":
-        make(args.split, args.cameras, Path(args.out), args.seed)
+        make(args.split, args.cameras, Path(args.out), args.seed, view_seed=args.view_seed)
     elif args.command == "export":
         print(f"{args.out}: max abs diff to torch {export(Path(args.checkpoint), Path(args.out)):.2e}")
     else:

@@ -56,9 +56,10 @@ def test_the_estimator_trains_exports_and_installs_into_a_model(tmp_path):
     main(["--data", str(tmp_path), "--out", str(run), "--minutes", "0.05", "--batch", "4", "--val-every", "1"])
     summary = json.loads((run / "camera.json").read_text())
     assert summary["train_views"] == 3 and summary["history"]
+    assert summary["val"]["objects"]["views"] == 3 and summary["val"]["animals"]["views"] == 0  # errors by kind
     net = CameraNet()
     net.load_state_dict(torch.load(run / "camera.pt"))
-    x, _, _ = examples(tmp_path, "val")
+    x, _, _, _ = examples(tmp_path, "val")
     import onnxruntime as ort
 
     graph = ort.InferenceSession(str(run / "camera.onnx"), providers=["CPUExecutionProvider"])
@@ -80,6 +81,32 @@ def test_the_estimator_trains_exports_and_installs_into_a_model(tmp_path):
     elm[0, 10, 20] = 1.0
     blind = model.render(mask, model.predict_ao(mask), elm)
     np.testing.assert_array_equal(blind, model.render(mask, model.predict_ao(mask, cameras), elm, cameras))
+
+
+def test_kind_weights_draw_a_kind_more_often():
+    """``--kind-weights 1 1 3``: among views of which a quarter are animals, half the draws are animals."""
+    from training.camera_estimator import sampling_weights
+
+    kinds = np.array([0, 0, 1, 2] * 500)
+    weights = sampling_weights(kinds, (1.0, 1.0, 3.0))
+    draws = torch.multinomial(weights, 6000, replacement=True, generator=torch.Generator().manual_seed(0))
+    assert (kinds[draws.numpy()] == 2).mean() == pytest.approx(0.5, abs=0.03)
+
+
+def test_other_views_of_the_same_items(tmp_path, monkeypatch):
+    """`training.heights make --view-seed`: the same items seen from other cameras (continuous ones drawn anew)."""
+    from training import heights
+    from training.data.sources import all_items
+
+    item = next(it for it in all_items(("procedural",), 36, 0, 0) if it.split == "val")
+    monkeypatch.setattr(heights, "all_items", lambda *a: [item])
+    for seed in (None, 1):
+        heights.main(
+            ["make", "--split", "val", "--out", str(tmp_path / f"{seed}.npz")] + (["--view-seed", "1"] if seed else [])
+        )
+    own, other = (np.load(tmp_path / f"{seed}.npz") for seed in (None, 1))
+    assert len(own["pitch"]) == len(other["pitch"]) == 15 and (own["kind"] == other["kind"]).all()
+    assert not np.allclose(own["pitch"], other["pitch"]) and not np.array_equal(own["mask"], other["mask"])
 
 
 def test_a_missing_split_is_named(tmp_path):
