@@ -152,6 +152,33 @@ def errors_by_group(pred: np.ndarray, truth: np.ndarray, pitches: np.ndarray, ki
     return out
 
 
+def weights_from_graph(path: Path, net: CameraNet) -> dict[str, torch.Tensor]:
+    """``net``'s state dict with the weights of an exported estimator graph: parameters by name, and each
+    GroupNorm's weight and bias from the two anonymous constants the exporter folded them into, in the order the
+    forward pass uses them (a shipped estimator fine-tunes without its run)."""
+    import onnx
+    from onnx import numpy_helper
+
+    from .onnx_weights import _serial
+
+    inits = onnx.load(str(path)).graph.initializer
+    target = net.state_dict()
+    named = {i.name: numpy_helper.to_array(i) for i in inits if i.name in target}
+    folded = [
+        numpy_helper.to_array(i)
+        for i in sorted((i for i in inits if i.name not in target), key=lambda i: _serial(i.name))
+    ]
+    norms = [k for k in target if k not in named]
+    if len(norms) != len(folded):
+        raise SystemExit(f"{path}: {len(folded)} folded constants for {len(norms)} normalisation tensors")
+    out = {}
+    for key, array in [*named.items(), *zip(norms, folded, strict=True)]:
+        if target[key].numel() != array.size:
+            raise SystemExit(f"{path}: {key} has {array.size} values, the network {target[key].numel()}")
+        out[key] = torch.from_numpy(np.array(array, np.float32)).reshape(target[key].shape)
+    return out
+
+
 def predict(net: CameraNet, x: np.ndarray) -> np.ndarray:
     net.eval()
     with torch.no_grad():
@@ -167,6 +194,8 @@ def train(args: argparse.Namespace) -> None:
     weights = sampling_weights(kinds, args.kind_weights)
     print(f"{len(x)} train and {len(xv)} val views read in {time.monotonic() - t0:.0f} s", flush=True)
     net = CameraNet(args.width)
+    if args.init_from:
+        net.load_state_dict(weights_from_graph(Path(args.init_from), net))
     opt = torch.optim.AdamW(net.parameters(), lr=args.lr, weight_decay=1e-4)
     xt, yt = torch.from_numpy(x[:, None]), torch.from_numpy(y)
     generator = torch.Generator().manual_seed(args.seed)
@@ -287,6 +316,7 @@ def main(argv: list[str] | None = None) -> None:
         metavar=("OBJECT", "HUMAN", "ANIMAL"),
         help="draw views of each kind this many times as often as their share",
     )
+    parser.add_argument("--init-from", help="start from the weights of an exported camera.onnx (a fine-tune)")
     parser.add_argument("--install", help="then install the estimator into this model folder (ssn_engine/models)")
     args = parser.parse_args(argv)
     if args.minutes > 0:

@@ -49,7 +49,7 @@ def test_the_estimator_trains_exports_and_installs_into_a_model(tmp_path):
     """A short run exports a graph that matches the network; installed into a copy of the shipped model, a blind
     call reads its camera from the mask and renders what a call given that camera renders."""
     from ssn_engine.methods import OnnxSSN
-    from training.camera_estimator import CameraNet, examples, main
+    from training.camera_estimator import CameraNet, examples, main, weights_from_graph
 
     _box_views(tmp_path)
     run = tmp_path / "run"
@@ -66,6 +66,8 @@ def test_the_estimator_trains_exports_and_installs_into_a_model(tmp_path):
     with torch.no_grad():
         expected = net.eval()(torch.from_numpy(x[:, None])).numpy()
     np.testing.assert_allclose(graph.run(["camera"], {"mask": x[:, None]})[0], expected, atol=1e-4)
+    rebuilt = weights_from_graph(run / "camera.onnx", CameraNet())  # --init-from: a fine-tune starts from the graph
+    assert all(torch.equal(rebuilt[k], v) for k, v in net.state_dict().items())
 
     folder = tmp_path / "model"
     shutil.copytree(ROOT / "ssn_engine" / "models", folder)
