@@ -159,15 +159,12 @@ def weights_from_graph(path: Path, net: CameraNet) -> dict[str, torch.Tensor]:
     import onnx
     from onnx import numpy_helper
 
-    from .onnx_weights import _serial
+    from .onnx_weights import folded_constants
 
     inits = onnx.load(str(path)).graph.initializer
     target = net.state_dict()
     named = {i.name: numpy_helper.to_array(i) for i in inits if i.name in target}
-    folded = [
-        numpy_helper.to_array(i)
-        for i in sorted((i for i in inits if i.name not in target), key=lambda i: _serial(i.name))
-    ]
+    folded = folded_constants(inits, lambda name: name in target)
     norms = [k for k in target if k not in named]
     if len(norms) != len(folded):
         raise SystemExit(f"{path}: {len(folded)} folded constants for {len(norms)} normalisation tensors")

@@ -19,6 +19,7 @@ from __future__ import annotations
 import argparse
 import json
 import re
+from collections.abc import Callable
 from pathlib import Path
 
 import numpy as np
@@ -64,6 +65,14 @@ def _serial(name: str) -> int:
     return int(found.group(1))
 
 
+def folded_constants(inits, named: Callable[[str], bool]) -> list[np.ndarray]:
+    """The anonymous constants among a graph's initializers (those ``named`` refuses), in the exporter's order:
+    each GroupNorm's weight and bias, as the forward pass uses them."""
+    return [
+        numpy_helper.to_array(i) for i in sorted((i for i in inits if not named(i.name)), key=lambda i: _serial(i.name))
+    ]
+
+
 def graph_config(model: onnx.ModelProto, groups: int = 8, member: int | None = None) -> tuple[str, UNetConfig]:
     """The module ("aop" or "sr") and the U-Net configuration of an exported graph's network (``member`` of an
     ensemble; ``groups``: the GroupNorm groups it was trained with, which the graph keeps only inside its
@@ -85,10 +94,7 @@ def state_dict_from_graph(
     inits, prefix = model.graph.initializer, weights_prefix(model, member)
     head, count = _heads(model)
     named = {i.name[len(prefix) :]: numpy_helper.to_array(i) for i in inits if i.name.startswith(prefix)}
-    folded = [
-        numpy_helper.to_array(i).reshape(-1)
-        for i in sorted((i for i in inits if not i.name.startswith(head)), key=lambda i: _serial(i.name))
-    ]
+    folded = [a.reshape(-1) for a in folded_constants(inits, lambda name: name.startswith(head))]
     target = net.state_dict()
     norms = [k for k in target if k not in named]  # the GroupNorms' weight and bias, in module order
     if count:
