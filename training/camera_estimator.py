@@ -159,21 +159,15 @@ def weights_from_graph(path: Path, net: CameraNet) -> dict[str, torch.Tensor]:
     import onnx
     from onnx import numpy_helper
 
-    from .onnx_weights import folded_constants
+    from .onnx_weights import fitted, folded_constants
 
     inits = onnx.load(str(path)).graph.initializer
     target = net.state_dict()
     named = {i.name: numpy_helper.to_array(i) for i in inits if i.name in target}
-    folded = folded_constants(inits, lambda name: name in target)
-    norms = [k for k in target if k not in named]
-    if len(norms) != len(folded):
-        raise SystemExit(f"{path}: {len(folded)} folded constants for {len(norms)} normalisation tensors")
-    out = {}
-    for key, array in [*named.items(), *zip(norms, folded, strict=True)]:
-        if target[key].numel() != array.size:
-            raise SystemExit(f"{path}: {key} has {array.size} values, the network {target[key].numel()}")
-        out[key] = torch.from_numpy(np.array(array, np.float32)).reshape(target[key].shape)
-    return out
+    try:
+        return fitted(target, named, folded_constants(inits, lambda name: name in target))
+    except ValueError as exc:
+        raise SystemExit(f"{path}: {exc}") from None
 
 
 def predict(net: CameraNet, x: np.ndarray) -> np.ndarray:

@@ -96,9 +96,18 @@ def state_dict_from_graph(
     named = {i.name[len(prefix) :]: numpy_helper.to_array(i) for i in inits if i.name.startswith(prefix)}
     folded = [a.reshape(-1) for a in folded_constants(inits, lambda name: name.startswith(head))]
     target = net.state_dict()
-    norms = [k for k in target if k not in named]  # the GroupNorms' weight and bias, in module order
-    if count:
-        folded = folded[(member or 0) * len(norms) : ((member or 0) + 1) * len(norms)]
+    if count:  # the members' constants follow one another
+        n = sum(k not in named for k in target)
+        folded = folded[(member or 0) * n : ((member or 0) + 1) * n]
+    return fitted(target, named, folded)
+
+
+def fitted(
+    target: dict[str, torch.Tensor], named: dict[str, np.ndarray], folded: list[np.ndarray]
+) -> dict[str, torch.Tensor]:
+    """The state dict ``target`` filled from a graph: the ``named`` parameters by key, the others (the GroupNorms'
+    weight and bias, in module order) from ``folded`` in turn; counts and sizes checked (ValueError)."""
+    norms = [k for k in target if k not in named]
     if len(norms) != len(folded):
         raise ValueError(f"the graph folds {len(folded)} normalisation tensors, the network has {len(norms)}")
     out = {}
