@@ -173,7 +173,7 @@ def export(checkpoint: Path, path: Path) -> float:
     largest difference to the torch network on the validation masks of a ``make`` file (or random ones)."""
     import torch
 
-    from .export import TOL, for_export, session
+    from .export import TOL, fill_norm_constants, for_export, session
     from .model.unet import HeightNet, UNetConfig
 
     net = HeightNet(UNetConfig())
@@ -191,6 +191,7 @@ def export(checkpoint: Path, path: Path) -> float:
         opset_version=18,
         dynamo=False,
     )
+    fill_norm_constants(path)
     x = (np.random.default_rng(0).random((4, 1, R, R)) > 0.5).astype(np.float32)
     got = session(path).run(None, {"mask": x})[0]
     with torch.no_grad():

@@ -75,15 +75,15 @@ def test_the_engine_loads_the_export(exported):
     assert s.shape == (2, 256, 256) and s.dtype == np.float32
 
 
-def test_two_pass_group_norm_is_group_norm():
-    from training.export import TwoPassGroupNorm
+def test_fixed_group_norm_is_group_norm():
+    from training.export import FixedGroupNorm
 
     gn = torch.nn.GroupNorm(4, 8)
     with torch.no_grad():
         gn.weight.uniform_(0.5, 2)
         gn.bias.uniform_(-1, 1)
     x = torch.randn(3, 8, 16, 12) * 5 + 2
-    torch.testing.assert_close(TwoPassGroupNorm(gn, (8, 16, 12))(x), gn(x), atol=2e-5, rtol=1e-5)
+    torch.testing.assert_close(FixedGroupNorm(gn, (8, 16, 12))(x), gn(x), atol=2e-5, rtol=1e-5)
 
 
 def _sr_mirror_gap(model_dir) -> float:
@@ -220,8 +220,8 @@ def test_a_checkpoint_rebuilt_from_the_graph_fine_tunes(exported, tmp_path):
 
 def test_a_graph_is_reexported_as_the_same_function_without_shape_arithmetic(exported, tmp_path):
     """`training.onnx_weights --reexport`: a graph comes back as the same function in the exporter's current form,
-    whose GroupNorms reshape to shapes fixed at export (no shape arithmetic to run); the shipped graphs are in that
-    form; a wrong U-Net is refused with a message."""
+    whose GroupNorms are fused normalisations of shapes fixed at export (no shape arithmetic to run); the shipped
+    graphs are in that form; a wrong U-Net is refused with a message."""
     import onnx
     from training.onnx_weights import main as rebuild_main
 
@@ -238,9 +238,13 @@ def test_a_graph_is_reexported_as_the_same_function_without_shape_arithmetic(exp
     for graph in (tmp_path / "sr.onnx", tmp_path / "aop.onnx", models / "sr.onnx", models / "aop.onnx"):
         g = onnx.load(str(graph)).graph
         fixed = {i.name for i in g.initializer} | {o for n in g.node if n.op_type == "Constant" for o in n.output}
-        reduced = {n.input[0] for n in g.node if n.op_type == "ReduceMean"}
-        norms = [n for n in g.node if n.op_type == "Reshape" and n.output[0] in reduced]
+        normalised = {n.input[0] for n in g.node if n.op_type == "LayerNormalization"}
+        norms = [n for n in g.node if n.op_type == "Reshape" and n.output[0] in normalised]
         assert norms and all(n.input[1] in fixed for n in norms), graph
+        assert not any(n.op_type == "ReduceMean" for n in g.node), graph  # one fused kernel per GroupNorm
+        filled = {n.output[0] for n in g.node if n.op_type == "ConstantOfShape"}
+        layer_norms = [n for n in g.node if n.op_type == "LayerNormalization"]
+        assert all(len(n.input) == 2 and n.input[1] in filled for n in layer_norms), graph  # no stored ones, zeros
     with pytest.raises(SystemExit, match="off the graph"):
         rebuild_main([str(exported / "sr.onnx"), "--reexport", str(tmp_path / "bad.onnx"), "--groups", "1"])
 
