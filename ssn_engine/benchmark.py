@@ -1,4 +1,5 @@
-"""``ssn-shadow benchmark``: medians and p95 of the engine's stages on this machine."""
+"""``ssn-shadow benchmark``: medians and p95 of the engine's stages on this machine, and their ratios to the
+project's budgets."""
 
 from __future__ import annotations
 
@@ -25,6 +26,10 @@ T = TypeVar("T")
 
 VARIANTS = 6  # distinct inputs cycled through when timing uncached work
 DRAG = 64  # sun positions of the dragged-light row, each rendered once
+# The budgets on a 2-core machine (docs/engine.md, "Speed"): the cutout analysis and a light change at N = 256
+# (issue #13), a light moved on a 4000 x 3000 canvas and the peak memory (issue #14); by the stage's name.
+BUDGET_MS = {"AOP": 30.0, "SR": 15.0, "SR, sun dragged": 15.0, "light moved 4000x3000": 25.0}
+BUDGET_MIB = 400.0
 
 
 def _time(fn: Callable[[], object], repeats: int, warmup: int = 2) -> np.ndarray:
@@ -56,8 +61,15 @@ def _cropped_top(alpha: np.ndarray, row: int) -> np.ndarray:
     return out
 
 
+def budget_of(name: str) -> float | None:
+    """The budget in ms of a stage named ``name`` ("SR (ssn, N=256)": the SR's), or None."""
+    return BUDGET_MS.get(name.split(" (")[0])
+
+
 def _row(name: str, ms: np.ndarray) -> str:
-    return f"{name:44s} {np.median(ms):9.1f} {np.percentile(ms, 95):9.1f}"
+    median, budget = float(np.median(ms)), budget_of(name)
+    judged = f"{budget:9.1f} {median / budget:6.2f}" if budget else f"{'-':>9s} {'-':>6s}"
+    return f"{name:44s} {median:9.1f} {np.percentile(ms, 95):9.1f} {judged}"
 
 
 def big_cutout(width: int = 4000, height: int = 3000) -> np.ndarray:
@@ -115,13 +127,19 @@ def run_benchmark(repeats: int = 20, method: str = "auto") -> dict[str, np.ndarr
     results["light moved 4000x3000 (SR+to canvas+layer)"] = _time(
         lambda: shadow_layer(session.render(light)), e2e_repeats, warmup=1
     )
-    print(f"{'stage':44s} {'median ms':>9s} {'p95 ms':>9s}")
+    print(f"{'stage':44s} {'median ms':>9s} {'p95 ms':>9s} {'budget ms':>9s} {'ratio':>6s}")
     for name, ms in results.items():
         print(_row(name, ms))
+    ratios = {name: float(np.median(ms)) / b for name, ms in results.items() if (b := budget_of(name))}
+    over = [f"{name} ({ratio:.2f})" for name, ratio in ratios.items() if ratio > 1]
     try:
         import resource  # POSIX only
     except ImportError:
         print("peak resident memory: not measured on this platform")
     else:
-        print(f"peak resident memory: {resource.getrusage(resource.RUSAGE_SELF).ru_maxrss / 1024:.0f} MiB")
+        peak = resource.getrusage(resource.RUSAGE_SELF).ru_maxrss / 1024
+        print(f"peak resident memory: {peak:.0f} MiB ({peak / BUDGET_MIB:.2f} of the budget, {BUDGET_MIB:.0f} MiB)")
+        if peak > BUDGET_MIB:
+            over.append(f"peak memory ({peak / BUDGET_MIB:.2f})")
+    print("over budget: " + ", ".join(over) if over else "within budget: every stage with one, and memory")
     return results

@@ -315,16 +315,29 @@ def test_subprocess_exit_code_and_message():
 
 
 def test_benchmark_prints_the_stage_table():
+    """Each stage's median and p95, and where the project sets a budget, the budget and the median's ratio to it;
+    then the peak memory against its budget and a verdict naming any stage over budget."""
     result = run_cli("benchmark", "--repeats", "2")
     assert result.returncode == 0, result.stderr
     lines = result.stdout.splitlines()
     header = next(i for i, line in enumerate(lines) if line.startswith("stage"))
-    assert "median ms" in lines[header] and "p95 ms" in lines[header]
+    assert lines[header].split() == ["stage", "median", "ms", "p95", "ms", "budget", "ms", "ratio"]
     rows = lines[header + 1 : header + 7]
-    names = ["AOP", "SR", "SR, sun dragged", "geometric card", "end to end 4000x3000", "light moved 4000x3000"]
-    assert len(rows) == len(names)
-    for name, row in zip(names, rows, strict=True):
+    budgets = {"AOP": 30, "SR": 15, "SR, sun dragged": 15, "geometric card": None, "end to end 4000x3000": None}
+    budgets["light moved 4000x3000"] = 25
+    assert len(rows) == len(budgets)
+    over = []
+    for (name, budget), row in zip(budgets.items(), rows, strict=True):
         assert row.startswith(name), row
-        median, p95 = (float(v) for v in row.split()[-2:])
-        assert 0 < median <= p95
-    assert any(line.startswith("peak resident memory:") for line in lines)
+        median, p95, shown, ratio = row.split()[-4:]
+        assert 0 < float(median) <= float(p95)
+        if budget is None:
+            assert (shown, ratio) == ("-", "-")
+        else:
+            assert float(shown) == budget and float(ratio) == pytest.approx(float(median) / budget, abs=0.01)
+            over += [name] if float(median) > budget else []
+    peak = next(line for line in lines if line.startswith("peak resident memory:"))
+    assert "of the budget, 400 MiB" in peak
+    verdict = lines[-1]
+    assert verdict.startswith("over budget: ") if over else verdict.startswith("within budget")
+    assert all(name in verdict for name in over)
