@@ -140,19 +140,20 @@ def fill_norm_constants(path: Path) -> None:
         array = numpy_helper.to_array(node.attribute[0].t)
         return array if array.size > 1 and np.all(array == value) else None
 
-    fills = []
+    fills, renamed = [], {}  # the ConstantOfShape nodes; each stored scale's name -> its fill's
     for norm in (n for n in g.node if n.op_type == "LayerNormalization"):
         if len(norm.input) > 2 and filled(norm.input[2], 0.0) is not None:
             del norm.input[2]
         ones = filled(norm.input[1], 1.0)
-        if ones is not None:
+        if ones is not None and norm.input[1] not in renamed:
             shape = numpy_helper.from_array(np.array(ones.shape, np.int64), norm.input[1] + "_shape")
             value = numpy_helper.from_array(np.ones(1, np.float32))
+            renamed[norm.input[1]] = norm.input[1] + "_filled"
             fills += [
                 helper.make_node("Constant", [], [shape.name], value=shape),
-                helper.make_node("ConstantOfShape", [shape.name], [norm.input[1] + "_filled"], value=value),
+                helper.make_node("ConstantOfShape", [shape.name], [renamed[norm.input[1]]], value=value),
             ]
-            norm.input[1] = norm.input[1] + "_filled"
+        norm.input[1] = renamed.get(norm.input[1], norm.input[1])
     used = {i for n in g.node for i in n.input} | {o.name for o in g.output}
     nodes = fills + [n for n in g.node if n.op_type != "Constant" or n.output[0] in used]
     del g.node[:]
