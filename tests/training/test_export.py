@@ -238,12 +238,12 @@ def test_a_graph_is_reexported_as_the_same_function_without_shape_arithmetic(exp
     for graph in (tmp_path / "sr.onnx", tmp_path / "aop.onnx", models / "sr.onnx", models / "aop.onnx"):
         g = onnx.load(str(graph)).graph
         fixed = {i.name for i in g.initializer} | {o for n in g.node if n.op_type == "Constant" for o in n.output}
-        normalised = {n.input[0] for n in g.node if n.op_type == "LayerNormalization"}
+        layer_norms = [n for n in g.node if n.op_type == "LayerNormalization"]
+        normalised = {n.input[0] for n in layer_norms}
         norms = [n for n in g.node if n.op_type == "Reshape" and n.output[0] in normalised]
         assert norms and all(n.input[1] in fixed for n in norms), graph
         assert not any(n.op_type == "ReduceMean" for n in g.node), graph  # one fused kernel per GroupNorm
         filled = {n.output[0] for n in g.node if n.op_type == "ConstantOfShape"}
-        layer_norms = [n for n in g.node if n.op_type == "LayerNormalization"]
         assert all(len(n.input) == 2 and n.input[1] in filled for n in layer_norms), graph  # no stored ones, zeros
     with pytest.raises(SystemExit, match="off the graph"):
         rebuild_main([str(exported / "sr.onnx"), "--reexport", str(tmp_path / "bad.onnx"), "--groups", "1"])
