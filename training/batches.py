@@ -52,6 +52,7 @@ class CachedView:
     occ: np.ndarray  # (T, R*R) uint8, occ * 255
     cards: tuple[np.ndarray, np.ndarray] | None = None  # card bases (2, T, R*R) uint8: blind camera, true camera
     ao_pred: np.ndarray | None = None  # (R, R) float32: an AOP's prediction from the mask (train --ao-from)
+    camera: tuple[float, float] = (0.0, 0.0)  # the view's camera input in frames: horizon row / N, focal length / N
 
 
 def camera_input(info: dict, n: int) -> tuple[float, float]:
@@ -69,10 +70,16 @@ def blind_camera(
     misses it."""
     if error is None:
         return None
-    horizon, focal = camera_input(info, n)
-    moved = np.array([[horizon + n * rng.laplace(0.0, error[0]), focal * np.exp(rng.laplace(0.0, error[1]))]])
-    h, f = clamp_cameras(moved, n)[0]
+    h, f = moved_cameras(np.array([camera_input(info, n)]), n, error, rng)[0]
     return float(h), float(f)
+
+
+def moved_cameras(cameras: np.ndarray, n: int, error: tuple[float, float], rng: np.random.Generator) -> np.ndarray:
+    """Camera inputs (b, 2) in pixels of an n-pixel frame moved by Laplace noise of ``error`` = (horizon scale in
+    frames, log focal length scale), within the camera input's bounds."""
+    h = cameras[:, 0] + n * rng.laplace(0.0, error[0], len(cameras))
+    f = cameras[:, 1] * np.exp(rng.laplace(0.0, error[1], len(cameras)))
+    return clamp_cameras(np.stack([h, f], axis=1), n)
 
 
 def card_bases(
@@ -137,14 +144,15 @@ def load_view(
         occ = np.zeros((0, resolution * resolution), np.uint8)
     mask = resample_frames(v.mask[None], resolution)[0]
     ao = resample_frames(v.ao[None], resolution)[0]
+    n = v.mask.shape[-1]
     cards = None
     if card is not None:
-        n = v.mask.shape[-1]
         true_camera = camera_input(v.info, n)
         blind = blind_camera(v.info, n, camera_error, rng if rng is not None else np.random.default_rng(i))
         cards = (card_bases(card, v.mask, blind, resolution), card_bases(card, v.mask, true_camera, resolution))
     ao_pred = None if predict_ao is None else predict_ao(mask[None])[0]
-    return CachedView(view_key(store, i), mask, np.clip(ao, 0.0, 1.0), occ, cards, ao_pred)
+    camera = tuple(float(c) / n for c in camera_input(v.info, n))
+    return CachedView(view_key(store, i), mask, np.clip(ao, 0.0, 1.0), occ, cards, ao_pred, camera)
 
 
 def targets_for(occ: np.ndarray, elm_hb: np.ndarray, peak: np.ndarray, weights: np.ndarray, target: str) -> np.ndarray:
@@ -258,7 +266,8 @@ class ViewCache:
 class Batch:
     """Numpy arrays: mask, ao, target (B, R, R); elm (B, 16, 32) network-normalised; lights; view keys; card
     (B, R, R), the card's shadow (geometry-guided SR only), and which samples' card used the true camera; ao_pred
-    (B, R, R), the AOP's predicted AO (train --ao-from)."""
+    (B, R, R), the AOP's predicted AO (train --ao-from); camera (B, 2), each view's camera input in frames, the
+    true one or (a camera-taking AOP's sampler) where not ``true_camera`` moved as an estimate misses it."""
 
     mask: np.ndarray
     ao: np.ndarray
@@ -269,6 +278,7 @@ class Batch:
     card: np.ndarray | None = None
     true_camera: np.ndarray | None = None
     ao_pred: np.ndarray | None = None
+    camera: np.ndarray | None = None
 
 
 def mirror(batch: Batch, which: np.ndarray) -> Batch:
@@ -337,6 +347,7 @@ def make_batch(
         card=card,
         true_camera=true_camera if card is not None else None,
         ao_pred=np.stack([v.ao_pred for v in views]) if views[0].ao_pred is not None else None,
+        camera=np.array([v.camera for v in views], np.float32),
     )
 
 
@@ -380,4 +391,6 @@ class BatchSampler:
         batch = make_batch(
             views, lights, self.cache.store.meta["elm_rows"], self.cache.weights, self.target, true_camera
         )
+        if batch.card is None and self.cache.camera_error is not None:  # a camera-taking AOP's inexact cameras
+            batch.camera[~true_camera] = moved_cameras(batch.camera[~true_camera], 1, self.cache.camera_error, rng)
         return mirror(batch, rng.random(self.batch) < 0.5) if self.flip else batch

@@ -3,6 +3,8 @@
 ``python -m training.export --aop runs/aop/last.pt --sr runs/sr/last.pt --out runs/export``
 writes aop.onnx, sr.onnx and model.json (the contract of ssn_engine/methods/onnx_ssn.py):
 - aop.onnx: "mask" [batch, 1, R, R] -> "ao" [batch, 1, R, R], clamped to [0, 1]
+- aop_camera.onnx (--aop-camera): an AOP trained with the camera input (train --camera), which also takes
+  "camera" [batch, 2], horizon row and focal length in frames (pixels / N)
 - sr.onnx: "mask", "ao" [batch, 1, R, R], "elm" [batch, 16, 32] (network_elm-normalised) -> "shadow" [batch, 1, R, R];
   a geometry-guided SR (train --card) also takes "card" [batch, 1, R, R], the geometric card's shadow
 ``--aop`` may name an installed aop.onnx instead of checkpoints: that graph is reused as it is (its record is read
@@ -100,6 +102,8 @@ def export_graph(net: nn.Module, module: str, resolution: int, path: Path, opset
     mask = torch.rand(2, 1, resolution, resolution)
     if module == "aop":
         args, names, out = (mask,), ["mask"], ["ao"]
+        if takes_camera(net):
+            args, names = args + (torch.tensor([[0.4, 1.2], [0.6, 1.0]]),), names + ["camera"]
     else:
         args, names, out = (
             (mask, torch.rand(2, 1, resolution, resolution), torch.rand(2, 16, 32)),
@@ -162,11 +166,21 @@ def fill_norm_constants(path: Path) -> None:
     onnx.save(model, str(path))
 
 
-def takes_card(net: nn.Module) -> bool:
-    """Whether an SR network (possibly wrapped in MirrorAverage / Ensemble) is geometry-guided."""
+def _config(net: nn.Module):
+    """The UNetConfig of a network, possibly wrapped in MirrorAverage / Ensemble."""
     while not hasattr(net, "config"):
         net = net.net if hasattr(net, "net") else net.nets[0]
-    return bool(net.config.card)
+    return net.config
+
+
+def takes_card(net: nn.Module) -> bool:
+    """Whether an SR network is geometry-guided."""
+    return bool(_config(net).card)
+
+
+def takes_camera(net: nn.Module) -> bool:
+    """Whether an AOP network takes the camera input."""
+    return bool(getattr(_config(net), "camera", False))
 
 
 def to_fp16_weights(src: Path, dst: Path) -> None:
@@ -283,12 +297,16 @@ def test_inputs(data: str | None, resolution: int, n: int = 8, seed: int = 0) ->
         ao = rng.random((n, resolution, resolution)).astype(np.float32)
     elm = network_elm(render_lights(sample_lights(rng, n), 16))
     card = rng.random((n, 1, resolution, resolution)).astype(np.float32) * mask[:, None]
-    return {"mask": mask[:, None], "ao": ao[:, None], "elm": elm, "card": card}
+    camera = np.stack([rng.uniform(-0.3, 1.3, n), rng.uniform(0.9, 1.6, n)], axis=1).astype(np.float32)
+    return {"mask": mask[:, None], "ao": ao[:, None], "elm": elm, "card": card, "camera": camera}
 
 
 def parity(path: Path, net: nn.Module, module: str, x: dict[str, np.ndarray]) -> float:
     """Max abs difference between onnxruntime and torch (clamped) outputs."""
-    names = ["mask"] if module == "aop" else ["mask", "ao", "elm"] + (["card"] if takes_card(net) else [])
+    if module == "aop":
+        names = ["mask"] + (["camera"] if takes_camera(net) else [])
+    else:
+        names = ["mask", "ao", "elm"] + (["card"] if takes_card(net) else [])
     feeds = {k: x[k] for k in names}
     got = session(path).run(None, feeds)[0]
     with torch.no_grad():
@@ -360,7 +378,9 @@ def model_card(card: dict, attribution: list[dict], command: str) -> str:
         "",
         f"- Resolution R = {card['resolution']} (the engine resamples its 256 x 256 frames to R and back).",
     ]
-    for m in ("aop", "sr"):
+    for m in ("aop", "sr", "aop_camera"):
+        if m not in ex:
+            continue
         r = ex[m]
         rebuilt = r.get("rebuilt_from") or [None] * len(r["checkpoints"])
         runs = " and ".join(
@@ -372,8 +392,12 @@ def model_card(card: dict, attribution: list[dict], command: str) -> str:
         if r.get("reused_from"):
             how = "without its mirror average" if r.get("mirror_average") is False else "as it is"
             reused = f" (the graph of `{r['reused_from']}`, reused {how})"
+        label, camera = m.upper(), ""
+        if m == "aop_camera":
+            label = "AOP with camera"
+            camera = " (for calls that give the camera input: it also takes the horizon row and focal length)"
         lines.append(
-            f"- {m.upper()}: {mean}{runs}{reused}, {r['weights']} weights, "
+            f"- {label}: {mean}{runs}{reused}{camera}, {r['weights']} weights, "
             f"{r['bytes'] / 1e6:.2f} MB, max abs diff to torch {r['max_abs_diff']:.1e}"
         )
     if card.get("height"):
@@ -425,7 +449,10 @@ def model_card(card: dict, attribution: list[dict], command: str) -> str:
             "(onnx_ssn.blur_frames; checked on the validation split, docs/training.md)."
         )
     if card.get("mirror_average"):
-        which = "the SR graph" if ex["aop"].get("reused_from") else "each graph"  # a reused AOP keeps its own
+        # a reused AOP keeps its own; a camera-taking one runs once
+        which = (
+            "the SR graph" if ex["aop"].get("reused_from") or ex["aop"].get("mirror_average") is False else "each graph"
+        )
         lines.append(
             f"- Mirror average: {which} runs its network on the input and on its mirror image (frames in x, the "
             "ELM in azimuth) and averages the two (training.model.MirrorAverage)."
@@ -519,6 +546,12 @@ def parse_args(argv: list[str] | None = None) -> argparse.Namespace:
         nargs="+",
         required=True,
         help="AOP checkpoint(s); several: one graph of their mean; or an installed aop.onnx, reused as it is",
+    )
+    p.add_argument(
+        "--aop-camera",
+        nargs="+",
+        help="camera-taking AOP checkpoint(s) (train --camera; several: their mean): aop_camera.onnx, the AOP "
+        "the engine runs for calls that give the camera input",
     )
     p.add_argument("--sr", required=True)
     p.add_argument("--out", default="runs/export")
@@ -619,18 +652,32 @@ def main(argv: list[str] | None = None) -> int:
     if args.ao_gamma != 1.0:
         card["ao_gamma"] = args.ao_gamma
     report = {}
-    for module, ck_paths in (("aop", args.aop), ("sr", [args.sr])):
-        if module == "aop" and reused:
+    graphs = [("aop", "aop", args.aop), ("sr", "sr", [args.sr])]
+    if args.aop_camera:
+        graphs.append(("aop_camera", "aop", args.aop_camera))
+        card["aop_camera"] = "aop_camera.onnx"
+    for name, module, ck_paths in graphs:
+        if name == "aop" and reused:
             report["aop"] = reuse_aop(Path(ck_paths[0]), out, args.aop_without_mirror)
             without = " without its mirror average" if args.aop_without_mirror else ""
             print(f"aop: reused {ck_paths[0]}{without}", flush=True)
             continue
         net, cks = load_models(ck_paths)
-        net = MirrorAverage(net).eval() if args.mirror_average else net
+        if module == "aop" and takes_camera(net) != (name == "aop_camera"):
+            print(
+                f"--{name.replace('_', '-')}: {' '.join(ck_paths)} must be AOPs "
+                f"{'with' if name == 'aop_camera' else 'without'} the camera input (train --camera)",
+                file=sys.stderr,
+            )
+            return 1
+        # A camera-taking AOP is not mirror-averaged: its camera input is no image to mirror (the shipped AOP
+        # runs once anyway, docs/training.md).
+        mirrored = args.mirror_average and name != "aop_camera"
+        net = MirrorAverage(net).eval() if mirrored else net
         r = cks[0]["unet"]["resolution"]
         card["resolution"] = r
         x = test_inputs(args.data, r)
-        fp32 = out / f"{module}.fp32.onnx"
+        fp32 = out / f"{name}.fp32.onnx"
         export_graph(net, module, r, fp32)
         diff32 = parity(fp32, net, module, x)
         final, diff, dtype = fp32, diff32, "float32"
@@ -638,34 +685,35 @@ def main(argv: list[str] | None = None) -> int:
             # The float16 model is the checkpoint with its weights rounded to float16: exported from that torch
             # model, checked against it (parity), and against the unrounded checkpoint (the rounding's effect).
             net16 = rounded_to_fp16(net)
-            src16, fp16 = out / f"{module}.r16.onnx", out / f"{module}.fp16.onnx"
+            src16, fp16 = out / f"{name}.r16.onnx", out / f"{name}.fp16.onnx"
             export_graph(net16, module, r, src16)
             to_fp16_weights(src16, fp16)
             src16.unlink()
             diff16 = parity(fp16, net16, module, x)
             shift = parity(fp16, net, module, x)
-            report[f"{module}_parity_fp16"] = diff16
-            report[f"{module}_fp16_vs_fp32_checkpoint"] = shift
+            report[f"{name}_parity_fp16"] = diff16
+            report[f"{name}_fp16_vs_fp32_checkpoint"] = shift
             if diff16 <= args.tol and shift <= args.max_shift:
                 final, diff, dtype = fp16, diff16, "float16"
-        shutil.copy(final, out / f"{module}.onnx")
-        report[f"{module}_parity_fp32"] = diff32
-        report[module] = {
+        shutil.copy(final, out / f"{name}.onnx")
+        report[f"{name}_parity_fp32"] = diff32
+        report[name] = {
             "checkpoints": [str(p) for p in ck_paths],
             "steps": [ck["step"] for ck in cks],
             "samples": [ck["samples"] for ck in cks],
             "widths": [ck["unet"]["widths"] for ck in cks],
             "rebuilt_from": [ck.get("rebuilt_from") for ck in cks],  # training.onnx_weights: a graph's network
             "weights": dtype,
+            "mirror_average": mirrored,
             "max_abs_diff": diff,
-            "bytes": (out / f"{module}.onnx").stat().st_size,
+            "bytes": (out / f"{name}.onnx").stat().st_size,
         }
         if diff > args.tol:
-            print(f"{module}: parity FAILED: max abs diff {diff:.2e} > {args.tol:.0e}", file=sys.stderr)
+            print(f"{name}: parity FAILED: max abs diff {diff:.2e} > {args.tol:.0e}", file=sys.stderr)
             return 1
         print(
-            f"{module}: {dtype} weights, max abs diff to torch {diff:.2e} (fp32 graph {diff32:.2e}), "
-            f"{report[module]['bytes'] / 1e6:.2f} MB",
+            f"{name}: {dtype} weights, max abs diff to torch {diff:.2e} (fp32 graph {diff32:.2e}), "
+            f"{report[name]['bytes'] / 1e6:.2f} MB",
             flush=True,
         )
     sr_ck = load_models([args.sr])[1][0]

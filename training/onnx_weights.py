@@ -83,7 +83,9 @@ def graph_config(model: onnx.ModelProto, groups: int = 8, member: int | None = N
     pattern = re.escape(weights_prefix(model, member)) + r"unet\.encoder\.(\d+)\.0\.0\.weight"
     convs = {int(m.group(1)): i for i in model.graph.initializer if (m := re.fullmatch(pattern, i.name))}
     widths = tuple(int(convs[k].dims[0]) for k in sorted(convs))
-    return module, UNetConfig(widths=widths, groups=groups, resolution=int(r), card="card" in inputs)
+    return module, UNetConfig(
+        widths=widths, groups=groups, resolution=int(r), card="card" in inputs, camera="camera" in inputs
+    )
 
 
 def state_dict_from_graph(
@@ -154,11 +156,19 @@ def graph_network(
 
 
 def random_inputs(r: int) -> dict[str, np.ndarray]:
-    """Four random masks, AO maps, light maps and cards at R = ``r`` (every graph input of the contract)."""
+    """Four random masks, AO maps, light maps, cards and camera inputs at R = ``r`` (every graph input of the
+    contract)."""
     rng = np.random.default_rng(0)
     mask = (rng.random((4, 1, r, r)) > 0.5).astype(np.float32)
     elm = rng.random((4, 16, 32)).astype(np.float32)
-    return {"mask": mask, "ao": rng.random(mask.shape, np.float32), "elm": elm / elm.max(), "card": mask * 0.5}
+    camera = np.array([[0.5, 1.2], [-0.2, 1.0], [0.9, 1.5], [0.3, 1.3]], np.float32)
+    return {
+        "mask": mask,
+        "ao": rng.random(mask.shape, np.float32),
+        "elm": elm / elm.max(),
+        "card": mask * 0.5,
+        "camera": camera,
+    }
 
 
 def rebuild(path: Path, groups: int = 8, tol: float = TOL, member: int | None = None) -> tuple[torch.nn.Module, dict]:

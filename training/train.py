@@ -34,7 +34,7 @@ from . import checkpoint
 from ssn_engine.hemisphere import texel_weights
 from ssn_engine.methods.onnx_ssn import MAX_CARD_BLUR, blur_frames
 
-from .batches import BatchSampler, ViewCache, make_batch
+from .batches import BatchSampler, ViewCache, make_batch, moved_cameras
 from .elm import TRAIN_MIX, sample_lights, sample_mixture
 from .model import UNetConfig, build
 from .model.complexity import describe
@@ -106,20 +106,26 @@ def parse_args(argv: list[str] | None = None) -> argparse.Namespace:
     )
     p.add_argument("--proxy-internal", type=int, default=64, help="--proxy: the grid its hard shadows are traced on")
     p.add_argument(
+        "--camera",
+        action="store_true",
+        help="AOP: also takes the camera input (horizon row, focal length) as ground-geometry channels "
+        "(training.model.AOPNet); the engine feeds it the camera estimator's reading when a call has none",
+    )
+    p.add_argument(
         "--true-camera",
         type=float,
         default=0.5,
-        help="SR --card: share of samples whose card is traced with the view's true camera input "
-        "(the others: the blind camera, --blind-camera-error)",
+        help="SR --card, AOP --camera: share of samples whose card is traced with (AOP: who get) the view's true "
+        "camera input (the others: the blind camera, --blind-camera-error)",
     )
     p.add_argument(
         "--blind-camera-error",
         type=float,
         nargs=2,
         metavar=("HORIZON", "LOG_FOCAL"),
-        help="SR --card: the blind cards' camera is the view's true camera moved by Laplace noise of these scales "
-        "(horizon row in frames, log focal length), as the shipped camera estimator misses it on the validation "
-        "split (docs/training.md); default: the conventions' default camera",
+        help="SR --card, AOP --camera: the blind camera is the view's true camera moved by Laplace noise of these "
+        "scales (horizon row in frames, log focal length), as the shipped camera estimator misses it on the "
+        "validation split (docs/training.md); default: the conventions' default camera (AOP: the true camera)",
     )
     p.add_argument(
         "--card-blur",
@@ -165,13 +171,15 @@ def parse_args(argv: list[str] | None = None) -> argparse.Namespace:
     p.add_argument(
         "--init-from",
         help="fine-tune: start a new run from this checkpoint's weights (same module, "
-        "target and U-Net) with a fresh optimizer and schedule",
+        "target and U-Net; an AOP without --camera may start a --camera one) with a fresh optimizer and schedule",
     )
     args = p.parse_args(argv)
     if args.through_sr and args.module != "aop":
         p.error("--through-sr trains an AOP (--module aop)")
     if (args.card or args.lights != "table1") and args.module != "sr":
         p.error("--card and --lights apply to SR (--module sr)")
+    if args.camera and args.module != "aop":
+        p.error("--camera applies to AOP (--module aop); a geometry-guided SR takes the camera through its card")
     if args.card_blur and not args.card:
         p.error("--card-blur blurs the card: give --card")
     if not 0.0 <= args.card_blur <= MAX_CARD_BLUR:
@@ -239,8 +247,9 @@ class Prefetcher:
         self.thread.join()
 
 
-def to_tensors(batch, device: torch.device, card_blur: float = 0.0) -> dict[str, torch.Tensor]:
-    """A batch's arrays as tensors on ``device``; the card's shadow blurred by ``card_blur`` pixels."""
+def to_tensors(batch, device: torch.device, card_blur: float = 0.0, camera: bool = False) -> dict[str, torch.Tensor]:
+    """A batch's arrays as tensors on ``device``; the card's shadow blurred by ``card_blur`` pixels; ``camera``:
+    with the camera inputs (a camera-taking AOP)."""
     t = lambda a: torch.from_numpy(np.ascontiguousarray(a)).to(device)
     out = {
         "mask": t(batch.mask[:, None]),
@@ -252,12 +261,14 @@ def to_tensors(batch, device: torch.device, card_blur: float = 0.0) -> dict[str,
         out["card"] = t(blur_frames(batch.card, card_blur)[:, None])
     if batch.ao_pred is not None:
         out["ao_pred"] = t(batch.ao_pred[:, None])
+    if camera:
+        out["camera"] = t(batch.camera)
     return out
 
 
 def forward(model, module: str, x: dict[str, torch.Tensor], ao: torch.Tensor | None = None) -> torch.Tensor:
     if module == "aop":
-        return model(x["mask"])
+        return model(x["mask"], x["camera"]) if "camera" in x else model(x["mask"])
     extra = (x["card"],) if "card" in x else ()
     return model(x["mask"], x["ao"] if ao is None else ao, x["elm"], *extra)
 
@@ -426,8 +437,12 @@ def build_val(store, args, weights_rows: int, run: Path | None = None):
     vs = [views[view_key(store, i)] for i in chosen]
     rng = np.random.default_rng([args.seed, 104729])
     lights = sample_mixture(rng, len(vs), TRAIN_MIX) if args.lights == "mix" else sample_lights(rng, len(vs))
-    true_camera = np.arange(len(vs)) % 2 == 1  # half of the cards with the true camera
-    return make_batch(vs, lights, weights_rows, texel_weights(weights_rows), lit, true_camera), split
+    true_camera = np.arange(len(vs)) % 2 == 1  # half of the cards (a --camera AOP: cameras) the true one
+    batch = make_batch(vs, lights, weights_rows, texel_weights(weights_rows), lit, true_camera)
+    error = blind_error(args)
+    if args.camera and error is not None:
+        batch.camera[~true_camera] = moved_cameras(batch.camera[~true_camera], 1, error, rng)
+    return batch, split
 
 
 @torch.no_grad()
@@ -646,17 +661,23 @@ def open_store(args: argparse.Namespace, given: Any = None) -> Any:
 def build_network(args: argparse.Namespace, proc: Process) -> Network:
     """The module's U-Net (seeded by --seed, the output bias at the typical target) and its Adam optimizer."""
     torch.manual_seed(args.seed)
-    config = UNetConfig(widths=args.widths, groups=args.groups, resolution=args.resolution, card=args.card)
+    config = UNetConfig(
+        widths=args.widths, groups=args.groups, resolution=args.resolution, card=args.card, camera=args.camera
+    )
     model = build(args.module, config, HEAD_BIAS[args.target]).to(proc.device)
     if proc.is_main:
         print(describe(args.module, model, args.resolution), flush=True)
     return Network(model, config, torch.optim.Adam(model.parameters(), lr=args.lr), parallel=model)
 
 
-def load_matching(path: str | Path, args: argparse.Namespace, config: UNetConfig, advice: str) -> dict:
-    """The checkpoint at ``path``, refused unless it holds this run's module, target and U-Net."""
+def load_matching(
+    path: str | Path, args: argparse.Namespace, config: UNetConfig, advice: str, camera_added: bool = False
+) -> dict:
+    """The checkpoint at ``path``, refused unless it holds this run's module, target and U-Net (``camera_added``:
+    or that U-Net without the camera input)."""
     ck = checkpoint.load(path)
-    if ck["module"] != args.module or ck.get("target") != args.target or ck["unet"] != config.to_dict():
+    unet = {**ck["unet"], "camera": True} if camera_added and not ck["unet"].get("camera") else ck["unet"]
+    if ck["module"] != args.module or ck.get("target") != args.target or unet != config.to_dict():
         raise SystemExit(f"{path} is a {ck['module']}/{ck.get('target')} {ck['unet']} run; {advice}")
     return ck
 
@@ -672,11 +693,23 @@ def resume(net: Network, args: argparse.Namespace, path: Path, proc: Process) ->
 
 
 def init_from(net: Network, args: argparse.Namespace, proc: Process) -> None:
-    """Fine-tune: a new run from --init-from's weights, with a fresh optimizer and schedule."""
-    ck = load_matching(args.init_from, args, net.config, "it cannot initialise this run (--init-from)")
-    net.model.load_state_dict(ck["model"])
+    """Fine-tune: a new run from --init-from's weights, with a fresh optimizer and schedule. An AOP without the
+    camera input starts a --camera one: the camera channels' first weights start at zero, so the new network
+    starts as the old one."""
+    ck = load_matching(args.init_from, args, net.config, "it cannot initialise this run (--init-from)", args.camera)
+    net.model.load_state_dict(with_new_inputs(ck["model"], net.model.state_dict()))
     if proc.is_main:
         print(f"initialised from {args.init_from} (step {ck['step']})", flush=True)
+
+
+def with_new_inputs(state: dict[str, torch.Tensor], target: dict[str, torch.Tensor]) -> dict[str, torch.Tensor]:
+    """``state`` with each weight that has fewer input channels (dim 1) than ``target``'s padded with zeros."""
+    out = dict(state)
+    for k, w in state.items():
+        t = target[k]
+        if w.ndim == 4 and t.shape[1] > w.shape[1] and t.shape[0] == w.shape[0]:
+            out[k] = torch.cat([w, torch.zeros(w.shape[0], t.shape[1] - w.shape[1], *w.shape[2:])], dim=1)
+    return out
 
 
 def restore(net: Network, args: argparse.Namespace, run: Path, proc: Process) -> None:
@@ -746,7 +779,7 @@ def build_data(args: argparse.Namespace, proc: Process, store: Any, run: Path, r
     sampler = batch_sampler(args, cache)
     rows = store.meta["elm_rows"]
     val_batch, val_split = build_val(store, args, rows, run) if proc.is_main else (None, None)
-    val = to_tensors(val_batch, proc.device, args.card_blur) if val_batch is not None else None
+    val = to_tensors(val_batch, proc.device, args.card_blur, args.camera) if val_batch is not None else None
     if proc.is_main:
         print(
             f"train views: {len(cache)} (cache {args.cache_views}), val: {args.val_samples} samples from the "
@@ -872,7 +905,7 @@ def train(
     net.parallel.train()
     while net.step < args.steps and not stop["flag"]:
         lr = lr_at(net.step, args)
-        x = to_tensors(stream.next(), proc.device, args.card_blur)
+        x = to_tensors(stream.next(), proc.device, args.card_blur, args.camera)
         loss = train_step(net, args.module, objective, x, ao_input(args, x, stream.gen), lr)
         net.step += 1
         net.samples += args.batch * proc.world

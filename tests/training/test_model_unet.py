@@ -54,6 +54,24 @@ def test_head_bias_and_complexity_report():
 def test_config_round_trip():
     cfg = UNetConfig(widths=(8, 16), groups=4, resolution=64)
     assert UNetConfig.from_dict(cfg.to_dict()) == cfg
+    cam = UNetConfig(widths=(8, 16), groups=4, resolution=64, camera=True)
+    assert UNetConfig.from_dict(cam.to_dict()) == cam
+
+
+def test_a_camera_taking_aop_sees_where_the_horizon_lies():
+    """The camera input enters as rows' offsets below the horizon (in frames) and the focal length: the same mask
+    under another horizon gets another AO map."""
+    from training.model.unet import FOCAL_CENTRE, camera_maps
+
+    maps = camera_maps(torch.tensor([[0.25, 1.5]]), 4)
+    assert torch.allclose(maps[0, 0, :, 0], torch.tensor([-0.125, 0.125, 0.375, 0.625]))
+    assert torch.allclose(maps[0, 1], torch.full((4, 4), 1.5 - FOCAL_CENTRE))
+    torch.manual_seed(0)
+    net = AOPNet(UNetConfig(widths=(4, 8, 8), groups=2, resolution=32, camera=True)).eval()
+    x = torch.rand(1, 1, 32, 32)
+    level, high = net(x, torch.tensor([[0.6, 1.2]])), net(x, torch.tensor([[-0.4, 1.2]]))
+    assert level.shape == (1, 1, 32, 32) and (level - high).abs().max() > 1e-4
+    assert "parameters" in describe("aop", net, 32)
 
 
 def test_mirror_average_is_the_mean_of_the_two_passes():

@@ -42,8 +42,11 @@ def describe(module: str, model: nn.Module, resolution: int) -> str:
     """One line: parameters and multiply-adds per image at ``resolution``."""
     mask = torch.zeros(1, 1, resolution, resolution)
     inputs = (mask,) if module == "aop" else (mask, mask, torch.zeros(1, 16, 32))
-    if module == "sr" and getattr(model, "config", None) is not None and model.config.card:
+    config = getattr(model, "config", None)
+    if module == "sr" and config is not None and config.card:
         inputs += (mask,)
+    if module == "aop" and config is not None and config.camera:
+        inputs += (torch.tensor([[0.5, 1.2]]),)
     was_training = model.training
     model.eval()
     macs = count_macs(model, *inputs)

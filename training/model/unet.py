@@ -28,6 +28,7 @@ class UNetConfig:
     groups: int = 8
     resolution: int = 128
     card: bool = False  # SR only: geometry-guided, takes the geometric card's shadow (SRNet)
+    camera: bool = False  # AOP only: takes the camera input as ground-geometry channels (AOPNet)
 
     @property
     def depth(self) -> int:
@@ -40,7 +41,13 @@ class UNetConfig:
 
     @classmethod
     def from_dict(cls, d: dict) -> UNetConfig:
-        return cls(widths=tuple(d["widths"]), groups=d["groups"], resolution=d["resolution"], card=d.get("card", False))
+        return cls(
+            widths=tuple(d["widths"]),
+            groups=d["groups"],
+            resolution=d["resolution"],
+            card=d.get("card", False),
+            camera=d.get("camera", False),
+        )
 
 
 def _norm(channels: int, groups: int) -> nn.GroupNorm:
@@ -109,16 +116,34 @@ class UNet(nn.Module):
         return self.head(x)
 
 
+FOCAL_CENTRE = 1.2  # a focal length of 1.2 frames (a 45 degree field of view) enters the focal channel as 0
+
+
+def camera_maps(camera: torch.Tensor, r: int) -> torch.Tensor:
+    """Ground-geometry channels (B, 2, R, R) of camera inputs (B, 2), horizon row and focal length in frames: each
+    pixel row's offset below the horizon and the focal length less ``FOCAL_CENTRE``. Which rows see the ground,
+    and how steeply it recedes there, is what a mask alone cannot tell under a level camera."""
+    b = camera.shape[0]
+    rows = (torch.arange(r, dtype=camera.dtype, device=camera.device) + 0.5) / r
+    below = rows[None, None, :, None] - camera[:, 0, None, None, None]
+    focal = camera[:, 1, None, None, None] - FOCAL_CENTRE
+    return torch.cat([below.expand(b, 1, r, r), focal.expand(b, 1, r, r)], dim=1)
+
+
 class AOPNet(nn.Module):
-    """Ambient-occlusion prediction: mask (B, 1, R, R) -> AO (B, 1, R, R), linear output."""
+    """Ambient-occlusion prediction: mask (B, 1, R, R) -> AO (B, 1, R, R), linear output; with ``config.camera``
+    also the camera input (B, 2) in frames (horizon row / N, focal length / N), as :func:`camera_maps`."""
 
     def __init__(self, config: UNetConfig):
         super().__init__()
         self.config = config
-        self.unet = UNet(1, config)
+        self.unet = UNet(3 if config.camera else 1, config)
 
-    def forward(self, mask: torch.Tensor) -> torch.Tensor:
-        return self.unet(mask)
+    def forward(self, mask: torch.Tensor, camera: torch.Tensor | None = None) -> torch.Tensor:
+        if not self.config.camera:
+            return self.unet(mask)
+        assert camera is not None, "this AOP takes the camera input"
+        return self.unet(torch.cat([mask, camera_maps(camera, mask.shape[-1])], dim=1))
 
 
 class SRNet(nn.Module):
