@@ -2,6 +2,10 @@
 
 A model folder holds ``model.json`` and the two graphs (docs/engine.md, "Model files"):
 - aop.onnx: "mask" [b, 1, R, R] -> "ao" [b, 1, R, R]
+- aop_camera.onnx (optional, named by ``aop_camera``): "mask" [b, 1, R, R], "camera" [b, 2] (horizon row and
+  focal length in frames, pixels / N) -> "ao" [b, 1, R, R]; the AOP of calls that give the camera input: which
+  rows see the ground, and how steeply it recedes there, is what a mask alone leaves open under a level camera
+  (blind calls keep aop.onnx: fed the camera estimator's reading instead, this AOP did worse; docs/training.md)
 - sr.onnx: "mask" [b, 1, R, R], "ao" [b, 1, R, R], "elm" [b, 16, 32] -> "shadow" [b, 1, R, R]; a
   geometry-guided SR also takes "card" [b, 1, R, R], the geometric card's shadow for the same ELM
   (:meth:`ssn_engine.methods.geometric.GeometricCard.card_shadows`, traced with the camera input when given)
@@ -60,6 +64,7 @@ class ModelError(RuntimeError):
 
 _EXPECTED = {
     "aop": [({"mask": 4}, {"ao": 4})],
+    "aop_camera": [({"mask": 4, "camera": 2}, {"ao": 4})],
     "sr": [({"mask": 4, "ao": 4, "elm": 3}, {"shadow": 4}), ({"mask": 4, "ao": 4, "elm": 3, "card": 4}, {"shadow": 4})],
     "height": [({"mask": 4}, {"heights": 4})],
     "camera": [({"mask": 4}, {"camera": 2})],
@@ -189,6 +194,7 @@ class OnnxSSN:
         self.meta, self.model_resolution = meta, r
         self.output_floor, self.output_floor_small_lights = (float(floors[k]) for k in floors)
         self._aop = _session(model_dir / meta.get("aop", "aop.onnx"), "aop")
+        self._aop_camera = _session(model_dir / meta["aop_camera"], "aop_camera") if meta.get("aop_camera") else None
         self._sr = _session(model_dir / meta.get("sr", "sr.onnx"), "sr")
         takes_card = "card" in {i.name for i in self._sr.get_inputs()}
         self.card: GeometricCard | None = GeometricCard(FRAME, internal=r) if takes_card else None
@@ -222,6 +228,8 @@ class OnnxSSN:
         mask = np.zeros((1, 1, self.model_resolution, self.model_resolution), np.float32)
         try:
             ao = _run(self._aop, "ao", {"mask": mask})
+            if self._aop_camera is not None:
+                _run(self._aop_camera, "ao", {"mask": mask, "camera": np.array([[0.5, 1.2]], np.float32)})
             feeds = {"mask": mask, "ao": ao, "elm": np.zeros((1, 16, 32), np.float32)}
             if self.card is not None:
                 feeds["card"] = mask
@@ -238,10 +246,15 @@ class OnnxSSN:
             raise ModelError(f"sr output has shape {s.shape}, expected {mask.shape}")
 
     def predict_ao(self, masks: np.ndarray, cameras: np.ndarray | None = None) -> np.ndarray:
-        """The AO maps; a geometry-guided model also traces each mask's card here, so moving a light does not."""
+        """The AO maps (from the camera-taking AOP where the call gives the camera input and the model has one); a
+        geometry-guided model also traces each mask's card here, so moving a light does not."""
         check_batch(masks, None, self.resolution, cameras=cameras)
         m = resample_frames(masks, self.model_resolution)[:, None]
-        ao = _run(self._aop, "ao", {"mask": m})[:, 0]
+        if cameras is not None and self._aop_camera is not None:
+            frames = (np.asarray(cameras, np.float64) / FRAME).astype(np.float32)
+            ao = _run(self._aop_camera, "ao", {"mask": m, "camera": frames})[:, 0]
+        else:
+            ao = _run(self._aop, "ao", {"mask": m})[:, 0]
         if self.card is not None:
             cameras = self.cameras_for(masks, cameras)
             for b, mask in enumerate(masks):

@@ -142,7 +142,8 @@ def test_no_haze_far_from_the_cutout_and_its_cast_shadow(preset_name):
 def test_a_blind_call_reads_the_camera_from_the_mask():
     """With no camera input the shipped model reads one from each mask (camera.onnx): on the twelve held-out
     views its horizon row lies closer to the true one than the conventions' default camera's does, and a blind
-    call renders exactly what a call given that camera renders."""
+    call traces its card with that reading. Its AO map is the plain AOP's; a call given a camera gets the
+    camera-taking AOP's (aop_camera.onnx), which moves with the horizon."""
     data = np.load(FIXTURE)
     masks = data["masks"].astype(np.float32) / 255
     method = api.default_method().method
@@ -154,7 +155,10 @@ def test_a_blind_call_reads_the_camera_from_the_mask():
     assert np.median(np.abs(estimated[:, 0] - truth)) < 0.6 * np.median(np.abs(default_horizons - truth))
     elms = np.stack([sun(0.3, 25.0)] * 3)
     blind = api.predict_frames(masks[:3], elms)
-    np.testing.assert_array_equal(blind, api.predict_frames(masks[:3], elms, cameras=estimated[:3]))
+    ao = method.predict_ao(masks[:3])
+    np.testing.assert_array_equal(blind, method.render(masks[:3], ao, elms, estimated[:3]))
+    level, steep = (method.predict_ao(masks[:3], data["cameras"][:3] + [[dh, 0.0]]) for dh in (0.0, -120.0))
+    assert np.abs(level - ao).max() > 0.02 and np.abs(steep - level).max() > 0.02
 
 
 @pytest.mark.parametrize("preset_name", ["high-sun", "low-sun-left", "low-sun-right", "softbox", "two-lights"])

@@ -81,8 +81,8 @@ def test_the_estimator_trains_exports_and_installs_into_a_model(tmp_path):
     assert cameras.shape == (1, 2) and np.isfinite(cameras).all()
     elm = np.zeros((1, 16, 32), np.float32)
     elm[0, 10, 20] = 1.0
-    blind = model.render(mask, model.predict_ao(mask), elm)
-    np.testing.assert_array_equal(blind, model.render(mask, model.predict_ao(mask, cameras), elm, cameras))
+    ao = model.predict_ao(mask)  # blind: the plain AOP (a given camera gets the camera-taking one)
+    np.testing.assert_array_equal(model.render(mask, ao, elm), model.render(mask, ao, elm, cameras))
 
 
 def test_kind_weights_draw_a_kind_more_often():

@@ -206,7 +206,13 @@ def test_a_checkpoint_rebuilt_from_the_graph_fine_tunes(exported, tmp_path):
     out = tmp_path / "rebuilt.pt"
     assert rebuild_main([str(exported / "sr.onnx"), "--out", str(out), "--groups", "2"]) == 0
     ck = checkpoint.load(out)
-    assert ck["parity"] <= 1e-4 and ck["unet"] == {"widths": [4, 8, 8], "groups": 2, "resolution": 32, "card": False}
+    assert ck["parity"] <= 1e-4 and ck["unet"] == {
+        "widths": [4, 8, 8],
+        "groups": 2,
+        "resolution": 32,
+        "card": False,
+        "camera": False,
+    }
     run = tmp_path / "finetune"
     args = ["--module", "sr", "--run", str(run), *TINY, "--init-from", str(out)]
     assert train_main(args, store=FakeStore(res=32)) == 0
@@ -276,3 +282,34 @@ def test_the_shipped_sr_can_be_fine_tuned_without_its_runs(tmp_path):
     assert any(not torch.equal(first[key], second[key]) for key in first)  # two different networks
     with pytest.raises(SystemExit, match="single network"):
         rebuild_main([str(models / "sr.onnx"), "--member", "0", "--out", str(tmp_path / "sr0.pt")])
+
+
+def test_a_camera_taking_aop_exports_beside_the_plain_one_and_serves_calls_with_a_camera(exported, tmp_path):
+    """An AOP trained with --camera exports as aop_camera.onnx ("camera" in frames) beside the plain AOP; the
+    engine runs it for calls that give the camera input and the plain AOP for blind ones; --aop refuses it."""
+    from ssn_engine.methods import OnnxSSN
+    from training import checkpoint
+    from training.onnx_weights import rebuild
+
+    run = tmp_path / "aop_cam"
+    assert train_main(["--module", "aop", "--camera", "--run", str(run), *TINY], store=FakeStore(res=32)) == 0
+    ck = checkpoint.load(run / "last.pt")
+    ck["model"]["unet.head.bias"].fill_(0.5)  # AO maps away from the clamp at 1, where camera changes would not show
+    checkpoint.save(run / "last.pt", ck)
+    sr, out = exported.parent / "sr" / "last.pt", tmp_path / "model"
+    assert export([run / "last.pt"], sr, tmp_path / "bad", tmp_path / "no-data") == 1
+    options = ("--ao-gamma", "0.6", "--aop-camera", str(run / "last.pt"))  # the fixture's gamma
+    assert export([exported / "aop.onnx"], sr, out, tmp_path / "no-data", *options) == 0
+    graph = ort.InferenceSession(str(out / "aop_camera.onnx"))
+    assert {i.name for i in graph.get_inputs()} == {"mask", "camera"}
+    card = json.loads((out / "model.json").read_text())
+    assert card["aop_camera"] == "aop_camera.onnx" and card["export"]["aop_camera"]["max_abs_diff"] <= 1e-4
+    assert "- AOP with camera: " in (out / "MODEL_CARD.md").read_text()
+    method, plain = OnnxSSN(out), OnnxSSN(exported)
+    mask = np.zeros((1, 256, 256), np.float32)
+    mask[0, 40:200, 100:156] = 1.0
+    np.testing.assert_array_equal(method.predict_ao(mask), plain.predict_ao(mask))  # blind: the plain AOP
+    level, steep = (method.predict_ao(mask, np.array([[h, 300.0]])) for h in (150.0, -100.0))
+    assert np.abs(level - steep).max() > 1e-3  # the camera reaches the camera-taking AOP
+    net, ck = rebuild(out / "aop_camera.onnx", groups=2)  # the shipped graph can be fine-tuned without its run
+    assert ck["unet"]["camera"] and ck["parity"] <= 1e-4
