@@ -233,6 +233,27 @@ def test_a_bad_camera_estimator_is_named_and_the_card_falls_back(tmp_path, monke
     _expect_model_error(folder, monkeypatch, str(folder / "camera.onnx"), "camera contract")
 
 
+def test_a_bad_camera_taking_aop_is_named(tmp_path, monkeypatch):
+    """The shipped model with its aop_camera graph missing, or replaced by the plain AOP (no camera input)."""
+    import shutil
+
+    folder = tmp_path / "m"
+    shutil.copytree(Path(api.__file__).parent / "models", folder)
+    (folder / "aop_camera.onnx").unlink()
+    _expect_model_error(folder, monkeypatch, "missing", str(folder / "aop_camera.onnx"))
+    shutil.copy(folder / "aop.onnx", folder / "aop_camera.onnx")
+    _expect_model_error(folder, monkeypatch, str(folder / "aop_camera.onnx"), "aop_camera contract")
+
+
+def test_the_shipped_model_fits_the_wheel_budget():
+    """Every graph model.json names is a shipped file, and together they stay within the 30 MB budget."""
+    folder = Path(api.__file__).parent / "models"
+    card = json.loads((folder / "model.json").read_text())
+    graphs = [folder / card[k] for k in ("aop", "sr", "aop_camera", "camera", "height") if card.get(k)]
+    assert len(graphs) == 4 and all(g.is_file() for g in graphs)
+    assert sum(g.stat().st_size for g in graphs) <= 30e6
+
+
 def test_graphs_named_in_the_card(tmp_path, monkeypatch, mask):
     folder = make_model_dir(tmp_path / "m", 128, card=_card(128, aop="a.onnx", sr="s.onnx"))
     monkeypatch.setenv("SSN_SHADOW_MODEL_DIR", str(folder))
