@@ -449,7 +449,7 @@ def model_card(card: dict, attribution: list[dict], command: str) -> str:
             "(onnx_ssn.blur_frames; checked on the validation split, docs/training.md)."
         )
     if card.get("mirror_average"):
-        # a reused AOP keeps its own; a camera-taking one runs once
+        # a reused AOP keeps its own mirror average or none (as the shipped one), as does --aop-camera's
         which = (
             "the SR graph" if ex["aop"].get("reused_from") or ex["aop"].get("mirror_average") is False else "each graph"
         )

@@ -15,6 +15,7 @@ from __future__ import annotations
 import argparse
 import contextlib
 import csv
+import dataclasses
 import json
 import os
 import queue
@@ -109,7 +110,7 @@ def parse_args(argv: list[str] | None = None) -> argparse.Namespace:
         "--camera",
         action="store_true",
         help="AOP: also takes the camera input (horizon row, focal length) as ground-geometry channels "
-        "(training.model.AOPNet); the engine feeds it the camera estimator's reading when a call has none",
+        "(training.model.AOPNet); export --aop-camera ships it as the AOP of calls that give the camera input",
     )
     p.add_argument(
         "--true-camera",
@@ -676,8 +677,10 @@ def load_matching(
     """The checkpoint at ``path``, refused unless it holds this run's module, target and U-Net (``camera_added``:
     or that U-Net without the camera input)."""
     ck = checkpoint.load(path)
-    unet = {**ck["unet"], "camera": True} if camera_added and not ck["unet"].get("camera") else ck["unet"]
-    if ck["module"] != args.module or ck.get("target") != args.target or unet != config.to_dict():
+    unet = UNetConfig.from_dict(ck["unet"])  # (a checkpoint from before a field was added gets its default)
+    if camera_added:
+        unet = dataclasses.replace(unet, camera=True)
+    if ck["module"] != args.module or ck.get("target") != args.target or unet != config:
         raise SystemExit(f"{path} is a {ck['module']}/{ck.get('target')} {ck['unet']} run; {advice}")
     return ck
 
