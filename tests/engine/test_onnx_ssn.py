@@ -221,28 +221,18 @@ def test_graph_with_wrong_input_names(tmp_path, monkeypatch):
     assert "image" in message and "mask" in message
 
 
-def test_a_bad_camera_estimator_is_named_and_the_card_falls_back(tmp_path, monkeypatch):
-    """The shipped model with its camera graph missing, or replaced by a graph of another contract."""
+@pytest.mark.parametrize("graph", ["camera", "aop_camera"])
+def test_a_bad_optional_graph_is_named(tmp_path, monkeypatch, graph):
+    """The shipped model with its camera estimator or its camera-taking AOP missing, or replaced by the plain AOP
+    (another contract)."""
     import shutil
 
     folder = tmp_path / "m"
     shutil.copytree(Path(api.__file__).parent / "models", folder)
-    (folder / "camera.onnx").unlink()
-    _expect_model_error(folder, monkeypatch, "missing", str(folder / "camera.onnx"))
-    shutil.copy(folder / "aop.onnx", folder / "camera.onnx")
-    _expect_model_error(folder, monkeypatch, str(folder / "camera.onnx"), "camera contract")
-
-
-def test_a_bad_camera_taking_aop_is_named(tmp_path, monkeypatch):
-    """The shipped model with its aop_camera graph missing, or replaced by the plain AOP (no camera input)."""
-    import shutil
-
-    folder = tmp_path / "m"
-    shutil.copytree(Path(api.__file__).parent / "models", folder)
-    (folder / "aop_camera.onnx").unlink()
-    _expect_model_error(folder, monkeypatch, "missing", str(folder / "aop_camera.onnx"))
-    shutil.copy(folder / "aop.onnx", folder / "aop_camera.onnx")
-    _expect_model_error(folder, monkeypatch, str(folder / "aop_camera.onnx"), "aop_camera contract")
+    (folder / f"{graph}.onnx").unlink()
+    _expect_model_error(folder, monkeypatch, "missing", str(folder / f"{graph}.onnx"))
+    shutil.copy(folder / "aop.onnx", folder / f"{graph}.onnx")
+    _expect_model_error(folder, monkeypatch, str(folder / f"{graph}.onnx"), f"{graph} contract")
 
 
 def test_the_shipped_model_fits_the_wheel_budget():
