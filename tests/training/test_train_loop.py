@@ -218,3 +218,107 @@ def test_inexact_cameras_miss_the_true_ones_by_the_given_scales():
     moved = moved_cameras(true, 1, (0.1, 0.05), np.random.default_rng(0))
     assert abs(np.median(np.abs(moved[:, 0] - 0.5)) - 0.1 * np.log(2)) < 0.01  # the median of |Laplace(b)|: b ln 2
     assert abs(np.median(np.abs(np.log(moved[:, 1] / 1.2))) - 0.05 * np.log(2)) < 0.005
+
+
+def test_aop_through_sr_adds_the_shadow_error_of_the_predicted_ao():
+    from training.train import Objective
+
+    class InverseSR(torch.nn.Module):  # the shadow is 1 - AO, so the shadow error follows the AO error
+        def forward(self, mask, ao, elm):
+            return 1.0 - ao
+
+    full = lambda v: torch.full((2, 1, 4, 4), v)  # noqa: E731
+    x = {"mask": full(1.0), "ao": full(0.5), "elm": torch.zeros(2, 512), "target": full(0.2)}
+    pred = full(0.7).requires_grad_(True)
+    assert Objective("aop")(pred, x).item() == pytest.approx(0.04)  # (0.7 - 0.5)^2
+    loss = Objective("aop", InverseSR(), shadow_weight=2.0)(pred, x)
+    assert loss.item() == pytest.approx(0.04 + 2.0 * 0.01)  # + 2 x ((1 - 0.7) - 0.2)^2
+    loss.backward()
+    assert float(pred.grad.abs().min()) > 0
+
+
+def test_ssim_term_is_the_benchmark_dssim_and_punishes_faint_haze():
+    import numpy as np
+
+    from training.metrics import dssim
+    from training.train import Objective, dssim_loss
+
+    rng = np.random.default_rng(0)
+    truth = np.zeros((32, 32), np.float32)
+    truth[20:28, 4:28] = 0.8  # a dark cast shadow on lit ground
+    haze = truth + 0.03 * rng.random(truth.shape).astype(np.float32)  # plus a faint noisy haze
+    t = lambda a: torch.tensor(a)[None, None]  # noqa: E731
+    # the metric in float64, the loss in float32
+    assert dssim_loss(t(haze), t(truth)).item() == pytest.approx(dssim(haze, truth), abs=1e-5)
+    x = {"target": t(truth)}
+    plain, weighted = Objective("sr")(t(haze), x).item(), Objective("sr", ssim_weight=0.1)(t(haze), x).item()
+    # the haze costs almost nothing in L2 (under 0.001) but a large share of the SSIM of the lit ground
+    assert plain < 1e-3 and weighted - plain > 20 * plain
+
+
+def test_zncc_term_is_the_benchmark_zncc_and_counts_a_small_shadow_like_a_large_one():
+    import numpy as np
+
+    from training.metrics import zncc
+    from training.train import Objective, zncc_loss
+
+    rng = np.random.default_rng(1)
+    large = np.zeros((32, 32), np.float32)
+    large[8:30, 2:30] = 0.8  # a low sun's long shadow
+    small = np.zeros((32, 32), np.float32)
+    small[26:29, 12:18] = 0.8  # a high sun's small pool
+    t = lambda a: torch.tensor(np.stack(a))[:, None]  # noqa: E731
+    preds = [a + 0.05 * rng.random(a.shape).astype(np.float32) for a in (large, small)]
+    want = 1 - np.mean([zncc(p, g) for p, g in zip(preds, (large, small), strict=True)])
+    assert zncc_loss(t(preds), t([large, small])).item() == pytest.approx(want, abs=1e-5)
+    # the small shadow moved by 4 pixels: a fraction of the large shadow's L2 error, the same ZNCC cost
+    moved = [np.roll(large, 4, axis=1), np.roll(small, 4, axis=1)]
+    l2 = [Objective("sr")(t([m]), {"target": t([g])}).item() for m, g in zip(moved, (large, small), strict=True)]
+    cost = [zncc_loss(t([m]), t([g])).item() for m, g in zip(moved, (large, small), strict=True)]
+    assert l2[1] < 0.5 * l2[0] and cost[1] > cost[0]
+    weighted = Objective("sr", zncc_weight=0.1)(t([moved[1]]), {"target": t([small])}).item()
+    assert weighted == pytest.approx(l2[1] + 0.1 * cost[1], rel=1e-5)
+
+
+def test_aop_trains_through_a_frozen_sr(tmp_path):
+    from training.train import frozen_sr
+
+    sr = _run(tmp_path / "s", "sr", 2) / "last.pt"
+    run = _run(tmp_path, "aop", 3, ["--through-sr", str(sr), "--shadow-weight", "3"])
+    ck = checkpoint.load(run / "last.pt")
+    assert ck["module"] == "aop" and ck["step"] == 3 and ck["args"]["through_sr"] == str(sr)
+    assert not any(w.requires_grad for w in frozen_sr(str(sr), torch.device("cpu")).parameters())
+    with pytest.raises(SystemExit):  # it needs an SR with the shadow target
+        _run(tmp_path / "bad", "aop", 1, ["--through-sr", str(run / "last.pt")])
+    with pytest.raises(SystemExit):  # and trains AOPs only
+        _run(tmp_path / "bad2", "sr", 1, ["--through-sr", str(sr)])
+    assert not (tmp_path / "bad").exists() and not (tmp_path / "bad2").exists()  # refused before any file
+
+
+def test_evaluation_by_light_family_on_the_standin(tmp_path):
+    from training.evaluate import main as eval_main
+    from training.evaluate import parse_args as eval_args
+    from training.evaluate_families import evaluate_families
+
+    args = eval_args(
+        ["--families", "sun,sky", "--per-view", "2", "--with-camera", "geometric", "--out", str(tmp_path / "fam")]
+    )
+    res = evaluate_families(args, store=FakeStore(res=32))
+    assert set(res["families"]) == {"sun", "sky"} and res["rows"] == ["geometric", "geometric + camera"]
+    sun = res["families"]["sun"]
+    assert sun["images"] == 2 * res["views"] and set(sun["kinds"]) <= {"object", "human", "animal"}
+    assert set(sun["pitches"]) == {"0", "15"}
+    assert set(sun["geometry"]) == set(res["rows"]) and "geometry" not in res["families"]["sky"]
+    text = (tmp_path / "fam" / "families.md").read_text()
+    assert "### sun" in text and "median direction error" in text and "### sky" in text
+    assert (tmp_path / "fam" / "sun_grid.png").is_file()
+    with pytest.raises(SystemExit, match="moon"):
+        eval_main(["--families", "sun,moon", "--out", str(tmp_path / "x")])
+
+
+@pytest.mark.parametrize(
+    "extra", [["--card-blur", "1"], ["--card", "--card-blur", "-1"], ["--card", "--card-blur", "9"]]
+)
+def test_a_card_blur_needs_the_card_and_a_sensible_size(tmp_path, extra):
+    with pytest.raises(SystemExit):
+        _run(tmp_path, "sr", 1, extra)
