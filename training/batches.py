@@ -145,13 +145,13 @@ def load_view(
     mask = resample_frames(v.mask[None], resolution)[0]
     ao = resample_frames(v.ao[None], resolution)[0]
     n = v.mask.shape[-1]
+    true_camera = camera_input(v.info, n)
     cards = None
     if card is not None:
-        true_camera = camera_input(v.info, n)
         blind = blind_camera(v.info, n, camera_error, rng if rng is not None else np.random.default_rng(i))
         cards = (card_bases(card, v.mask, blind, resolution), card_bases(card, v.mask, true_camera, resolution))
     ao_pred = None if predict_ao is None else predict_ao(mask[None])[0]
-    camera = tuple(float(c) / n for c in camera_input(v.info, n))
+    camera = (true_camera[0] / n, true_camera[1] / n)
     return CachedView(view_key(store, i), mask, np.clip(ao, 0.0, 1.0), occ, cards, ao_pred, camera)
 
 
@@ -351,6 +351,15 @@ def make_batch(
     )
 
 
+def move_blind_cameras(
+    batch: Batch, true_camera: np.ndarray, error: tuple[float, float], rng: np.random.Generator
+) -> None:
+    """A camera-taking AOP's batch: the cameras (in frames) of the samples not ``true_camera`` moved in place by
+    :func:`moved_cameras`, as an estimate (or a horizon set by eye) misses the true one."""
+    assert batch.camera is not None
+    batch.camera[~true_camera] = moved_cameras(batch.camera[~true_camera], 1, error, rng)
+
+
 class BatchSampler:
     """Random training batches: ``batch // elms_per_view`` cached views, each under ``elms_per_view`` random ELMs
     (Table 1, or a mixture of light families ``lights``); ``flip``: each sample mirrored left to right with
@@ -391,6 +400,6 @@ class BatchSampler:
         batch = make_batch(
             views, lights, self.cache.store.meta["elm_rows"], self.cache.weights, self.target, true_camera
         )
-        if batch.card is None and self.cache.camera_error is not None:  # a camera-taking AOP's inexact cameras
-            batch.camera[~true_camera] = moved_cameras(batch.camera[~true_camera], 1, self.cache.camera_error, rng)
+        if batch.card is None and self.cache.camera_error is not None:  # (an SR's cameras ride in its cards)
+            move_blind_cameras(batch, true_camera, self.cache.camera_error, rng)
         return mirror(batch, rng.random(self.batch) < 0.5) if self.flip else batch

@@ -180,7 +180,7 @@ def takes_card(net: nn.Module) -> bool:
 
 def takes_camera(net: nn.Module) -> bool:
     """Whether an AOP network takes the camera input."""
-    return bool(getattr(_config(net), "camera", False))
+    return bool(_config(net).camera)
 
 
 def to_fp16_weights(src: Path, dst: Path) -> None:

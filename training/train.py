@@ -35,7 +35,7 @@ from . import checkpoint
 from ssn_engine.hemisphere import texel_weights
 from ssn_engine.methods.onnx_ssn import MAX_CARD_BLUR, blur_frames
 
-from .batches import BatchSampler, ViewCache, make_batch, moved_cameras
+from .batches import BatchSampler, ViewCache, make_batch, move_blind_cameras
 from .elm import TRAIN_MIX, sample_lights, sample_mixture
 from .model import UNetConfig, build
 from .model.complexity import describe
@@ -442,7 +442,7 @@ def build_val(store, args, weights_rows: int, run: Path | None = None):
     batch = make_batch(vs, lights, weights_rows, texel_weights(weights_rows), lit, true_camera)
     error = blind_error(args)
     if args.camera and error is not None:
-        batch.camera[~true_camera] = moved_cameras(batch.camera[~true_camera], 1, error, rng)
+        move_blind_cameras(batch, true_camera, error, rng)
     return batch, split
 
 
