@@ -52,6 +52,7 @@ class CachedView:
     occ: np.ndarray  # (T, R*R) uint8, occ * 255
     cards: tuple[np.ndarray, np.ndarray] | None = None  # card bases (2, T, R*R) uint8: blind camera, true camera
     ao_pred: np.ndarray | None = None  # (R, R) float32: an AOP's prediction from the mask (train --ao-from)
+    ao_pred_camera: np.ndarray | None = None  # (R, R) float32: and a camera AOP's, given the true camera
     camera: tuple[float, float] = (0.0, 0.0)  # the view's camera input in frames: horizon row / N, focal length / N
 
 
@@ -130,11 +131,13 @@ def load_view(
     predict_ao=None,
     camera_error: tuple[float, float] | None = None,
     rng: np.random.Generator | None = None,
+    predict_ao_camera=None,
 ) -> CachedView:
     """Load view ``i`` of ``store`` and bring it to ``resolution`` (``with_occ`` False: no bases, for AOP;
     ``card``: the bases of this card method (the geometric card, or the height proxy) for the blind camera
     (:func:`blind_camera` of ``camera_error``, drawn with ``rng``) and the true camera; ``predict_ao``: a
-    function of masks (B, R, R) -> AO maps whose prediction the view keeps)."""
+    function of masks (B, R, R) -> AO maps whose prediction the view keeps; ``predict_ao_camera``: one of masks and
+    camera inputs (B, 2) in frames, given the view's true camera)."""
     v = store.load(i, with_occ)
     if with_occ:
         t = v.occlusion.shape[0] * v.occlusion.shape[1]
@@ -152,7 +155,8 @@ def load_view(
         cards = (card_bases(card, v.mask, blind, resolution), card_bases(card, v.mask, true_camera, resolution))
     ao_pred = None if predict_ao is None else predict_ao(mask[None])[0]
     camera = (true_camera[0] / n, true_camera[1] / n)
-    return CachedView(view_key(store, i), mask, np.clip(ao, 0.0, 1.0), occ, cards, ao_pred, camera)
+    ao_pred_camera = None if predict_ao_camera is None else predict_ao_camera(mask[None], np.array([camera]))[0]
+    return CachedView(view_key(store, i), mask, np.clip(ao, 0.0, 1.0), occ, cards, ao_pred, ao_pred_camera, camera)
 
 
 def targets_for(occ: np.ndarray, elm_hb: np.ndarray, peak: np.ndarray, weights: np.ndarray, target: str) -> np.ndarray:
@@ -197,10 +201,11 @@ class ViewCache:
         predict_ao=None,
         camera_error: tuple[float, float] | None = None,
         seed: int = 0,
+        predict_ao_camera=None,
     ):
         self.resolution, self.max_views, self.split, self.kind = resolution, max_views, split, kind
         self.with_occ, self.balance_kinds, self.card = with_occ, balance_kinds, card
-        self.predict_ao, self.camera_error = predict_ao, camera_error
+        self.predict_ao, self.predict_ao_camera, self.camera_error = predict_ao, predict_ao_camera, camera_error
         self.rng = np.random.default_rng([seed, 2027])  # the blind cards' camera errors
         self.views: dict[tuple, CachedView] = {}
         self.open(store)
@@ -254,6 +259,7 @@ class ViewCache:
             self.predict_ao,
             self.camera_error,
             self.rng,
+            self.predict_ao_camera,
         )
 
     def get(self, key: tuple) -> CachedView:
@@ -346,9 +352,21 @@ def make_batch(
         keys=[v.key for v in views],
         card=card,
         true_camera=true_camera if card is not None else None,
-        ao_pred=np.stack([v.ao_pred for v in views]) if views[0].ao_pred is not None else None,
+        ao_pred=predicted_ao(views, true_camera if card is not None else None),
         camera=np.array([v.camera for v in views], np.float32),
     )
+
+
+def predicted_ao(views: list[CachedView], true_camera: np.ndarray | None) -> np.ndarray | None:
+    """The AOP's predicted AO of each sample (None without one): the camera AOP's where the sample's card is traced
+    with the true camera and the view has it, as the engine runs that AOP only for calls given the camera."""
+    if views[0].ao_pred is None:
+        return None
+    given = np.zeros(len(views), bool) if true_camera is None else true_camera
+    maps = [
+        v.ao_pred_camera if g and v.ao_pred_camera is not None else v.ao_pred for v, g in zip(views, given, strict=True)
+    ]
+    return np.stack(maps)
 
 
 def move_blind_cameras(

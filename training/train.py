@@ -141,6 +141,13 @@ def parse_args(argv: list[str] | None = None) -> argparse.Namespace:
         default="table1",
         help=f"SR: light maps from the paper's Table 1, or the mixture of light families {TRAIN_MIX} (training.elm)",
     )
+    p.add_argument(
+        "--ao-from-camera",
+        nargs="+",
+        help="SR with --ao-from and --card: a camera-taking AOP (checkpoints, or an exported aop_camera.onnx) "
+        "whose AO, predicted with the view's true camera, replaces --ao-from's in the samples whose card is "
+        "traced with the true camera, as the engine feeds a call given the camera input",
+    )
     p.add_argument("--ao-from-prob", type=float, default=0.5)
     p.add_argument(
         "--through-sr",
@@ -275,15 +282,19 @@ def forward(model, module: str, x: dict[str, torch.Tensor], ao: torch.Tensor | N
 
 
 class OnnxAOP:
-    """An exported AOP graph (aop.onnx) called like the torch AOP: mask tensor (B, 1, R, R) -> AO tensor."""
+    """An exported AOP graph (aop.onnx, or aop_camera.onnx with ``camera``) called like the torch AOP: mask tensor
+    (B, 1, R, R) (and camera inputs (B, 2) in frames) -> AO tensor."""
 
-    def __init__(self, path: str):
+    def __init__(self, path: str, camera: bool = False):
         from ssn_engine.methods.onnx_ssn import _session
 
-        self.session = _session(Path(path), "aop")
+        self.session = _session(Path(path), "aop_camera" if camera else "aop")
 
-    def __call__(self, mask: torch.Tensor) -> torch.Tensor:
-        return torch.from_numpy(self.session.run(["ao"], {"mask": mask.numpy().astype(np.float32)})[0])
+    def __call__(self, mask: torch.Tensor, camera: torch.Tensor | None = None) -> torch.Tensor:
+        feeds = {"mask": mask.numpy().astype(np.float32)}
+        if camera is not None:
+            feeds["camera"] = camera.numpy().astype(np.float32)
+        return torch.from_numpy(self.session.run(["ao"], feeds)[0])
 
 
 def blind_error(args: argparse.Namespace) -> tuple[float, float] | None:
@@ -308,14 +319,23 @@ def card_method(args: argparse.Namespace):
     return HeightProxy(lambda m: graph.run(None, {"mask": m})[0], args.resolution, internal=args.proxy_internal)
 
 
-def load_aop(paths: list[str]):
-    """The AO predictor --ao-from names, checkpoints (their ensemble) or one exported aop.onnx graph, as a
-    function of masks (B, R, R) -> AO maps (B, R, R) for the view cache (each view's AO is predicted once)."""
-    net = OnnxAOP(paths[0]) if len(paths) == 1 and paths[0].endswith(".onnx") else checkpoint.load_models(paths)[0]
+def load_aop(paths: list[str], camera: bool = False):
+    """The AO predictor --ao-from (``camera``: --ao-from-camera) names, checkpoints (their ensemble) or one exported
+    aop.onnx (aop_camera.onnx) graph, as a function of masks (B, R, R) (and camera inputs (B, 2) in frames) -> AO
+    maps (B, R, R) for the view cache (each view's AO is predicted once)."""
+    if len(paths) == 1 and paths[0].endswith(".onnx"):
+        net = OnnxAOP(paths[0], camera)
+    else:
+        net, ckpts = checkpoint.load_models(paths)
+        if any(bool(ck["unet"].get("camera", False)) != camera for ck in ckpts):
+            raise ValueError(f"{paths}: expected AOP checkpoints {'with' if camera else 'without'} the camera input")
 
     @torch.no_grad()
-    def predict(masks: np.ndarray) -> np.ndarray:
-        return net(torch.from_numpy(np.ascontiguousarray(masks[:, None], np.float32)))[:, 0].clamp(0, 1).numpy()
+    def predict(masks: np.ndarray, cameras: np.ndarray | None = None) -> np.ndarray:
+        inputs = [torch.from_numpy(np.ascontiguousarray(masks[:, None], np.float32))]
+        if cameras is not None:
+            inputs.append(torch.from_numpy(np.asarray(cameras, np.float32)))
+        return net(*inputs)[:, 0].clamp(0, 1).numpy()
 
     return predict
 
@@ -746,6 +766,7 @@ def train_cache(args: argparse.Namespace, store: Any) -> ViewCache:
     the --ao-from AOP's predicted AO as the run needs them."""
     lit = shadow_target(args)
     predict_ao = load_aop(args.ao_from) if args.module == "sr" and args.ao_from else None
+    predict_ao_camera = load_aop(args.ao_from_camera, camera=True) if predict_ao and args.ao_from_camera else None
     return ViewCache(
         store,
         "train",
@@ -755,6 +776,7 @@ def train_cache(args: argparse.Namespace, store: Any) -> ViewCache:
         balance_kinds=args.balance_kinds,
         card=card_method(args),
         predict_ao=predict_ao,
+        predict_ao_camera=predict_ao_camera,
         camera_error=blind_error(args),
         seed=args.seed,
     )

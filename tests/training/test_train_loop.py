@@ -177,6 +177,26 @@ def test_sr_trains_on_predicted_ao(tmp_path):
     assert checkpoint.load(run / "last.pt")["args"]["ao_from"] == [str(aop), str(aop2)]
 
 
+def test_samples_given_the_camera_get_the_camera_aops_map(tmp_path):
+    """An SR learns on the AO maps the engine feeds it: the camera AOP's (given the true camera) where the card is
+    traced with the true camera, the plain AOP's where it is blind."""
+    from training.batches import CachedView, predicted_ao
+
+    plain, given = np.full((4, 4), 0.2, np.float32), np.full((4, 4), 0.7, np.float32)
+    views = [CachedView((k,), plain, plain, np.zeros((0, 16), np.uint8), None, plain, given) for k in range(3)]
+    picked = predicted_ao(views, np.array([True, False, True]))
+    assert [float(m.mean()) for m in picked] == pytest.approx([0.7, 0.2, 0.7])
+    assert [float(m.mean()) for m in predicted_ao(views, None)] == pytest.approx([0.2] * 3)
+
+    aop = _run(tmp_path / "a", "aop", 2) / "last.pt"
+    cam = _run(tmp_path / "b", "aop", 2, ["--camera"]) / "last.pt"
+    extra = ["--card", "--ao-from", str(aop), "--ao-from-camera", str(cam), "--ao-from-prob", "1"]
+    run = _run(tmp_path / "c", "sr", 2, extra)
+    assert checkpoint.load(run / "last.pt")["args"]["ao_from_camera"] == [str(cam)]
+    with pytest.raises(ValueError, match="with the camera input"):  # a plain AOP cannot stand in for one
+        _run(tmp_path / "d", "sr", 1, ["--card", "--ao-from", str(aop), "--ao-from-camera", str(aop)])
+
+
 def test_fine_tuning_starts_from_the_weights_with_a_fresh_schedule(tmp_path):
     base = _run(tmp_path / "base", "sr", 3)
     tuned = _run(tmp_path / "ft", "sr", 2, ["--init-from", str(base / "last.pt"), "--lr", "0", "--lr-min", "0"])
