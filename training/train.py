@@ -190,6 +190,10 @@ def parse_args(argv: list[str] | None = None) -> argparse.Namespace:
         p.error("--camera applies to AOP (--module aop); a geometry-guided SR takes the camera through its card")
     if args.card_blur and not args.card:
         p.error("--card-blur blurs the card: give --card")
+    if args.ao_from_camera and not (args.ao_from and args.card):
+        p.error(
+            "--ao-from-camera replaces --ao-from's maps where the card uses the true camera: give --ao-from and --card"
+        )
     if not 0.0 <= args.card_blur <= MAX_CARD_BLUR:
         p.error(f"--card-blur must be in [0, {MAX_CARD_BLUR}] pixels")
     args.widths = tuple(int(w) for w in str(args.widths).split(","))
@@ -763,10 +767,10 @@ def distribute(net: Network, proc: Process) -> None:
 
 def train_cache(args: argparse.Namespace, store: Any) -> ViewCache:
     """The train split's views at R (a plain AOP keeps them all: it needs no bases), with their bases, cards and
-    the --ao-from AOP's predicted AO as the run needs them."""
+    the --ao-from (and --ao-from-camera) AOPs' predicted AO as the run needs them."""
     lit = shadow_target(args)
     predict_ao = load_aop(args.ao_from) if args.module == "sr" and args.ao_from else None
-    predict_ao_camera = load_aop(args.ao_from_camera, camera=True) if predict_ao and args.ao_from_camera else None
+    predict_ao_camera = load_aop(args.ao_from_camera, camera=True) if args.ao_from_camera else None
     return ViewCache(
         store,
         "train",

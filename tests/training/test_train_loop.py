@@ -195,6 +195,8 @@ def test_samples_given_the_camera_get_the_camera_aops_map(tmp_path):
     assert checkpoint.load(run / "last.pt")["args"]["ao_from_camera"] == [str(cam)]
     with pytest.raises(ValueError, match="with the camera input"):  # a plain AOP cannot stand in for one
         _run(tmp_path / "d", "sr", 1, ["--card", "--ao-from", str(aop), "--ao-from-camera", str(aop)])
+    with pytest.raises(SystemExit):  # blind samples need the plain AOP's maps, and only a card tells them apart
+        _run(tmp_path / "e", "sr", 1, ["--ao-from-camera", str(cam)])
 
 
 def test_fine_tuning_starts_from_the_weights_with_a_fresh_schedule(tmp_path):
