@@ -11,6 +11,9 @@ where the silhouette leaves the pitch ambiguous a regression is pulled to the mi
 varies from run to run, while the median of a classifier's distribution stays with the likelier camera. The
 graph also averages the mask with its mirror image. With ``--install ssn_engine/models`` the run is then
 installed into the model folder (``--minutes 0``: install the run in ``--out`` without training).
+
+On a GPU machine, where the views do not travel: ``--write-examples FILE`` here packs both splits' inputs (about
+10 MB for 32,160 views), and ``--examples FILE --device cuda`` there trains on them.
 """
 
 from __future__ import annotations
@@ -106,7 +109,7 @@ class CameraNet(nn.Module):
 
 def soft_labels(horizon: torch.Tensor) -> torch.Tensor:
     """(b, K) Gaussian soft labels over the bins for horizons (b,) over N."""
-    centres = torch.tensor(0.5 * (EDGES[:-1] + EDGES[1:]), dtype=torch.float32)
+    centres = torch.tensor(0.5 * (EDGES[:-1] + EDGES[1:]), dtype=torch.float32, device=horizon.device)
     w = torch.exp(-0.5 * ((horizon[:, None] - centres[None]) / LABEL_SIGMA) ** 2)
     return w / w.sum(1, keepdim=True).clamp(min=1e-12)
 
@@ -116,11 +119,11 @@ def jittered(x: torch.Tensor, y: torch.Tensor, generator: torch.Generator) -> tu
     3 % of the frame, with their targets (b, 2; horizon row and focal length over N) moved to match: the
     camera is the same, seen a little closer or further."""
     b = len(x)
-    k = 0.9 + 0.2 * torch.rand(b, generator=generator)
-    dx = 0.06 * (torch.rand(b, generator=generator) - 0.5)
+    k = 0.9 + 0.2 * torch.rand(b, generator=generator, device=x.device)
+    dx = 0.06 * (torch.rand(b, generator=generator, device=x.device) - 0.5)
     top = round(TOP_MARGIN * INPUT) / INPUT
     ay = 2 * top - 1  # the top row in affine_grid's [-1, 1] coordinates
-    theta = torch.zeros(b, 2, 3)
+    theta = torch.zeros(b, 2, 3, device=x.device)
     theta[:, 0, 0] = theta[:, 1, 1] = 1 / k
     theta[:, 0, 2] = -dx
     theta[:, 1, 2] = ay * (1 - 1 / k)
@@ -170,26 +173,66 @@ def weights_from_graph(path: Path, net: CameraNet) -> dict[str, torch.Tensor]:
         raise SystemExit(f"{path}: {exc}") from None
 
 
+def export(net: CameraNet, path: Path) -> None:
+    """Write the estimator graph ("mask" [b, 1, INPUT, INPUT] -> "camera" [b, 2])."""
+    torch.onnx.export(
+        net.cpu().eval(),
+        (torch.zeros(1, 1, INPUT, INPUT),),
+        str(path),
+        input_names=["mask"],
+        output_names=["camera"],
+        dynamic_axes={"mask": {0: "b"}, "camera": {0: "b"}},
+        opset_version=17,
+        dynamo=False,
+    )
+
+
 def predict(net: CameraNet, x: np.ndarray) -> np.ndarray:
     net.eval()
+    device = next(net.parameters()).device
     with torch.no_grad():
-        return np.concatenate([net(torch.from_numpy(x[i : i + 256, None])).numpy() for i in range(0, len(x), 256)])
+        batches = [torch.from_numpy(x[i : i + 256, None]).to(device) for i in range(0, len(x), 256)]
+        return np.concatenate([net(b).cpu().numpy() for b in batches])
+
+
+EXAMPLE_KEYS = ("x", "y", "pitch", "kind")
+
+
+def write_examples(root: Path, path: Path) -> None:
+    """Both splits' examples in one compressed file (inputs as 8-bit), small enough to travel to a GPU machine."""
+    parts = {}
+    for split in ("train", "val"):
+        for key, value in zip(EXAMPLE_KEYS, examples(root, split), strict=True):
+            parts[f"{split}_{key}"] = np.round(value * 255).astype(np.uint8) if key == "x" else value
+    np.savez_compressed(path, **parts)
+    print(f"{len(parts['train_x'])} train and {len(parts['val_x'])} val views -> {path}")
+
+
+def read_examples(args: argparse.Namespace, split: str) -> tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray]:
+    """:func:`examples` of a split, from ``--examples`` (a :func:`write_examples` file) where given."""
+    if not args.examples:
+        return examples(Path(args.data), split)
+    with np.load(args.examples) as data:
+        x, y, pitch, kind = (data[f"{split}_{key}"] for key in EXAMPLE_KEYS)
+    return x.astype(np.float32) / 255, y, pitch, kind
 
 
 def train(args: argparse.Namespace) -> None:
     torch.manual_seed(args.seed)
     torch.set_num_threads(args.threads)
+    device = torch.device(args.device)
     t0 = time.monotonic()
-    x, y, _, kinds = examples(Path(args.data), "train")
-    xv, yv, pv, kv = examples(Path(args.data), "val")
-    weights = sampling_weights(kinds, args.kind_weights)
+    x, y, _, kinds = read_examples(args, "train")
+    xv, yv, pv, kv = read_examples(args, "val")
+    weights = sampling_weights(kinds, args.kind_weights).to(device)
     print(f"{len(x)} train and {len(xv)} val views read in {time.monotonic() - t0:.0f} s", flush=True)
     net = CameraNet(args.width)
     if args.init_from:
         net.load_state_dict(weights_from_graph(Path(args.init_from), net))
+    net.to(device)
     opt = torch.optim.AdamW(net.parameters(), lr=args.lr, weight_decay=1e-4)
-    xt, yt = torch.from_numpy(x[:, None]), torch.from_numpy(y)
-    generator = torch.Generator().manual_seed(args.seed)
+    xt, yt = torch.from_numpy(x[:, None]).to(device), torch.from_numpy(y).to(device)
+    generator = torch.Generator(device).manual_seed(args.seed)
     out = Path(args.out)
     out.mkdir(parents=True, exist_ok=True)
     history, best, best_state, step, start = [], float("inf"), None, 0, time.monotonic()
@@ -200,7 +243,7 @@ def train(args: argparse.Namespace) -> None:
         net.train()
         idx = torch.multinomial(weights, args.batch, replacement=True, generator=generator)
         xb, yb = jittered(xt[idx], yt[idx], generator)
-        flip = torch.rand(len(xb), generator=generator) < 0.5  # mirrored: the same camera
+        flip = torch.rand(len(xb), generator=generator, device=device) < 0.5  # mirrored: the same camera
         xb = torch.where(flip[:, None, None, None], torch.flip(xb, [3]), xb)
         loss = loss_of(net, xb, yb)
         opt.zero_grad()
@@ -213,22 +256,13 @@ def train(args: argparse.Namespace) -> None:
             print(json.dumps(history[-1]), flush=True)
             score = val["horizon_px"] + 0.5 * val["focal_px"]
             if score < best:  # the validation split picks the step (the test split stays unseen)
-                best, best_state = score, {k: v.clone() for k, v in net.state_dict().items()}
+                best, best_state = score, {k: v.detach().cpu().clone() for k, v in net.state_dict().items()}
                 torch.save(best_state, out / "camera.pt")
     if best_state is None:
         raise SystemExit("--minutes too short for one validation; nothing to export")
-    net.load_state_dict(best_state)
+    net.cpu().load_state_dict(best_state)
     report = errors_by_group(predict(net, xv), yv, pv, kv)
-    torch.onnx.export(
-        net.eval(),
-        (torch.from_numpy(xv[:1, None]),),
-        str(out / "camera.onnx"),
-        input_names=["mask"],
-        output_names=["camera"],
-        dynamic_axes={"mask": {0: "b"}, "camera": {0: "b"}},
-        opset_version=17,
-        dynamo=False,
-    )
+    export(net, out / "camera.onnx")
     summary = {
         "val": report,
         "best_step": min(history, key=lambda h: h["horizon_px"] + 0.5 * h["focal_px"])["step"],
@@ -236,6 +270,7 @@ def train(args: argparse.Namespace) -> None:
         "train_views": len(x),
         "kind_weights": list(args.kind_weights),
         "minutes": round((time.monotonic() - start) / 60, 1),
+        "device": torch.cuda.get_device_name(device) if device.type == "cuda" else "cpu",
         "history": history,
     }
     (out / "camera.json").write_text(json.dumps(summary, indent=1))
@@ -255,10 +290,12 @@ def install(run: Path, models: Path) -> None:
     val = summary["val"]
     meta["camera"] = "camera.onnx"
     weights = summary.get("kind_weights", [1.0, 1.0, 1.0])
+    device = summary.get("device", "cpu")
+    machine = "this project's 2-core CPU build machine" if device == "cpu" else f"one {device} GPU"
     drawn = "" if weights == [1.0, 1.0, 1.0] else f", objects, people and animals drawn {weights} times their share"
     meta["camera_training"] = (
         f"{summary['train_views']} train views of both camera sets (mirrored and rescaled at random{drawn}), "
-        f"{summary['steps']} steps in {summary['minutes']} minutes on this project's 2-core CPU build machine, the "
+        f"{summary['steps']} steps in {summary['minutes']} minutes on {machine}, the "
         f"step with the lowest validation error kept ({summary['best_step']}); validation median errors: horizon "
         f"{val['all']['horizon_px']:.1f} px, focal length {val['all']['focal_px']:.1f} px (canonical frame, N = 256)"
     )
@@ -307,9 +344,15 @@ def main(argv: list[str] | None = None) -> None:
         metavar=("OBJECT", "HUMAN", "ANIMAL"),
         help="draw views of each kind this many times as often as their share",
     )
+    parser.add_argument("--device", default="cpu", help="torch device to train on (cuda: a GPU)")
+    parser.add_argument("--examples", help="read both splits from this --write-examples file instead of --data")
+    parser.add_argument("--write-examples", help="only write --data's examples to this file (for a GPU machine)")
     parser.add_argument("--init-from", help="start from the weights of an exported camera.onnx (a fine-tune)")
     parser.add_argument("--install", help="then install the estimator into this model folder (ssn_engine/models)")
     args = parser.parse_args(argv)
+    if args.write_examples:
+        write_examples(Path(args.data), Path(args.write_examples))
+        return
     if args.minutes > 0:
         train(args)
     if args.install:

@@ -116,3 +116,25 @@ def test_a_missing_split_is_named(tmp_path):
 
     with pytest.raises(SystemExit, match="no train"):
         main(["--data", str(tmp_path), "--out", str(tmp_path / "run"), "--minutes", "0.01"])
+
+
+def test_examples_written_once_train_without_the_views(tmp_path):
+    """``--write-examples`` packs both splits' inputs into one small file (for a GPU machine, where the views do
+    not travel); a run given it with ``--examples`` reads the same inputs, to 8 bits, and the same targets."""
+    from training.camera_estimator import examples, main
+
+    (tmp_path / "views").mkdir()
+    _box_views(tmp_path / "views")
+    packed = tmp_path / "examples.npz"
+    main(["--data", str(tmp_path / "views"), "--write-examples", str(packed)])
+    main(
+        ["--examples", str(packed), "--out", str(tmp_path / "run"), "--minutes", "0.05", "--batch", "4"]
+        + ["--val-every", "1"]
+    )
+    assert json.loads((tmp_path / "run" / "camera.json").read_text())["train_views"] == 3
+    x, y, pitch, kind = examples(tmp_path / "views", "val")
+    with np.load(packed) as data:
+        np.testing.assert_allclose(data["val_x"] / 255, x, atol=0.5 / 255 + 1e-6)
+        np.testing.assert_array_equal(data["val_y"], y)
+        np.testing.assert_array_equal(data["val_pitch"], pitch)
+        assert data["train_x"].dtype == np.uint8
