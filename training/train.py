@@ -36,6 +36,7 @@ from ssn_engine.hemisphere import texel_weights
 from ssn_engine.methods.onnx_ssn import MAX_CARD_BLUR, blur_frames
 
 from .batches import BatchSampler, ViewCache, make_batch, move_blind_cameras
+from .data.packed import PackedStore, is_packed
 from .elm import TRAIN_MIX, sample_lights, sample_mixture
 from .model import UNetConfig, build
 from .model.complexity import describe
@@ -184,6 +185,8 @@ def parse_args(argv: list[str] | None = None) -> argparse.Namespace:
     args = p.parse_args(argv)
     if args.through_sr and args.module != "aop":
         p.error("--through-sr trains an AOP (--module aop)")
+    if is_packed(args.data) and (args.module != "aop" or args.through_sr):
+        p.error(f"--data {args.data[0]} is a packed file (masks and AO maps, no bases): it trains a plain AOP only")
     if (args.card or args.lights != "table1") and args.module != "sr":
         p.error("--card and --lights apply to SR (--module sr)")
     if args.camera and args.module != "aop":
@@ -675,9 +678,12 @@ def open_run(args: argparse.Namespace) -> Path:
 
 
 def open_store(args: argparse.Namespace, given: Any = None) -> Any:
-    """``given`` (a test's stand-in), else the ViewStore of --data as the generator has written it so far."""
+    """``given`` (a test's stand-in), else the ViewStore of --data as the generator has written it so far, or a
+    packed file's views (``training.data.packed``)."""
     if given is not None:
         return given
+    if is_packed(args.data):
+        return PackedStore(args.data[0])
     from .data.store import ViewStore
 
     return ViewStore(args.data)
