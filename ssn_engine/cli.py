@@ -175,8 +175,9 @@ def load_cutout(args: argparse.Namespace) -> np.ndarray:
 
 
 def _make_shadow(cutout_rgba: np.ndarray, args: argparse.Namespace, stage: Stages):
-    """The canvas shadow of a cutout; returns (CanvasShadow, loaded method). The light map and AO edits are read
-    first, so a bad one costs no inference."""
+    """The canvas shadow of a cutout; returns (CanvasShadow, loaded method, the camera the model read from the
+    outline or None: ShadowSession.camera_read). The light map and AO edits are read first, so a bad one costs no
+    inference."""
     from .framing import EmptyAlphaError
     from .methods import load_method
     from .session import ShadowSession, no_shadow_reason
@@ -195,7 +196,7 @@ def _make_shadow(cutout_rgba: np.ndarray, args: argparse.Namespace, stage: Stage
     reason = no_shadow_reason(lights, shadow)
     if reason:
         raise NoShadow(reason)
-    return shadow, loaded
+    return shadow, loaded, session.camera_read
 
 
 def _write_outputs(
@@ -252,19 +253,24 @@ def cmd_render(args: argparse.Namespace) -> int:
         cutout = load_cutout(args)
         stage("reading the background")
         background = _load_background(args, (cutout.shape[1], cutout.shape[0]))
-        shadow, loaded = _make_shadow(cutout, args, stage)
+        shadow, loaded, camera_read = _make_shadow(cutout, args, stage)
         with atomic_writes() as write:
             written = _write_outputs(write, cutout, shadow, args, background, stage)
     finally:
         stage.close()
-    return _report(written, loaded)
+    return _report(written, loaded, camera_read)
 
 
-def _report(written: list, loaded) -> int:
-    """Say what was written and which method made it."""
+def _report(written: list, loaded, camera_read: dict | None) -> int:
+    """Say what was written, which method made it and, for a call without a camera, which one the model read."""
     for path in written:
         print(f"wrote {path}")
     print(f"method: {loaded.method.name} ({loaded.note})")
+    if camera_read is not None:
+        print(
+            f"camera read from the cutout's outline: --horizon {camera_read['horizon']:.0f} "
+            f"--fov {camera_read['fov']:.0f} (give the image's own to correct it)"
+        )
     return EXIT_OK
 
 
@@ -289,14 +295,14 @@ def cmd_demo(args: argparse.Namespace) -> int:
     args.composite, args.cutout = args.out, "the sample pawn"
     stage = Stages()
     try:
-        shadow, loaded = _make_shadow(cutout, args, stage)
+        shadow, loaded, camera_read = _make_shadow(cutout, args, stage)
         with atomic_writes() as write:
             written = _write_outputs(write, cutout, shadow, args, background, stage)
             # a fresh background: the composite was blended into the first one
             written += [write(path, image) for path, image in zip(samples, (cutout, studio_background()), strict=False)]
     finally:
         stage.close()
-    return _report(written, loaded)
+    return _report(written, loaded, camera_read)
 
 
 def cmd_presets(args: argparse.Namespace) -> int:

@@ -21,7 +21,7 @@ from dataclasses import dataclass
 import numpy as np
 from PIL import Image
 
-from .camera import DEFAULT_FOV, focal_from_fov, top_row
+from .camera import DEFAULT_FOV, focal_from_fov, fov_from_focal, top_row
 from .stripes import for_each_stripe
 
 OBJECT_EXTENT = 0.5
@@ -76,6 +76,11 @@ class Framing:
         if not 1.0 <= fov <= 170.0:
             raise ValueError(f"field of view: expected 1 to 170 degrees, got {fov:g}")
         return horizon * self.scale + self.offset_y, focal_from_fov(self.canvas_height, fov) * self.scale
+
+    def canvas_camera(self, horizon: float, focal: float) -> tuple[float, float]:
+        """The inverse of :meth:`camera_input`: the canvas horizon row and vertical field of view (degrees) of a
+        frame's camera input (horizon row h, focal length f)."""
+        return (horizon - self.offset_y) / self.scale, fov_from_focal(self.canvas_height, focal / self.scale)
 
 
 @dataclass(frozen=True)

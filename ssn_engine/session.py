@@ -47,9 +47,21 @@ class ShadowSession:
         elif fov is not None:
             raise ValueError("field of view: give the horizon row too (the camera input needs both)")
         self.predicted_ao = method.predict_ao(self.mask[None], self.cameras)[0]
+        resolve = getattr(method, "cameras_for", None)  # a model's own reading of a blind call's camera
+        self.used_cameras = resolve(self.mask[None], self.cameras) if resolve is not None else self.cameras
         self.edits: list[dict[str, Any]] = []
         self.ao = self.predicted_ao
         self._card: GeometricCard | None = None  # traces long shadows for methods without a card of their own
+
+    @property
+    def camera_read(self) -> dict[str, float] | None:
+        """The camera the model read from the outline for a session without one: {"horizon": canvas row, "fov":
+        degrees}, where an artist can start to set it; None when a camera was given or the method reads none
+        (it then assumes the conventions' default)."""
+        if self.cameras is not None or self.used_cameras is None:
+            return None
+        horizon, fov = self.framing.canvas_camera(*self.used_cameras[0])
+        return {"horizon": float(horizon), "fov": float(fov)}
 
     def set_ao_edits(self, edits: list[dict[str, Any]]) -> np.ndarray:
         """Replace the list of AO edits; returns the edited AO map."""
@@ -76,9 +88,9 @@ class ShadowSession:
             self._card = self._card or GeometricCard(self.method.resolution)
             card = self._card
         elm = render_light_map(light_map, NETWORK_SHAPE[0])
-        resolve = getattr(self.method, "cameras_for", None)  # a model's own reading of a blind call's camera
-        cameras = resolve(self.mask[None], self.cameras) if resolve else self.cameras
-        wide = card.extended_shadow(self.mask, elm, camera_at(cameras, 0), long_shadow.MARGIN, long_shadow.CELL)
+        wide = card.extended_shadow(
+            self.mask, elm, camera_at(self.used_cameras, 0), long_shadow.MARGIN, long_shadow.CELL
+        )
         window = (*framing.to_frame(0, 0), *framing.to_frame(framing.canvas_width, framing.canvas_height))
         values, origin = long_shadow.extend(frame, wide, window=window if clip else None)
         return shadow_to_canvas(values, framing, origin, clip)

@@ -139,7 +139,10 @@ class Worker:
         self.sessions[key] = session
         while len(self.sessions) > MAX_SESSIONS:
             self.sessions.popitem(last=False)
-        return {"cutout": key, "bbox": list(session.framing.bbox)}, {}
+        reply = {"cutout": key, "bbox": list(session.framing.bbox)}
+        if session.camera_read is not None:
+            reply["camera_read"] = session.camera_read
+        return reply, {}
 
     def get_ao(self, header: dict, buffers: dict) -> tuple[dict, dict]:
         s = self._session(header)

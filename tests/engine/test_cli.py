@@ -264,6 +264,19 @@ def test_horizon_and_fov_reach_the_method(tmp_path, cutout_png):
     assert tops[1] < tops[0] - 3
 
 
+def test_a_blind_render_says_which_camera_it_read(tmp_path, cutout_png, capsys):
+    """Without --horizon the shipped model reads the camera from the outline and prints it as the flags that set
+    it; given those flags it has nothing to read."""
+    import re
+
+    layer = tmp_path / "layer.png"
+    assert main(["render", str(cutout_png), "--layer", str(layer), "--method", "ssn"]) == 0
+    read = re.search(r"camera read from the cutout's outline: (--horizon -?\d+ --fov \d+)", capsys.readouterr().out)
+    assert read, "no camera reported"
+    assert main(["render", str(cutout_png), "--layer", str(layer), "--method", "ssn", *read.group(1).split()]) == 0
+    assert "camera read" not in capsys.readouterr().out
+
+
 def _light_file(tmp_path, u, v):
     path = tmp_path / f"light_{u}_{v}.json"
     path.write_text(

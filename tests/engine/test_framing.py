@@ -280,3 +280,12 @@ def test_camera_input_follows_the_framing():
     assert f == pytest.approx(framing.scale * 150.0 / np.tan(np.radians(25.0)))
     with pytest.raises(ValueError, match="field of view"):
         framing.camera_input(250.0, 0.0)
+
+
+def test_a_frame_camera_maps_back_to_the_canvas():
+    """``canvas_camera`` inverts ``camera_input``: the canvas horizon row and field of view come back."""
+    alpha = np.zeros((300, 400), np.uint8)
+    alpha[100:200, 150:220] = 255
+    _, framing = frame_alpha(alpha, 256)
+    for horizon, fov in ((250.0, 50.0), (-800.0, 30.0), (120.5, 75.0)):
+        assert framing.canvas_camera(*framing.camera_input(horizon, fov)) == pytest.approx((horizon, fov))

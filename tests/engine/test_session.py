@@ -149,3 +149,21 @@ def test_a_canvas_joins_only_the_part_of_a_long_shadow_it_sees():
         assert px + part.shape[1] >= min(window[2], 128) and py + part.shape[0] >= min(window[3], 128)
         np.testing.assert_allclose(part, whole[y0 : y0 + part.shape[0], x0 : x0 + part.shape[1]], atol=1e-6)
     assert long_shadow.extend(frame, wide, window=(200.0, 0.0, 300.0, 50.0))[0].size == 0  # beyond its reach
+
+
+def test_the_camera_read_from_the_outline_is_the_one_the_shadow_uses():
+    """Blind, the shipped model reads a camera from the outline; reported on the canvas and given back, it is the
+    same frame camera the blind session traced its card and long shadow with. The geometric card reads none."""
+    from engine_helpers import REPO
+
+    from ssn_engine.methods import OnnxSSN
+
+    model = OnnxSSN(REPO / "ssn_engine" / "models")
+    alpha = drawn_alpha()
+    blind = ShadowSession(alpha, model)
+    read = blind.camera_read
+    assert read is not None
+    given = ShadowSession(alpha, model, read["horizon"], read["fov"])
+    assert given.camera_read is None
+    np.testing.assert_allclose(given.used_cameras, blind.used_cameras, rtol=1e-6)
+    assert ShadowSession(alpha, GeometricCard(resolution=128)).camera_read is None

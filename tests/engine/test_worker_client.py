@@ -491,3 +491,17 @@ def test_bad_camera_is_a_bad_request(client, camera, fragment):
     with pytest.raises(EngineError) as info:
         client.request("set_cutout", {"alpha": buf(canvas_alpha())}, camera=camera)
     assert info.value.kind == "BadRequest" and fragment in str(info.value)
+
+
+def test_a_cutout_without_a_camera_says_which_one_the_model_read(client):
+    """Blind, the shipped model reads the camera from the outline and says so in canvas terms (where an artist
+    can start to set it); given a camera, there is nothing to report."""
+    alpha = canvas_alpha(np.uint8)
+    reply, _ = client.request("set_cutout", {"alpha": buf(alpha)})
+    read = reply["camera_read"]
+    assert set(read) == {"horizon", "fov"} and 10.0 < read["fov"] < 120.0
+    assert -10 * CANVAS_H < read["horizon"] < 10 * CANVAS_H
+    given, _ = client.request("set_cutout", {"alpha": buf(alpha)}, camera=read)
+    assert "camera_read" not in given
+    for key in (reply["cutout"], given["cutout"]):
+        client.request("release", cutout=key)
