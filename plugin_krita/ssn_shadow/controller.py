@@ -71,6 +71,7 @@ class ShadowController(QObject):
     rendered = pyqtSignal(dict)  # {"elapsed_ms", "timing_ms", "width", "height", "created", "method"}
     engineReady = pyqtSignal(dict)
     previewed = pyqtSignal(bytes, int, int)  # packed RGB, width, height: the live preview of a light drag
+    cameraRead = pyqtSignal(object)  # {"horizon", "fov"} the model read from the outline (no camera set), or None
 
     def __init__(self, engine: Any, host: Any, parent: QObject | None = None) -> None:
         super().__init__(parent)
@@ -269,6 +270,7 @@ class ShadowController(QObject):
 
         def on_cutout(reply: dict, buffers: dict) -> None:
             self.cutout, self._cutout_key = reply["cutout"], key
+            self.cameraRead.emit(reply.get("camera_read"))
             if self.ao_edits:
                 self.engine.request(
                     "edit_ao",

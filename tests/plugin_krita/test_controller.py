@@ -175,16 +175,22 @@ def test_worker_crash_mid_session_recovers(qapp):
 
 
 def test_the_camera_reaches_the_worker_and_changes_the_shadow(qapp):
-    """A horizon set in the docker: the cutout is analysed again with it, and the shadow changes."""
+    """A horizon set in the docker: the cutout is analysed again with it, and the shadow changes. Before it, the
+    worker says which camera the model read from the outline; after it, none."""
     host = FakeHost()
     c, engine, messages, _ = make(host)
+    reads = []
+    c.cameraRead.connect(reads.append)
     try:
         c.generate()
         assert wait_until(lambda: not c.busy and host.writes), messages
         first_cutout = c.cutout
+        assert wait_until(lambda: reads), messages
+        assert reads[-1] is not None and set(reads[-1]) == {"horizon", "fov"}  # blind: the model read one
         c.set_camera({"horizon": -400.0, "fov": 40.0})  # seen from high above
         assert wait_until(lambda: not c.busy and len(host.writes) == 2), messages
         assert c.cutout != first_cutout  # a new analysis with the camera
+        assert reads[-1] is None
         assert host.writes[1][0] != host.writes[0][0]  # the shadow's rectangle moved or changed size
         assert not [m for m in messages if m[0] == "error"]
     finally:

@@ -187,6 +187,22 @@ def test_horizon_from_guide_is_remembered_per_document(qapp):
     assert c.camera is None and c.camera_for(first) is None
 
 
+def test_the_camera_read_from_the_outline_is_shown_and_ticking_starts_from_it(qapp):
+    """Without a horizon of the image's own, the docker shows the camera the model read (disabled fields and a
+    line of text); ticking the box sends that camera, and the line goes away."""
+    c = ShadowController(NoEngine(), FakeHost())
+    panel = ShadowPanel(c)
+    assert panel.camera_read.isHidden()
+    c.cameraRead.emit({"horizon": 412.4, "fov": 47.2})
+    assert not panel.use_horizon.isChecked() and not panel.horizon.isEnabled() and c.camera is None
+    assert panel.horizon.value() == 412 and panel.fov.value() == 47
+    assert not panel.camera_read.isHidden() and "row 412" in panel.camera_read.text()
+    panel.use_horizon.setChecked(True)
+    assert c.camera == {"horizon": 412.0, "fov": 47.0} and panel.camera_read.isHidden()
+    c.cameraRead.emit(None)  # the cutout analysed with that camera: nothing read
+    assert panel.camera_read.isHidden() and panel.horizon.value() == 412
+
+
 def test_ao_preview_zooms_on_the_cutout_and_stretches_the_occlusion(qapp):
     """Issue #14, item 7: the preview shows the cutout and its contact shadow, not a pale whole frame."""
     from plugin_krita.ssn_shadow.ui.ao_preview import AOPreview, contrast_table

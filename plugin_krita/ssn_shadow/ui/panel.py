@@ -135,9 +135,12 @@ class ShadowPanel(QWidget):
         self.fov.setValue(DEFAULT_FOV)
         self.fov.setToolTip("The image's vertical field of view (a phone camera: about 50 degrees)")
         cform.addRow("Field of view", self.fov)
+        self.camera_read = QLabel()
+        self.camera_read.setWordWrap(True)
         cv.addWidget(self.use_horizon)
         cv.addLayout(hrow)
         cv.addLayout(cform)
+        cv.addWidget(self.camera_read)
         root.addWidget(camera_box)
         self._show_camera(None)
 
@@ -210,6 +213,7 @@ class ShadowPanel(QWidget):
         c.aoChanged.connect(self._guard(self.ao_preview.set_images))
         c.previewed.connect(self._guard(self.drag_preview.set_image))
         c.engineReady.connect(self._guard(self._engine_ready))
+        c.cameraRead.connect(self._guard(self._show_camera_read))
         self._stroke = False
 
     def _guard(self, fn):
@@ -327,6 +331,24 @@ class ShadowPanel(QWidget):
         for w in (self.horizon, self.fov):
             w.setEnabled(camera is not None)
         self._syncing = False
+        self._show_camera_read(None)
+
+    def _show_camera_read(self, read: dict | None) -> None:
+        """Without a camera of the image's own, show the one the model read from the outline in the (disabled)
+        fields, so that ticking the box starts from it."""
+        if read is None or self.use_horizon.isChecked():
+            self.camera_read.setText("")
+            self.camera_read.setVisible(False)
+            return
+        self._syncing = True
+        self.horizon.setValue(round(read["horizon"]))
+        self.fov.setValue(read["fov"])
+        self._syncing = False
+        self.camera_read.setText(
+            f"Read from the cutout's outline: horizon at row {round(read['horizon'])}, {read['fov']:.0f}° field of "
+            "view. If the shadow's perspective looks wrong, tick the box and correct them."
+        )
+        self.camera_read.setVisible(True)
 
     def _camera_edited(self) -> None:
         if self._syncing:
@@ -335,6 +357,8 @@ class ShadowPanel(QWidget):
         for w in (self.horizon, self.fov):
             w.setEnabled(on)
         camera = {"horizon": float(self.horizon.value()), "fov": float(self.fov.value())} if on else None
+        if on:
+            self._show_camera_read(None)
         if camera != self.controller.camera:
             self.controller.set_camera(camera)
 
