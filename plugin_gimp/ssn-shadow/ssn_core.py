@@ -79,9 +79,12 @@ def engine_call(engine: Engine, cmd: str, buffers: dict | None = None, **params:
         raise ShadowError(f"Lost contact with the shadow engine: {exc}") from None
 
 
-def upload_cutout(engine: Engine, cutout: Cutout, camera: dict[str, float] | None = None) -> str:
+def upload_cutout(
+    engine: Engine, cutout: Cutout, camera: dict[str, float] | None = None
+) -> tuple[str, dict[str, float] | None]:
     """Send the alpha (and the image's camera, if set) to the worker, which predicts AO now; return the cutout
-    id."""
+    id and, without a camera, the one the model read from the outline ({"horizon": row, "fov": degrees} in the
+    cutout's pixels; None where it reads none)."""
     if cutout.width <= 0 or cutout.height <= 0:
         raise ShadowError("The image is empty.")
     if is_blank(cutout.data):
@@ -91,7 +94,7 @@ def upload_cutout(engine: Engine, cutout: Cutout, camera: dict[str, float] | Non
         )
     alpha = protocol.Buffer(cutout.dtype, (cutout.height, cutout.width), cutout.data)
     reply, _ = engine_call(engine, "set_cutout", {"alpha": alpha}, **({"camera": camera} if camera else {}))
-    return str(reply["cutout"])
+    return str(reply["cutout"]), reply.get("camera_read")
 
 
 def render_shadow(engine: Engine, cutout_id: str, settings: ShadowSettings, dtype: str) -> ShadowLayerData:
@@ -127,7 +130,7 @@ def compute_shadow(host: Host, engine: Engine, settings: ShadowSettings) -> tupl
         raise ShadowError("The opacity is 0, so the shadow layer would show nothing. Raise the opacity.")
     plan = host.pixel_plan()
     cutout = host.read_cutout(plan)
-    cutout_id = upload_cutout(engine, cutout, settings.camera())
+    cutout_id, _ = upload_cutout(engine, cutout, settings.camera())
     try:
         shadow = render_shadow(engine, cutout_id, settings, plan.layer_dtype)
     finally:

@@ -25,7 +25,7 @@ from ssn_engine_link import light_editor, light_map, protocol  # noqa: E402
 from ssn_gimp_host import config_values  # noqa: E402
 from ssn_light_area import LightMapArea  # noqa: E402
 from ssn_preview import PREVIEW_SIZE, render_preview  # noqa: E402
-from ssn_settings import PROCEDURE_NAME, SettingsError, editor_light_map  # noqa: E402
+from ssn_settings import PROCEDURE_NAME, SettingsError, camera_read_settings, editor_light_map  # noqa: E402
 
 CUSTOM = "(custom)"
 SELFTEST_ENV = "SSN_SHADOW_DIALOG_SELFTEST"
@@ -36,13 +36,15 @@ PREVIEW_DELAY_MS = 150
 class ShadowPreview:
     """A thumbnail of the image with the shadow multiplied on, re-rendered while the light moves."""
 
-    def __init__(self, host, engine) -> None:
-        self.host, self.engine = host, engine
+    def __init__(self, host, engine, on_camera_read=None) -> None:
+        """``on_camera_read`` gets the ``camera_read_settings`` of each camera the model reads from the outline
+        (the first analysis, and each one after the image's horizon is turned off)."""
+        self.host, self.engine, self.on_camera_read = host, engine, on_camera_read
         self.widget = Gtk.Image()
         self.status = Gtk.Label(xalign=0.0)
         self.status.set_line_wrap(True)
         self.cutout_id: str | None = None
-        self._values = None
+        self.camera_read: dict | None = None  # the camera_read_settings of the model's reading, or None
         self._timer = False
         width, height = host.image.get_width(), host.image.get_height()
         tw, th, _ = protocol.preview_size(width, height, PREVIEW_SIZE)
@@ -52,7 +54,7 @@ class ShadowPreview:
             # the thumbnail-sized cutout casts the shadow and hides it where it covers the image
             self.small = host.read_cutout(host.pixel_plan(), size=(self.thumbnail.width, self.thumbnail.height))
             self.camera: dict | None = None  # the camera the worker's cutout was analysed with
-            self.cutout_id = upload_cutout(engine, self.small)
+            self._analysed(*upload_cutout(engine, self.small))
         except (ShadowError, engine_client.EngineError) as exc:
             self.status.set_text(str(exc))
 
@@ -82,7 +84,8 @@ class ShadowPreview:
             camera = settings.camera(self.scale)
             if camera != self.camera:  # a new horizon: the worker analyses the cutout again
                 release(self.engine, self.cutout_id)
-                self.cutout_id, self.camera = upload_cutout(self.engine, self.small, camera), camera
+                self._analysed(*upload_cutout(self.engine, self.small, camera))
+                self.camera = camera
             horizon = camera["horizon"] if camera is not None else None
             rgb, no_shadow = render_preview(self.engine, self.cutout_id, settings, self.thumbnail, self.small, horizon)
         except (ShadowError, SettingsError) as exc:
@@ -92,7 +95,22 @@ class ShadowPreview:
         self.widget.set_from_pixbuf(
             GdkPixbuf.Pixbuf.new_from_bytes(GLib.Bytes.new(rgb), GdkPixbuf.Colorspace.RGB, False, 8, w, h, 3 * w)
         )
-        self.status.set_text("No visible shadow with these lights." if no_shadow else "")
+        self.status.set_text("No visible shadow with these lights." if no_shadow else self._camera_note())
+
+    def _analysed(self, cutout_id: str, camera_read: dict | None) -> None:
+        self.cutout_id = cutout_id
+        self.camera_read = camera_read_settings(camera_read, self.scale) if camera_read is not None else None
+        if self.camera_read is not None and self.on_camera_read is not None:
+            self.on_camera_read(self.camera_read)
+
+    def _camera_note(self) -> str:
+        read = self.camera_read
+        if read is None:
+            return ""
+        return (
+            f"Camera read from the cutout's outline: horizon at row {read['horizon']:.0f}, {read['fov']:.0f}° field "
+            "of view. If the shadow's perspective looks wrong, set the image's horizon."
+        )
 
     def close(self) -> None:
         if self.cutout_id is not None:
@@ -116,7 +134,14 @@ def run_dialog(procedure: Gimp.Procedure, config: Gimp.ProcedureConfig, host, en
         lights = editor_light_map(config.get_property("light-map"))
     except SettingsError:
         lights = light_map.preset(light_map.DEFAULT_PRESET)
-    preview = ShadowPreview(host, engine)
+
+    def on_camera_read(read: dict) -> None:
+        # The horizon option, turned on, starts from the model's reading of the camera.
+        if not config.get_property("use-horizon"):
+            for name, value in read.items():
+                config.set_property(name, value)
+
+    preview = ShadowPreview(host, engine, on_camera_read)
     area: LightMapArea | None = None
 
     def on_change(live: bool, new_stroke: bool) -> None:
@@ -278,6 +303,12 @@ def _selftest(dialog, area: LightMapArea, preview: ShadowPreview, values, config
     size = f"{pixbuf.get_width()}x{pixbuf.get_height()}" if pixbuf is not None else "none"
     print(
         f"ssn-shadow dialog selftest: lights={len(editor.lights)} preview={size} status={preview.status.get_text()!r}",
+        file=sys.stderr,
+        flush=True,
+    )
+    print(
+        f"ssn-shadow dialog selftest: horizon setting {config.get_property('horizon'):.0f}, "
+        f"field of view {config.get_property('fov'):.0f}, on: {config.get_property('use-horizon')}",
         file=sys.stderr,
         flush=True,
     )

@@ -169,3 +169,14 @@ class ShadowSettings:
     def ao_edits(self) -> list[dict[str, Any]]:
         """The AO edit list for ``edit_ao``; empty when the predicted AO is kept."""
         return [] if self.ao_strength == 1.0 else [{"op": "strength", "value": self.ao_strength}]
+
+
+def camera_read_settings(read: dict[str, float], scale: float = 1.0) -> dict[str, float]:
+    """The ``horizon`` and ``fov`` settings of a camera the model read from a cutout ``scale`` times the image's
+    size (the preview's thumbnail), within the settings' bounds: where the horizon option starts when turned on."""
+
+    def within(value: float, name: str) -> float:
+        lo, hi = ARG_BY_NAME[name].bounds
+        return float(min(max(round(value), lo), hi))
+
+    return {"horizon": within(read["horizon"] / scale, "horizon"), "fov": within(read["fov"], "fov")}

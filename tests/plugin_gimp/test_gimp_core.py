@@ -210,7 +210,8 @@ def test_dialog_preview_from_the_real_worker(real_engine, precision):
     host = FakeHost(precision)
     small = host.read_cutout(host.plan)
     thumbnail = Thumbnail(W, H, 4, bytes([230, 230, 230, 255]) * (W * H))
-    key = upload_cutout(real_engine, small)
+    key, read = upload_cutout(real_engine, small)
+    assert read is not None and set(read) == {"horizon", "fov"}  # no horizon set: the model read one
     settings = settings_from_arguments({**ARGS, "light-map": "high-sun", "use-horizon": True, "horizon": 40.0})
     camera = settings.camera(0.5)  # the thumbnail at half the image's size
     assert camera is not None
@@ -224,3 +225,12 @@ def test_dialog_preview_from_the_real_worker(real_engine, precision):
     dark = settings_from_arguments({**ARGS, "light-map": '{"format": "ssn-shadow-elm", "version": 1, "lights": []}'})
     assert render_preview(real_engine, key, dark, thumbnail, small)[1]
     release(real_engine, key)
+
+
+def test_a_camera_read_from_a_thumbnail_becomes_the_image_settings():
+    """The model's reading of the preview's thumbnail, as the dialog's horizon and field of view: scaled to the
+    image's rows, rounded, and kept within the settings' bounds."""
+    from ssn_settings import camera_read_settings
+
+    assert camera_read_settings({"horizon": 40.4, "fov": 47.6}, 0.5) == {"horizon": 81.0, "fov": 48.0}
+    assert camera_read_settings({"horizon": -9e6, "fov": 150.0}) == {"horizon": -100000.0, "fov": 120.0}

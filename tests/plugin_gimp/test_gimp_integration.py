@@ -431,7 +431,11 @@ def test_interactive_dialog(workdir, worker, precision):
     assert result["layers"] == ["Pawn", "Shadow: Pawn", "Background"]
     line = next((ln for ln in log.splitlines() if ln.startswith("ssn-shadow dialog selftest: lights=")), None)
     assert line is not None, log[-6000:]
-    assert "lights=2" in line and "preview=200x150" in line and "status=''" in line
+    assert "lights=2" in line and "preview=200x150" in line
+    # no horizon set: the preview says which camera the model read, and the horizon option starts from it
+    read = re.search(r"Camera read from the cutout's outline: horizon at row (-?\d+), (\d+)° field of view", line)
+    assert read is not None, line
+    assert f"horizon setting {read[1]}, field of view {read[2]}, on: False" in log, log[-3000:]
     # the light added by a press at (0.85, 0.7) of the map and dragged by (-0.05, +0.02) through the widget
     assert "ssn-shadow dialog selftest: light at u=0.800 v=0.720" in log, log[-3000:]
     # Reset to Factory Defaults / Load Saved Settings reach the light map (issue #14, item 12)
