@@ -1,8 +1,11 @@
 """docs/img/krita-docker.png: the Krita docker's panel at the width it gets docked in a 1366 x 768 Krita window
 (340 px, Krita's 8 pt UI font), all of it (docked, the lower part scrolls), with the sample pawn's AO and the
-live preview of a light drag from the real engine, and the horizon set from a guide (offscreen Qt grab).
+live preview of a light drag from the real engine, and the horizon set from a guide (offscreen Qt grab); then
+docs/img/krita-camera-read.png: its Camera box with the horizon unticked, showing the camera the shipped model
+read from the pawn's outline.
 
 usage: QT_QPA_PLATFORM=offscreen python tools/krita_docker_figure.py [--out docs/img/krita-docker.png]
+    [--camera-out docs/img/krita-camera-read.png]
 """
 
 from __future__ import annotations
@@ -45,6 +48,7 @@ class Host:
 def main(argv: list[str] | None = None) -> int:
     p = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     p.add_argument("--out", default="docs/img/krita-docker.png")
+    p.add_argument("--camera-out", default="docs/img/krita-camera-read.png")
     args = p.parse_args(argv)
     app = QApplication.instance() or QApplication(sys.argv)
     font = app.font()
@@ -74,6 +78,12 @@ def main(argv: list[str] | None = None) -> int:
         app.processEvents()
     panel.grab().save(args.out)
     print(f"wrote {args.out}", file=sys.stderr)
+    panel.use_horizon.setChecked(False)  # blind: the worker's set_cutout reply carries the camera it read
+    controller.cameraRead.emit(session.camera_read)
+    for _ in range(10):
+        app.processEvents()
+    panel.use_horizon.parentWidget().grab().save(args.camera_out)
+    print(f"wrote {args.camera_out} ({session.camera_read})", file=sys.stderr)
     return 0
 
 
