@@ -45,6 +45,7 @@ class ShadowPreview:
         self.status.set_line_wrap(True)
         self.cutout_id: str | None = None
         self.camera_read: dict | None = None  # the camera_read_settings of the model's reading, or None
+        self._values = None
         self._timer = False
         width, height = host.image.get_width(), host.image.get_height()
         tw, th, _ = protocol.preview_size(width, height, PREVIEW_SIZE)
