@@ -559,7 +559,7 @@ class TrainData:
     sampler: BatchSampler
     elm_rows: int
     val: dict[str, torch.Tensor] | None
-    refreshable: bool  # the store is re-opened every --refresh-minutes (not a store handed to main)
+    refreshable: bool  # the store is re-opened every --refresh-minutes (not a store handed to main, nor a packed file)
 
 
 class BatchStream:
@@ -986,7 +986,7 @@ def main(argv: list[str] | None = None, store=None) -> int:
     restore(net, args, run, proc)
     write_config(run, args, proc)
     distribute(net, proc)
-    data = build_data(args, proc, views, run, refreshable=store is None)
+    data = build_data(args, proc, views, run, refreshable=store is None and not is_packed(args.data))
     train(args, proc, run, net, data, objective)
     end_process(proc)
     return 0
