@@ -189,6 +189,8 @@ def composite_image(
 
 HORIZON_DASH = 6  # pixels on, pixels off
 HORIZON_RGB = (255, 140, 0)
+READ_HORIZON_DOT = 2  # the horizon the model read: a dotted line, one pixel in this many
+READ_HORIZON_RGB = (40, 170, 255)
 
 
 def preview_image(
@@ -198,10 +200,12 @@ def preview_image(
     color: Sequence[float] = (0.0, 0.0, 0.0),
     opacity: float = 1.0,
     horizon: float | None = None,
+    read: bool = False,
 ) -> np.ndarray:
     """A dialog's preview: the shadow multiplied onto a small uint8 RGB(A) ``background`` (h, w, 3|4) as a
     Multiply layer would, hidden where the cutout above it covers the image (``cover``: its alpha (h, w), any
-    dtype), with the ``horizon`` row as a dashed orange line. Returns packed RGB (h, w, 3) uint8."""
+    dtype), with the ``horizon`` row as a dashed orange line, or, ``read``: a dotted blue one (the horizon the
+    model read from the cutout's outline, not one the artist set). Returns packed RGB (h, w, 3) uint8."""
     h, w = background.shape[:2]
     rgb = background[..., :3].astype(np.float32)
     if not shadow.is_empty:
@@ -215,6 +219,7 @@ def preview_image(
             rgb[y0:y1, x0:x1] *= 1.0 - s[..., None] * (1.0 - _colour(color))
     out = np.rint(np.clip(rgb, 0, 255)).astype(np.uint8)
     if horizon is not None and 0 <= np.floor(horizon) < h:
-        dashes = (np.arange(w) // HORIZON_DASH) % 2 == 0
-        out[int(np.floor(horizon)), dashes] = HORIZON_RGB
+        x = np.arange(w)
+        drawn = x % READ_HORIZON_DOT == 0 if read else (x // HORIZON_DASH) % 2 == 0
+        out[int(np.floor(horizon)), drawn] = READ_HORIZON_RGB if read else HORIZON_RGB
     return out

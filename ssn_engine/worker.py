@@ -206,13 +206,19 @@ class Worker:
         horizon = header.get("horizon")
         if horizon is not None and (not isinstance(horizon, (int, float)) or not np.isfinite(horizon)):
             raise RequestError("BadRequest", f"horizon: expected a row number, got {horizon!r}")
+        read_horizon = header.get("read_horizon", False)
+        if not isinstance(read_horizon, bool):
+            raise RequestError("BadRequest", f"read_horizon: expected true or false, got {read_horizon!r}")
+        read = horizon is None and read_horizon and s.camera_read is not None and s.used_cameras is not None
+        if read:  # the camera the model read, in the preview's rows (its framing maps frame rows to them)
+            horizon = framing.canvas_camera(*s.used_cameras[0])[0]
         shadow = s.render(light_map, framing)
         color, opacity = header.get("color", (0.0, 0.0, 0.0)), float(header.get("opacity", 1.0))
         reply = {}
         reason = no_shadow_reason(light_map, shadow)
         if reason:
             reply["no_shadow"] = reason
-        return reply, {"image": to_buffer(preview_image(background, shadow, cover, color, opacity, horizon))}
+        return reply, {"image": to_buffer(preview_image(background, shadow, cover, color, opacity, horizon, read))}
 
     @staticmethod
     def _preview_framing(s: ShadowSession, width: int, height: int) -> Framing:

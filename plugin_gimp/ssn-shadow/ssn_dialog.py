@@ -109,8 +109,8 @@ class ShadowPreview:
         if read is None:
             return ""
         return (
-            f"Camera read from the cutout's outline: horizon at row {read['horizon']:.0f}, {read['fov']:.0f}° field "
-            "of view. If the shadow's perspective looks wrong, set the image's horizon."
+            f"Camera read from the cutout's outline: horizon at row {read['horizon']:.0f} (dotted blue), "
+            f"{read['fov']:.0f}° field of view. If the shadow's perspective looks wrong, set the image's horizon."
         )
 
     def close(self) -> None:

@@ -37,7 +37,8 @@ def render_preview(
     horizon: float | None = None,
 ) -> tuple[bytes, str]:
     """The thumbnail with the shadow multiplied on (packed RGB, the thumbnail's size) and why no shadow shows
-    ("" when one does). ``cover`` is the thumbnail-sized cutout; ``horizon``, a thumbnail row, is drawn."""
+    ("" when one does). ``cover`` is the thumbnail-sized cutout; ``horizon``, a thumbnail row, is drawn, and
+    without it the horizon the model read from the cutout's outline (dotted)."""
     edits = settings.ao_edits()
     if edits:
         engine_call(engine, "edit_ao", cutout=cutout_id, edits=edits)
@@ -50,6 +51,8 @@ def render_preview(
     params = {key: params[key] for key in ("light_map", "preset", "color", "opacity") if key in params}
     if horizon is not None:
         params["horizon"] = horizon
+    else:
+        params["read_horizon"] = True
     reply, out = engine_call(engine, "preview", buffers, cutout=cutout_id, **params)
     image = out.get("image")
     if image is None or image.dtype != "uint8" or tuple(image.shape) != (h, w, 3):

@@ -204,6 +204,8 @@ class ShadowController(QObject):
         }
         if self.camera:
             params["horizon"] = self.camera["horizon"] * width / source.width
+        else:
+            params["read_horizon"] = True  # the horizon the model read, dotted
         background = protocol.Buffer("uint8", (height, width, 4), rgba)
         self.engine.request("preview", params, {"background": background}, self._on_preview, self._on_preview_error)
 

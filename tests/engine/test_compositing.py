@@ -7,6 +7,7 @@ import pytest
 
 from ssn_engine.compositing import (
     HORIZON_RGB,
+    READ_HORIZON_RGB,
     composite_shadow,
     from_unit_float,
     over,
@@ -196,3 +197,7 @@ def test_preview_image_multiplies_hides_under_the_cutout_and_draws_the_horizon()
     assert lined[:4].max() == 0 and lined[5:].max() == 0  # only that row
     for outside in (-3.0, 10.0):
         assert preview_image(rgb, CanvasShadow(np.zeros((0, 0), np.float32), 0, 0), horizon=outside).max() == 0
+    # the horizon the model read, not one the artist set: dotted, in another colour
+    dotted = preview_image(rgb, CanvasShadow(np.zeros((0, 0), np.float32), 0, 0), horizon=4.6, read=True)
+    assert tuple(dotted[4, 0]) == READ_HORIZON_RGB and dotted[4, 1].tolist() == [0, 0, 0]
+    assert tuple(dotted[4, 6]) == READ_HORIZON_RGB and HORIZON_RGB not in [tuple(p) for p in dotted[4]]

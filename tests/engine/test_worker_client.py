@@ -479,6 +479,39 @@ def test_set_cutout_with_a_camera_changes_the_geometric_shadow():
     assert layers[0].shape != layers[1].shape or np.abs(layers[0] - layers[1]).mean() > 1.0
 
 
+def test_a_blind_preview_draws_the_horizon_the_model_read(client):
+    """Without a horizon of the artist's, a preview can show the one the model read from the outline (dotted
+    blue, at the thumbnail's scale), so a wrong perspective has a visible cause; an artist's horizon is drawn
+    instead, and a cutout given a camera has no reading to draw."""
+    alpha = np.pad(drawn_alpha(160, 120), ((100, 0), (0, 0)))  # sky above the post: the reading lies inside
+    reply, _ = client.request("set_cutout", {"alpha": buf(alpha)})
+    key, read = reply["cutout"], reply["camera_read"]
+    assert 10 < read["horizon"] < 200
+    for width, height in ((160, 220), (80, 110)):
+        background = {"background": buf(np.zeros((height, width, 3), np.uint8))}
+        image = arr(client.request("preview", background, cutout=key, preset="softbox", read_horizon=True)[1]["image"])
+        blue = np.all(image == (40, 170, 255), axis=-1)
+        row = int(np.floor(read["horizon"] * width / 160))
+        assert blue[row, ::2].all() and not blue[row, 1::2].any() and blue.sum() == blue[row].sum()
+        plain = arr(client.request("preview", background, cutout=key, preset="softbox")[1]["image"])
+        assert not np.all(plain == (40, 170, 255), axis=-1).any()  # only when asked for
+        set_row = arr(
+            client.request("preview", background, cutout=key, preset="softbox", read_horizon=True, horizon=5.0)[1][
+                "image"
+            ]
+        )
+        assert tuple(set_row[5, 0]) == (255, 140, 0) and not np.all(set_row == (40, 170, 255), axis=-1).any()
+    with pytest.raises(EngineError, match="read_horizon: expected true or false") as info:
+        client.request("preview", background, cutout=key, preset="softbox", read_horizon="yes")
+    assert info.value.kind == "BadRequest"
+    given = client.request("set_cutout", {"alpha": buf(alpha)}, camera={"horizon": 30.0, "fov": 45.0})[0]["cutout"]
+    background = {"background": buf(np.zeros((220, 160, 3), np.uint8))}
+    image = arr(client.request("preview", background, cutout=given, preset="softbox", read_horizon=True)[1]["image"])
+    assert not np.all(image == (40, 170, 255), axis=-1).any()
+    for k in (key, given):
+        client.request("release", cutout=k)
+
+
 @pytest.mark.parametrize(
     "camera, fragment",
     [

@@ -201,7 +201,8 @@ def test_real_worker_casts_the_shadow_away_from_the_light(real_engine, precision
 @pytest.mark.parametrize("precision", ["u8-non-linear", "u16-linear", "float-perceptual"])
 def test_dialog_preview_from_the_real_worker(real_engine, precision):
     """The dialog's preview: the worker composites the thumbnail (any cutout depth, no 8-bit cut in Python),
-    the cutout hides its own shadow, and a horizon setting draws the line at the thumbnail's scale."""
+    the cutout hides its own shadow, and a horizon setting draws the line at the thumbnail's scale (without
+    one: the horizon the model read, dotted)."""
     from ssn_engine_link import protocol
     from ssn_preview import PREVIEW_SIZE, Thumbnail, render_preview
 
@@ -222,6 +223,11 @@ def test_dialog_preview_from_the_real_worker(real_engine, precision):
     opaque[20] = False  # the horizon row
     assert (image[opaque] == 230).all()  # hidden under the opaque cutout
     assert tuple(image[20, 0]) == (255, 140, 0)  # horizon 40 at scale 0.5
+    # no horizon set: the one the model read, dotted blue
+    blind = settings_from_arguments({**ARGS, "light-map": "high-sun"})
+    blind_rgb = np.frombuffer(render_preview(real_engine, key, blind, thumbnail, small)[0], np.uint8).reshape(H, W, 3)
+    dotted = np.all(blind_rgb == (40, 170, 255), axis=-1)
+    assert dotted[int(read["horizon"]), ::2].all() and dotted.sum() == (W + 1) // 2  # one dotted row
     dark = settings_from_arguments({**ARGS, "light-map": '{"format": "ssn-shadow-elm", "version": 1, "lights": []}'})
     assert render_preview(real_engine, key, dark, thumbnail, small)[1]
     release(real_engine, key)

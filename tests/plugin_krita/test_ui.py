@@ -15,10 +15,11 @@ class NoEngine:
     """An engine that never answers (enough for UI state)."""
 
     def __init__(self):
-        self.sent = []
+        self.sent, self.params = [], []
 
     def request(self, cmd, params=None, buffers=None, on_reply=None, on_error=None, timeout_s=None):
         self.sent.append(cmd)
+        self.params.append(params)
         return len(self.sent)
 
 
@@ -136,6 +137,7 @@ def test_a_drag_on_the_map_previews_and_the_release_renders_the_layer(qapp):
         target = QPointF(pos(w, light.u + 0.05 * k, light.v))
         QApplication.sendEvent(w, QMouseEvent(QEvent.MouseMove, target, Qt.NoButton, Qt.LeftButton, Qt.NoModifier))
     assert engine.sent == ["preview"]  # one in flight (this engine never answers), no layer render
+    assert engine.params[0]["read_horizon"] is True and "horizon" not in engine.params[0]  # no camera set
     QTest.mouseRelease(w, Qt.LeftButton, Qt.NoModifier, pos(w, light.u + 0.15, light.v))
     assert engine.sent[1:] == ["set_cutout"]  # the layer's render (the cutout first: its key is new here)
     assert c.light_map == w.light_map
