@@ -209,9 +209,10 @@ class Worker:
         read_horizon = header.get("read_horizon", False)
         if not isinstance(read_horizon, bool):
             raise RequestError("BadRequest", f"read_horizon: expected true or false, got {read_horizon!r}")
-        read = horizon is None and read_horizon and s.camera_read is not None and s.used_cameras is not None
-        if read:  # the camera the model read, in the preview's rows (its framing maps frame rows to them)
-            horizon = framing.canvas_camera(*s.used_cameras[0])[0]
+        read = False
+        if horizon is None and read_horizon and s.cameras is None and s.used_cameras is not None:
+            # the camera the model read (ShadowSession.camera_read), in the preview's rows
+            horizon, read = framing.canvas_camera(*s.used_cameras[0])[0], True
         shadow = s.render(light_map, framing)
         color, opacity = header.get("color", (0.0, 0.0, 0.0)), float(header.get("opacity", 1.0))
         reply = {}
