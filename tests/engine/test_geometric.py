@@ -116,6 +116,21 @@ def test_the_card_shadow_is_the_light_weighted_mean_of_its_hard_shadows(pawn_fra
     np.testing.assert_allclose(card.shadow(weights), np.clip(expected, 0, 1), atol=2e-4)
 
 
+def test_a_card_traced_as_lights_come_sums_the_shadows_of_one_traced_at_once(pawn_frame):
+    """A card traces a texel's hard shadow when a light first needs it and sums each texel over the ground its
+    shadow covers; a light moved over a half-traced card gives, to the bit, what the fully traced card gives."""
+    lazy = GeometricCard(resolution=256).card(pawn_frame)
+    full = GeometricCard(resolution=256).card(pawn_frame)
+    full.trace()
+    for lights in ([(0.3, 0.6, 0.002)], [(0.2, 0.5, 0.02), (0.8, 0.3, 0.05)], [(0.35, 0.55, 0.03)], [(0.5, 0.9, 0.1)]):
+        elm = render_light_map(LightMap([GaussianLight(u, v, softness, 1.0) for u, v, softness in lights]))
+        weights = elm.ravel() * texel_weights(16).ravel()
+        shadow = lazy.shadow(weights)
+        assert shadow.max() > 0.05 and np.array_equal(shadow, full.shadow(weights))
+        if lights[0][2] < 0.01:  # a sun: only the few texels around it are traced so far
+            assert 0 < lazy.traced.sum() < 0.1 * lazy.traced.size
+
+
 def test_all_zero_elm_gives_no_shadow(geometric, frame):
     s = _render(geometric, frame, np.zeros((16, 32), np.float32))
     assert s.shape == (256, 256) and not s.any()
