@@ -58,9 +58,13 @@ class ShadowSession:
         """The camera the model read from the outline for a session without one: {"horizon": canvas row, "fov":
         degrees}, where an artist can start to set it; None when a camera was given or the method reads none
         (it then assumes the conventions' default)."""
+        return self.camera_read_in(self.framing)
+
+    def camera_read_in(self, framing: Framing) -> dict[str, float] | None:
+        """:attr:`camera_read` on the canvas of ``framing`` (this session's, or a preview's scaled copy of it)."""
         if self.cameras is not None or self.used_cameras is None:
             return None
-        horizon, fov = self.framing.canvas_camera(*self.used_cameras[0])
+        horizon, fov = framing.canvas_camera(*self.used_cameras[0])
         return {"horizon": float(horizon), "fov": float(fov)}
 
     def set_ao_edits(self, edits: list[dict[str, Any]]) -> np.ndarray:

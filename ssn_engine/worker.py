@@ -209,17 +209,18 @@ class Worker:
         read_horizon = header.get("read_horizon", False)
         if not isinstance(read_horizon, bool):
             raise RequestError("BadRequest", f"read_horizon: expected true or false, got {read_horizon!r}")
-        read = False
-        if horizon is None and read_horizon and s.cameras is None and s.used_cameras is not None:
-            # the camera the model read (ShadowSession.camera_read), in the preview's rows
-            horizon, read = framing.canvas_camera(*s.used_cameras[0])[0], True
+        read = s.camera_read_in(framing) if horizon is None and read_horizon else None
+        if read is not None:
+            horizon = read["horizon"]
         shadow = s.render(light_map, framing)
         color, opacity = header.get("color", (0.0, 0.0, 0.0)), float(header.get("opacity", 1.0))
         reply = {}
         reason = no_shadow_reason(light_map, shadow)
         if reason:
             reply["no_shadow"] = reason
-        return reply, {"image": to_buffer(preview_image(background, shadow, cover, color, opacity, horizon, read))}
+        return reply, {
+            "image": to_buffer(preview_image(background, shadow, cover, color, opacity, horizon, read is not None))
+        }
 
     @staticmethod
     def _preview_framing(s: ShadowSession, width: int, height: int) -> Framing:
