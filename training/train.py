@@ -186,7 +186,10 @@ def parse_args(argv: list[str] | None = None) -> argparse.Namespace:
     if args.through_sr and args.module != "aop":
         p.error("--through-sr trains an AOP (--module aop)")
     if is_packed(args.data) and (args.module != "aop" or args.through_sr):
-        p.error(f"--data {args.data[0]} is a packed file (masks and AO maps, no bases): it trains a plain AOP only")
+        p.error(
+            f"--data {args.data[0]} is a packed file (masks and AO maps, no shadow bases): "
+            "it trains an AOP, without --through-sr"
+        )
     if (args.card or args.lights != "table1") and args.module != "sr":
         p.error("--card and --lights apply to SR (--module sr)")
     if args.camera and args.module != "aop":

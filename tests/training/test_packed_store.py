@@ -46,6 +46,9 @@ def test_an_aop_trains_from_the_file_and_an_sr_is_refused(packed, tmp_path):
     common = ["--data", str(path), "--steps", "2", *tiny_run_args(16, 1)]
     assert main(["--module", "aop", "--run", str(tmp_path / "aop"), *common]) == 0
     assert (tmp_path / "aop" / "last.pt").is_file()
+    # the camera-taking AOP too (training/gpu_aop.sh runs it from such a file): the infos carry the rescaled camera
+    assert main(["--module", "aop", "--camera", "--run", str(tmp_path / "aop_camera"), *common]) == 0
+    assert (tmp_path / "aop_camera" / "last.pt").is_file()
     with pytest.raises(SystemExit):
         main(["--module", "sr", "--run", str(tmp_path / "sr"), *common])
     with pytest.raises(ValueError, match="AOP"):
