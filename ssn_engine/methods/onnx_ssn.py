@@ -127,7 +127,10 @@ def _session(path: Path, role: str) -> ort.InferenceSession:
         raise ModelError(f"model file missing: {path}")
     options = ort.SessionOptions()
     options.graph_optimization_level = ort.GraphOptimizationLevel.ORT_ENABLE_ALL
-    options.add_session_config_entry("session.intra_op.allow_spinning", "0")
+    # Threads spin while a run lasts (a light change's graph ~1 ms faster) and stop as soon as it returns, so that
+    # they do not hold a core the canvas work after it needs (docs/engine.md, "Speed").
+    options.add_session_config_entry("session.intra_op.allow_spinning", "1")
+    options.add_session_config_entry("session.force_spinning_stop", "1")
     options.enable_cpu_mem_arena = False  # the arena kept ~80 MB after the first AOP run; no measurable speed cost
     try:
         session = ort.InferenceSession(str(path), options, providers=["CPUExecutionProvider"])

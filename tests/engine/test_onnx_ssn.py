@@ -4,6 +4,7 @@ from __future__ import annotations
 
 import json
 import os
+import time
 from pathlib import Path
 
 import numpy as np
@@ -344,3 +345,19 @@ def test_blur_frames_softens_the_cards_steps_and_keeps_its_shadow():
     np.testing.assert_allclose(soft.sum(axis=(1, 2)), card.sum(axis=(1, 2)), rtol=1e-4)
     assert np.abs(np.diff(soft[0, 29, 10:50])).max() < 0.5 * np.abs(np.diff(card[0, 29, 10:50])).max()
     assert soft[1, 12, 50] == pytest.approx(0.5, abs=1e-3) and soft[1, 40, 10] == 0.0  # inside, far from it
+
+
+def test_the_model_holds_no_core_once_a_light_change_returns(mask):
+    """onnxruntime's threads spin while a graph runs and stop when it returns: a worker waiting for the next light
+    change uses no CPU that the host (or the canvas work after the graph) needs."""
+    model = OnnxSSN(Path(api.__file__).parent / "models")
+    masks = mask[None]
+    ao = model.predict_ao(masks)
+    elm = render_light_map(preset("two-lights"))[None]
+    for _ in range(5):
+        model.render(masks, ao, elm)
+    before = os.times()
+    time.sleep(0.3)
+    after = os.times()
+    busy = (after.user - before.user) + (after.system - before.system)
+    assert busy < 0.015, f"{busy:.3f} s of CPU in 0.3 s of idling after a render"
