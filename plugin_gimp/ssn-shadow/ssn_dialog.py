@@ -25,7 +25,13 @@ from ssn_engine_link import light_editor, light_map, protocol  # noqa: E402
 from ssn_gimp_host import config_values  # noqa: E402
 from ssn_light_area import LightMapArea  # noqa: E402
 from ssn_preview import PREVIEW_SIZE, render_preview  # noqa: E402
-from ssn_settings import PROCEDURE_NAME, SettingsError, camera_read_settings, editor_light_map  # noqa: E402
+from ssn_settings import (  # noqa: E402
+    PROCEDURE_NAME,
+    SettingsError,
+    camera_read_note,
+    camera_read_settings,
+    editor_light_map,
+)
 
 CUSTOM = "(custom)"
 SELFTEST_ENV = "SSN_SHADOW_DIALOG_SELFTEST"
@@ -48,6 +54,7 @@ class ShadowPreview:
         self._values = None
         self._timer = False
         width, height = host.image.get_width(), host.image.get_height()
+        self.image_height = height
         tw, th, _ = protocol.preview_size(width, height, PREVIEW_SIZE)
         try:
             self.thumbnail = host.thumbnail(tw, th)
@@ -105,13 +112,7 @@ class ShadowPreview:
             self.on_camera_read(self.camera_read)
 
     def _camera_note(self) -> str:
-        read = self.camera_read
-        if read is None:
-            return ""
-        return (
-            f"Camera read from the cutout's outline: horizon at row {read['horizon']:.0f} (dotted blue), "
-            f"{read['fov']:.0f}° field of view. If the shadow's perspective looks wrong, set the image's horizon."
-        )
+        return "" if self.camera_read is None else camera_read_note(self.camera_read, self.image_height)
 
     def close(self) -> None:
         if self.cutout_id is not None:

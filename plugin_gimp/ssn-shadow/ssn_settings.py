@@ -180,3 +180,14 @@ def camera_read_settings(read: dict[str, float], scale: float = 1.0) -> dict[str
         return float(min(max(round(value), lo), hi))
 
     return {"horizon": within(read["horizon"] / scale, "horizon"), "fov": within(read["fov"], "fov")}
+
+
+def camera_read_note(read: dict[str, float], image_height: int) -> str:
+    """The preview's note on a camera the model read (``camera_read_settings``, image rows): where its horizon is
+    drawn (dotted blue), or that it lies above or below the image, where the preview cannot show it."""
+    horizon = read["horizon"]
+    where = "dotted blue" if 0 <= horizon < image_height else ("above the image" if horizon < 0 else "below the image")
+    return (
+        f"Camera read from the cutout's outline: horizon at row {horizon:.0f} ({where}), "
+        f"{read['fov']:.0f}° field of view. If the shadow's perspective looks wrong, set the image's horizon."
+    )

@@ -240,3 +240,14 @@ def test_a_camera_read_from_a_thumbnail_becomes_the_image_settings():
 
     assert camera_read_settings({"horizon": 40.4, "fov": 47.6}, 0.5) == {"horizon": 81.0, "fov": 48.0}
     assert camera_read_settings({"horizon": -9e6, "fov": 150.0}) == {"horizon": -100000.0, "fov": 120.0}
+
+
+def test_the_preview_note_says_where_the_read_horizon_is():
+    """The line under the preview names the dotted blue line only where the preview draws it: a horizon read
+    above or below the image is said to lie there."""
+    from ssn_settings import camera_read_note
+
+    assert "horizon at row 80 (dotted blue), 48° field of view" in camera_read_note({"horizon": 80.0, "fov": 48.0}, 300)
+    assert "row -42 (above the image)" in camera_read_note({"horizon": -42.0, "fov": 48.0}, 300)
+    assert "row 300 (below the image)" in camera_read_note({"horizon": 300.0, "fov": 48.0}, 300)
+    assert "dotted blue" not in camera_read_note({"horizon": 1200.0, "fov": 35.0}, 300)

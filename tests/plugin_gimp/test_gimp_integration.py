@@ -434,7 +434,9 @@ def test_interactive_dialog(workdir, worker, precision):
     assert "lights=2" in line and "preview=200x150" in line
     # no horizon set: the preview says which camera the model read, and the horizon option starts from it
     read = re.search(
-        r"Camera read from the cutout's outline: horizon at row (-?\d+) \(dotted blue\), (\d+)° field of view", line
+        r"Camera read from the cutout's outline: horizon at row (-?\d+) \((?:dotted blue|above the image|below the "
+        r"image)\), (\d+)° field of view",
+        line,
     )
     assert read is not None, line
     assert f"horizon setting {read[1]}, field of view {read[2]}, on: False" in log, log[-3000:]
