@@ -25,13 +25,8 @@ from ssn_engine_link import light_editor, light_map, protocol  # noqa: E402
 from ssn_gimp_host import config_values  # noqa: E402
 from ssn_light_area import LightMapArea  # noqa: E402
 from ssn_preview import PREVIEW_SIZE, render_preview  # noqa: E402
-from ssn_settings import (  # noqa: E402
-    PROCEDURE_NAME,
-    SettingsError,
-    camera_read_note,
-    camera_read_settings,
-    editor_light_map,
-)
+from ssn_settings import PROCEDURE_NAME, SettingsError, editor_light_map  # noqa: E402
+from ssn_settings import camera_read_note, camera_read_settings  # noqa: E402
 
 CUSTOM = "(custom)"
 SELFTEST_ENV = "SSN_SHADOW_DIALOG_SELFTEST"
