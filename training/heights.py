@@ -21,6 +21,7 @@ import numpy as np
 
 from ssn_engine.camera import Camera
 from ssn_engine.frames import resample_frames
+from ssn_engine.methods.camera_estimate import canonical_input, to_canonical
 
 from .data import meshes
 from .data.depth_raster import depth_range
@@ -34,6 +35,8 @@ from .progress import Progress
 FRAME = 256  # the frame the masks are covered at (the engine's N)
 R = 128
 KIND_NAMES = ("object", "human", "animal")
+KEYS = ("mask", "front", "back", "camera", "kind", "pitch")
+ESTIMATOR_KEYS = ("estimator", "estimator_camera")  # the camera estimator's 8-bit input from the N = FRAME mask
 
 
 def pixel_heights(camera: Camera, depth: np.ndarray) -> np.ndarray:
@@ -46,10 +49,14 @@ def pixel_heights(camera: Camera, depth: np.ndarray) -> np.ndarray:
 
 
 def view_heights(mesh: meshes.Mesh, topo: meshes.Topology, yaw: float, pitch: float, fov: float) -> dict:
-    """One view at R: mask, the two pixel-height maps and the camera input (horizon row, focal length)."""
+    """One view at R: mask, the two pixel-height maps and the camera input (horizon row, focal length); and the
+    camera estimator's input made from the mask at N = FRAME, as the engine makes it, with its target (canonical
+    horizon row and focal length over N)."""
     v = np.ascontiguousarray(yawed(mesh.vertices, yaw))
     cam = view_camera(v, FRAME, fov, pitch)
-    mask = resample_frames(mask_coverage(v, mesh.faces, topo, cam, 4)[None], R)[0]
+    frame_mask = mask_coverage(v, mesh.faces, topo, cam, 4)
+    estimator, framing = canonical_input(frame_mask)
+    mask = resample_frames(frame_mask[None], R)[0]
     small = Camera(R, cam.target_height, fov=fov, pitch=pitch, shift=cam.shift * R / FRAME)
     front, back = depth_range(v, mesh.faces, small)
     return {
@@ -57,6 +64,8 @@ def view_heights(mesh: meshes.Mesh, topo: meshes.Topology, yaw: float, pitch: fl
         "front": pixel_heights(small, front),
         "back": pixel_heights(small, np.where(np.isfinite(front), back, np.nan)),
         "camera": (small.horizon, float(small.focal)),
+        "estimator": estimator,
+        "estimator_camera": np.array(to_canonical((cam.horizon, float(cam.focal)), framing)) / FRAME,
     }
 
 
@@ -72,7 +81,7 @@ def make(
     """Write every view of ``split`` under each camera set to ``out`` (npz, float16 maps). ``view_seed`` (default:
     ``seed``, the dataset's own views) draws other views of the same items."""
     items = [it for it in all_items(("mesh", "procedural", "anny"), procedural, humans, seed) if it.split == split]
-    rec: dict[str, list] = {"mask": [], "front": [], "back": [], "camera": [], "kind": [], "pitch": []}
+    rec: dict[str, list] = {key: [] for key in KEYS + ESTIMATOR_KEYS}
     prog = Progress(len(items) * len(cameras))
     for c, which in enumerate(cameras):
         for q, item in enumerate(items):
@@ -84,6 +93,8 @@ def make(
                 for key in ("mask", "front", "back"):
                     rec[key].append(view[key].astype(np.float16))
                 rec["camera"].append(view["camera"])
+                rec["estimator"].append(np.round(view["estimator"] * 255).astype(np.uint8))
+                rec["estimator_camera"].append(view["estimator_camera"])
                 rec["kind"].append(KIND_NAMES.index(item.kind))
                 rec["pitch"].append(pitch)
             prog.update(c * len(items) + q + 1, item.id)
@@ -93,9 +104,11 @@ def make(
 
 
 def load(paths: list[Path]) -> dict[str, np.ndarray]:
-    """The views of several ``make`` files, concatenated."""
+    """The views of several ``make`` files, concatenated; the camera estimator's inputs (:data:`ESTIMATOR_KEYS`)
+    too where every file has them (files made before session 28 do not)."""
     parts = [np.load(p) for p in paths]
-    return {k: np.concatenate([p[k] for p in parts]) for k in ("mask", "front", "back", "camera", "kind", "pitch")}
+    keys = KEYS + (ESTIMATOR_KEYS if all(set(ESTIMATOR_KEYS) <= set(p.files) for p in parts) else ())
+    return {k: np.concatenate([p[k] for p in parts]) for k in keys}
 
 
 def targets(data: dict[str, np.ndarray], idx: np.ndarray) -> tuple[np.ndarray, np.ndarray]:

@@ -138,3 +138,31 @@ def test_examples_written_once_train_without_the_views(tmp_path):
         np.testing.assert_array_equal(data["val_y"], y)
         np.testing.assert_array_equal(data["val_pitch"], pitch)
         assert data["train_x"].dtype == np.uint8
+
+
+def test_the_estimator_learns_from_inputs_as_sharp_as_the_engines(tmp_path):
+    """``make`` writes the estimator's input from the mask at the engine's N = 256, as the engine makes it from a
+    cutout, not from the 128-pixel mask scaled up: the same views and targets (within the bounding box's rounding),
+    the silhouette's edge as crisp as in use."""
+    from training.camera_estimator import examples
+    from training.heights import ESTIMATOR_KEYS
+
+    mesh = meshes.normalise(box((0.5, 0.35, 0.3), (0.0, 0.175, 0.0)))
+    topo = meshes.topology(mesh)
+    views = [view_heights(mesh, topo, yaw, pitch, 45.0) for yaw, pitch in ((0.0, 0.0), (60.0, 15.0), (120.0, 30.0))]
+    data = {key: np.stack([v[key] for v in views]).astype(np.float16) for key in ("mask", "front", "back")}
+    data |= {"camera": np.array([v["camera"] for v in views]), "kind": np.zeros(3, int), "pitch": np.array([0, 15, 30])}
+    (tmp_path / "old").mkdir()
+    (tmp_path / "sharp").mkdir()
+    np.savez(tmp_path / "old" / "val.npz", **data)
+    sharp = {"estimator": np.stack([np.round(v["estimator"] * 255).astype(np.uint8) for v in views])}
+    sharp["estimator_camera"] = np.stack([v["estimator_camera"] for v in views])
+    assert set(sharp) == set(ESTIMATOR_KEYS)
+    np.savez(tmp_path / "sharp" / "val.npz", **data, **sharp)
+    x_old, y_old, _, _ = examples(tmp_path / "old", "val")
+    x, y, _, _ = examples(tmp_path / "sharp", "val")
+    assert x.shape == x_old.shape and x.dtype == np.float32
+    np.testing.assert_allclose(y[:, 0], y_old[:, 0], atol=0.02)  # horizon rows over N
+    np.testing.assert_allclose(y[:, 1], y_old[:, 1], rtol=0.06)  # focal lengths
+    partial = lambda a: ((a > 0.05) & (a < 0.95)).sum()  # noqa: E731
+    assert partial(x) < 0.8 * partial(x_old)  # fewer blurred edge pixels
