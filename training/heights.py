@@ -7,7 +7,9 @@
 ``training.make_dataset`` draws it (:func:`training.data.generate.view_rng`), its mask is the dataset's
 coverage at N = 256 resampled to R, and the nearest and farthest surface at every pixel centre come from a
 z-buffer at R (:func:`training.data.depth_raster.depth_range`); pixel heights follow with the camera
-(:func:`pixel_heights`, the inverse of :func:`ssn_engine.methods.height_proxy.depth_from_heights`).
+(:func:`pixel_heights`, the inverse of :func:`ssn_engine.methods.height_proxy.depth_from_heights`). The camera
+estimator's input is made from the coverage at N = 256 too, as the engine makes it from a cutout
+(:data:`ESTIMATOR_KEYS`).
 """
 
 from __future__ import annotations
