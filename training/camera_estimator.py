@@ -39,15 +39,19 @@ LABEL_SIGMA = 0.04  # the soft labels' spread, over N
 FOCAL_MEAN, FOCAL_STD = 1.3, 0.35  # focal length over N in the canonical frame (data: median 1.25)
 
 
-def examples(root: Path, split: str) -> tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray]:
+def examples(root: Path, split: str, sharp: bool = False) -> tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray]:
     """Inputs (n, INPUT, INPUT), targets (n, 2) (canonical horizon row and focal length over N), pitches (n,) and
     kinds (n,; indices into ``training.heights.KIND_NAMES``) of a split's views in a ``training.heights make``
-    folder (every ``<split>*.npz``: the dataset's views and any others drawn with ``make --view-seed``)."""
+    folder (every ``<split>*.npz``: the dataset's views and any others drawn with ``make --view-seed``): from the
+    128-pixel masks scaled up, as the shipped estimator was trained, or (``sharp``) the inputs ``make`` writes from
+    the masks at N = 256, as sharp as the engine's."""
     paths = sorted(root.glob(f"{split}*.npz"))
     if not paths:
         raise SystemExit(f"no {split}*.npz in {root}: make them with `python -m training.heights make`")
     data = load(paths)
-    if "estimator" in data:  # made from the N = 256 masks, as sharp as the engine's input
+    if sharp:
+        if "estimator" not in data:
+            raise SystemExit(f"--sharp-input: {root}'s {split}*.npz predate it; make them again with `heights make`")
         x = data["estimator"].astype(np.float32) / 255
         return x, data["estimator_camera"].astype(np.float32), data["pitch"], data["kind"]
     n = data["mask"].shape[-1]
@@ -201,11 +205,11 @@ def predict(net: CameraNet, x: np.ndarray) -> np.ndarray:
 EXAMPLE_KEYS = ("x", "y", "pitch", "kind")
 
 
-def write_examples(root: Path, path: Path) -> None:
+def write_examples(root: Path, path: Path, sharp: bool = False) -> None:
     """Both splits' examples in one compressed file (inputs as 8-bit), small enough to travel to a GPU machine."""
     parts = {}
     for split in ("train", "val"):
-        for key, value in zip(EXAMPLE_KEYS, examples(root, split), strict=True):
+        for key, value in zip(EXAMPLE_KEYS, examples(root, split, sharp), strict=True):
             parts[f"{split}_{key}"] = np.round(value * 255).astype(np.uint8) if key == "x" else value
     np.savez_compressed(path, **parts)
     print(f"{len(parts['train_x'])} train and {len(parts['val_x'])} val views -> {path}")
@@ -214,7 +218,7 @@ def write_examples(root: Path, path: Path) -> None:
 def read_examples(args: argparse.Namespace, split: str) -> tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray]:
     """:func:`examples` of a split, from ``--examples`` (a :func:`write_examples` file) where given."""
     if not args.examples:
-        return examples(Path(args.data), split)
+        return examples(Path(args.data), split, args.sharp_input)
     with np.load(args.examples) as data:
         x, y, pitch, kind = (data[f"{split}_{key}"] for key in EXAMPLE_KEYS)
     return x.astype(np.float32) / 255, y, pitch, kind
@@ -350,11 +354,17 @@ def main(argv: list[str] | None = None) -> None:
     parser.add_argument("--device", default="cpu", help="torch device to train on (cuda: a GPU)")
     parser.add_argument("--examples", help="read both splits from this --write-examples file instead of --data")
     parser.add_argument("--write-examples", help="only write --data's examples to this file (for a GPU machine)")
+    parser.add_argument(
+        "--sharp-input",
+        action="store_true",
+        help="train on the inputs `heights make` writes from the masks at N = 256 (as the engine makes them; session "
+        "28) instead of the 128-pixel masks scaled up (the shipped estimator's)",
+    )
     parser.add_argument("--init-from", help="start from the weights of an exported camera.onnx (a fine-tune)")
     parser.add_argument("--install", help="then install the estimator into this model folder (ssn_engine/models)")
     args = parser.parse_args(argv)
     if args.write_examples:
-        write_examples(Path(args.data), Path(args.write_examples))
+        write_examples(Path(args.data), Path(args.write_examples), args.sharp_input)
         return
     if args.minutes > 0:
         train(args)

@@ -142,8 +142,8 @@ def test_examples_written_once_train_without_the_views(tmp_path):
 
 def test_the_estimator_learns_from_inputs_as_sharp_as_the_engines(tmp_path):
     """``make`` writes the estimator's input from the mask at the engine's N = 256, as the engine makes it from a
-    cutout, not from the 128-pixel mask scaled up: the same views and targets (within the bounding box's rounding),
-    the silhouette's edge as crisp as in use."""
+    cutout; with ``--sharp-input`` the estimator trains on it instead of the 128-pixel mask scaled up: the same views
+    and targets (within the bounding box's rounding), the silhouette's edge as crisp as in use."""
     from training.camera_estimator import examples
     from training.heights import ESTIMATOR_KEYS
 
@@ -159,8 +159,10 @@ def test_the_estimator_learns_from_inputs_as_sharp_as_the_engines(tmp_path):
     sharp["estimator_camera"] = np.stack([v["estimator_camera"] for v in views])
     assert set(sharp) == set(ESTIMATOR_KEYS)
     np.savez(tmp_path / "sharp" / "val.npz", **data, **sharp)
-    x_old, y_old, _, _ = examples(tmp_path / "old", "val")
-    x, y, _, _ = examples(tmp_path / "sharp", "val")
+    x_old, y_old, _, _ = examples(tmp_path / "sharp", "val")  # the shipped estimator's inputs, unless asked
+    x, y, _, _ = examples(tmp_path / "sharp", "val", sharp=True)
+    with pytest.raises(SystemExit, match="predate"):
+        examples(tmp_path / "old", "val", sharp=True)
     assert x.shape == x_old.shape and x.dtype == np.float32
     np.testing.assert_allclose(y[:, 0], y_old[:, 0], atol=0.02)  # horizon rows over N
     np.testing.assert_allclose(y[:, 1], y_old[:, 1], rtol=0.06)  # focal lengths
