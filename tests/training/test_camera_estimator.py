@@ -34,13 +34,17 @@ def test_the_graph_reads_the_median_of_its_horizon_distribution(monkeypatch):
     assert focal == pytest.approx(FOCAL_MEAN + 0.5 * FOCAL_STD)
 
 
-def _box_views(tmp_path: Path) -> None:
-    """A box seen from a few cameras, as `training.heights make` writes views, for both splits."""
+def _box_views(tmp_path: Path, sharp: bool = False) -> None:
+    """A box seen from a few cameras, as `training.heights make` writes views, for both splits (``sharp``: with the
+    estimator's inputs made from the masks at N = 256, as `make` writes them since session 28)."""
     mesh = meshes.normalise(box((0.5, 0.35, 0.3), (0.0, 0.175, 0.0)))
     topo = meshes.topology(mesh)
     views = [view_heights(mesh, topo, yaw, pitch, 45.0) for yaw, pitch in ((0.0, 0.0), (60.0, 15.0), (120.0, 30.0))]
     data = {key: np.stack([v[key] for v in views]).astype(np.float16) for key in ("mask", "front", "back")}
     data |= {"camera": np.array([v["camera"] for v in views]), "kind": np.zeros(3, int), "pitch": np.array([0, 15, 30])}
+    if sharp:
+        data["estimator"] = np.stack([np.round(v["estimator"] * 255).astype(np.uint8) for v in views])
+        data["estimator_camera"] = np.stack([v["estimator_camera"] for v in views])
     for split in ("train", "val"):
         np.savez(tmp_path / f"{split}_box.npz", **data)
 
@@ -145,20 +149,13 @@ def test_the_estimator_learns_from_inputs_as_sharp_as_the_engines(tmp_path):
     cutout; with ``--sharp-input`` the estimator trains on it instead of the 128-pixel mask scaled up: the same views
     and targets (within the bounding box's rounding), the silhouette's edge as crisp as in use."""
     from training.camera_estimator import examples
-    from training.heights import ESTIMATOR_KEYS
+    from training.heights import ESTIMATOR_KEYS, load
 
-    mesh = meshes.normalise(box((0.5, 0.35, 0.3), (0.0, 0.175, 0.0)))
-    topo = meshes.topology(mesh)
-    views = [view_heights(mesh, topo, yaw, pitch, 45.0) for yaw, pitch in ((0.0, 0.0), (60.0, 15.0), (120.0, 30.0))]
-    data = {key: np.stack([v[key] for v in views]).astype(np.float16) for key in ("mask", "front", "back")}
-    data |= {"camera": np.array([v["camera"] for v in views]), "kind": np.zeros(3, int), "pitch": np.array([0, 15, 30])}
     (tmp_path / "old").mkdir()
     (tmp_path / "sharp").mkdir()
-    np.savez(tmp_path / "old" / "val.npz", **data)
-    sharp = {"estimator": np.stack([np.round(v["estimator"] * 255).astype(np.uint8) for v in views])}
-    sharp["estimator_camera"] = np.stack([v["estimator_camera"] for v in views])
-    assert set(sharp) == set(ESTIMATOR_KEYS)
-    np.savez(tmp_path / "sharp" / "val.npz", **data, **sharp)
+    _box_views(tmp_path / "old")
+    _box_views(tmp_path / "sharp", sharp=True)
+    assert set(ESTIMATOR_KEYS) <= set(load([tmp_path / "sharp" / "val_box.npz"]))
     x_old, y_old, _, _ = examples(tmp_path / "sharp", "val")  # the shipped estimator's inputs, unless asked
     x, y, _, _ = examples(tmp_path / "sharp", "val", sharp=True)
     with pytest.raises(SystemExit, match="predate"):
