@@ -11,7 +11,7 @@ from typing import TYPE_CHECKING
 if TYPE_CHECKING:  # for type checkers only: at run time __getattr__ imports it on first use
     from .api import predict_frames
 
-__version__ = "0.1.0"
+__version__ = "0.2.0"
 __all__ = ["__version__", "predict_frames"]
 
 
