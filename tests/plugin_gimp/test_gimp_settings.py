@@ -11,7 +11,16 @@ from ssn_engine import light_map
 
 def test_arguments_cover_every_setting():
     names = [a.name for a in s.ARGUMENTS]
-    assert names == ["light-map", "shadow-color", "opacity", "ao-strength", "use-horizon", "horizon", "fov", "keep-whole-shadow"]
+    assert names == [
+        "light-map",
+        "shadow-color",
+        "opacity",
+        "ao-strength",
+        "use-horizon",
+        "horizon",
+        "fov",
+        "keep-whole-shadow",
+    ]
     for spec in s.ARGUMENTS:
         assert spec.kind in {"string", "double", "boolean", "color"}
         if spec.kind == "double":
