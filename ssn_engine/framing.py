@@ -69,6 +69,21 @@ class Framing:
             (math.floor(x0 * factor), math.floor(y0 * factor), math.ceil(x1 * factor), math.ceil(y1 * factor)),
         )
 
+    def padded(self, margin: int) -> Framing:
+        """The same framing on the canvas grown by ``margin`` pixels on every side (its origin moved to the
+        grown canvas's corner): a layer clipped to it keeps what a host can show when the layer is moved a
+        little."""
+        x0, y0, x1, y1 = self.bbox
+        return Framing(
+            self.n,
+            self.canvas_width + 2 * margin,
+            self.canvas_height + 2 * margin,
+            self.scale,
+            self.offset_x - margin * self.scale,
+            self.offset_y - margin * self.scale,
+            (x0 + margin, y0 + margin, x1 + margin, y1 + margin),
+        )
+
     def camera_input(self, horizon: float, fov: float = DEFAULT_FOV) -> tuple[float, float]:
         """The frame's camera input (horizon row h, focal length f; conventions "Camera input") for a canvas
         horizon row ``horizon`` (canvas pixels from the top edge; may lie outside the canvas) and the canvas's

@@ -50,6 +50,7 @@ MAX_PREVIEW_SIDE = 4096  # pixels, either side of a preview's background
 MAX_REQUEST_BYTES = 1 << 30  # buffers of one request
 MAX_CANVAS_SIDE = 32768  # pixels, either side of a set_cutout alpha
 MAX_CANVAS_PIXELS = 1 << 28  # 268 megapixels
+MAX_MARGIN = MAX_CANVAS_SIDE  # pixels a clipped layer may reach past each side of the canvas
 REQUEST_BUFFERS = {  # the buffers each command takes; the others take none
     "set_cutout": ("alpha",),
     "preview": ("background", "cover"),
@@ -164,10 +165,17 @@ class Worker:
         clip = header.get("clip", True)
         if not isinstance(clip, bool):
             raise RequestError("BadRequest", "clip: expected true (the layer stays on the canvas) or false")
+        margin = header.get("margin", 0)
+        if isinstance(margin, bool) or not isinstance(margin, int) or not 0 <= margin <= MAX_MARGIN:
+            raise RequestError("BadRequest", f"margin: expected whole pixels in [0, {MAX_MARGIN}], got {margin!r}")
         t0 = time.perf_counter()
         frame = s.render_frame(light_map)
         t1 = time.perf_counter()
-        shadow = s.to_canvas(frame, light_map, clip)
+        if clip and margin:  # clipped to the canvas grown by the margin, then placed back on the canvas
+            shadow = s.to_canvas(frame, light_map, framing=s.framing.padded(margin))
+            shadow.x, shadow.y = shadow.x - margin, shadow.y - margin
+        else:
+            shadow = s.to_canvas(frame, light_map, clip)
         t2 = time.perf_counter()
         reply = {"x": shadow.x, "y": shadow.y, "width": 0, "height": 0, "method": s.method.name}
         out: dict[str, Buffer] = {}

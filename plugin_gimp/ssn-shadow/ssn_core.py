@@ -15,8 +15,11 @@ from typing import Any, Protocol
 
 from ssn_engine_link import client as engine_client
 from ssn_engine_link import protocol
-from ssn_pixels import BYTES_PER_SAMPLE, PixelPlan, is_blank
+from ssn_pixels import BYTES_PER_SAMPLE, PixelPlan, is_blank, max_alpha
 from ssn_settings import ARG_BY_NAME, LAYER_PREFIX, SettingsError, ShadowSettings
+
+
+FAINT = 0.5  # a cutout no more opaque than this that casts no visible shadow is called almost transparent
 
 
 class ShadowError(RuntimeError):
@@ -52,6 +55,8 @@ class Host(Protocol):
     def pixel_plan(self) -> PixelPlan: ...
 
     def source_name(self) -> str: ...
+
+    def hidden_reason(self) -> str | None: ...
 
     def read_cutout(self, plan: PixelPlan) -> Cutout: ...
 
@@ -97,12 +102,14 @@ def upload_cutout(
     return str(reply["cutout"]), reply.get("camera_read")
 
 
-def render_shadow(engine: Engine, cutout_id: str, settings: ShadowSettings, dtype: str) -> ShadowLayerData:
-    """Apply the AO edits and render the shadow layer in ``dtype``."""
+def render_shadow(
+    engine: Engine, cutout_id: str, settings: ShadowSettings, dtype: str, canvas: tuple[int, int]
+) -> ShadowLayerData:
+    """Apply the AO edits and render the shadow layer in ``dtype`` for a ``canvas`` (width, height)."""
     edits = settings.ao_edits()
     if edits:
         engine_call(engine, "edit_ao", cutout=cutout_id, edits=edits)
-    reply, buffers = engine_call(engine, "render", cutout=cutout_id, **settings.render_params(dtype))
+    reply, buffers = engine_call(engine, "render", cutout=cutout_id, **settings.render_params(dtype, canvas))
     x, y, w, h = (int(reply[k]) for k in ("x", "y", "width", "height"))
     if w == 0 or h == 0:
         return ShadowLayerData(x, y, 0, 0, dtype, b"")
@@ -128,14 +135,23 @@ def compute_shadow(host: Host, engine: Engine, settings: ShadowSettings) -> tupl
     """Read the cutout and render its shadow; touches nothing in the image."""
     if settings.opacity <= 0:
         raise ShadowError("The opacity is 0, so the shadow layer would show nothing. Raise the opacity.")
+    hidden = host.hidden_reason()
+    if hidden:
+        raise ShadowError(hidden)
     plan = host.pixel_plan()
     cutout = host.read_cutout(plan)
     cutout_id, _ = upload_cutout(engine, cutout, settings.camera())
     try:
-        shadow = render_shadow(engine, cutout_id, settings, plan.layer_dtype)
+        shadow = render_shadow(engine, cutout_id, settings, plan.layer_dtype, (cutout.width, cutout.height))
     finally:
         release(engine, cutout_id)
     if shadow.width == 0:
+        strongest = max_alpha(cutout.data, cutout.dtype)
+        if strongest < FAINT:
+            raise ShadowError(
+                f"Nothing to cast a shadow from: {cutout.source} is almost transparent (its most opaque pixel is "
+                f"{strongest:.0%} opaque). Cast from an opaque cutout, or select the object."
+            )
         raise ShadowError(
             "These lights cast no visible shadow inside the canvas. Try a light lower in the sky or a higher opacity."
         )
@@ -176,6 +192,7 @@ def settings_from_arguments(values: dict[str, Any]) -> ShadowSettings:
             ao_strength=get("ao-strength"),
             horizon=get("horizon") if get("use-horizon") else None,
             fov=get("fov"),
+            keep_whole=bool(get("keep-whole-shadow")),
         )
     except SettingsError as exc:
         raise ShadowError(str(exc)) from None

@@ -120,7 +120,7 @@ def run_dialog(procedure: Gimp.Procedure, config: Gimp.ProcedureConfig, host, en
     dialog = GimpUi.ProcedureDialog(procedure=procedure, config=config, title="Soft Shadow (SSN)")
     for name in ("opacity", "ao-strength", "fov"):  # GIMP's slider-with-entry widgets, not bare spin buttons
         dialog.get_spin_scale(name, 1.0)
-    dialog.fill(["shadow-color", "opacity", "ao-strength", "use-horizon", "horizon", "fov"])
+    dialog.fill(["shadow-color", "opacity", "ao-strength", "use-horizon", "horizon", "fov", "keep-whole-shadow"])
 
     def values() -> dict:
         out = config_values(config)
@@ -208,6 +208,7 @@ def run_dialog(procedure: Gimp.Procedure, config: Gimp.ProcedureConfig, host, en
         0,
     )
     preview_box = Gtk.Box(orientation=Gtk.Orientation.VERTICAL, spacing=6)
+    preview_box.pack_start(_wrap(Gtk.Label(label=host.target_note(), xalign=0.0)), False, False, 0)
     preview_box.pack_start(Gtk.Label(label="Preview", xalign=0.0), False, False, 0)
     preview_box.pack_start(preview.widget, False, False, 0)
     preview_box.pack_start(preview.status, False, False, 0)

@@ -19,7 +19,9 @@ from gi.repository import Babl, Gegl, Gimp  # noqa: E402
 from ssn_core import Cutout, ShadowError, ShadowLayerData  # noqa: E402
 from ssn_pixels import PixelFormatError, PixelPlan, layer_image_type, plan_for_precision  # noqa: E402
 from ssn_preview import Thumbnail  # noqa: E402
-from ssn_settings import ARGUMENTS  # noqa: E402
+from ssn_settings import ARGUMENTS, LAYER_PREFIX  # noqa: E402
+
+SOURCE_PARASITE = "ssn-shadow-source"  # on a shadow layer: the tattoo of the layer it was cast from
 
 
 def config_values(config: Gimp.ProcedureConfig) -> dict:
@@ -43,14 +45,38 @@ def no_cutout_message(layer_name: str) -> str:
     )
 
 
+def _siblings(image: Gimp.Image, layer: Gimp.Layer) -> list:
+    parent = layer.get_parent()
+    return list(parent.get_children() if parent is not None else image.get_layers())
+
+
+def _source_tattoo(layer: Gimp.Layer) -> int | None:
+    """The tattoo of the layer a shadow layer was cast from (its parasite), or None for other layers."""
+    parasite = layer.get_parasite(SOURCE_PARASITE)
+    if parasite is None:
+        return None
+    try:
+        return int(bytes(parasite.get_data()).decode("ascii"))
+    except (UnicodeDecodeError, ValueError):
+        return None
+
+
 class GimpHost:
-    """One image and its active drawable, as the run logic sees them."""
+    """One image and its active drawable, as the run logic sees them.
+
+    The source is the active layer, or, when the active layer is a shadow this filter made, the layer that
+    shadow was cast from: running the filter again (Ctrl+F) re-casts the source's shadow instead of shadowing
+    the shadow. The layer's existing shadow, if any, is replaced in its place (:meth:`add_shadow_layer`).
+    """
 
     def __init__(self, image: Gimp.Image, drawable: Gimp.Drawable) -> None:
         if not isinstance(drawable, Gimp.Layer) or isinstance(drawable, Gimp.LayerMask):
             raise ShadowError("Soft Shadow works on a layer: select a layer, not a channel or a mask.")
-        self.image, self.drawable = image, drawable
-        group = drawable.get_parent()
+        self.image, self.active = image, drawable
+        source = self._source_of(drawable)
+        self.drawable = source if source is not None else drawable
+        self.replacing = drawable if source is not None else self._shadow_of(self.drawable)
+        group = self.drawable.get_parent()
         while group is not None:  # the shadow layer goes beside the drawable: its group must take it
             if group.get_lock_content():
                 raise ShadowError(
@@ -59,6 +85,65 @@ class GimpHost:
                     "lock icon) or move the layer out of the group."
                 )
             group = group.get_parent()
+
+    def _source_of(self, layer: Gimp.Layer) -> Gimp.Layer | None:
+        """The layer a shadow layer was cast from, or None when ``layer`` is no shadow of this filter. Shadows
+        made before the parasite existed are recognised by name: "Shadow: X" right below a layer "X"."""
+        tattoo = _source_tattoo(layer)
+        if tattoo is not None:
+            source = self.image.get_layer_by_tattoo(tattoo)
+            if source is None:
+                raise ShadowError(
+                    f'"{layer.get_name()}" is a shadow whose layer is no longer in the image: select the layer '
+                    "to cast a shadow from."
+                )
+            return source
+        name = layer.get_name()
+        if not name.startswith(LAYER_PREFIX):
+            return None
+        siblings = _siblings(self.image, layer)
+        index = next(i for i, item in enumerate(siblings) if item.get_id() == layer.get_id())
+        above = siblings[index - 1] if index > 0 else None
+        return above if above is not None and above.get_name() == name[len(LAYER_PREFIX) :] else None
+
+    def _shadow_of(self, source: Gimp.Layer) -> Gimp.Layer | None:
+        """The shadow layer this filter cast from ``source`` earlier, if it is still beside it."""
+        tattoo, siblings = source.get_tattoo(), _siblings(self.image, source)
+        found = next((lay for lay in siblings if _source_tattoo(lay) == tattoo), None)
+        if found is not None:
+            return found
+        index = next(i for i, item in enumerate(siblings) if item.get_id() == source.get_id())
+        below = siblings[index + 1] if index + 1 < len(siblings) else None
+        named = below is not None and below.get_name() == LAYER_PREFIX + source.get_name()
+        return below if named and _source_tattoo(below) is None else None
+
+    def target_note(self) -> str:
+        """Which layer the filter casts from and which shadow it replaces, for the dialog."""
+        note = f'Casting the shadow of the layer "{self.drawable.get_name()}"'
+        if self.replacing is not None:
+            note += f', replacing "{self.replacing.get_name()}"'
+        return note + "."
+
+    def hidden_reason(self) -> str | None:
+        """Why the source layer shows nothing (hidden, or at opacity 0), or None; a selection casts regardless."""
+        if Gimp.Selection.bounds(self.image)[1]:
+            return None
+        name = self.drawable.get_name()
+        item = self.drawable
+        while item is not None:
+            if not item.get_visible():
+                where = "is hidden" if item is self.drawable else f'is in the hidden group "{item.get_name()}"'
+                return (
+                    f'The layer "{name}" {where}, so it shows nothing to cast a shadow from. Make it visible '
+                    "(the eye in the Layers dialog), or select the object to cast from."
+                )
+            item = item.get_parent()
+        if self.drawable.get_opacity() <= 0.0:
+            return (
+                f'The layer "{name}" is at opacity 0, so it shows nothing to cast a shadow from. Raise its '
+                "opacity (Layers dialog), or select the object to cast from."
+            )
+        return None
 
     def pixel_plan(self) -> PixelPlan:
         try:
@@ -153,17 +238,34 @@ class GimpHost:
         self.image.undo_group_end()
 
     def add_shadow_layer(self, name: str, shadow: ShadowLayerData, plan: PixelPlan) -> Any:
-        """A Multiply layer right below the drawable, at the shadow's place on the canvas."""
+        """A Multiply layer right below the drawable, at the shadow's place on the canvas; or, where the layer
+        has a shadow already, the new one in its place (keeping its name, visibility, opacity and mode). The
+        layer that was active stays active (the new shadow, where the old one was)."""
         image_type = getattr(Gimp.ImageType, layer_image_type(self.image.get_base_type().value_nick))
-        layer = Gimp.Layer.new(
-            self.image, name, shadow.width, shadow.height, image_type, 100.0, Gimp.LayerMode.MULTIPLY
+        old = self.replacing
+        opacity, mode = (old.get_opacity(), old.get_mode()) if old is not None else (100.0, Gimp.LayerMode.MULTIPLY)
+        layer = Gimp.Layer.new(self.image, name, shadow.width, shadow.height, image_type, opacity, mode)
+        anchor = old if old is not None else self.drawable
+        position = self.image.get_item_position(anchor) + (0 if old is not None else 1)
+        self.image.insert_layer(layer, anchor.get_parent(), position)
+        layer.attach_parasite(
+            Gimp.Parasite.new(
+                SOURCE_PARASITE,
+                Gimp.PARASITE_PERSISTENT | Gimp.PARASITE_UNDOABLE,
+                list(str(self.drawable.get_tattoo()).encode("ascii")),
+            )
         )
-        parent = self.drawable.get_parent()
-        position = self.image.get_item_position(self.drawable) + 1
-        self.image.insert_layer(layer, parent, position)
         layer.set_offsets(shadow.x, shadow.y)
         buffer = layer.get_buffer()
         buffer.set(Gegl.Rectangle.new(0, 0, shadow.width, shadow.height), plan.shadow_format, shadow.data)
         buffer.flush()
         layer.update(0, 0, shadow.width, shadow.height)
+        if old is not None:
+            layer.set_visible(old.get_visible())
+            kept_name = old.get_name()  # the user may have renamed it; set once the old layer has gone
+            self.image.remove_layer(old)
+            layer.set_name(kept_name)
+            self.replacing = layer
+        active = layer if self.active is old else self.active
+        self.image.set_selected_layers([active])
         return layer

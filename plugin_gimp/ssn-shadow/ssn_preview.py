@@ -47,7 +47,7 @@ def render_preview(
         "background": protocol.Buffer("uint8", (h, w, thumbnail.channels), thumbnail.data),
         "cover": protocol.Buffer(cover.dtype, (cover.height, cover.width), cover.data),
     }
-    params = settings.render_params("uint8")
+    params = settings.render_params("uint8", (w, h))
     params = {key: params[key] for key in ("light_map", "preset", "color", "opacity") if key in params}
     if horizon is not None:
         params["horizon"] = horizon

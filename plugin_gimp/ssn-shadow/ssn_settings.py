@@ -19,6 +19,7 @@ MENU_LABEL = "Soft _Shadow (SSN)..."
 MENU_PATH = "<Image>/Filters/Light and Shadow"
 IMAGE_TYPES = "RGB*, GRAY*"
 LAYER_PREFIX = "Shadow: "
+CLIP_MARGIN = 0.1  # share of the canvas's larger side a clipped shadow layer may reach past each edge
 
 
 @dataclass(frozen=True)
@@ -78,6 +79,14 @@ ARGUMENTS: tuple[ArgSpec, ...] = (
         100000.0,
     ),
     ArgSpec("fov", "double", "_Field of view", "The image's vertical field of view in degrees", 45.0, 10.0, 120.0),
+    ArgSpec(
+        "keep-whole-shadow",
+        "boolean",
+        "_Keep the whole shadow",
+        "Keep a long shadow whole, however far it reaches past the canvas; off: the layer ends a little past the "
+        "canvas's edges (what can be seen when the layer is moved a bit)",
+        False,
+    ),
 )
 ARG_BY_NAME = {a.name: a for a in ARGUMENTS}
 
@@ -134,6 +143,7 @@ class ShadowSettings:
     ao_strength: float = 1.0
     horizon: float | None = None  # the image's horizon row, or None: the engine's default camera
     fov: float = 45.0
+    keep_whole: bool = False  # the layer keeps a long shadow whole, past the canvas plus its margin
 
     def __post_init__(self) -> None:
         if not isinstance(self.light_map, str):
@@ -156,14 +166,16 @@ class ShadowSettings:
         """``set_cutout``'s camera for an image scaled by ``scale`` (the preview's thumbnail), or None."""
         return None if self.horizon is None else {"horizon": self.horizon * scale, "fov": self.fov}
 
-    def render_params(self, dtype: str) -> dict[str, Any]:
-        """Parameters of the worker's ``render`` command (without the cutout id)."""
+    def render_params(self, dtype: str, canvas: tuple[int, int]) -> dict[str, Any]:
+        """Parameters of the worker's ``render`` command (without the cutout id) for a ``canvas`` (width,
+        height): the layer clipped to the canvas grown by ``CLIP_MARGIN``, or the whole shadow."""
+        clip = {"clip": False} if self.keep_whole else {"clip": True, "margin": round(CLIP_MARGIN * max(canvas))}
         return {
             **resolve_light_map(self.light_map),
             "color": list(self.color),
             "opacity": self.opacity,
             "format": {"dtype": dtype, "channels": "rgba"},
-            "clip": False,  # a GIMP layer may reach past the canvas: a long shadow is kept whole
+            **clip,
         }
 
     def ao_edits(self) -> list[dict[str, Any]]:

@@ -333,6 +333,8 @@ def test_errors_and_the_worker_survives(client, cmd, params, buffers, kind, frag
         ({"preset": "softbox", "format": "uint8"}, "BadRequest", "format"),
         ({"preset": "softbox", "opacity": 3}, "BadRequest", "opacity"),
         ({"preset": "softbox", "color": [1, 2, 3]}, "BadRequest", "color"),
+        ({"preset": "softbox", "margin": -1}, "BadRequest", "margin"),
+        ({"preset": "softbox", "margin": 2.5}, "BadRequest", "margin"),
     ],
 )
 def test_render_errors(client, cutout, params, kind, fragment):
@@ -538,3 +540,22 @@ def test_a_cutout_without_a_camera_says_which_one_the_model_read(client):
     assert "camera_read" not in given
     for key in (reply["cutout"], given["cutout"]):
         client.request("release", cutout=key)
+
+
+def test_a_clipped_layer_reaches_past_the_canvas_by_its_margin_only(client):
+    """A long shadow near the canvas's right edge: clipped to the canvas, to the canvas grown by a margin (the
+    same pixels where both cover it), or kept whole."""
+    alpha = np.zeros((CANVAS_H, CANVAS_W), np.uint8)
+    alpha[100:260, 330:390] = (drawn_alpha(60, 160, np.float32) * 255).astype(np.uint8)
+    reply, _ = client.request("set_cutout", {"alpha": buf(alpha)})
+    sun = _light(0.25, 0.92, 0.0005, 2.0)  # 7 degrees up, left of forward: a long shadow to the right
+    layers = {}
+    for name, params in {"canvas": {}, "margin": {"margin": 40}, "whole": {"clip": False}}.items():
+        header, buffers = client.request("render", cutout=reply["cutout"], light_map=sun, **params)
+        layers[name] = header, arr(buffers["layer"])[..., 3]
+    (canvas, a), (grown, b), (whole, _) = layers["canvas"], layers["margin"], layers["whole"]
+    assert canvas["x"] + canvas["width"] == CANVAS_W
+    assert grown["x"] + grown["width"] == CANVAS_W + 40 < whole["x"] + whole["width"]
+    assert grown["y"] >= -40 and grown["x"] >= -40
+    dy, dx = canvas["y"] - grown["y"], canvas["x"] - grown["x"]
+    np.testing.assert_array_equal(b[dy : dy + a.shape[0], dx : dx + a.shape[1]], a)

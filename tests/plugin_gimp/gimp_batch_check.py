@@ -63,7 +63,7 @@ def build(case):
     x0, y0, x1, y1 = c["rect"]
     for yy in range(y0, y1):
         row = yy * c["w"] * 4
-        px[row + x0 * 4 : row + x1 * 4] = bytes([200, 60, 40, 255]) * (x1 - x0)
+        px[row + x0 * 4 : row + x1 * 4] = bytes([200, 60, 40, c.get("alpha_value", 255)]) * (x1 - x0)
     if not has_alpha:
         layer.fill(Gimp.FillType.WHITE)
     layer.get_buffer().set(Gegl.Rectangle.new(0, 0, c["w"], c["h"]), "R'G'B'A u8", bytes(px))
@@ -84,6 +84,10 @@ def build(case):
             image.select_ellipse(Gimp.ChannelOps.REPLACE, sx, sy, sw, sh)
     if case.get("indexed"):
         image.convert_indexed(Gimp.ConvertDitherType.NONE, Gimp.ConvertPaletteType.GENERATE, 16, False, False, "")
+    if case.get("hidden"):
+        layer.set_visible(False)
+    if "layer_opacity" in case:
+        layer.set_opacity(case["layer_opacity"])
     if parent is not None:
         parent.set_lock_content(True)  # last: nothing may write into the group after this
     return image, layer
@@ -127,6 +131,20 @@ def run_case(case, out_dir):
     t = time.time()
     result = proc.run(config)
     res["seconds"] = time.time() - t
+    res["reruns"] = []
+    for target in case.get("reruns", []):  # run again on the shadow just made, or on the source
+        drawable = result.index(1) if target == "shadow" else layer
+        config.set_core_object_array("drawables", [drawable])
+        result = proc.run(config)
+        res["reruns"].append(
+            {
+                "status": result.index(0).value_nick,
+                "layers": [lay.get_name() for lay in image.get_layers()],
+                "selected": [lay.get_name() for lay in image.get_selected_layers()],
+                "returned": result.index(1).get_name(),
+                "returned_is_selected": [x.get_id() for x in image.get_selected_layers()] == [result.index(1).get_id()],
+            }
+        )
     status = result.index(0)
     res["status"] = status.value_nick
     if status != Gimp.PDBStatusType.SUCCESS:
@@ -135,6 +153,7 @@ def run_case(case, out_dir):
         except Exception as exc:  # noqa: BLE001
             res["error"] = f"(no error text: {exc})"
     layers = image.get_layers()
+    res["selected_after"] = [lay.get_name() for lay in image.get_selected_layers()]
     res["layers_before"] = layers_before
     res["layers_after"] = [lay.get_name() for lay in layers]
     res["source_unchanged"] = read(layer, 0, 0, layer.get_width(), layer.get_height(), "R'G'B'A float") == src_before

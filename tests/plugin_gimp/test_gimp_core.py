@@ -13,7 +13,7 @@ from ssn_core import (
     settings_from_arguments,
     upload_cutout,
 )
-from ssn_pixels import plan_for_precision
+from ssn_pixels import max_alpha, plan_for_precision
 
 from ssn_engine.client import EngineClient, EngineError, WorkerUnavailable
 from ssn_engine.protocol import Buffer
@@ -30,10 +30,13 @@ def pawn_alpha(dtype="uint8") -> np.ndarray:
 class FakeHost:
     """Records every call so tests can check what happens inside the undo group."""
 
-    def __init__(self, precision="u8-non-linear", alpha=None, no_cutout=False):
+    def __init__(self, precision="u8-non-linear", alpha=None, no_cutout=False, hidden=None):
         self.plan = plan_for_precision(precision)
         alpha = pawn_alpha(self.plan.alpha_dtype) if alpha is None else alpha
-        self.alpha, self.no_cutout, self.calls, self.layers = alpha, no_cutout, [], []
+        self.alpha, self.no_cutout, self.hidden, self.calls, self.layers = alpha, no_cutout, hidden, [], []
+
+    def hidden_reason(self):
+        return self.hidden
 
     def pixel_plan(self):
         self.calls.append("pixel_plan")
@@ -149,6 +152,13 @@ def test_no_cutout_and_blank_alpha_never_reach_the_engine():
     assert engine.requests == []
 
 
+def test_a_hidden_source_is_refused_before_reading_pixels():
+    host, engine = FakeHost(hidden='The layer "Pawn" is hidden'), FakeEngine()
+    with pytest.raises(ShadowError, match="is hidden"):
+        make_shadow(host, engine, ARGS)
+    assert host.calls == [] and engine.requests == []
+
+
 def test_bad_arguments_fail_before_reading_pixels():
     host = FakeHost()
     with pytest.raises(ShadowError, match="opacity"):
@@ -195,7 +205,22 @@ def test_real_worker_casts_the_shadow_away_from_the_light(real_engine, precision
     assert a.max() > 0.3
     ys, xs = np.nonzero(a > 0.2)
     assert shadow.x + xs.mean() < 80 - 5  # the pawn's centre is x = 80: the shadow falls left
-    assert shadow.x < 0  # the low sun's shadow runs past the canvas's left edge: the layer keeps it whole
+    # the low sun's shadow runs past the canvas's left edge: the layer reaches past it by the margin only
+    assert -round(0.1 * W) == shadow.x
+
+
+def test_a_faint_cutout_is_named_as_the_reason_for_no_shadow(real_engine):
+    """A cutout at alpha 5/255 casts nothing visible: the message is about the cutout, not the lights."""
+    alpha = (pawn_alpha() // 255 * 5).astype("uint8")
+    with pytest.raises(ShadowError, match="almost transparent .*2% opaque"):
+        make_shadow(FakeHost(alpha=alpha), real_engine, ARGS)
+
+
+def test_max_alpha_of_every_cutout_dtype():
+    assert max_alpha(np.array([0, 5, 51], "uint8").tobytes(), "uint8") == pytest.approx(0.2)
+    assert max_alpha(np.array([0, 65535], "uint16").tobytes(), "uint16") == 1.0
+    assert max_alpha(np.array([0.25, -1], "float32").tobytes(), "float32") == 0.25
+    assert max_alpha(b"", "uint8") == 0.0
 
 
 @pytest.mark.parametrize("precision", ["u8-non-linear", "u16-linear", "float-perceptual"])

@@ -188,6 +188,43 @@ CASES = [
         "args": {"light-map": "softbox", "opacity": 0.0},
         "error": "opacity is 0",
     },
+    # running again on the shadow (Ctrl+F with the new shadow active) and on the source replaces the shadow
+    {
+        "id": "rgb-u8-rerun",
+        "base": "RGB",
+        "precision": "U8_NON_LINEAR",
+        "cutout": PAWN,
+        "args": {"light-map": "low-sun-right", "opacity": 1.0, "ao-strength": 1.0, "shadow-color": [0, 0, 0]},
+        "reruns": ["shadow", "source"],
+        "side": "left",
+    },
+    # a hidden layer, a layer at opacity 0 and an almost transparent cutout say so
+    {
+        "id": "error-hidden-layer",
+        "base": "RGB",
+        "precision": "U8_NON_LINEAR",
+        "cutout": PAWN,
+        "hidden": True,
+        "args": {"light-map": "softbox"},
+        "error": 'layer "Pawn" is hidden',
+    },
+    {
+        "id": "error-layer-opacity-zero",
+        "base": "RGB",
+        "precision": "U8_NON_LINEAR",
+        "cutout": PAWN,
+        "layer_opacity": 0.0,
+        "args": {"light-map": "softbox"},
+        "error": 'layer "Pawn" is at opacity 0',
+    },
+    {
+        "id": "error-faint-cutout",
+        "base": "RGB",
+        "precision": "U8_NON_LINEAR",
+        "cutout": {**PAWN, "alpha_value": 5},
+        "args": {"light-map": "low-sun-right"},
+        "error": "almost transparent",
+    },
     {
         "id": "error-one-pixel-selection",
         "base": "RGB",
@@ -297,7 +334,7 @@ def _expected(worker: tuple[int, str], case: dict, cutout: np.ndarray) -> tuple[
             color=list(args["shadow-color"]),
             opacity=args["opacity"],
             format={"dtype": "float32", "channels": "rgba"},
-            clip=False,
+            margin=round(0.1 * max(W, H)),  # the plug-in's default: the canvas and a tenth of its larger side
             **params,
         )
         layer = np.frombuffer(buffers["layer"].data, "<f4").reshape(reply["height"], reply["width"], 4)
@@ -348,14 +385,26 @@ def test_shadow_layer(gimp_results, worker, case):
         mask = cutout.reshape(H, W) > 0.5
         object_cx = np.nonzero(mask)[1].mean()
         assert (shadow_cx < object_cx - 10) if case["side"] == "left" else (shadow_cx > object_cx + 10)
-    # the layer is not clipped to the canvas (issue #14, item 14): a long shadow may reach past its edges
-    assert reply["width"] > 0 and reply["height"] > 0
+    # the user's active layer stays active
+    assert r["selected_after"] == ["Pawn"]
 
 
-def test_a_low_sun_shadow_reaches_past_the_canvas(gimp_results):
-    """The low sun's shadow runs off the 320 x 240 canvas to the left: the GIMP layer keeps it whole."""
+def test_a_low_sun_shadow_reaches_past_the_canvas_by_the_margin(gimp_results):
+    """The low sun's shadow runs off the 320 x 240 canvas to the left: the GIMP layer goes a tenth of the canvas's
+    larger side past its edge, no further (the whole shadow only when asked)."""
     r = gimp_results[0]["rgb-u8-nonlinear"]
-    assert r["shadow_offsets"][0] < 0, r["shadow_offsets"]
+    assert r["shadow_offsets"][0] == -32, r["shadow_offsets"]
+
+
+def test_running_again_replaces_the_shadow(gimp_results):
+    """Run on the new shadow (what Ctrl+F does next) and then on the source: each re-casts the source's shadow in
+    place, never "Shadow: Shadow: Pawn" nor a second "Shadow: Pawn"; the active layer stays what it was."""
+    reruns = gimp_results[0]["rgb-u8-rerun"]["reruns"]
+    assert [r["status"] for r in reruns] == ["success", "success"]
+    for r in reruns:
+        assert r["layers"] == ["Pawn", "Shadow: Pawn", "Background"] and r["returned"] == "Shadow: Pawn"
+    assert reruns[0]["returned_is_selected"]  # run on the shadow: the new shadow is the active layer
+    assert reruns[1]["selected"] == ["Pawn"]  # run on the source: the source stays active
 
 
 @pytest.mark.parametrize("case", [c for c in CASES if "error" in c], ids=lambda c: c["id"])

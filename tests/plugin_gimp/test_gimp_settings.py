@@ -11,7 +11,16 @@ from ssn_engine import light_map
 
 def test_arguments_cover_every_setting():
     names = [a.name for a in s.ARGUMENTS]
-    assert names == ["light-map", "shadow-color", "opacity", "ao-strength", "use-horizon", "horizon", "fov"]
+    assert names == [
+        "light-map",
+        "shadow-color",
+        "opacity",
+        "ao-strength",
+        "use-horizon",
+        "horizon",
+        "fov",
+        "keep-whole-shadow",
+    ]
     for spec in s.ARGUMENTS:
         assert spec.kind in {"string", "double", "boolean", "color"}
         if spec.kind == "double":
@@ -88,13 +97,16 @@ def test_settings_validation(kwargs, fragment):
 
 def test_render_params_and_edits():
     st = ShadowSettings("low-sun-left", (0.2, 0.1, 0.0), 0.5, 1.0)
-    assert st.render_params("uint16") == {
+    assert st.render_params("uint16", (4000, 3000)) == {
         "preset": "low-sun-left",
         "color": [0.2, 0.1, 0.0],
         "opacity": 0.5,
         "format": {"dtype": "uint16", "channels": "rgba"},
-        "clip": False,
+        "clip": True,  # the canvas and a margin of a tenth of its larger side
+        "margin": 400,
     }
+    whole = ShadowSettings("low-sun-left", keep_whole=True).render_params("uint8", (4000, 3000))
+    assert whole["clip"] is False and "margin" not in whole
     assert st.ao_edits() == []
     assert ShadowSettings(ao_strength=0.0).ao_edits() == [{"op": "strength", "value": 0.0}]
     assert ShadowSettings(ao_strength=2).ao_edits() == [{"op": "strength", "value": 2.0}]
