@@ -57,3 +57,33 @@ def test_zip_is_importable_by_krita(tmp_path):
     imported = plugin_importer.PluginImporter(str(z), str(tmp_path / "res"), lambda p: True).import_all()
     assert [p["name"] for p in imported] == ["ssn_shadow"]
     assert (tmp_path / "res/pykrita/ssn_shadow/engine_shared/light_map.py").is_file()
+
+
+def test_the_krita_benchmark_ships_its_driver(tmp_path):
+    """``python -m plugin_krita.benchmark`` runs from an installed copy: the wheel holds the driver Krita runs."""
+    import subprocess
+
+    from plugin_krita import benchmark
+
+    root = Path(__file__).resolve().parents[2]
+    subprocess.run(
+        [
+            sys.executable,
+            "-m",
+            "pip",
+            "wheel",
+            "--no-deps",
+            "--no-build-isolation",
+            "-q",
+            "-w",
+            str(tmp_path),
+            str(root),
+        ],
+        check=True,
+        capture_output=True,
+        timeout=300,
+    )
+    (wheel,) = tmp_path.glob("ssn_shadow-*.whl")
+    names = zipfile.ZipFile(wheel).namelist()
+    assert f"plugin_krita/{benchmark.DRIVER.name}" in names
+    assert "plugin_krita/benchmark.py" in names

@@ -9,6 +9,7 @@ import os
 import struct
 import time
 import traceback
+from typing import Any
 
 from krita import Krita
 from PyQt5.QtCore import QEventLoop, QTimer
@@ -18,7 +19,7 @@ RESULT = os.environ.get("SSN_BENCH_RESULT", "/tmp/ssn_bench.json")
 DRAG_S = float(os.environ.get("SSN_BENCH_DRAG_S", "8"))
 RELEASES = 5  # releases timed per depth (their median is reported)
 DEPTHS = os.environ.get("SSN_BENCH_DEPTHS", "U8,U16,F16,F32").split(",")
-out = {"live": {}}
+out: dict[str, Any] = {"live": {}}
 
 
 def pixel(depth, bgr, a):
@@ -49,7 +50,7 @@ def document(w, h, depth="U8"):
     doc.setActiveNode(person)
     doc.waitForDone()
     deadline = time.monotonic() + 10
-    while (doc.activeNode() is None or doc.activeNode().name() != "Person") and time.monotonic() < deadline:
+    while getattr(doc.activeNode(), "name", lambda: None)() != "Person" and time.monotonic() < deadline:
         QApplication.processEvents()
         time.sleep(0.01)
     return doc
@@ -72,7 +73,9 @@ def controller_for(doc):
 def trace_replies(engine):
     """Per request of each command: when it was sent, when its reply's first and last bytes arrived, and in how
     many reads (the reply's bytes come through the worker's pipe as Krita's event loop reads them)."""
-    traced, sent, state = {}, {}, {"first": None, "chunks": 0}
+    traced: dict[str, list] = {}
+    sent: dict[Any, tuple[str, float]] = {}
+    state: dict[str, Any] = {"first": None, "chunks": 0}
     request, feed = engine.request, engine._decoder.feed
 
     def traced_request(cmd, *args, **kwargs):
@@ -87,8 +90,9 @@ def trace_replies(engine):
         state["chunks"] += 1
         messages = feed(data)
         for header, _ in messages:
-            cmd, at = sent.pop(header.get("id"), (None, None))
-            if cmd is not None:
+            entry = sent.pop(header.get("id"), None)
+            if entry is not None:
+                cmd, at = entry
                 traced.setdefault(cmd, []).append((at, max(state["first"], at), time.perf_counter(), state["chunks"]))
             state["first"], state["chunks"] = None, 0
         return messages
