@@ -93,7 +93,8 @@ def trace_replies(engine):
             entry = sent.pop(header.get("id"), None)
             if entry is not None:
                 cmd, at = entry
-                traced.setdefault(cmd, []).append((at, max(state["first"], at), time.perf_counter(), state["chunks"]))
+                first: float = state["first"] or t
+                traced.setdefault(cmd, []).append((at, max(first, at), time.perf_counter(), state["chunks"]))
             state["first"], state["chunks"] = None, 0
         return messages
 
