@@ -40,16 +40,11 @@ def cutout_alpha(w: int = 200, h: int = 160, box=(80, 40, 120, 140)) -> bytes:
 
 
 class FakeDocument:
-    """Stands in for a Krita document: a file name and horizontal guides."""
+    """Stands in for a Krita document: a file name, horizontal guides and annotations."""
 
     def __init__(self, name: str = "", guides=()):
         self.name, self.guides = name, list(guides)
-
-    def fileName(self):  # noqa: N802 (Krita's API)
-        return self.name
-
-    def horizontalGuides(self):  # noqa: N802 (Krita's API)
-        return self.guides
+        self.annotations: dict[str, tuple[str, bytes]] = {}
 
 
 class FakeHost:
@@ -63,9 +58,22 @@ class FakeHost:
         self.blends: list[str] = []
         self.reads = 0
         self.document = FakeDocument("a.kra")
+        self.closed: list[FakeDocument] = []
 
     def active_document(self):
         return self.document
+
+    def horizontal_guides(self, document):
+        return list(document.guides) if document is not None else []
+
+    def is_open(self, document):
+        return document not in self.closed
+
+    def annotation(self, document, kind):
+        return document.annotations.get(kind, ("", b""))[1]
+
+    def set_annotation(self, document, kind, description, data):
+        document.annotations[kind] = (description, bytes(data))
 
     def read_source(self, document):
         self.reads += 1
