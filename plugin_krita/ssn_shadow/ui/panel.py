@@ -54,7 +54,8 @@ class ShadowPanel(QWidget):
         self.controller = controller
         self.model: ShadowModel = controller.model
         self._bindings: list[Binding] = []
-        self._syncing = False
+        self._syncing = False  # the light sliders show the selected light (no edit)
+        self._showing_map = False  # the map widget shows the model's map (no edit)
         self._build()
         self._wire()
         self.show_model(controller.model)
@@ -286,11 +287,11 @@ class ShadowPanel(QWidget):
     # -- lights --------------------------------------------------------------------------
     def _show_light_map(self, light_map: lm.LightMap) -> None:
         if self.map_widget.light_map != light_map:  # else the widget's own edit: it shows it already
-            self._syncing = True
+            self._showing_map = True
             try:
                 self.map_widget.editor.load(light_map.copy())
             finally:
-                self._syncing = False
+                self._showing_map = False
         self._sync_light_controls()
 
     def _choose_preset(self, index: int) -> None:
@@ -301,7 +302,7 @@ class ShadowPanel(QWidget):
         self.model.light_map = lm.preset(name)
 
     def _lights_changed(self, live: bool, new_stroke: bool) -> None:
-        if self._syncing:
+        if self._showing_map:
             return
         self._sync_light_controls()
         dragging = live and self.map_widget.editor.dragging  # a preview in the docker; the layer on release
