@@ -18,7 +18,7 @@ from __future__ import annotations
 
 import copy
 from collections.abc import Callable
-from typing import Any, Generic, TypeVar
+from typing import Any, Generic, TypeVar, overload
 
 from PyQt5.QtCore import QMetaObject, QObject
 
@@ -45,9 +45,13 @@ class Property(Generic[T]):
     def __set_name__(self, owner: type, name: str) -> None:
         self.name = name
 
-    def __get__(self, instance: Any, owner: type | None = None) -> T:
+    @overload
+    def __get__(self, instance: None, owner: type | None = None) -> Property[T]: ...
+    @overload
+    def __get__(self, instance: object, owner: type | None = None) -> T: ...
+    def __get__(self, instance: Any, owner: type | None = None) -> T | Property[T]:
         if instance is None:
-            return self  # type: ignore[return-value]  # the class attribute is the descriptor
+            return self  # the class attribute is the descriptor
         values = instance.__dict__.setdefault("_property_values", {})
         if self.name not in values:
             values[self.name] = copy.deepcopy(self.default)
@@ -60,7 +64,7 @@ class Property(Generic[T]):
 
     def set(self, instance: Any, value: T) -> bool:
         """Store ``value``; emit ``<name>_changed`` and call the owner's hook if it differs. True if it did."""
-        old = self.__get__(instance)
+        old = self.__get__(instance, type(instance))
         if old == value:
             return False
         instance.__dict__["_property_values"][self.name] = value
