@@ -135,6 +135,18 @@ def reopen(*args):
         controller, panel = docker_parts(doc)
         out["shown"] = shown(panel)
         out["modified_after_reading"] = doc.modified()
+
+        # the docker itself, on the active document: it shows that document's settings, the same model at
+        # each view change (Krita hands out a new Document wrapper each time)
+        from ssn_shadow.docker import SoftShadowDocker
+
+        out["active_is_opened"] = k.activeDocument() == doc
+        docker = SoftShadowDocker()
+        first = docker.controller.model
+        docker.canvasChanged(None)
+        out["docker_same_model"] = docker.controller.model is first
+        out["docker_shown"] = shown(docker.panel)
+        docker.engine.shutdown()
         doc.close()
         out["done"] = True
     except Exception:

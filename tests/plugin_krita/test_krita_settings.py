@@ -42,3 +42,6 @@ def test_settings_survive_saving_closing_and_reopening_the_kra(tmp_path):
     assert second["shown"]["panel"]["use_horizon"] and second["shown"]["panel"]["horizon"] == 123
     assert second["shown"]["status"][0] == "info"  # read without complaint
     assert not second["modified_after_reading"]  # reading the settings is no change
+    # the docker on the active (reopened) document shows them too, one model per document across view changes
+    assert second["active_is_opened"] and second["docker_same_model"]
+    assert second["docker_shown"] == second["shown"]

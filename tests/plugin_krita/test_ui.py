@@ -1,3 +1,5 @@
+import json
+
 from PyQt5.QtCore import QEvent, QPoint, QPointF, Qt
 from PyQt5.QtGui import QMouseEvent, QWheelEvent
 from PyQt5.QtTest import QTest
@@ -6,6 +8,7 @@ from PyQt5.QtWidgets import QApplication
 from krita_helpers import FakeHost
 from plugin_krita.ssn_shadow.ao_edits import AoEdits
 from plugin_krita.ssn_shadow.controller import ShadowController
+from plugin_krita.ssn_shadow.persistence import ANNOTATION, DocumentModels
 from plugin_krita.ssn_shadow.shared import light_map as lm
 from plugin_krita.ssn_shadow.ui.light_map_widget import LightMapWidget, slider_to_softness, softness_to_slider
 from plugin_krita.ssn_shadow.ui.panel import ShadowPanel
@@ -216,7 +219,6 @@ def test_the_panel_shows_the_active_documents_model(qapp):
     """Each document has its own settings: the panel follows the controller to another document's model and
     back, and an edit reaches only the model shown."""
     from krita_helpers import FakeDocument
-    from plugin_krita.ssn_shadow.persistence import DocumentModels
 
     host = FakeHost()
     models = DocumentModels(host)
@@ -261,3 +263,19 @@ def test_ao_preview_zooms_on_the_cutout_and_stretches_the_occlusion(qapp):
     ao[44 * n + 24] = 0xC0  # an AO edit: same cutout, the view stays
     preview.set_images(bytes(ao), bytes(mask), n)
     assert preview.view == (left, top, size)
+
+
+def test_ao_edits_stay_with_their_cutout(qapp):
+    """A Generate from another layer starts without the AO edits painted on the last one (saved so)."""
+    host = FakeHost()
+    c = ShadowController(NoEngine(), host, DocumentModels(host).model_for(host.document))
+    c.model.grow_ao(2)
+    c.model.ao_strength = 2.0
+    c.generate()  # the first source: the edits (e.g. loaded with the image) apply to it
+    assert c.model.ao_edit_list() == [{"op": "grow", "pixels": 2}, {"op": "strength", "value": 2.0}]
+    c.source = host.read_source(host.document)
+    c.source.node_id = "another-layer"
+    c._renders.clear()
+    c.generate()
+    assert c.model.ao_edit_list() == [] and c.model.ao_strength == 1.0
+    assert json.loads(host.document.annotations[ANNOTATION][1])["ao_edits"] == {"steps": [], "strength": 1.0}
