@@ -18,7 +18,6 @@ from __future__ import annotations
 
 from collections.abc import Iterator
 from contextlib import contextmanager
-from typing import Any
 
 from PyQt5.QtCore import QObject, pyqtSignal
 
@@ -88,6 +87,13 @@ class ShadowModel(QObject):
 
     def end_stroke(self) -> None:
         self._stroke = 0
+
+    def take_step(self) -> bool:
+        """Whether an edit now starts a new undo step (outside a stroke, always; in one, its first edit)."""
+        if self._stroke == 1:
+            self._stroke = 2
+            return True
+        return self._stroke == 0
 
     def edit_light_map(self, light_map: lm.LightMap, new_step: bool, dragging: bool = False) -> None:
         """The editor's map changed (the model keeps a copy). ``dragging``: a move of a light drag (the docker
@@ -168,14 +174,7 @@ class ShadowModel(QObject):
         finally:
             self._quiet = quiet
 
-    def take_step(self) -> bool:
-        """Whether an edit now starts a new undo step (outside a stroke, always; in one, its first edit)."""
-        if self._stroke == 1:
-            self._stroke = 2
-            return True
-        return self._stroke == 0
-
-    def _property_set(self, name: str, old: Any) -> None:
+    def _property_set(self, name: str) -> None:
         if name in _CAMERA and self._quiet:  # shown or loaded: the camera to compare the next edit with
             self._camera = self.camera
         if name in ("status", "camera_read") or self._quiet:

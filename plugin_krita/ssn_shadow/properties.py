@@ -3,7 +3,7 @@
 A :class:`Property` on a ``QObject`` subclass stores one value per instance
 and, when a new value differs from the old one, emits the class's
 ``<name>_changed`` signal (which the class declares) and calls the owner's
-``_property_set(name, old)`` hook, where one exists. Read-only properties
+``_property_set(name)`` hook, where one exists. Read-only properties
 (state the owner derives, shown but never edited) refuse plain assignment;
 their owner sets them with :meth:`Property.set`.
 
@@ -71,7 +71,7 @@ class Property(Generic[T]):
         getattr(instance, f"{self.name}_changed").emit(value)
         hook = getattr(instance, "_property_set", None)
         if hook is not None:
-            hook(self.name, old)
+            hook(self.name)
         return True
 
 
