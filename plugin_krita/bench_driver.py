@@ -105,10 +105,10 @@ def trace_replies(engine):
 def spin(controller, timeout_s):
     loop = QEventLoop()
     QTimer.singleShot(int(timeout_s * 1000), loop.quit)
-    controller.busyChanged.connect(lambda busy: None if busy else loop.quit())
+    connection = controller.busy_changed.connect(lambda busy: None if busy else loop.quit())
     if controller.busy:
         loop.exec_()
-    controller.busyChanged.disconnect()
+    controller.busy_changed.disconnect(connection)
 
 
 def live_drag(doc, depth):
@@ -117,7 +117,7 @@ def live_drag(doc, depth):
     parts (the worker's render, the host's write)."""
     c = controller_for(doc)
     messages = out.setdefault("live_messages", {})[depth] = []
-    c.status.connect(lambda level, text: messages.append([level, text]) if level != "info" else None)
+    c.model.status_changed.connect(lambda status: messages.append(list(status)) if status[0] != "info" else None)
     c.generate()
     spin(c, 120)
     previews, writes, write_ms = [], [], []
@@ -134,12 +134,12 @@ def live_drag(doc, depth):
     c.host.write = timed_write
     replies = trace_replies(c.engine)
     light = {"i": 0}
-    editor = c.light_map.copy()
+    editor = c.model.light_map.copy()
 
     def move():  # what the light map widget does on every mouse move (60 Hz)
         light["i"] += 1
         editor.move(0, 0.30 + 0.4 * ((light["i"] % 240) / 240.0), 0.6)
-        c.drag_light_map(editor)
+        c.model.edit_light_map(editor, light["i"] == 1, dragging=True)
 
     def drag(seconds):
         timer = QTimer()
@@ -159,7 +159,7 @@ def live_drag(doc, depth):
     for _ in range(RELEASES):
         drag(0.25)  # a short drag: a preview is in flight at the release, as after a real one
         released, start = time.perf_counter(), len(writes)
-        c.set_light_map(editor, False)
+        c.model.edit_light_map(editor, False)
         spin(c, 30)
         if len(writes) > start:
             at, info = writes[start]
@@ -196,7 +196,9 @@ def generate_latency(doc, runs=3):
     times = []
     for i in range(runs):
         c.forget_cutout()  # a fresh cutout each time: the full path (read alpha, AO, render, write)
-        c.light_map.move(0, 0.3 + 0.1 * i, 0.6)
+        lights = c.model.light_map.copy()
+        lights.move(0, 0.3 + 0.1 * i, 0.6)
+        c.model.light_map = lights  # no source after forget_cutout: nothing renders before the Generate
         t = time.perf_counter()
         c.generate()
         spin(c, 120)

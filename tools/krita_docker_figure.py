@@ -44,6 +44,9 @@ class Host:
     def active_document(self):
         return self.Document()
 
+    def horizontal_guides(self, document):
+        return document.horizontalGuides()
+
 
 def main(argv: list[str] | None = None) -> int:
     p = argparse.ArgumentParser(description=__doc__.splitlines()[0])
@@ -66,7 +69,7 @@ def main(argv: list[str] | None = None) -> int:
     pw, ph, _ = protocol.preview_size(width, height, PREVIEW_SIDE)
     framing = session.framing.scaled(pw / width)
     image = Image.fromarray(over(studio_background(), pawn)).resize((pw, ph), Image.Resampling.LANCZOS)
-    shadow = session.render(controller.light_map, framing)
+    shadow = session.render(controller.model.light_map, framing)
     shown = preview_image(np.asarray(image), shadow, session.cover(framing), horizon=520.0 * pw / width)
     panel.drag_preview.set_image(shown.tobytes(), pw, ph)
     panel.resize(340, panel.heightForWidth(340) if panel.hasHeightForWidth() else panel.sizeHint().height())
@@ -79,7 +82,7 @@ def main(argv: list[str] | None = None) -> int:
     panel.grab().save(args.out)
     print(f"wrote {args.out}", file=sys.stderr)
     panel.use_horizon.setChecked(False)  # blind: the worker's set_cutout reply carries the camera it read
-    controller.cameraRead.emit(session.camera_read)
+    controller.model.report_camera_read(session.camera_read)
     for _ in range(10):
         app.processEvents()
     panel.use_horizon.parentWidget().grab().save(args.camera_out)

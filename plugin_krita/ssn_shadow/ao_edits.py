@@ -1,14 +1,21 @@
-"""The docker's list of AO edits (protocol ops), with undo of the last stroke or step."""
+"""The docker's AO edits: brush strokes and grow/shrink steps (protocol ops), with undo of the last one."""
 
 from __future__ import annotations
 
+import copy
+
 
 class AoEdits:
-    """Brush strokes and grow/shrink steps in order, plus one global strength (last)."""
+    """Brush strokes and grow/shrink steps in order (the AO strength is the model's own setting)."""
 
-    def __init__(self) -> None:
-        self.steps: list[list[dict]] = []  # a brush stroke (several dabs) or one grow op per step
-        self.strength = 1.0
+    def __init__(self, steps: list[list[dict]] | None = None) -> None:
+        self.steps: list[list[dict]] = copy.deepcopy(steps) if steps else []  # a stroke (dabs) or one grow op
+
+    def __eq__(self, other: object) -> bool:
+        return isinstance(other, AoEdits) and other.steps == self.steps
+
+    def copy(self) -> AoEdits:
+        return AoEdits(self.steps)
 
     def brush(self, x: float, y: float, radius: float, strength: float, new_stroke: bool) -> None:
         dab = {"op": "brush", "x": round(x, 4), "y": round(y, 4), "radius": radius, "strength": strength}
@@ -26,13 +33,9 @@ class AoEdits:
             return True
         return False
 
-    def reset(self) -> None:
-        self.steps.clear()
-        self.strength = 1.0
-
-    def to_list(self) -> list[dict]:
-        """The protocol's ``edits`` list."""
+    def to_list(self, strength: float = 1.0) -> list[dict]:
+        """The protocol's ``edits`` list: the steps' ops, then ``strength`` unless it is 1."""
         ops = [op for step in self.steps for op in step]
-        if self.strength != 1.0:
-            ops.append({"op": "strength", "value": self.strength})
+        if strength != 1.0:
+            ops.append({"op": "strength", "value": strength})
         return ops

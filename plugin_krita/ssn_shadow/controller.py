@@ -1,4 +1,9 @@
-"""The docker's logic: source -> engine cutout -> AO -> render -> shadow layer, asynchronously.
+"""The docker's conversation with the worker: source -> engine cutout -> AO -> render -> shadow layer.
+
+The controller renders what its :class:`model.ShadowModel` (the active
+document's) says, as the model's ``edited`` signal asks, and reports back into
+the model (status, the camera the engine read). What each request holds is
+built in :mod:`worker_requests`; when requests go out, in :mod:`scheduling`.
 
 Renders are coalesced (latest wins): while one is in flight, further requests
 merge into one pending request, which is sent as soon as the reply arrives and
@@ -17,201 +22,161 @@ undo step for the whole drag.
 from __future__ import annotations
 
 import time
-from dataclasses import dataclass
 from typing import Any
 
 from PyQt5.QtCore import QObject, QTimer, pyqtSignal
 
-from .adapters.krita_document import SourceError
-from .adapters.pixel_format import UnsupportedFormat, blend_mode, shadow_color
+from . import worker_requests
+from .adapters.krita_document import Source, SourceError
+from .adapters.pixel_format import UnsupportedFormat
 from .engine import EngineError
-from .shared import defaults
-from .shared import light_map as lm
-from .shared import protocol
-
+from .model import ShadowModel
+from .properties import Property
+from .scheduling import Drag, LatestWins, RenderJob, RenderQueue
 
 PREVIEW_SIDE = 320  # pixels: the longer side of the docker's live preview
 PAUSE_MS = 300  # a drag that rests this long writes the layer
-
-
-def document_key(document: Any) -> str:
-    """What identifies a document for remembered settings: its file, or (unsaved) the object."""
-    return document.fileName() or f"unsaved:{id(document)}"
-
-
-@dataclass
-class RenderJob:
-    """One wanted render; ``new_step`` makes its layer write an undo step, ``reread`` re-reads the source;
-    ``retried``: it already sent the cutout again once (after a worker restart)."""
-
-    new_step: bool
-    reread: bool
-    started: float = 0.0
-    retried: bool = False
-
-    def merge(self, other: RenderJob) -> RenderJob:
-        return RenderJob(self.new_step or other.new_step, self.reread or other.reread, self.started or other.started)
-
-
-@dataclass
-class Drag:
-    """A light drag in progress: the preview's background ((width, height, RGBA), None when there is no
-    preview) and whether the drag has written its layer yet (at a rest)."""
-
-    background: tuple[int, int, bytes] | None
-    wrote: bool = False
+NO_GUIDE = "Add a horizontal guide on the horizon first (drag one down from the top ruler), then press From guide."
 
 
 class ShadowController(QObject):
-    """State of one docker and the requests that realise it."""
+    """Realises a model's shadow through the engine worker, and writes it into the document."""
 
-    busyChanged = pyqtSignal(bool)
-    status = pyqtSignal(str, str)  # level ("info" | "warning" | "error"), text for people
+    busy_changed = pyqtSignal(bool)
+    live_changed = pyqtSignal(bool)
     aoChanged = pyqtSignal(bytes, bytes, int)  # AO map, framed mask (N x N uint8 each), N
     rendered = pyqtSignal(dict)  # {"elapsed_ms", "timing_ms", "width", "height", "created", "method"}
     engineReady = pyqtSignal(dict)
     previewed = pyqtSignal(bytes, int, int)  # packed RGB, width, height: the live preview of a light drag
-    cameraRead = pyqtSignal(object)  # {"horizon", "fov"} the model read from the outline (no camera set), or None
 
-    def __init__(self, engine: Any, host: Any, parent: QObject | None = None) -> None:
+    busy: Property[bool] = Property(False, readonly=True)  # a request is in flight
+    live: Property[bool] = Property(True)  # follow each edit with a render (else only Generate renders)
+
+    def __init__(self, engine: Any, host: Any, model: ShadowModel | None = None, parent: QObject | None = None) -> None:
         super().__init__(parent)
         self.engine, self.host = engine, host
-        self.light_map = lm.preset(lm.DEFAULT_PRESET)
-        self.ao_edits: list[dict] = []
-        self.color: tuple[float, float, float] = (0.0, 0.0, 0.0)
-        self.opacity = defaults.OPACITY
-        self.camera: dict | None = None  # {"horizon": canvas row, "fov": degrees}, or None: the default camera
-        self._cameras: dict[str, dict | None] = {}  # remembered per document
-        self.live = True
-        self.source = None
+        self.model = model if model is not None else ShadowModel()
+        self.model.edited.connect(self._edited)
+        self.source: Source | None = None
         self.cutout: str | None = None
         self._cutout_key: str | None = None
         self._mask = b""
-        self._in_flight = False
-        self._pending: RenderJob | None = None
-        self._edit_in_flight = False
-        self._edit_dirty = False
-        self._busy = False
+        self._renders = RenderQueue()
+        self._edits = LatestWins()
+        self._previews = LatestWins()
         self.renders = 0
         self.previews = 0
         self._layer_map: Any = None  # the light map of the last layer render sent
         self._drag: Drag | None = None
-        self._preview_in_flight = False
-        self._preview_pending = False
         self._pause = QTimer(self)
         self._pause.setSingleShot(True)
         self._pause.timeout.connect(self._drag_rested)
         if hasattr(engine, "ready"):
-            engine.ready.connect(self._on_engine_ready)
+            engine.ready.connect(self.engineReady.emit)
 
     # -- public API (called by the UI) ------------------------------------------
-    @property
-    def busy(self) -> bool:
-        return self._busy
+    def set_model(self, model: ShadowModel) -> None:
+        """Render another document's model from now on (the next Generate reads that document afresh)."""
+        if model is self.model:
+            return
+        self.model.edited.disconnect(self._edited)
+        self.model = model
+        model.edited.connect(self._edited)
+        self.forget_cutout()
 
     def generate(self) -> None:
         """Read the source again and render; the layer write is one new undo step."""
         self._schedule(RenderJob(new_step=True, reread=True, started=time.perf_counter()))
 
-    def lights_edited(self, stroke_started: bool = False) -> None:
-        """The light map or the shadow options changed; re-render at once when Live is on and a shadow exists."""
-        if self.live and self.source is not None:
-            self._schedule(RenderJob(new_step=stroke_started, reread=False, started=time.perf_counter()))
+    def horizon_from_guide(self) -> None:
+        """Give the model's horizon on the active document's first horizontal guide (or say how to add one)."""
+        if not self.model.horizon_from_guides(self.host.horizontal_guides(self.host.active_document())):
+            self.model.report_status("warning", NO_GUIDE)
 
-    def set_light_map(self, light_map: Any, stroke_started: bool = True) -> None:
-        """The editor's map changed (the controller keeps its own copy); it ends a previewed drag. A map equal
-        to the last one rendered, as after the last move of a live drag, renders nothing new."""
+    def cancel(self) -> None:
+        """Stop waiting for the engine (a hung or slow analysis): the worker is stopped and restarts with the
+        next request; the image is left as it is."""
+        if not self.busy:
+            return
+        self.engine.cancel()
+        self.cutout, self._cutout_key = None, None
+        self._edits.clear()
+        self._previews.clear()
+        self._fail("Cancelled. The shadow engine starts again with the next Generate.", "warning")
+
+    def forget_cutout(self) -> None:
+        """Another document or view: the next render reads its source afresh."""
+        self.cutout, self._cutout_key, self.source = None, None, None
+        self._drag = None
+        self._pause.stop()
+
+    # -- the model's edits ----------------------------------------------------------
+    def _edited(self, what: str, new_step: bool) -> None:
+        if what == "light_map":
+            if self.model.light_dragging:
+                self._light_dragged()
+            else:
+                self._light_map_set(new_step)
+        elif what == "ao_edits":
+            if self.cutout is not None:
+                self._send_edits()
+                self._rerender(new_step)
+        else:
+            self._rerender(new_step)
+
+    def _rerender(self, new_step: bool) -> None:
+        """Re-render at once when Live is on and a shadow exists."""
+        if self.live and self.source is not None:
+            self._schedule(RenderJob(new_step=new_step, reread=False, started=time.perf_counter()))
+
+    def _light_map_set(self, new_step: bool) -> None:
+        """The map changed; it ends a previewed drag. A map equal to the last one rendered, as after the last
+        move of a live drag, renders nothing new."""
         drag, self._drag = self._drag, None
         self._pause.stop()
-        self.light_map = light_map.copy()
+        light_map = self.model.light_map
         if drag is not None:  # the drag's layer: its undo step unless a rest already wrote one
             if light_map != self._layer_map or not drag.wrote:
-                self.lights_edited(stroke_started=stroke_started or not drag.wrote)
+                self._rerender(new_step or not drag.wrote)
             return
-        if light_map == self._layer_map and not stroke_started:
+        if light_map == self._layer_map and not new_step:
             return
-        self.lights_edited(stroke_started=stroke_started)
+        self._rerender(new_step)
 
-    def drag_light_map(self, light_map: Any) -> None:
+    def _light_dragged(self) -> None:
         """A light is being dragged: update the docker's preview (:attr:`previewed`); the layer follows when the
-        drag rests or ends (:meth:`set_light_map`). Before a first Generate, or with Live off, only the map is
-        kept."""
-        self.light_map = light_map.copy()
-        if not self.live or self.source is None:
+        drag rests or ends. Before a first Generate, or with Live off, nothing is rendered."""
+        source = self.source
+        if not self.live or source is None:
             return
         if self._drag is None:
             background = None
             if self.cutout is not None:  # else (the worker restarted) the layer alone follows
                 try:
-                    background = self.host.preview_background(self.source, PREVIEW_SIDE)
+                    background = self.host.preview_background(source, PREVIEW_SIDE)
                 except Exception as exc:  # the UI boundary: no preview, the layer still follows
-                    self.status.emit("warning", f"No live preview: {type(exc).__name__}: {exc}")
+                    self.model.report_status("warning", f"No live preview: {type(exc).__name__}: {exc}")
             self._drag = Drag(background)
         self._pause.start(PAUSE_MS)
         self._request_preview()
 
-    def set_ao_edits(self, edits: list[dict], stroke_started: bool = False) -> None:
-        """Replace the AO edits (the whole list); the worker re-applies them to its AO map."""
-        self.ao_edits = list(edits)
-        if self.cutout is None:
-            return
-        self._send_edits()
-        self.lights_edited(stroke_started=stroke_started)
-
-    def set_camera(self, camera: dict | None) -> None:
-        """The image's horizon row and field of view (None: the engine's default camera), remembered for the
-        active document; the worker analyses the cutout again with it."""
-        self.camera = dict(camera) if camera is not None else None
-        document = self.host.active_document()
-        if document is not None:
-            self._cameras[document_key(document)] = self.camera
-        self.lights_edited(stroke_started=True)
-
-    def camera_for(self, document) -> dict | None:
-        """The camera remembered for ``document`` (None when none was set)."""
-        return self._cameras.get(document_key(document)) if document is not None else None
-
-    def cancel(self) -> None:
-        """Stop waiting for the engine (a hung or slow analysis): the worker is stopped and restarts with the
-        next request; the image is left as it is."""
-        if not self._busy:
-            return
-        self.engine.cancel()
-        self.cutout, self._cutout_key = None, None
-        self._edit_in_flight = self._edit_dirty = False
-        self._preview_in_flight = self._preview_pending = False
-        self._fail("Cancelled. The shadow engine starts again with the next Generate.", "warning")
-
     def _drag_rested(self) -> None:
-        if self._drag is not None and self.light_map != self._layer_map:
-            self.lights_edited(stroke_started=not self._drag.wrote)
+        if self._drag is not None and self.model.light_map != self._layer_map:
+            self._rerender(not self._drag.wrote)
             self._drag.wrote = True
 
+    # -- preview ------------------------------------------------------------------
     def _request_preview(self) -> None:
-        drag, source = self._drag, self.source
-        if drag is None or drag.background is None or source is None or self.cutout is None:
+        drag, source, cutout = self._drag, self.source, self.cutout
+        if drag is None or drag.background is None or source is None or cutout is None:
             return
-        if self._preview_in_flight:
-            self._preview_pending = True  # latest wins: sent with the map of the moment when the reply comes
-            return
-        self._preview_in_flight, self._preview_pending = True, False
-        width, height, rgba = drag.background
-        params: dict[str, Any] = {
-            "cutout": self.cutout,
-            "light_map": self.light_map.to_dict(),
-            "color": list(self.color),  # the thumbnail is 8-bit sRGB, whatever the document's profile
-            "opacity": self.opacity,
-        }
-        if self.camera:
-            params["horizon"] = self.camera["horizon"] * width / source.width
-        else:
-            params["read_horizon"] = True  # the horizon the model read, dotted
-        background = protocol.Buffer("uint8", (height, width, 4), rgba)
-        self.engine.request("preview", params, {"background": background}, self._on_preview, self._on_preview_error)
+        if not self._previews.begin():
+            return  # latest wins: sent with the map of the moment when the reply comes
+        params, buffers = worker_requests.preview(self.model, cutout, source, drag.background)
+        self.engine.request("preview", params, buffers, self._on_preview, self._on_preview_error)
 
     def _on_preview(self, reply: dict, buffers: dict) -> None:
-        self._preview_in_flight = False
-        if self._preview_pending:
+        if self._previews.end():
             self._request_preview()
         image = buffers.get("image")
         if image is not None and len(image.shape) == 3:
@@ -219,40 +184,34 @@ class ShadowController(QObject):
             self.previewed.emit(bytes(image.data), int(image.shape[1]), int(image.shape[0]))
 
     def _on_preview_error(self, error: EngineError) -> None:
-        self._preview_in_flight = self._preview_pending = False
+        self._previews.clear()
         if error.kind in ("UnknownCutout", "WorkerUnavailable"):
             self.cutout, self._cutout_key = None, None  # the drag's end sends the cutout again
         else:
-            self.status.emit("warning", f"Live preview: {error}")
-
-    def forget_cutout(self) -> None:
-        self.cutout, self._cutout_key, self.source = None, None, None
+            self.model.report_status("warning", f"Live preview: {error}")
 
     # -- scheduling ---------------------------------------------------------------
     def _schedule(self, job: RenderJob) -> None:
-        if self._in_flight:
-            self._pending = job if self._pending is None else self._pending.merge(job)
-            return
-        self._run(job)
+        now = self._renders.submit(job)
+        if now is not None:
+            self._run(now)
 
     def _set_busy(self, busy: bool) -> None:
-        if busy != self._busy:
-            self._busy = busy
-            self.busyChanged.emit(busy)
+        type(self).busy.set(self, busy)
 
     def _fail(self, message: str, level: str = "error") -> None:
-        self._in_flight, self._pending = False, None
+        self._renders.clear()
         self._set_busy(False)
-        self.status.emit(level, message)
+        self.model.report_status(level, message)
 
     def _run(self, job: RenderJob) -> None:
-        self._in_flight = True
+        self._renders.start()
         self._set_busy(True)
         try:
             if job.reread or self.source is None:
                 source = self.host.read_source(self.host.active_document())
                 if self.source is not None and source.node_id != self.source.node_id:
-                    self.ao_edits = []
+                    self.model.clear_ao_edits()
                 self.source = source
             self._ensure_cutout(lambda: self._render(job), job)
         except (SourceError, UnsupportedFormat) as exc:
@@ -263,42 +222,32 @@ class ShadowController(QObject):
     def _ensure_cutout(self, then: Any, job: RenderJob) -> None:
         source = self.source
         assert source is not None, "a job reads its source first"
-        key = f"{source.key}:{sorted(self.camera.items()) if self.camera else None}"  # the AO depends on both
+        camera = self.model.camera
+        key = worker_requests.cutout_key(source, camera)
         if self.cutout is not None and key == self._cutout_key:
             then()
             return
-        self.status.emit("info", "Analysing the cutout (ambient occlusion)...")
-        alpha = protocol.Buffer(source.dtype, (source.height, source.width), source.alpha)
+        self.model.report_status("info", "Analysing the cutout (ambient occlusion)...")
 
         def on_cutout(reply: dict, buffers: dict) -> None:
             self.cutout, self._cutout_key = reply["cutout"], key
-            self.cameraRead.emit(reply.get("camera_read"))
-            if self.ao_edits:
+            self.model.report_camera_read(reply.get("camera_read"))
+            edits = self.model.ao_edit_list()
+            if edits:
                 self.engine.request(
-                    "edit_ao",
-                    {"cutout": self.cutout, "edits": self.ao_edits},
-                    None,
-                    self._on_ao_edited,
-                    self._on_edit_error,
+                    "edit_ao", {"cutout": self.cutout, "edits": edits}, None, self._on_ao_edited, self._on_edit_error
                 )
             self.engine.request("get_ao", {"cutout": self.cutout}, None, self._on_ao, None)
             then()
 
-        params = {"camera": self.camera} if self.camera else {}
-        self.engine.request("set_cutout", params, {"alpha": alpha}, on_cutout, lambda e: self._on_error(e, job))
+        params, buffers = worker_requests.set_cutout(source, camera)
+        self.engine.request("set_cutout", params, buffers, on_cutout, lambda e: self._on_error(e, job))
 
     def _render(self, job: RenderJob) -> None:
-        source = self.source
-        assert source is not None, "a job reads its source first"
-        self._layer_map = self.light_map.copy()
-        params = {
-            "cutout": self.cutout,
-            "light_map": self.light_map.to_dict(),
-            "color": shadow_color(self.color, source.profile),
-            "opacity": self.opacity,
-            "format": source.layer_format.render_format(),
-        }
-        blend = blend_mode(self.color)  # the mode of the colour rendered, whatever the colour is by the reply
+        source, cutout = self.source, self.cutout
+        assert source is not None and cutout is not None, "a job reads its source and sends its cutout first"
+        self._layer_map = self.model.light_map.copy()
+        params, blend = worker_requests.render(self.model, cutout, source)  # the blend of the colour rendered
         self.engine.request(
             "render",
             params,
@@ -308,9 +257,8 @@ class ShadowController(QObject):
         )
 
     # -- replies --------------------------------------------------------------------
-    def _on_rendered(self, job: RenderJob, source: Any, blend: str, reply: dict, buffers: dict) -> None:
-        nxt, self._pending = self._pending, None
-        self._in_flight = False
+    def _on_rendered(self, job: RenderJob, source: Source, blend: str, reply: dict, buffers: dict) -> None:
+        nxt = self._renders.finish()
         if nxt is not None:
             self._run(nxt)  # the worker renders the next frame while this one is written
         rect = (int(reply["x"]), int(reply["y"]), int(reply["width"]), int(reply["height"]))
@@ -332,12 +280,14 @@ class ShadowController(QObject):
             "method": reply.get("method", ""),
         }
         if result.notice:
-            self.status.emit("warning", result.notice)
+            self.model.report_status("warning", result.notice)
         elif rect[2] == 0:
-            self.status.emit("warning", "No visible shadow with these lights (is every light at zero intensity?).")
+            self.model.report_status(
+                "warning", "No visible shadow with these lights (is every light at zero intensity?)."
+            )
         elif job.new_step:
-            self.status.emit("info", f"Shadow {rect[2]} x {rect[3]} px in {elapsed:.0f} ms ({info['method']}).")
-        if not self._in_flight:
+            self.model.report_status("info", f"Shadow {rect[2]} x {rect[3]} px in {elapsed:.0f} ms ({info['method']}).")
+        if not self._renders.in_flight:
             self._set_busy(False)
         self.rendered.emit(info)
 
@@ -346,7 +296,7 @@ class ShadowController(QObject):
             self.cutout, self._cutout_key = None, None  # the next request sends the cutout again
         if error.kind == "UnknownCutout" and not job.retried:
             # The worker restarted (it died while idle, or dropped the cutout): send the cutout again, once.
-            self._in_flight = False
+            self._renders.in_flight = False
             self._run(RenderJob(job.new_step, True, job.started, retried=True))
             return
         level = "warning" if error.kind == "EmptyAlpha" else "error"
@@ -359,25 +309,19 @@ class ShadowController(QObject):
             self.aoChanged.emit(bytes(ao.data), self._mask, int(ao.shape[0]))
 
     def _send_edits(self) -> None:
-        if self._edit_in_flight:
-            self._edit_dirty = True
+        if not self._edits.begin():
             return
-        self._edit_in_flight, self._edit_dirty = True, False
-        self.engine.request(
-            "edit_ao", {"cutout": self.cutout, "edits": self.ao_edits}, None, self._on_ao_edited, self._on_edit_error
-        )
+        edits = {"cutout": self.cutout, "edits": self.model.ao_edit_list()}
+        self.engine.request("edit_ao", edits, None, self._on_ao_edited, self._on_edit_error)
 
     def _on_ao_edited(self, reply: dict, buffers: dict) -> None:
-        self._edit_in_flight = False
+        again = self._edits.end()
         ao = buffers.get("ao")
         if ao is not None and self._mask:
             self.aoChanged.emit(bytes(ao.data), self._mask, int(ao.shape[0]))
-        if self._edit_dirty and self.cutout is not None:
+        if again and self.cutout is not None:
             self._send_edits()
 
     def _on_edit_error(self, error: EngineError) -> None:
-        self._edit_in_flight = self._edit_dirty = False
-        self.status.emit("error", str(error))
-
-    def _on_engine_ready(self, info: dict) -> None:
-        self.engineReady.emit(info)
+        self._edits.clear()
+        self.model.report_status("error", str(error))

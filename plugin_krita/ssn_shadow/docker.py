@@ -1,4 +1,4 @@
-"""The "Soft Shadow" docker inside Krita (thin: builds the engine client, host adapter and panel)."""
+"""The "Soft Shadow" docker inside Krita (thin: builds the engine client, host adapter, models and panel)."""
 
 from __future__ import annotations
 
@@ -8,6 +8,7 @@ from PyQt5.QtWidgets import QApplication, QFrame, QScrollArea
 from .adapters.host import KritaHost
 from .controller import ShadowController
 from .engine import EngineProcess
+from .persistence import DocumentModels
 from .ui.panel import ShadowPanel
 
 DOCKER_ID = "ssn_shadow_docker"
@@ -21,7 +22,9 @@ class SoftShadowDocker(DockWidget):
         super().__init__()
         self.setWindowTitle(TITLE)
         self.engine = EngineProcess(parent=self)
-        self.controller = ShadowController(self.engine, KritaHost(Krita.instance()), self)
+        host = KritaHost(Krita.instance())
+        self.models = DocumentModels(host)
+        self.controller = ShadowController(self.engine, host, self.models.model_for(host.active_document()), self)
         self.panel = ShadowPanel(self.controller)
         # Docked in a short window, the panel scrolls instead of squeezing its controls over each other.
         scroll = QScrollArea()
@@ -34,9 +37,11 @@ class SoftShadowDocker(DockWidget):
             app.aboutToQuit.connect(self.engine.shutdown)
 
     def canvasChanged(self, canvas) -> None:  # noqa: N802 (Krita's API)
-        """Another document or view: the next Generate reads its source afresh, with that document's camera."""
+        """Another document or view: the docker shows that document's settings, and the next Generate reads its
+        source afresh."""
         try:
             self.controller.forget_cutout()
-            self.panel.document_changed(Krita.instance().activeDocument())
+            self.controller.set_model(self.models.model_for(self.controller.host.active_document()))
+            self.panel.show_model(self.controller.model)
         except Exception as exc:  # never crash the host
             self.panel.show_message("error", f"Soft Shadow: {exc}")

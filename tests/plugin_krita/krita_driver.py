@@ -76,11 +76,23 @@ def wait_for(controller, timeout_s=90.0):
     timer = QTimer()
     timer.setSingleShot(True)
     timer.timeout.connect(loop.quit)
-    controller.busyChanged.connect(lambda busy: None if busy else loop.quit())
+    connection = controller.busy_changed.connect(lambda busy: None if busy else loop.quit())
     timer.start(int(timeout_s * 1000))
     if controller.busy:
         loop.exec_()
-    controller.busyChanged.disconnect()
+    controller.busy_changed.disconnect(connection)
+
+
+def choose(controller, lights=None, color=None):
+    """Set the lights (a preset's name) or the colour with Live off, as a user who then presses Generate."""
+    from ssn_shadow.shared import light_map as lm
+
+    live, controller.live = controller.live, False
+    if lights is not None:
+        controller.model.light_map = lm.preset(lights)
+    if color is not None:
+        controller.model.color = color
+    controller.live = live
 
 
 def alpha_plane(node, depth):
@@ -133,7 +145,6 @@ def run_case(depth, with_window):
     from ssn_shadow.adapters.host import KritaHost
     from ssn_shadow.controller import ShadowController
     from ssn_shadow.engine import EngineProcess
-    from ssn_shadow.shared import light_map as lm
 
     k = Krita.instance()
     case = out["cases"][depth] = {}
@@ -147,11 +158,11 @@ def run_case(depth, with_window):
     host.active_document = lambda: doc  # several test documents are open; the docker uses the active one
     controller = ShadowController(engine, host)
     messages = case["messages"] = []
-    controller.status.connect(lambda level, text: messages.append([level, text]))
+    controller.model.status_changed.connect(lambda status: messages.append(list(status)))
     renders = case["renders"] = []
     controller.rendered.connect(lambda info: renders.append(info))
 
-    controller.light_map = lm.preset("low-sun-left")  # light left of centre: shadow to the right
+    choose(controller, "low-sun-left")  # light left of centre: shadow to the right
     t = time.perf_counter()
     controller.generate()
     wait_for(controller)
@@ -166,7 +177,7 @@ def run_case(depth, with_window):
     engine._proc.waitForFinished(5000)
     QApplication.processEvents()
     messages_before = len(messages)
-    controller.light_map = lm.preset("low-sun-right")  # shadow to the left
+    choose(controller, "low-sun-right")  # shadow to the left
     controller.generate()
     wait_for(controller)
     case["after_second"] = shadow_state(doc, depth)
@@ -194,7 +205,7 @@ def run_case(depth, with_window):
         doc.setSelection(sel)
         activate(doc, person)
         sel_before = bytes(doc.selection().pixelData(0, 0, W, H))
-        controller.light_map = lm.preset("low-sun-left")
+        choose(controller, "low-sun-left")
         controller.generate()
         wait_for(controller)
         case["with_selection"] = shadow_state(doc, depth)
@@ -253,10 +264,11 @@ def run_case(depth, with_window):
         controller.generate()
         wait_for(controller)
         case["before_camera"] = shadow_state(doc, depth)
+        case["camera_read"] = controller.model.camera_read
         doc.setHorizontalGuides([40.0])
         panel.from_guide.click()
         wait_for(controller)
-        case["camera_from_guide"] = controller.camera
+        case["camera_from_guide"] = controller.model.camera
         case["with_camera"] = shadow_state(doc, depth)
 
         # The docker in a short dock area (issue #14, item 5): the panel scrolls, at its full height
@@ -280,7 +292,7 @@ def run_case(depth, with_window):
     host.active_document = lambda: doc
     doc.setSelection(Selection())
     activate(doc, person)
-    controller.light_map = lm.preset("low-sun-left")  # shadow to the right
+    choose(controller, "low-sun-left")  # shadow to the right
     controller.generate()
     wait_for(controller)
     pump(0.5)
@@ -306,10 +318,10 @@ def run_case(depth, with_window):
     }
     previews, start, said = [], len(renders), len(messages)
     controller.previewed.connect(lambda rgb, w, h: previews.append((rgb, w, h)))
-    editor = controller.light_map.copy()
+    editor = controller.model.light_map.copy()
     for i in range(12):  # a mouse drag, faster than the rest delay
         editor.move(0, 0.25 + 0.01 * i, editor.lights[0].v)
-        controller.drag_light_map(editor)
+        controller.model.edit_light_map(editor, i == 0, dragging=True)
         pump(0.05)
     pump(0.1)
     drag.update(
@@ -322,7 +334,7 @@ def run_case(depth, with_window):
         shadow_visible=all(n.visible() for n in doc.rootNode().childNodes()),
         active=doc.activeNode().name() if doc.activeNode() is not None else None,
     )
-    controller.set_light_map(editor, False)  # the release
+    controller.model.edit_light_map(editor, False)  # the release
     wait_for(controller)
     drag["writes_after"] = len(renders) - start
     drag["release_created"] = bool(renders[-1]["created"]) if len(renders) > start else None
@@ -340,7 +352,7 @@ def run_case(depth, with_window):
         image = doc.projection(0, 0, W, H).convertToFormat(QImage.Format.Format_RGBA8888)
         modes[mode]["reds"] = reds(image.constBits().asstring(image.sizeInBytes()), W, 1.0, 4)
     # a coloured shadow is written as a Multiply layer, which tints what lies under it
-    controller.color = (0.2, 0.3, 0.9)
+    choose(controller, color=(0.2, 0.3, 0.9))
     controller.generate()
     wait_for(controller)
     case["coloured"] = shadow_state(doc, depth)

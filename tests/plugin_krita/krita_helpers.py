@@ -1,8 +1,15 @@
 """Shared helpers of the plug-in tests: waiting on the Qt event loop, a stand-in Krita host."""
 
+import json
+import os
+import random
+import shutil
+import subprocess
 import sys
 import time
 from pathlib import Path
+
+import pytest
 
 from PyQt5.QtCore import QEventLoop, QTimer
 
@@ -12,6 +19,61 @@ from ssn_engine import protocol
 from ssn_engine.engine_config import EngineConfig
 
 REPO = Path(__file__).resolve().parents[2]
+HERE = Path(__file__).resolve().parent
+IN_CI = os.environ.get("CI") == "true"
+
+
+def need(tool: str) -> str:
+    """The tool's path; outside CI a missing tool skips the test."""
+    path = shutil.which(tool)
+    if path is None:
+        if IN_CI:
+            pytest.fail(f"{tool} is missing in CI (.ci/run installs it)")
+        pytest.skip(f"{tool} not installed")
+    return path
+
+
+def run_kritarunner(pykrita: Path, module: str, function: str, result: Path, env_extra: dict[str, str]) -> dict:
+    """Run ``function`` of the driver ``module`` (in this folder) in a fresh Krita (kritarunner) on a virtual X
+    server, with the plug-in installed in ``pykrita``; returns the JSON the driver wrote to ``result``.
+
+    Needs Debian's krita (kritarunner) and xvfb-run: Krita's undo action exists only with a window, which
+    kritarunner can open on an X server but not on the offscreen platform.
+    """
+    kritarunner = need("kritarunner")
+    xvfb = need("xvfb-run")
+    env = dict(os.environ)
+    env.update(
+        env_extra,
+        SSN_TEST_RESULT=str(result),
+        # the plug-in as installed, the driver, and the repo (so the worker's Python finds ssn_engine)
+        PYTHONPATH=os.pathsep.join([str(pykrita), str(HERE), str(REPO)]),
+        XDG_RUNTIME_DIR=str(result.parent),
+    )
+    env.pop("SSN_SHADOW_ENGINE_CONFIG", None)
+    # Krita's embedded Python finds its home through the first python3 on PATH: make it Debian's,
+    # not the test's (pyenv, venv, /usr/local), or it cannot import PyQt5/PyKrita.
+    env["PATH"] = os.pathsep.join(["/usr/bin", "/bin", env.get("PATH", "")])
+    env.pop("QT_QPA_PLATFORM", None)  # xcb on the virtual X server (the unit tests set offscreen)
+    # kritarunner's exit status says nothing (and it may crash on exit): the result file counts. xvfb-run -a
+    # checks only this /tmp's lock files, so an X server elsewhere (the GIMP test's chroot shares the abstract
+    # socket namespace) can hold the display it picks ("could not connect to display"): start the search at a
+    # random number, and retry.
+    for _attempt in range(3):
+        proc = subprocess.run(
+            [xvfb, "-a", "-n", str(random.randint(200, 900)), kritarunner, "-s", module, "-f", function],
+            env=env,
+            capture_output=True,
+            text=True,
+            timeout=180,
+        )
+        if result.exists() or "could not connect to display" not in proc.stderr:
+            break
+    assert result.exists(), f"Krita wrote no result\n{proc.stdout[-3000:]}\n{proc.stderr[-3000:]}"
+    data = json.loads(result.read_text())
+    assert "error" not in data, data["error"]
+    assert data.get("done"), data
+    return data
 
 
 def worker_command(*args: str) -> EngineConfig:
@@ -40,16 +102,11 @@ def cutout_alpha(w: int = 200, h: int = 160, box=(80, 40, 120, 140)) -> bytes:
 
 
 class FakeDocument:
-    """Stands in for a Krita document: a file name and horizontal guides."""
+    """Stands in for a Krita document: a file name, horizontal guides and annotations."""
 
     def __init__(self, name: str = "", guides=()):
         self.name, self.guides = name, list(guides)
-
-    def fileName(self):  # noqa: N802 (Krita's API)
-        return self.name
-
-    def horizontalGuides(self):  # noqa: N802 (Krita's API)
-        return self.guides
+        self.annotations: dict[str, tuple[str, bytes]] = {}
 
 
 class FakeHost:
@@ -63,9 +120,22 @@ class FakeHost:
         self.blends: list[str] = []
         self.reads = 0
         self.document = FakeDocument("a.kra")
+        self.closed: list[FakeDocument] = []
 
     def active_document(self):
         return self.document
+
+    def horizontal_guides(self, document):
+        return list(document.guides) if document is not None else []
+
+    def is_open(self, document):
+        return document not in self.closed
+
+    def annotation(self, document, kind):
+        return document.annotations.get(kind, ("", b""))[1]
+
+    def set_annotation(self, document, kind, description, data):
+        document.annotations[kind] = (description, bytes(data))
 
     def read_source(self, document):
         self.reads += 1

@@ -9,9 +9,16 @@ def make(host, command=worker_command):
     engine = EngineProcess(command)
     c = ShadowController(engine, host)
     messages, aos = [], []
-    c.status.connect(lambda level, text: messages.append((level, text)))
+    c.model.status_changed.connect(messages.append)
     c.aoChanged.connect(lambda ao, mask, n: aos.append(n))
     return c, engine, messages, aos
+
+
+def moved(c, u, v, new_step, dragging=False):
+    """The editor moved the first light to (u, v)."""
+    light_map = c.model.light_map.copy()
+    light_map.move(0, u, v)
+    c.model.edit_light_map(light_map, new_step, dragging)
 
 
 def test_the_layer_mode_follows_the_shadow_colour(qapp):
@@ -22,9 +29,10 @@ def test_the_layer_mode_follows_the_shadow_colour(qapp):
     try:
         c.generate()
         assert wait_until(lambda: not c.busy and len(host.writes) == 1), messages
-        c.color = (0.3, 0.1, 0.6)
+        c.live = False  # the colour changes render only with Generate
+        c.model.color = (0.3, 0.1, 0.6)
         c.generate()
-        c.color = (0.0, 0.0, 0.0)
+        c.model.color = (0.0, 0.0, 0.0)
         assert wait_until(lambda: not c.busy and len(host.writes) == 2), messages
         c.generate()
         assert wait_until(lambda: not c.busy and len(host.writes) == 3), messages
@@ -37,7 +45,7 @@ def test_generate_then_live_drag(qapp):
     host = FakeHost()
     c, engine, messages, aos = make(host)
     busy = []
-    c.busyChanged.connect(busy.append)
+    c.busy_changed.connect(busy.append)
     try:
         c.generate()
         assert c.busy
@@ -51,9 +59,8 @@ def test_generate_then_live_drag(qapp):
         assert wait_until(lambda: not c.busy and len(host.writes) == 2)
         assert c.cutout == cutout and host.writes[1][2]
 
-        for i in range(30):  # a fast drag: requests coalesce, only the first is an undo step
-            c.light_map.move(0, 0.2 + 0.01 * i, 0.6)
-            c.lights_edited(i == 0)
+        for i in range(30):  # a fast slider drag: requests coalesce, only the first is an undo step
+            moved(c, 0.2 + 0.01 * i, 0.6, i == 0)
         assert wait_until(lambda: not c.busy)
         live = host.writes[2:]
         assert 1 <= len(live) < 30
@@ -61,8 +68,9 @@ def test_generate_then_live_drag(qapp):
         assert host.reads == 2  # live updates do not read the image again
         assert not [m for m in messages if m[0] == "error"]
 
-        c.set_ao_edits([{"op": "strength", "value": 2.0}], stroke_started=True)
+        c.model.ao_strength = 2.0
         assert wait_until(lambda: not c.busy and len(aos) >= 2)
+        assert host.writes[-1][2]  # a new undo step
     finally:
         engine.shutdown()
 
@@ -81,34 +89,30 @@ def test_a_light_drag_previews_in_the_docker_and_writes_the_layer_once(qapp):
     shown = []
     c.previewed.connect(lambda rgb, w, h: shown.append((len(rgb), w, h)))
     try:
-        c.drag_light_map(c.light_map)  # before any Generate: nothing to preview, nothing written
+        moved(c, 0.3, 0.6, True, dragging=True)  # before any Generate: nothing to preview, nothing written
         assert not c.busy and not shown and not host.writes
-        c.set_light_map(c.light_map, False)
+        c.model.edit_light_map(c.model.light_map, False)
         c.generate()
         assert wait_until(lambda: not c.busy and len(host.writes) == 1)
         for i in range(20):  # a drag, faster than the rest delay
-            c.light_map.move(0, 0.2 + 0.02 * i, 0.6)
-            c.drag_light_map(c.light_map)
+            moved(c, 0.2 + 0.02 * i, 0.6, i == 0, dragging=True)
             _spin(40)
         assert len(host.writes) == 1 and len(shown) >= 3, messages
         assert shown[-1] == (320 * 256 * 3, 320, 256)  # the 800 x 640 image at the preview's size
-        c.set_light_map(c.light_map, False)  # the release
+        c.model.edit_light_map(c.model.light_map, False)  # the release
         assert wait_until(lambda: not c.busy and len(host.writes) == 2)
         assert host.writes[1][2]  # the drag's one undo step
 
-        c.light_map.move(0, 0.7, 0.5)
-        c.drag_light_map(c.light_map)
+        moved(c, 0.7, 0.5, True, dragging=True)
         assert wait_until(lambda: len(host.writes) == 3, 5)  # the drag rests: the layer follows, a new step
         assert host.writes[2][2]
-        c.light_map.move(0, 0.75, 0.5)
-        c.drag_light_map(c.light_map)
-        c.set_light_map(c.light_map, False)  # it moved on, then the release: in place, the same step
+        moved(c, 0.75, 0.5, False, dragging=True)
+        c.model.edit_light_map(c.model.light_map, False)  # it moved on, then the release: in place, the same step
         assert wait_until(lambda: not c.busy and len(host.writes) == 4)
         assert not host.writes[3][2]
-        c.light_map.move(0, 0.8, 0.5)
-        c.drag_light_map(c.light_map)
+        moved(c, 0.8, 0.5, True, dragging=True)
         assert wait_until(lambda: len(host.writes) == 5, 5) and host.writes[4][2]
-        c.set_light_map(c.light_map, False)  # released where it rested: nothing new
+        c.model.edit_light_map(c.model.light_map, False)  # released where it rested: nothing new
         _spin(200)
         assert len(host.writes) == 5 and not c.busy
         assert not [m for m in messages if m[0] != "info"], messages
@@ -120,7 +124,8 @@ def test_live_off_does_not_render(qapp):
     host = FakeHost()
     c, engine, messages, _ = make(host)
     c.live = False
-    c.lights_edited(True)
+    moved(c, 0.3, 0.5, True)
+    c.model.opacity = 0.5
     assert not c.busy and not host.writes
     engine.stop()
 
@@ -167,8 +172,7 @@ def test_worker_crash_mid_session_recovers(qapp):
         assert wait_until(lambda: not c.busy and host.writes)
         engine._proc.kill()  # the worker dies
         assert wait_until(lambda: not engine.running)
-        c.light_map.move(0, 0.3, 0.5)
-        c.lights_edited(True)  # needs the cutout again: sent again from the kept source
+        moved(c, 0.3, 0.5, True)  # needs the cutout again: sent again from the kept source
         assert wait_until(lambda: not c.busy and len(host.writes) == 2), messages
     finally:
         engine.shutdown()
@@ -180,14 +184,16 @@ def test_the_camera_reaches_the_worker_and_changes_the_shadow(qapp):
     host = FakeHost()
     c, engine, messages, _ = make(host)
     reads = []
-    c.cameraRead.connect(reads.append)
+    c.model.camera_read_changed.connect(reads.append)
     try:
         c.generate()
         assert wait_until(lambda: not c.busy and host.writes), messages
         first_cutout = c.cutout
         assert wait_until(lambda: reads), messages
         assert reads[-1] is not None and set(reads[-1]) == {"horizon", "fov"}  # blind: the model read one
-        c.set_camera({"horizon": -400.0, "fov": 40.0})  # seen from high above
+        c.model.horizon, c.model.fov = -400.0, 40.0  # seen from high above
+        assert len(host.writes) == 1  # not given yet: the same camera, nothing rendered
+        c.model.use_horizon = True
         assert wait_until(lambda: not c.busy and len(host.writes) == 2), messages
         assert c.cutout != first_cutout  # a new analysis with the camera
         assert reads[-1] is None
@@ -203,7 +209,7 @@ def test_cancel_stops_waiting_for_a_hung_worker(qapp):
     hung = EngineProcess(lambda: worker_command("-c", "import time; time.sleep(60)"), timeout_s=120.0)
     c = ShadowController(hung, host)
     messages = []
-    c.status.connect(lambda level, text: messages.append((level, text)))
+    c.model.status_changed.connect(messages.append)
     c.generate()
     assert c.busy
     c.cancel()

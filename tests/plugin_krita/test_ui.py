@@ -1,3 +1,5 @@
+import json
+
 from PyQt5.QtCore import QEvent, QPoint, QPointF, Qt
 from PyQt5.QtGui import QMouseEvent, QWheelEvent
 from PyQt5.QtTest import QTest
@@ -6,6 +8,7 @@ from PyQt5.QtWidgets import QApplication
 from krita_helpers import FakeHost
 from plugin_krita.ssn_shadow.ao_edits import AoEdits
 from plugin_krita.ssn_shadow.controller import ShadowController
+from plugin_krita.ssn_shadow.persistence import ANNOTATION, DocumentModels
 from plugin_krita.ssn_shadow.shared import light_map as lm
 from plugin_krita.ssn_shadow.ui.light_map_widget import LightMapWidget, slider_to_softness, softness_to_slider
 from plugin_krita.ssn_shadow.ui.panel import ShadowPanel
@@ -87,13 +90,11 @@ def test_ao_edits_list():
     e.brush(0.5, 0.9, 0.05, -0.5, True)
     e.brush(0.52, 0.9, 0.05, -0.5, False)
     e.grow(2)
-    e.strength = 1.5
-    ops = e.to_list()
+    ops = e.to_list(1.5)
     assert [o["op"] for o in ops] == ["brush", "brush", "grow", "strength"]
-    assert e.undo() and [o["op"] for o in e.to_list()] == ["brush", "brush", "strength"]
-    assert e.undo() and e.to_list() == [{"op": "strength", "value": 1.5}]
-    e.reset()
-    assert e.to_list() == [] and not e.undo()
+    assert e.undo() and [o["op"] for o in e.to_list(1.5)] == ["brush", "brush", "strength"]
+    assert e.undo() and e.to_list(1.5) == [{"op": "strength", "value": 1.5}]
+    assert not e.undo() and e.to_list() == []
 
 
 def test_panel_state(qapp):
@@ -102,24 +103,38 @@ def test_panel_state(qapp):
     panel = ShadowPanel(c)
     panel.show()
     assert not panel.busy.isVisible()
+    assert "press Generate" in panel.message.text()
     panel.generate.click()
     assert panel.busy.isVisible() and panel.cancel.isVisible() and engine.sent == ["set_cutout"]
     c._fail("the shadow engine exited with code 1; it will restart on the next request.")
     assert not panel.busy.isVisible() and not panel.cancel.isVisible() and "restart" in panel.message.text()
 
+    m = c.model
     panel.presets.setCurrentIndex(panel.presets.findText("two-lights"))
     panel.presets.activated.emit(panel.presets.currentIndex())
-    assert len(c.light_map) == 2 and panel.map_widget.light_map == c.light_map
-    assert panel.map_widget.light_map is not c.light_map  # the controller keeps its own copy
+    assert len(m.light_map) == 2 and panel.map_widget.light_map == m.light_map
+    assert panel.map_widget.light_map is not m.light_map  # the model keeps its own copy
 
     panel.live.setChecked(False)
     assert c.live is False
+    c.live = True
+    assert panel.live.isChecked()
     panel.opacity.setValue(40)
-    assert c.opacity == 0.4
-    panel.set_colour((0.1, 0.1, 0.3))
-    assert c.color == (0.1, 0.1, 0.3)
+    assert m.opacity == 0.4
+    m.opacity = 0.7  # the model changed (e.g. loaded): the slider follows
+    assert panel.opacity.value() == 70
+    m.color = (0.1, 0.1, 0.3)
+    assert "rgb(26, 26, 76)" in panel.color_button.styleSheet()
     panel.intensity.setValue(250)
-    assert c.light_map.lights[panel.map_widget.selected].intensity == 2.5
+    assert m.light_map.lights[panel.map_widget.selected].intensity == 2.5
+    panel.ao_strength.setValue(150)
+    assert m.ao_strength == 1.5 and m.ao_edit_list() == [{"op": "strength", "value": 1.5}]
+    panel.grow.click()
+    panel.ao_undo.click()
+    panel.shrink.click()
+    assert m.ao_edits.steps == [[{"op": "grow", "pixels": -2}]]
+    panel.ao_reset.click()
+    assert m.ao_edit_list() == [] and panel.ao_strength.value() == 100
 
 
 def test_a_drag_on_the_map_previews_and_the_release_renders_the_layer(qapp):
@@ -140,7 +155,7 @@ def test_a_drag_on_the_map_previews_and_the_release_renders_the_layer(qapp):
     assert engine.params[0]["read_horizon"] is True and "horizon" not in engine.params[0]  # no camera set
     QTest.mouseRelease(w, Qt.LeftButton, Qt.NoModifier, pos(w, light.u + 0.15, light.v))
     assert engine.sent[1:] == ["set_cutout"]  # the layer's render (the cutout first: its key is new here)
-    assert c.light_map == w.light_map
+    assert c.model.light_map == w.light_map
 
     assert not panel.drag_preview.isVisible()
     c.previewed.emit(bytes([90, 90, 90]) * (200 * 160), 200, 160)
@@ -162,31 +177,23 @@ def test_ui_errors_are_shown_not_raised(qapp):
     assert "kaput" in panel.message.text()
 
 
-def test_horizon_from_guide_is_remembered_per_document(qapp):
-    from krita_helpers import FakeDocument
-
+def test_horizon_from_guide(qapp):
     host = FakeHost()
     c = ShadowController(NoEngine(), host)
     panel = ShadowPanel(c)
-    assert not panel.use_horizon.isChecked() and not panel.horizon.isEnabled() and c.camera is None
+    m = c.model
+    assert not panel.use_horizon.isChecked() and not panel.horizon.isEnabled() and m.camera is None
     panel.from_guide.click()  # no guide yet: says how to add one, changes nothing
-    assert "horizontal guide" in panel.message.text() and c.camera is None
+    assert "horizontal guide" in panel.message.text() and m.camera is None
     host.document.guides = [412.6]
     panel.from_guide.click()
-    assert c.camera == {"horizon": 413.0, "fov": 45.0} and panel.use_horizon.isChecked()
+    assert m.camera == {"horizon": 413.0, "fov": 45.0} and panel.use_horizon.isChecked()
+    assert panel.horizon.value() == 413 and panel.horizon.isEnabled()
     panel.fov.setValue(60)
     panel.fov.editingFinished.emit()
-    assert c.camera == {"horizon": 413.0, "fov": 60.0}
-
-    first, other = host.document, FakeDocument("b.kra")
-    host.document = other
-    panel.document_changed(other)  # another document: its own (no) camera
-    assert c.camera is None and not panel.use_horizon.isChecked()
-    host.document = first
-    panel.document_changed(first)
-    assert c.camera == {"horizon": 413.0, "fov": 60.0} and panel.horizon.value() == 413
+    assert m.camera == {"horizon": 413.0, "fov": 60.0}
     panel.use_horizon.setChecked(False)
-    assert c.camera is None and c.camera_for(first) is None
+    assert m.camera is None and not panel.fov.isEnabled()
 
 
 def test_the_camera_read_from_the_outline_is_shown_and_ticking_starts_from_it(qapp):
@@ -194,15 +201,41 @@ def test_the_camera_read_from_the_outline_is_shown_and_ticking_starts_from_it(qa
     line of text); ticking the box sends that camera, and the line goes away."""
     c = ShadowController(NoEngine(), FakeHost())
     panel = ShadowPanel(c)
+    m = c.model
+    edits = []
+    m.edited.connect(lambda what, step: edits.append(what))
     assert panel.camera_read.isHidden()
-    c.cameraRead.emit({"horizon": 412.4, "fov": 47.2})
-    assert not panel.use_horizon.isChecked() and not panel.horizon.isEnabled() and c.camera is None
-    assert panel.horizon.value() == 412 and panel.fov.value() == 47
+    m.report_camera_read({"horizon": 412.4, "fov": 47.2})
+    assert not panel.use_horizon.isChecked() and not panel.horizon.isEnabled() and m.camera is None
+    assert panel.horizon.value() == 412 and panel.fov.value() == 47 and not edits  # shown, not an edit
     assert not panel.camera_read.isHidden() and "row 412" in panel.camera_read.text()
     panel.use_horizon.setChecked(True)
-    assert c.camera == {"horizon": 412.0, "fov": 47.0} and panel.camera_read.isHidden()
-    c.cameraRead.emit(None)  # the cutout analysed with that camera: nothing read
+    assert m.camera == {"horizon": 412.0, "fov": 47.0} and panel.camera_read.isHidden() and edits == ["camera"]
+    m.report_camera_read(None)  # the cutout analysed with that camera: nothing read
     assert panel.camera_read.isHidden() and panel.horizon.value() == 412
+
+
+def test_the_panel_shows_the_active_documents_model(qapp):
+    """Each document has its own settings: the panel follows the controller to another document's model and
+    back, and an edit reaches only the model shown."""
+    from krita_helpers import FakeDocument
+
+    host = FakeHost()
+    models = DocumentModels(host)
+    first, other = host.document, FakeDocument("b.kra")
+    c = ShadowController(NoEngine(), host, models.model_for(first))
+    panel = ShadowPanel(c)
+    host.document.guides = [300.0]
+    panel.from_guide.click()
+    panel.opacity.setValue(30)
+    c.set_model(models.model_for(other))
+    panel.show_model(c.model)
+    assert not panel.use_horizon.isChecked() and panel.opacity.value() == 85  # the other's defaults
+    panel.opacity.setValue(55)
+    c.set_model(models.model_for(first))
+    panel.show_model(c.model)
+    assert panel.use_horizon.isChecked() and panel.horizon.value() == 300 and panel.opacity.value() == 30
+    assert models.model_for(other).opacity == 0.55 and c.model is models.model_for(first)
 
 
 def test_ao_preview_zooms_on_the_cutout_and_stretches_the_occlusion(qapp):
@@ -230,3 +263,19 @@ def test_ao_preview_zooms_on_the_cutout_and_stretches_the_occlusion(qapp):
     ao[44 * n + 24] = 0xC0  # an AO edit: same cutout, the view stays
     preview.set_images(bytes(ao), bytes(mask), n)
     assert preview.view == (left, top, size)
+
+
+def test_ao_edits_stay_with_their_cutout(qapp):
+    """A Generate from another layer starts without the AO edits painted on the last one (saved so)."""
+    host = FakeHost()
+    c = ShadowController(NoEngine(), host, DocumentModels(host).model_for(host.document))
+    c.model.grow_ao(2)
+    c.model.ao_strength = 2.0
+    c.generate()  # the first source: the edits (e.g. loaded with the image) apply to it
+    assert c.model.ao_edit_list() == [{"op": "grow", "pixels": 2}, {"op": "strength", "value": 2.0}]
+    c.source = host.read_source(host.document)
+    c.source.node_id = "another-layer"
+    c._renders.clear()
+    c.generate()
+    assert c.model.ao_edit_list() == [] and c.model.ao_strength == 1.0
+    assert json.loads(host.document.annotations[ANNOTATION][1])["ao_edits"] == {"steps": [], "strength": 1.0}

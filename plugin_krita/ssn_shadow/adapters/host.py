@@ -1,4 +1,4 @@
-"""The Krita host as the controller sees it: the active document, its source, the shadow layer."""
+"""The Krita host as the docker sees it: the active document, its source, the shadow layer, its annotations."""
 
 from __future__ import annotations
 
@@ -9,7 +9,16 @@ from PyQt5.QtCore import QTimer
 if TYPE_CHECKING:
     from krita import Document, Krita
 
-from .krita_document import LayerWriter, Source, WriteResult, preview_background, read_source
+from .krita_document import (
+    LayerWriter,
+    Source,
+    WriteResult,
+    horizontal_guides,
+    preview_background,
+    read_annotation,
+    read_source,
+    write_annotation,
+)
 
 
 class KritaHost:
@@ -39,3 +48,16 @@ class KritaHost:
     def preview_background(self, source: Source, side: int) -> tuple[int, int, bytes]:
         """The image without the source's shadow, at most ``side`` pixels a side: (width, height, RGBA)."""
         return preview_background(source.document, source.node, side)
+
+    def horizontal_guides(self, document: Document | None) -> list[float]:
+        return horizontal_guides(document)
+
+    def is_open(self, document: Document) -> bool:
+        """``document`` is still open in Krita (not closed)."""
+        return any(open_document == document for open_document in self.krita.documents())
+
+    def annotation(self, document: Document, kind: str) -> bytes:
+        return read_annotation(document, kind)
+
+    def set_annotation(self, document: Document, kind: str, description: str, data: bytes) -> None:
+        write_annotation(document, kind, description, data)

@@ -301,3 +301,21 @@ class LayerWriter:
             "below it: the shadow was put above it. Move the shadow layer below the cutout "
             "(or add a layer under the cutout first)."
         )
+
+
+def read_annotation(document: Document, kind: str) -> bytes:
+    """The document's annotation of type ``kind`` (empty when it has none)."""
+    return bytes(document.annotation(kind))
+
+
+def write_annotation(document: Document, kind: str, description: str, data: bytes) -> None:
+    """Set (add or replace) the document's annotation of type ``kind``. Krita saves it in the .kra file; it
+    touches no pixel and adds no undo step, and marks the document modified."""
+    from PyQt5.QtCore import QByteArray
+
+    document.setAnnotation(kind, description, QByteArray(data))
+
+
+def horizontal_guides(document: Document | None) -> list[float]:
+    """The document's horizontal guides (canvas rows), in Krita's order; none without a document."""
+    return list(document.horizontalGuides()) if document is not None else []

@@ -1,4 +1,10 @@
-"""The docker's content: light map editor, AO preview and tools, shadow options, Generate/Live."""
+"""The docker's content: light map editor, AO preview and tools, camera, shadow options, Generate/Live.
+
+The panel shows one document's :class:`model.ShadowModel` (the controller's
+current one) through bindings: each widget shows a property and its edits set
+that property. It reaches Krita only through the controller's actions
+(Generate, From guide, Cancel).
+"""
 
 from __future__ import annotations
 
@@ -22,7 +28,8 @@ from PyQt5.QtWidgets import (
     QWidget,
 )
 
-from ..ao_edits import AoEdits
+from ..model import DEFAULT_FOV, ShadowModel
+from ..properties import Binding, bind
 from ..shared import defaults
 from ..shared import light_map as lm
 from .ao_preview import AOPreview
@@ -30,8 +37,6 @@ from .drag_preview import DragPreview
 from .light_map_widget import LightMapWidget, slider_to_softness, softness_to_slider
 
 LEVEL_COLOURS = {"info": "", "warning": "color: #d08000;", "error": "color: #d03030;"}
-DEFAULT_FOV = 45.0  # degrees, the engine's default camera
-NO_GUIDE = "Add a horizontal guide on the horizon first (drag one down from the top ruler), then press From guide."
 
 
 def _slider(lo: int, hi: int, value: int) -> QSlider:
@@ -42,16 +47,18 @@ def _slider(lo: int, hi: int, value: int) -> QSlider:
 
 
 class ShadowPanel(QWidget):
-    """All controls; talks only to a ShadowController."""
+    """All controls, bound to the controller's model; the actions go to the controller."""
 
     def __init__(self, controller, parent: QWidget | None = None) -> None:
         super().__init__(parent)
         self.controller = controller
-        self.ao_edits = AoEdits()
-        self._syncing = False
+        self.model: ShadowModel = controller.model
+        self._bindings: list[Binding] = []
+        self._syncing = False  # the light sliders show the selected light (no edit)
+        self._showing_map = False  # the map widget shows the model's map (no edit)
         self._build()
         self._wire()
-        self._sync_light_controls()
+        self.show_model(controller.model)
 
     # -- layout ----------------------------------------------------------------------
     def _build(self) -> None:
@@ -66,7 +73,7 @@ class ShadowPanel(QWidget):
         lv.addWidget(self.presets)
         self.drag_preview = DragPreview()
         lv.addWidget(self.drag_preview)
-        self.map_widget = LightMapWidget(self.controller.light_map.copy())
+        self.map_widget = LightMapWidget(lm.LightMap())
         lv.addWidget(self.map_widget)
         form = QFormLayout()
         self.softness = _slider(0, 100, 50)
@@ -142,14 +149,12 @@ class ShadowPanel(QWidget):
         cv.addLayout(cform)
         cv.addWidget(self.camera_read)
         root.addWidget(camera_box)
-        self._show_camera(None)
 
         shadow_box = QGroupBox("Shadow")
         sf = QFormLayout(shadow_box)
         self.color_button = QPushButton()
         self.color_button.setToolTip("Shadow colour")
-        self._show_colour()
-        self.opacity = _slider(0, 100, round(100 * self.controller.opacity))
+        self.opacity = _slider(0, 100, round(100 * defaults.OPACITY))
         sf.addRow("Colour", self.color_button)
         sf.addRow("Opacity", self.opacity)
         root.addWidget(shadow_box)
@@ -157,7 +162,6 @@ class ShadowPanel(QWidget):
         row = QHBoxLayout()
         self.live = QCheckBox("Live")
         self.live.setToolTip("Follow the lights as they change: a preview above the map while a light is dragged")
-        self.live.setChecked(self.controller.live)
         self.generate = QPushButton("Generate shadow")
         self.generate.setDefault(True)
         row.addWidget(self.live)
@@ -175,46 +179,85 @@ class ShadowPanel(QWidget):
         busy_row.addWidget(self.busy, 1)
         busy_row.addWidget(self.cancel)
         root.addLayout(busy_row)
-        self.message = QLabel("Select the cutout's layer (or a selection) and press Generate.")
+        self.message = QLabel()
         self.message.setWordWrap(True)
         self.message.setTextInteractionFlags(Qt.TextInteractionFlag.TextSelectableByMouse)
         root.addWidget(self.message)
         root.addStretch(1)
 
     def _wire(self) -> None:
-        c = self.controller
-        self.generate.clicked.connect(self._guard(lambda *_: c.generate()))
-        self.live.toggled.connect(self._guard(self._set_live))
-        self.presets.activated.connect(self._guard(self._choose_preset))
-        self.map_widget.lightsChanged.connect(self._guard(self._lights_changed))
-        self.map_widget.selectionChanged.connect(self._guard(lambda _: self._sync_light_controls()))
-        self.softness.valueChanged.connect(self._guard(self._softness_moved))
-        self.intensity.valueChanged.connect(self._guard(self._intensity_moved))
-        self.softness.sliderPressed.connect(self._guard(self._slider_pressed))
-        self.intensity.sliderPressed.connect(self._guard(self._slider_pressed))
-        self.ao_preview.brushed.connect(self._guard(self._brush))
-        self.brush_size.valueChanged.connect(self._guard(self._brush_size))
-        self.grow.clicked.connect(self._guard(lambda *_: self._grow(2)))
-        self.shrink.clicked.connect(self._guard(lambda *_: self._grow(-2)))
-        self.ao_strength.valueChanged.connect(self._guard(self._ao_strength))
-        self.ao_strength.sliderPressed.connect(self._guard(self._slider_pressed))
-        self.ao_undo.clicked.connect(self._guard(lambda *_: self._undo_ao()))
-        self.ao_reset.clicked.connect(self._guard(lambda *_: self._reset_ao()))
-        self.color_button.clicked.connect(self._guard(lambda *_: self._pick_colour()))
-        self.opacity.valueChanged.connect(self._guard(self._opacity))
-        self.opacity.sliderPressed.connect(self._guard(self._slider_pressed))
-        self.use_horizon.toggled.connect(self._guard(lambda *_: self._camera_edited()))
-        self.horizon.editingFinished.connect(self._guard(self._camera_edited))
-        self.fov.editingFinished.connect(self._guard(self._camera_edited))
-        self.from_guide.clicked.connect(self._guard(lambda *_: self._horizon_from_guide()))
-        self.cancel.clicked.connect(self._guard(lambda *_: c.cancel()))
-        c.busyChanged.connect(self._guard(self._show_busy))
-        c.status.connect(self._guard(self.show_message))
-        c.aoChanged.connect(self._guard(self.ao_preview.set_images))
-        c.previewed.connect(self._guard(self.drag_preview.set_image))
-        c.engineReady.connect(self._guard(self._engine_ready))
-        c.cameraRead.connect(self._guard(self._show_camera_read))
-        self._stroke = False
+        """The connections that do not depend on the document: actions, tools, the controller's state."""
+        c, guard = self.controller, self._guard
+        self.generate.clicked.connect(guard(lambda *_: c.generate()))
+        self.cancel.clicked.connect(guard(lambda *_: c.cancel()))
+        self.from_guide.clicked.connect(guard(lambda *_: c.horizon_from_guide()))
+        self.presets.activated.connect(guard(self._choose_preset))
+        self.map_widget.lightsChanged.connect(guard(self._lights_changed))
+        self.map_widget.selectionChanged.connect(guard(lambda _: self._sync_light_controls()))
+        self.softness.valueChanged.connect(guard(self._softness_moved))
+        self.intensity.valueChanged.connect(guard(self._intensity_moved))
+        self.ao_preview.brushed.connect(guard(self._brush))
+        self.brush_size.valueChanged.connect(guard(self._brush_size))
+        self.grow.clicked.connect(guard(lambda *_: self.model.grow_ao(2)))
+        self.shrink.clicked.connect(guard(lambda *_: self.model.grow_ao(-2)))
+        self.ao_undo.clicked.connect(guard(lambda *_: self.model.undo_ao()))
+        self.ao_reset.clicked.connect(guard(lambda *_: self.model.reset_ao()))
+        self.color_button.clicked.connect(guard(lambda *_: self._pick_colour()))
+        for slider in (self.softness, self.intensity, self.ao_strength, self.opacity):  # a drag: one undo step
+            slider.sliderPressed.connect(guard(lambda: self.model.begin_stroke()))
+            slider.sliderReleased.connect(guard(lambda: self.model.end_stroke()))
+        bind(c, "live", self.live.setChecked, self.live.toggled, guard(lambda on: setattr(c, "live", on)))
+        bind(c, "busy", guard(self._show_busy))
+        c.aoChanged.connect(guard(self.ao_preview.set_images))
+        c.previewed.connect(guard(self.drag_preview.set_image))
+        c.engineReady.connect(guard(self._engine_ready))
+
+    def show_model(self, model: ShadowModel) -> None:
+        """Show (and edit) ``model``: the controller's, after it changed to another document's."""
+        for binding in self._bindings:
+            binding.disconnect()
+        self.model, guard = model, self._guard
+        self._bindings = [
+            bind(model, "light_map", guard(self._show_light_map)),
+            bind(
+                model,
+                "ao_strength",
+                lambda v: self.ao_strength.setValue(round(100 * v)),
+                self.ao_strength.valueChanged,
+                guard(lambda v: setattr(model, "ao_strength", v / 100.0)),
+            ),
+            bind(
+                model,
+                "use_horizon",
+                guard(self._show_use_horizon),
+                self.use_horizon.toggled,
+                guard(lambda on: setattr(model, "use_horizon", on)),
+            ),
+            bind(
+                model,
+                "horizon",
+                lambda v: self.horizon.setValue(round(v)),
+                self.horizon.editingFinished,
+                guard(lambda: setattr(model, "horizon", float(self.horizon.value()))),
+            ),
+            bind(
+                model,
+                "fov",
+                self.fov.setValue,
+                self.fov.editingFinished,
+                guard(lambda: setattr(model, "fov", float(self.fov.value()))),
+            ),
+            bind(model, "camera_read", guard(lambda _: self._show_camera_read())),
+            bind(model, "color", guard(self._show_colour)),
+            bind(
+                model,
+                "opacity",
+                lambda v: self.opacity.setValue(round(100 * v)),
+                self.opacity.valueChanged,
+                guard(lambda v: setattr(model, "opacity", v / 100.0)),
+            ),
+            bind(model, "status", guard(lambda status: self.show_message(*status))),
+        ]
 
     def _guard(self, fn):
         """Catch everything at the UI boundary and show it in the docker instead."""
@@ -239,27 +282,31 @@ class ShadowPanel(QWidget):
 
     def _engine_ready(self, info: dict) -> None:
         note = info.get("method_note") or info.get("method", "")
-        self.map_widget.setToolTip(self.map_widget.toolTip())
         self.setToolTip(f"Shadow engine {info.get('version', '?')}: {note}")
 
     # -- lights --------------------------------------------------------------------------
-    def _set_live(self, on: bool) -> None:
-        self.controller.live = on
+    def _show_light_map(self, light_map: lm.LightMap) -> None:
+        if self.map_widget.light_map != light_map:  # else the widget's own edit: it shows it already
+            self._showing_map = True
+            try:
+                self.map_widget.editor.load(light_map.copy())
+            finally:
+                self._showing_map = False
+        self._sync_light_controls()
 
     def _choose_preset(self, index: int) -> None:
         if index <= 0:
             return
         name = self.presets.itemText(index)
         self.presets.setCurrentIndex(0)
-        self.map_widget.editor.load(lm.preset(name))
-        self._sync_light_controls()
+        self.model.light_map = lm.preset(name)
 
     def _lights_changed(self, live: bool, new_stroke: bool) -> None:
+        if self._showing_map:
+            return
         self._sync_light_controls()
-        if live and self.map_widget.editor.dragging:  # a preview in the docker; the layer on release
-            self.controller.drag_light_map(self.map_widget.light_map)  # it keeps a copy
-        else:
-            self.controller.set_light_map(self.map_widget.light_map, new_stroke)
+        dragging = live and self.map_widget.editor.dragging  # a preview in the docker; the layer on release
+        self.model.edit_light_map(self.map_widget.light_map, new_stroke, dragging)
 
     def _sync_light_controls(self) -> None:
         i = self.map_widget.selected
@@ -272,22 +319,13 @@ class ShadowPanel(QWidget):
             self.intensity.setValue(round(100 * light.intensity))
             self._syncing = False
 
-    def _slider_pressed(self) -> None:
-        self._stroke = True
-
-    def _take_stroke(self) -> bool:
-        started, self._stroke = self._stroke, False
-        return started
-
     def _softness_moved(self, value: int) -> None:
-        if not self._syncing:  # the widget's lightsChanged re-renders
-            started = self._take_stroke() or not self.softness.isSliderDown()
-            self.map_widget.editor.set_softness(slider_to_softness(value), started)
+        if not self._syncing:  # the widget's lightsChanged edits the model
+            self.map_widget.editor.set_softness(slider_to_softness(value), self.model.take_step())
 
     def _intensity_moved(self, value: int) -> None:
         if not self._syncing:
-            started = self._take_stroke() or not self.intensity.isSliderDown()
-            self.map_widget.editor.set_intensity(value / 100.0, started)
+            self.map_widget.editor.set_intensity(value / 100.0, self.model.take_step())
 
     # -- AO ----------------------------------------------------------------------------------
     def _brush_size(self, value: int) -> None:
@@ -295,107 +333,36 @@ class ShadowPanel(QWidget):
 
     def _brush(self, x: float, y: float, started: bool) -> None:
         sign = -1.0 if self.darken.isChecked() else 1.0
-        self.ao_edits.brush(x, y, self.brush_size.value() / 100.0, sign * self.brush_strength.value() / 100.0, started)
-        self.controller.set_ao_edits(self.ao_edits.to_list(), started)
-
-    def _grow(self, pixels: int) -> None:
-        self.ao_edits.grow(pixels)
-        self.controller.set_ao_edits(self.ao_edits.to_list(), True)
-
-    def _ao_strength(self, value: int) -> None:
-        if self._syncing:
-            return
-        self.ao_edits.strength = value / 100.0
-        started = self._take_stroke() or not self.ao_strength.isSliderDown()
-        self.controller.set_ao_edits(self.ao_edits.to_list(), started)
-
-    def _undo_ao(self) -> None:
-        if self.ao_edits.undo():
-            self.controller.set_ao_edits(self.ao_edits.to_list(), True)
-
-    def _reset_ao(self) -> None:
-        self.ao_edits.reset()
-        self._syncing = True
-        self.ao_strength.setValue(100)
-        self._syncing = False
-        self.controller.set_ao_edits([], True)
+        self.model.brush_ao(x, y, self.brush_size.value() / 100.0, sign * self.brush_strength.value() / 100.0, started)
 
     # -- camera ----------------------------------------------------------------------------
-    def _show_camera(self, camera: dict | None) -> None:
-        """Show a camera (None: the default) without sending it."""
-        self._syncing = True
-        self.use_horizon.setChecked(camera is not None)
-        if camera is not None:
-            self.horizon.setValue(round(camera["horizon"]))
-            self.fov.setValue(camera.get("fov", DEFAULT_FOV))
+    def _show_use_horizon(self, given: bool) -> None:
+        self.use_horizon.setChecked(given)
         for w in (self.horizon, self.fov):
-            w.setEnabled(camera is not None)
-        self._syncing = False
-        self._show_camera_read(None)
+            w.setEnabled(given)
+        self._show_camera_read()
 
-    def _show_camera_read(self, read: dict | None) -> None:
-        """Without a camera of the image's own, show the one the model read from the outline in the (disabled)
-        fields, so that ticking the box starts from it."""
-        if read is None or self.use_horizon.isChecked():
+    def _show_camera_read(self) -> None:
+        """Without a horizon of the image's own, say which camera the model read from the outline (the disabled
+        fields show it, so that ticking the box starts from it)."""
+        read = self.model.camera_read
+        if read is None or self.model.use_horizon:
             self.camera_read.setText("")
             self.camera_read.setVisible(False)
             return
-        self._syncing = True
-        self.horizon.setValue(round(read["horizon"]))
-        self.fov.setValue(read["fov"])
-        self._syncing = False
         self.camera_read.setText(
             f"Read from the cutout's outline: horizon at row {round(read['horizon'])}, {read['fov']:.0f}° field of "
             "view. If the shadow's perspective looks wrong, tick the box and correct them."
         )
         self.camera_read.setVisible(True)
 
-    def _camera_edited(self) -> None:
-        if self._syncing:
-            return
-        on = self.use_horizon.isChecked()
-        for w in (self.horizon, self.fov):
-            w.setEnabled(on)
-        camera = {"horizon": float(self.horizon.value()), "fov": float(self.fov.value())} if on else None
-        if on:
-            self._show_camera_read(None)
-        if camera != self.controller.camera:
-            self.controller.set_camera(camera)
-
-    def _horizon_from_guide(self) -> None:
-        document = self.controller.host.active_document()
-        guides = list(document.horizontalGuides()) if document is not None else []
-        if not guides:
-            self.show_message("warning", NO_GUIDE)
-            return
-        self._syncing = True
-        self.horizon.setValue(round(guides[0]))
-        self.use_horizon.setChecked(True)
-        self._syncing = False
-        self._camera_edited()
-
-    def document_changed(self, document) -> None:
-        """Another document is active: show (and use) the camera remembered for it."""
-        camera = self.controller.camera_for(document)
-        self.controller.camera = camera
-        self._show_camera(camera)
-
     # -- shadow ----------------------------------------------------------------------------
-    def _show_colour(self) -> None:
-        r, g, b = (round(255 * c) for c in self.controller.color)
+    def _show_colour(self, rgb: tuple[float, float, float]) -> None:
+        r, g, b = (round(255 * c) for c in rgb)
         self.color_button.setStyleSheet(f"background-color: rgb({r}, {g}, {b}); min-height: 18px;")
 
     def _pick_colour(self) -> None:
-        r, g, b = (round(255 * c) for c in self.controller.color)
+        r, g, b = (round(255 * c) for c in self.model.color)
         colour = QColorDialog.getColor(QColor(r, g, b), self, "Shadow colour")
         if colour.isValid():
-            self.set_colour((colour.redF(), colour.greenF(), colour.blueF()))
-
-    def set_colour(self, rgb: tuple[float, float, float]) -> None:
-        self.controller.color = tuple(float(c) for c in rgb)
-        self._show_colour()
-        self.controller.lights_edited(True)
-
-    def _opacity(self, value: int) -> None:
-        self.controller.opacity = value / 100.0
-        self.controller.lights_edited(self._take_stroke() or not self.opacity.isSliderDown())
+            self.model.color = (colour.redF(), colour.greenF(), colour.blueF())

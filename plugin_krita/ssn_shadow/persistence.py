@@ -1,0 +1,161 @@
+"""The docker's settings saved in the document, so that they travel with the .kra file.
+
+Each document's :class:`model.ShadowModel` settings (light map, horizon,
+colour, opacity, AO edits) are written, as JSON, into one of the document's
+annotations (:data:`ANNOTATION`) whenever the user changes one, and read
+back when the docker first sees the document. Krita saves annotations in the
+.kra file (``<name>/annotations/ssn_shadow/settings`` in the archive) and
+loads them with it. Writing one changes no pixel and adds no undo step; it
+marks the document modified, so closing it asks to save the changed settings.
+
+The file format (version 1)::
+
+    {"format": "ssn-shadow-krita-settings", "version": 1,
+     "light_map": {...the light-map file's object...},
+     "horizon": {"given": false, "row": 412.0, "fov": 45.0},
+     "color": [0.0, 0.0, 0.0], "opacity": 0.85,
+     "ao_edits": {"steps": [[{"op": "brush", ...}, ...], [{"op": "grow", "pixels": 2}]], "strength": 1.0}}
+"""
+
+from __future__ import annotations
+
+import json
+import math
+from typing import Any
+
+from .ao_edits import AoEdits
+from .model import ShadowModel
+from .shared import defaults
+from .shared import light_map as lm
+
+__all__ = ["ANNOTATION", "DocumentModels", "SettingsError", "dump", "restore"]
+
+ANNOTATION = "ssn_shadow/settings"  # the annotation's type (its name in the document)
+DESCRIPTION = "Soft Shadow docker settings (ssn-shadow)"
+FORMAT = "ssn-shadow-krita-settings"
+VERSION = 1
+FOV_RANGE = (10.0, 120.0)  # degrees, the docker's field-of-view range
+AO_OPS = ("brush", "grow")
+
+
+class SettingsError(ValueError):
+    """Saved settings that cannot be read; the message names the field."""
+
+
+def dump(model: ShadowModel) -> bytes:
+    """The model's settings as the annotation's bytes (UTF-8 JSON)."""
+    data = {
+        "format": FORMAT,
+        "version": VERSION,
+        "light_map": model.light_map.to_dict(),
+        "horizon": {"given": model.use_horizon, "row": model.horizon, "fov": model.fov},
+        "color": list(model.color),
+        "opacity": model.opacity,
+        "ao_edits": {"steps": model.ao_edits.steps, "strength": model.ao_strength},
+    }
+    return json.dumps(data, separators=(",", ":")).encode("utf-8")
+
+
+def restore(model: ShadowModel, data: bytes) -> None:
+    """Set ``model``'s settings from the annotation's bytes: all of them, or (on :class:`SettingsError`) none.
+    The widgets show them; it is no edit (nothing is rendered or saved)."""
+    try:
+        settings = json.loads(data.decode("utf-8"))
+    except (UnicodeDecodeError, json.JSONDecodeError) as exc:
+        raise SettingsError(f"not JSON ({exc})") from None
+    if not isinstance(settings, dict):
+        raise SettingsError(f"expected a JSON object, got {type(settings).__name__}")
+    if settings.get("format") != FORMAT:
+        raise SettingsError(f"format: expected {FORMAT!r}, got {settings.get('format')!r}")
+    if settings.get("version") != VERSION:
+        raise SettingsError(f"version: this Soft Shadow reads version {VERSION}, got {settings.get('version')!r}")
+    try:
+        light_map = lm.LightMap.from_dict(settings.get("light_map"))
+    except lm.LightMapError as exc:
+        raise SettingsError(f"light_map: {exc}") from None
+    horizon = _object(settings, "horizon")
+    given = horizon.get("given")
+    if not isinstance(given, bool):
+        raise SettingsError(f"horizon.given: expected true or false, got {given!r}")
+    row = _number(horizon.get("row"), "horizon.row", -math.inf, math.inf)
+    fov = _number(horizon.get("fov"), "horizon.fov", *FOV_RANGE)
+    color = settings.get("color")
+    if not isinstance(color, list) or len(color) != 3:
+        raise SettingsError(f"color: expected [red, green, blue], got {color!r}")
+    rgb = (
+        _number(color[0], "color[0]", 0.0, 1.0),
+        _number(color[1], "color[1]", 0.0, 1.0),
+        _number(color[2], "color[2]", 0.0, 1.0),
+    )
+    opacity = _number(settings.get("opacity"), "opacity", 0.0, 1.0)
+    ao = _object(settings, "ao_edits")
+    steps = _ao_steps(ao.get("steps"))
+    strength = _number(ao.get("strength"), "ao_edits.strength", 0.0, defaults.MAX_AO_STRENGTH)
+    with model.quietly():
+        model.light_map = light_map
+        model.horizon, model.fov, model.use_horizon = row, fov, given
+        model.color, model.opacity = rgb, opacity
+        model.ao_edits, model.ao_strength = AoEdits(steps), strength
+
+
+def _object(settings: dict, key: str) -> dict:
+    value = settings.get(key)
+    if not isinstance(value, dict):
+        raise SettingsError(f"{key}: expected an object, got {value!r}")
+    return value
+
+
+def _number(value: Any, where: str, lo: float, hi: float) -> float:
+    if isinstance(value, bool) or not isinstance(value, (int, float)) or not math.isfinite(value):
+        raise SettingsError(f"{where}: expected a number, got {value!r}")
+    if not lo <= value <= hi:
+        raise SettingsError(f"{where}: expected a number in [{lo:g}, {hi:g}], got {value!r}")
+    return float(value)
+
+
+def _ao_steps(steps: Any) -> list[list[dict]]:
+    """The steps' structure (the engine checks each op's numbers when it applies them)."""
+    if not isinstance(steps, list):
+        raise SettingsError(f"ao_edits.steps: expected a list, got {steps!r}")
+    for i, step in enumerate(steps):
+        if not isinstance(step, list) or not step:
+            raise SettingsError(f"ao_edits.steps[{i}]: expected a non-empty list of edits")
+        for j, op in enumerate(step):
+            if not isinstance(op, dict) or op.get("op") not in AO_OPS:
+                raise SettingsError(f"ao_edits.steps[{i}][{j}]: expected a 'brush' or 'grow' edit, got {op!r}")
+    return steps
+
+
+class DocumentModels:
+    """A :class:`ShadowModel` per open document, loaded from the document's annotation when first asked for,
+    and saved into it at each change of a setting.
+
+    ``host`` reads and writes annotations (:class:`adapters.host.KritaHost`): the only document access.
+    """
+
+    def __init__(self, host: Any) -> None:
+        self.host = host
+        self._models: list[tuple[Any, ShadowModel]] = []
+
+    def model_for(self, document: Any) -> ShadowModel:
+        """The model of ``document`` (None: a model of its own, saved nowhere)."""
+        if document is None:
+            return ShadowModel()
+        self._models = [(d, m) for d, m in self._models if self.host.is_open(d)]  # forget closed documents
+        for known, model in self._models:
+            if known == document:
+                return model
+        model = ShadowModel()
+        data = self.host.annotation(document, ANNOTATION)
+        if data:
+            try:
+                restore(model, data)
+            except SettingsError as exc:  # shown; the saved settings stay until a setting is changed
+                model.report_status(
+                    "warning",
+                    f"The Soft Shadow settings saved in this image cannot be read ({exc}); the docker starts from "
+                    "its defaults, and the image keeps the saved ones until a setting is changed.",
+                )
+        model.modified.connect(lambda _name: self.host.set_annotation(document, ANNOTATION, DESCRIPTION, dump(model)))
+        self._models.append((document, model))
+        return model

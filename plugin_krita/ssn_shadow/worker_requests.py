@@ -1,0 +1,55 @@
+"""The worker's requests, built from the model's settings and the source (what is sent, not when)."""
+
+from __future__ import annotations
+
+from typing import Any
+
+from .adapters.krita_document import Source
+from .adapters.pixel_format import blend_mode, shadow_color
+from .model import ShadowModel
+from .shared import protocol
+
+__all__ = ["cutout_key", "preview", "render", "set_cutout"]
+
+
+def cutout_key(source: Source, camera: dict | None) -> str:
+    """What the worker's cutout (and its AO) depends on: the alpha and the camera."""
+    return f"{source.key}:{sorted(camera.items()) if camera else None}"
+
+
+def set_cutout(source: Source, camera: dict | None) -> tuple[dict[str, Any], dict[str, protocol.Buffer]]:
+    """``set_cutout``: the source's canvas-sized alpha, and the given camera if there is one."""
+    alpha = protocol.Buffer(source.dtype, (source.height, source.width), source.alpha)
+    return ({"camera": camera} if camera else {}), {"alpha": alpha}
+
+
+def render(model: ShadowModel, cutout: str, source: Source) -> tuple[dict[str, Any], str]:
+    """``render`` in the document's pixel format and colour profile, and the layer's blend mode for its colour."""
+    params = {
+        "cutout": cutout,
+        "light_map": model.light_map.to_dict(),
+        "color": shadow_color(model.color, source.profile),
+        "opacity": model.opacity,
+        "format": source.layer_format.render_format(),
+    }
+    return params, blend_mode(model.color)
+
+
+def preview(
+    model: ShadowModel, cutout: str, source: Source, background: tuple[int, int, bytes]
+) -> tuple[dict[str, Any], dict[str, protocol.Buffer]]:
+    """``preview``: the shadow multiplied onto ``background`` (width, height, 8-bit RGBA), the thumbnail of a
+    light drag; the given horizon scaled to it, or else the horizon the model read, dotted."""
+    width, height, rgba = background
+    params: dict[str, Any] = {
+        "cutout": cutout,
+        "light_map": model.light_map.to_dict(),
+        "color": list(model.color),  # the thumbnail is 8-bit sRGB, whatever the document's profile
+        "opacity": model.opacity,
+    }
+    camera = model.camera
+    if camera:
+        params["horizon"] = camera["horizon"] * width / source.width
+    else:
+        params["read_horizon"] = True
+    return params, {"background": protocol.Buffer("uint8", (height, width, 4), rgba)}

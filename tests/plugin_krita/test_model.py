@@ -1,0 +1,171 @@
+"""The docker's per-document model and its settings saved in the document, without Krita."""
+
+import json
+
+import pytest
+from krita_helpers import FakeDocument, FakeHost
+
+from plugin_krita.ssn_shadow.model import READY, ShadowModel
+from plugin_krita.ssn_shadow.persistence import ANNOTATION, DocumentModels, SettingsError, dump, restore
+from plugin_krita.ssn_shadow.shared import light_map as lm
+
+
+def record(model):
+    edits, saved = [], []
+    model.edited.connect(lambda what, step: edits.append((what, step)))
+    model.modified.connect(saved.append)
+    return edits, saved
+
+
+def test_a_change_is_signalled_once_and_derived_state_is_read_only(qapp):
+    m = ShadowModel()
+    shown = []
+    m.opacity_changed.connect(shown.append)
+    edits, saved = record(m)
+    m.opacity = 0.5
+    m.opacity = 0.5  # the same value: nothing
+    assert shown == [0.5] and edits == [("opacity", True)] and saved == ["opacity"]
+    assert m.status == ("info", READY)
+    with pytest.raises(AttributeError, match="derived state"):
+        m.status = ("error", "x")  # type: ignore[misc]
+    m.report_status("warning", "careful")
+    assert m.status == ("warning", "careful") and len(edits) == 1  # a report is no edit
+
+
+def test_a_slider_drag_is_one_undo_step(qapp):
+    m = ShadowModel()
+    edits, _ = record(m)
+    m.begin_stroke()
+    for value in (0.5, 0.6, 0.7):
+        m.opacity = value
+    m.end_stroke()
+    m.opacity = 0.8  # a key press: its own step
+    assert edits == [("opacity", True), ("opacity", False), ("opacity", False), ("opacity", True)]
+
+
+def test_the_camera_is_edited_only_when_the_horizon_is_given(qapp):
+    m = ShadowModel()
+    edits, saved = record(m)
+    m.horizon = 300.0  # remembered, but the engine still reads the camera itself
+    assert m.camera is None and edits == [] and saved == ["horizon"]
+    m.use_horizon = True
+    assert m.camera == {"horizon": 300.0, "fov": 45.0} and edits == [("camera", True)]
+    m.fov = 50.0
+    assert edits[-1] == ("camera", True) and m.camera == {"horizon": 300.0, "fov": 50.0}
+    m.use_horizon = False
+    m.report_camera_read({"horizon": 411.6, "fov": 38.2})  # shown in the fields; no edit, nothing saved
+    assert (m.horizon, m.fov, m.camera) == (412.0, 38.0, None) and len(saved) == 4
+    m.use_horizon = True  # giving the horizon starts from the one read
+    assert m.camera == {"horizon": 412.0, "fov": 38.0} and edits[-1] == ("camera", True)
+
+
+def test_a_light_drag_and_its_release_are_edits_even_when_the_map_is_unchanged(qapp):
+    m = ShadowModel()
+    edits, saved = record(m)
+    light_map = m.light_map.copy()
+    light_map.move(0, 0.3, 0.4)
+    m.edit_light_map(light_map, True, dragging=True)
+    assert m.light_dragging and m.light_map == light_map and m.light_map is not light_map
+    m.edit_light_map(light_map, False)  # the release where the drag left it
+    assert not m.light_dragging and edits == [("light_map", True), ("light_map", False)] and saved == ["light_map"]
+
+
+def settings_of(m):
+    return (m.light_map, m.use_horizon, m.horizon, m.fov, m.color, m.opacity, m.ao_edits.steps, m.ao_strength)
+
+
+def edit_everything(m):
+    m.light_map = lm.preset("two-lights")
+    m.horizon, m.fov, m.use_horizon = 413.0, 60.0, True
+    m.color, m.opacity = (0.2, 0.1, 0.4), 0.6
+    m.brush_ao(0.5, 0.8, 0.05, -0.5, True)
+    m.brush_ao(0.52, 0.8, 0.05, -0.5, False)
+    m.grow_ao(2)
+    m.ao_strength = 1.5
+
+
+def test_settings_are_saved_in_the_document_and_read_back_by_a_new_docker(qapp):
+    """Each change writes the document's annotation; a docker that meets the document later (Krita restarted,
+    the .kra reopened) shows the same settings, and reading them writes nothing."""
+    host = FakeHost()
+    m = DocumentModels(host).model_for(host.document)
+    edit_everything(m)
+    description, data = host.document.annotations[ANNOTATION]
+    assert "Soft Shadow" in description and json.loads(data)["horizon"] == {"given": True, "row": 413.0, "fov": 60.0}
+
+    writes = []
+    host.set_annotation = lambda *args: writes.append(args)
+    again = DocumentModels(host).model_for(host.document)
+    assert settings_of(again) == settings_of(m) and again is not m
+    assert again.ao_edit_list() == m.ao_edit_list() and len(again.ao_edit_list()) == 4
+    assert again.camera == {"horizon": 413.0, "fov": 60.0}
+    assert writes == []  # reading is no change: the document is not marked modified
+
+
+def test_each_document_has_its_own_model_and_a_closed_one_is_forgotten(qapp):
+    host = FakeHost()
+    models = DocumentModels(host)
+    first, other = host.document, FakeDocument("b.kra")
+    models.model_for(first).opacity = 0.3
+    assert models.model_for(other).opacity == 0.85 and models.model_for(first).opacity == 0.3
+    assert ANNOTATION not in other.annotations  # nothing changed there: nothing written
+    old = models.model_for(first)
+    host.closed.append(first)
+    assert models.model_for(other) is not None and all(d is not first for d, _ in models._models)
+    assert models.model_for(None) is not models.model_for(None)  # no document: a model saved nowhere
+    assert old.opacity == 0.3
+
+
+@pytest.mark.parametrize(
+    ("change", "message"),
+    [
+        (lambda s: s.update(opacity=2), "opacity: expected a number in [0, 1], got 2"),
+        (lambda s: s.update(format="other"), "format: expected 'ssn-shadow-krita-settings'"),
+        (lambda s: s.update(version=2), "version: this Soft Shadow reads version 1, got 2"),
+        (lambda s: s["horizon"].update(given="yes"), "horizon.given: expected true or false"),
+        (lambda s: s["horizon"].update(fov=500), "horizon.fov: expected a number in [10, 120]"),
+        (lambda s: s.update(color=[0, 0]), "color: expected [red, green, blue]"),
+        (lambda s: s["light_map"]["lights"][0].pop("u"), "light_map: lights[0].u: missing"),
+        (lambda s: s["ao_edits"].update(steps=[[{"op": "paint"}]]), "ao_edits.steps[0][0]: expected a 'brush'"),
+        (lambda s: s["ao_edits"].update(strength=None), "ao_edits.strength: expected a number, got None"),
+    ],
+)
+def test_bad_saved_settings_name_the_field_and_change_nothing(qapp, change, message):
+    source = ShadowModel()
+    edit_everything(source)
+    settings = json.loads(dump(source))
+    change(settings)
+    target = ShadowModel()
+    before = settings_of(target)
+    with pytest.raises(SettingsError) as info:
+        restore(target, json.dumps(settings).encode())
+    assert message in str(info.value)
+    assert settings_of(target) == before  # all or nothing
+
+
+def test_unreadable_settings_are_kept_in_the_document_until_a_change(qapp):
+    host = FakeHost()
+    host.document.annotations[ANNOTATION] = ("Soft Shadow", b"{not json")
+    m = DocumentModels(host).model_for(host.document)
+    level, text = m.status
+    assert level == "warning" and "cannot be read (not JSON" in text and m.opacity == 0.85
+    assert host.document.annotations[ANNOTATION][1] == b"{not json"  # not overwritten by a mere look
+    m.opacity = 0.5
+    assert json.loads(host.document.annotations[ANNOTATION][1])["opacity"] == 0.5
+
+
+def test_a_widget_that_rounds_a_loaded_value_does_not_change_it(qapp):
+    """The opacity slider shows whole percent: a loaded 0.333 shows as 33 and stays 0.333 (no save, no render)."""
+    from test_ui import NoEngine
+
+    from plugin_krita.ssn_shadow.controller import ShadowController
+    from plugin_krita.ssn_shadow.ui.panel import ShadowPanel
+
+    host = FakeHost()
+    source = ShadowModel()
+    source.opacity = 0.333
+    host.document.annotations[ANNOTATION] = ("Soft Shadow", dump(source))
+    m = DocumentModels(host).model_for(host.document)
+    edits, saved = record(m)
+    panel = ShadowPanel(ShadowController(NoEngine(), host, m))
+    assert panel.opacity.value() == 33 and m.opacity == 0.333 and not edits and not saved
