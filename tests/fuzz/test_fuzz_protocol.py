@@ -49,6 +49,19 @@ def requests(draw) -> bytes:
     return json.dumps(header).encode() + b"\n" + payload
 
 
+@st.composite
+def nested(draw) -> bytes:
+    """A header line nesting arrays and objects up to far past Python's recursion limit, balanced or not, alone
+    or inside a request's field."""
+    depth = draw(st.integers(1, 5) | st.integers(25, 40) | st.integers(900, 1100) | st.integers(10_000, 300_000))
+    opener, closer = draw(st.sampled_from([(b"[", b"]"), (b'{"a":', b"}"), (b'[{"a":', b"}]")]))
+    inner = opener * depth + b"1" + closer * draw(st.sampled_from([depth, depth // 2, 0]))
+    if draw(st.booleans()):
+        field = draw(fields)
+        inner = b'{"id": 7, "cmd": "render", "cutout": "c1", "' + field.encode() + b'": ' + inner + b"}"
+    return inner + b"\n"
+
+
 def converse(data: bytes) -> tuple[list[dict], bool]:
     writer = io.BytesIO()
     ended = WORKER.serve(io.BytesIO(data), writer)
@@ -62,7 +75,7 @@ def converse(data: bytes) -> tuple[list[dict], bool]:
 
 
 @FUZZ
-@given(stream=st.lists(requests() | st.binary(max_size=80).map(lambda b: b + b"\n"), min_size=1, max_size=4))
+@given(stream=st.lists(requests() | nested() | st.binary(max_size=80).map(lambda b: b + b"\n"), min_size=1, max_size=4))
 def test_random_requests_always_get_documented_replies(stream):
     try:
         replies, ended = converse(b"".join(stream) + HELLO)
@@ -75,7 +88,7 @@ def test_random_requests_always_get_documented_replies(stream):
 
 
 @FUZZ
-@given(data=st.binary(max_size=300))
+@given(data=st.binary(max_size=300) | nested())
 def test_the_reader_takes_any_bytes(data):
     """read_message on arbitrary bytes: a message, EOFError or ProtocolError, nothing else."""
     try:
