@@ -217,9 +217,12 @@ def test_a_symlinked_output_is_written_through_to_its_target(cutout_png, tmp_pat
         assert target.stat().st_mode & 0o777 == 0o600
 
 
-def test_a_device_is_no_output(cutout_png, capsys):
-    code, _, err = _run(capsys, "render", cutout_png, "--layer", os.devnull)
-    assert code == 2 and "not a regular file" in err and os.path.exists(os.devnull)
+def test_a_special_file_is_no_output(cutout_png, tmp_path, capsys):
+    """A pipe (as a device such as /dev/null would be, for root) is refused, not replaced by a PNG file."""
+    pipe = tmp_path / "pipe.png"
+    os.mkfifo(pipe)
+    code, _, err = _run(capsys, "render", cutout_png, "--layer", pipe)
+    assert code == 2 and "not a regular file" in err and pipe.is_fifo()
 
 
 @pytest.mark.parametrize("option", ["--light-map", "--ao-edits"])

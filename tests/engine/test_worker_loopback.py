@@ -73,6 +73,7 @@ def test_a_silent_or_half_sent_connection_does_not_hold_the_worker(port):
         b'"shape": [1], "nbytes": 1}]}\n\x00',
         b"[" * 200_000 + b"]" * 200_000 + b"\n",
     ],
+    ids=["garbage", "hello", "wrong-token", "surrogate-token", "list-token", "auth-with-buffer", "nested"],
 )
 def test_anything_but_auth_first_is_unauthorized_and_closed(port, first):
     with _connect(port) as conn:

@@ -94,6 +94,7 @@ def test_a_refused_declared_size_is_never_read(worker):
         b'{"id": 1, "cmd": "hello", "x": ' + b"[" * 600 + b"]" * 600 + b"}",  # within it, past the protocol's
         b'{"id": 1, "cmd": "render", "cutout": "c1", "light_map": ' + b'{"a": ' * 40 + b"1" + b"}" * 41,
     ],
+    ids=["200000-deep", "600-deep-field", "40-deep-light-map"],
 )
 def test_deeply_nested_json_is_refused_and_the_worker_goes_on(worker, line):
     replies, ended = converse(worker, line + b"\n" + HELLO)
