@@ -5,6 +5,8 @@ from __future__ import annotations
 
 import io
 import json
+import socket
+import threading
 
 import numpy as np
 import pytest
@@ -12,6 +14,7 @@ from fuzz_settings import FUZZ
 from hypothesis import given
 from hypothesis import strategies as st
 
+from ssn_engine.loopback import authenticate
 from ssn_engine.methods import load_method
 from ssn_engine.protocol import ProtocolError, read_message
 from ssn_engine.worker import Worker
@@ -95,3 +98,24 @@ def test_the_reader_takes_any_bytes(data):
         read_message(io.BytesIO(data))
     except (EOFError, ProtocolError):
         pass
+
+
+@FUZZ
+@given(data=st.binary(max_size=300) | nested() | requests())
+def test_a_loopback_connection_takes_any_first_bytes(data):
+    """authenticate on arbitrary first bytes: refused, with an Unauthorized reply where a line came."""
+    ours, theirs = socket.socketpair()
+    with ours, theirs:
+
+        def send() -> None:
+            theirs.sendall(data)
+            theirs.shutdown(socket.SHUT_WR)
+
+        sender = threading.Thread(target=send, daemon=True)
+        sender.start()  # a long line fills the socket's buffer before authenticate reads it
+        admitted = authenticate(ours, "secret")
+        ours.close()
+        reply = theirs.makefile("rb").readline()
+        sender.join(timeout=10)
+    assert not admitted
+    assert not reply or json.loads(reply)["error"]["type"] == "Unauthorized"
