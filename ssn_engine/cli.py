@@ -1,22 +1,30 @@
-"""The ``ssn-shadow`` command line."""
+"""The ``ssn-shadow`` command line.
+
+Only the standard library is imported before :func:`main` starts: a Ctrl+C while numpy or the model loads is
+then answered like any other (exit status 130, what was written, no traceback).
+"""
 
 from __future__ import annotations
 
 import argparse
-import json
+import contextlib
 import os
+import signal
 import sys
 import threading
 import time
-from collections.abc import Sequence
+from collections.abc import Iterator, Sequence
 from pathlib import Path
-
-import numpy as np
+from typing import TYPE_CHECKING
 
 from . import defaults
 
+if TYPE_CHECKING:
+    import numpy as np
+
 EXIT_OK, EXIT_ERROR, EXIT_USAGE = 0, 1, 2
 EXIT_NO_SHADOW = 3  # nothing casts a shadow or nothing lights it: nothing is written
+EXIT_INTERRUPTED = 130  # Ctrl+C, as a shell reports a command ended by SIGINT
 PROGRESS_AFTER = 1.0  # seconds: a command that runs longer prints its stages on stderr
 PLUGIN_ENTRY_POINTS = "ssn_shadow.plugins"  # the plug-ins' installers (pyproject.toml), not imported by the engine
 
@@ -49,6 +57,41 @@ def _number_in(lo: float, hi: float):
         return value
 
     return parse
+
+
+class Interrupted(KeyboardInterrupt):
+    """Ctrl+C, as :class:`CtrlC` raises it. A plain KeyboardInterrupt that has passed through some C code (an
+    import, for one) makes Python end the process by SIGINT at exit, even once it is caught; a subclass does
+    not, so the exit status stays 130."""
+
+
+class CtrlC:
+    """The CLI's SIGINT handler: it raises :class:`Interrupted`, except inside :meth:`held`, where it only
+    records the interrupt and the block raises it as it ends."""
+
+    def __init__(self) -> None:
+        self._holding = self._pending = False
+
+    def __call__(self, signum: int, frame: object) -> None:
+        if self._holding:
+            self._pending = True
+        else:
+            raise Interrupted
+
+    @contextlib.contextmanager
+    def held(self) -> Iterator[None]:
+        """Hold Ctrl+C over a block that must not be cut short: loading onnxruntime, whose initialisation
+        turns an exception raised inside it into an ImportError."""
+        self._holding, self._pending = True, False
+        try:
+            yield
+        finally:
+            self._holding = False
+        if self._pending:
+            raise Interrupted
+
+
+CTRL_C = CtrlC()
 
 
 class NoShadow(Exception):
@@ -96,17 +139,35 @@ def _same_file(a: Path, b: Path) -> bool:
         return False
 
 
+def _read_only(path: Path) -> bool:
+    """Whether an existing file forbids writing: to this user, or to everyone (a 0444 file, which root could
+    otherwise replace)."""
+    return not os.access(path, os.W_OK) or not path.stat().st_mode & 0o222
+
+
 def check_paths(outputs: dict[str, str | None], inputs: dict[str, str | None]) -> None:
-    """Before any work: every output goes to an existing, writable folder, is not a folder, differs from the
-    other outputs and from every input (by path or by inode)."""
+    """Before any work: every output names a file (no trailing slash), goes to an existing, writable folder
+    (through a symbolic link: its target's), is not a folder, a special file or a read-only file, differs from
+    the other outputs and from every input (by path or by inode)."""
     outs = [(label, Path(p)) for label, p in outputs.items() if p]
     ins = [(label, Path(p)) for label, p in inputs.items() if p]
+    for label, p in outputs.items():
+        if p and p.endswith(("/", os.sep)):
+            raise CliError(f"{label} {p}: ends with a slash, so it names a folder; give a file name")
     for i, (label, path) in enumerate(outs):
-        folder = path.parent
+        target = Path(os.path.realpath(path)) if path.is_symlink() else path  # a link is written through
+        folder = target.parent
         if not folder.is_dir():
             raise CliError(f"{label} {path}: folder {folder} does not exist")
-        if path.is_dir():
+        if target.is_dir():
             raise CliError(f"{label} {path}: is a folder; give a file name")
+        if target.exists() and not target.is_file():
+            raise CliError(f"{label} {path}: is not a regular file (a device, pipe or socket); give a file name")
+        if target.exists() and _read_only(target):
+            raise CliError(
+                f"{label} {path}: is read-only; ssn-shadow does not replace a read-only file (make it writable or "
+                "choose another path)"
+            )
         if not os.access(folder, os.W_OK):
             raise CliError(f"{label} {path}: folder {folder} is not writable")
         for other_label, other in outs[:i]:
@@ -125,14 +186,18 @@ def check_folder(label: str, folder: str | None) -> None:
 
 
 def _light_map(args: argparse.Namespace):
-    from .light_map import LightMap, preset
+    from .light_map import LightMap, LightMapError, preset
     from .session import NO_LIGHT
 
     if args.light_map:
         try:
-            lights = LightMap.from_json(Path(args.light_map).read_text())
+            lights = LightMap.from_json(Path(args.light_map).read_text(encoding="utf-8"))
         except OSError as exc:
             raise CliError(f"{args.light_map}: cannot read ({exc.strerror})") from None
+        except UnicodeDecodeError:
+            raise CliError(f"{args.light_map}: not a light map (not UTF-8 JSON text)") from None
+        except LightMapError as exc:
+            raise CliError(f"{args.light_map}: {exc}") from None
     else:
         lights = preset(args.preset)
     if lights.is_dark:
@@ -141,11 +206,13 @@ def _light_map(args: argparse.Namespace):
 
 
 def _ao_edits(args: argparse.Namespace) -> list[dict]:
+    from .protocol import loads
+
     edits: list[dict] = []
     if args.ao_edits:
         try:
-            edits = json.loads(Path(args.ao_edits).read_text())
-        except (OSError, json.JSONDecodeError) as exc:
+            edits = loads(Path(args.ao_edits).read_text(encoding="utf-8"))
+        except (OSError, ValueError) as exc:  # JSONDecodeError, NestingError and UnicodeDecodeError are ValueErrors
             raise CliError(f"{args.ao_edits}: not a readable JSON list of AO edits ({exc})") from None
         if not isinstance(edits, list):
             raise CliError(f"{args.ao_edits}: expected a JSON list of AO edits")
@@ -178,19 +245,24 @@ def _make_shadow(cutout_rgba: np.ndarray, args: argparse.Namespace, stage: Stage
     """The canvas shadow of a cutout; returns (CanvasShadow, loaded method, the camera the model read from the
     outline or None: ShadowSession.camera_read). The light map and AO edits are read first, so a bad one costs no
     inference."""
+    from .ao_edit import AOEditError
     from .framing import EmptyAlphaError
     from .methods import load_method
     from .session import ShadowSession, no_shadow_reason
 
     lights, edits = _light_map(args), _ao_edits(args)
     stage("loading the model")
-    loaded = load_method(args.method)
+    with CTRL_C.held():
+        loaded = load_method(args.method)
     stage("analysing the cutout")
     try:
         session = ShadowSession(cutout_rgba[..., 3], loaded.method, args.horizon, args.fov)
     except EmptyAlphaError as exc:
         raise NoShadow(f"{args.cutout}: {exc}") from None
-    session.set_ao_edits(edits)
+    try:
+        session.set_ao_edits(edits)
+    except AOEditError as exc:
+        raise CliError(f"{args.ao_edits or '--ao-strength'}: {exc}") from None
     stage("rendering the shadow")
     shadow = session.render(lights)
     reason = no_shadow_reason(lights, shadow)
@@ -203,6 +275,8 @@ def _write_outputs(
     write, cutout: np.ndarray, shadow, args: argparse.Namespace, background: np.ndarray | None, stage: Stages
 ) -> list[Path]:
     """Stage the layer and the composite through ``write`` (:func:`ssn_engine.imageio.atomic_writes`)."""
+    import numpy as np
+
     from .compositing import composite_image, layer_image
 
     h, w = cutout.shape[:2]
@@ -238,6 +312,11 @@ def cmd_render(args: argparse.Namespace) -> int:
 
     if not (args.layer or args.composite):
         raise CliError("nothing to write: give --layer and/or --composite")
+    if args.background and not args.composite:
+        raise CliError(
+            "--background is the backdrop of --composite, and the shadow layer has none: add --composite OUT.png "
+            "or leave out --background"
+        )
     check_paths(
         {"--layer": args.layer, "--composite": args.composite},
         {
@@ -254,7 +333,7 @@ def cmd_render(args: argparse.Namespace) -> int:
         stage("reading the background")
         background = _load_background(args, (cutout.shape[1], cutout.shape[0]))
         shadow, loaded, camera_read = _make_shadow(cutout, args, stage)
-        with atomic_writes() as write:
+        with atomic_writes(args.placed) as write:
             written = _write_outputs(write, cutout, shadow, args, background, stage)
     finally:
         stage.close()
@@ -296,7 +375,7 @@ def cmd_demo(args: argparse.Namespace) -> int:
     stage = Stages()
     try:
         shadow, loaded, camera_read = _make_shadow(cutout, args, stage)
-        with atomic_writes() as write:
+        with atomic_writes(args.placed) as write:
             written = _write_outputs(write, cutout, shadow, args, background, stage)
             # a fresh background: the composite was blended into the first one
             written += [write(path, image) for path, image in zip(samples, (cutout, studio_background()), strict=False)]
@@ -318,8 +397,9 @@ def cmd_presets(args: argparse.Namespace) -> int:
 
 
 def cmd_serve(args: argparse.Namespace) -> int:
+    from .loopback import serve_tcp
     from .methods import load_method
-    from .worker import serve_stdio, serve_tcp
+    from .worker import serve_stdio
 
     loaded = load_method(args.method)
     if args.port is None:
@@ -493,8 +573,25 @@ def build_parser() -> argparse.ArgumentParser:
 
 
 def main(argv: Sequence[str] | None = None) -> int:
-    """Run the CLI; returns the exit status."""
+    """Run the CLI; returns the exit status. Ctrl+C at any point, the heavy imports included, ends it with
+    status 130 and a line saying which files (if any) were written, without a traceback."""
+    placed: list[Path] = []  # the outputs put in place so far (:func:`ssn_engine.imageio.atomic_writes`)
+    in_main_thread = threading.current_thread() is threading.main_thread()  # the only one that gets signals
+    previous = signal.signal(signal.SIGINT, CTRL_C) if in_main_thread else None
+    try:
+        return _run(argv, placed)
+    except KeyboardInterrupt:
+        what = "wrote " + ", ".join(map(str, placed)) if placed else "nothing written"
+        print(f"ssn-shadow: interrupted, {what}", file=sys.stderr)
+        return EXIT_INTERRUPTED
+    finally:
+        if in_main_thread:
+            signal.signal(signal.SIGINT, previous)
+
+
+def _run(argv: Sequence[str] | None, placed: list[Path]) -> int:
     args = build_parser().parse_args(argv)
+    args.placed = placed
     from .imageio import ImageFileError
     from .light_map import LightMapError
     from .methods import ModelError
@@ -513,8 +610,6 @@ def main(argv: Sequence[str] | None = None) -> int:
     except ModelError as exc:
         print(f"ssn-shadow: error: {exc}", file=sys.stderr)
         return EXIT_ERROR
-    except KeyboardInterrupt:
-        return 130
 
 
 if __name__ == "__main__":

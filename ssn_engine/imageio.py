@@ -3,13 +3,15 @@
 Reading checks an image's size before decoding it (``max_megapixels``, instead of Pillow's decompression-bomb
 error or warning). Writing goes through :func:`atomic_writes`: each image is written to a temporary file beside
 its destination, and all are renamed into place only when every one was written, so an interrupted or failed run
-leaves neither a partial file nor a damaged old one.
+leaves neither a partial file nor a damaged old one. A replaced file keeps its permissions, and a symbolic link
+is written through: its target gets the image and the link stays.
 """
 
 from __future__ import annotations
 
 import contextlib
 import os
+import stat
 import tempfile
 import warnings
 from collections.abc import Callable, Iterator
@@ -57,6 +59,8 @@ def load_image(path: str | Path, max_megapixels: float = DEFAULT_MAX_MEGAPIXELS)
     one, the alpha is opaque). Images above ``max_megapixels`` are refused before they are decoded."""
     path = Path(path)
     try:
+        if path.is_file() and path.stat().st_size == 0:
+            raise ImageFileError(f"{path}: empty file (0 bytes), not an image")
         with _size_checked_here(), Image.open(path) as im:
             w, h = im.size
             if w * h > max_megapixels * 1e6:
@@ -86,32 +90,44 @@ def _umask() -> int:
     return mask
 
 
+def _mode(target: Path) -> int:
+    """The permissions of the file ``target`` replaces, or the usual ones (0666 less the umask) for a new file."""
+    try:
+        return stat.S_IMODE(target.stat().st_mode)
+    except FileNotFoundError:
+        return 0o666 & ~_umask()
+
+
 @contextlib.contextmanager
-def atomic_writes() -> Iterator[Callable[[str | Path, np.ndarray], Path]]:
+def atomic_writes(placed: list[Path] | None = None) -> Iterator[Callable[[str | Path, np.ndarray], Path]]:
     """Yield ``write(path, image)``, which writes a PNG (uint8 RGB(A)/grey, or uint16 grey) to a temporary file
-    beside ``path``. When the block ends normally all of them are renamed into place; when it raises (a failed
-    write, a full disk, Ctrl+C) every temporary file is removed and no destination is touched."""
-    staged: list[tuple[Path, Path]] = []
+    beside ``path`` (beside a symbolic link's target). When the block ends normally all of them are renamed into
+    place, each appended to ``placed`` once it is; when it raises (a failed write, a full disk, Ctrl+C) every
+    temporary file is removed and no destination is touched. A replaced file keeps its permissions."""
+    staged: list[tuple[Path, Path, Path]] = []  # (temporary file, where it goes, the path as given)
 
     def write(path: str | Path, image: np.ndarray) -> Path:
         path = Path(path)
+        target = Path(os.path.realpath(path))  # a symbolic link's target gets the image; the link stays
         try:
-            fd, tmp = tempfile.mkstemp(prefix=f".{path.name}.", suffix=".part", dir=path.parent)
+            fd, tmp = tempfile.mkstemp(prefix=f".{target.name}.", suffix=".part", dir=target.parent)
         except OSError as exc:
             raise ImageFileError(f"{path}: cannot write ({exc.strerror or exc})") from None
-        staged.append((Path(tmp), path))
+        staged.append((Path(tmp), target, path))
         try:
             with os.fdopen(fd, "wb") as stream:
                 Image.fromarray(image).save(stream, format="PNG")
-            os.chmod(tmp, 0o666 & ~_umask())  # mkstemp's files are private; an output gets the usual mode
+            os.chmod(tmp, _mode(target))  # mkstemp's files are private
         except OSError as exc:
             raise ImageFileError(f"{path}: cannot write ({exc.strerror or exc}); nothing was written") from None
         return path
 
     try:
         yield write
-        for tmp, path in staged:
-            os.replace(tmp, path)
+        for tmp, target, path in staged:
+            os.replace(tmp, target)
+            if placed is not None:
+                placed.append(path)
     finally:
-        for tmp, _ in staged:
+        for tmp, _, _ in staged:
             tmp.unlink(missing_ok=True)

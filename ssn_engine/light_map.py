@@ -23,6 +23,8 @@ from collections.abc import Callable, Iterator
 from dataclasses import dataclass, field, replace
 from typing import Any
 
+from .protocol import NestingError, loads
+
 FORMAT = "ssn-shadow-elm"
 VERSION = 1
 
@@ -181,7 +183,9 @@ class LightMap:
     @classmethod
     def from_json(cls, text: str) -> LightMap:
         try:
-            data = json.loads(text)
+            data = loads(text)
+        except NestingError as exc:
+            raise LightMapError(f"light map: {exc}") from None
         except json.JSONDecodeError as exc:
             raise LightMapError(f"light map: not valid JSON ({exc})") from None
         return cls.from_dict(data)

@@ -10,12 +10,13 @@ See ``docs/protocol.md`` for the commands. The plug-ins import this module
 from __future__ import annotations
 
 import json
-from typing import IO, NamedTuple
+from typing import IO, Any, NamedTuple
 
 PROTOCOL_VERSION = 1
 DTYPES = {"uint8": 1, "uint16": 2, "float16": 2, "float32": 4}
 MAX_HEADER = 1 << 20
 MAX_DIMS = 4
+MAX_DEPTH = 32  # nesting of JSON arrays and objects: a header, a light map, a list of AO edits
 CHUNK = 1 << 20  # bytes read at once
 
 
@@ -33,6 +34,36 @@ class ProtocolError(RuntimeError):
     def __init__(self, message: str, skip: int | None = None) -> None:
         super().__init__(message)
         self.skip = skip
+
+
+class NestingError(ValueError):
+    """JSON nested deeper than :data:`MAX_DEPTH` arrays and objects."""
+
+
+def loads(text: str | bytes) -> Any:
+    """JSON text as Python values; NestingError where it nests deeper than :data:`MAX_DEPTH` (a deep but
+    well-formed text would otherwise exhaust the stack, here or in whatever reads the values),
+    json.JSONDecodeError (or UnicodeDecodeError) where it is not JSON."""
+    too_deep = f"JSON nested more than {MAX_DEPTH} arrays or objects deep"
+    try:
+        value = json.loads(text)
+    except RecursionError:
+        raise NestingError(too_deep) from None
+    if _depth(value) > MAX_DEPTH:
+        raise NestingError(too_deep)
+    return value
+
+
+def _depth(value: Any) -> int:
+    """How many arrays and objects deep ``value`` nests (iteratively: any depth)."""
+    deepest, stack = 0, [(value, 1)]
+    while stack:
+        item, level = stack.pop()
+        children = item.values() if isinstance(item, dict) else item if isinstance(item, list) else None
+        if children is not None:
+            deepest = max(deepest, level)
+            stack.extend((child, level + 1) for child in children)
+    return deepest
 
 
 class Buffer:
@@ -139,7 +170,9 @@ def parse_header(line: bytes) -> tuple[dict, list[BufferSpec]]:
     if not line.endswith(b"\n") or len(line) > MAX_HEADER + 1:
         raise ProtocolError("header line too long or truncated")
     try:
-        header = json.loads(line)
+        header = loads(line)
+    except NestingError as exc:
+        raise ProtocolError(f"header: {exc}") from None
     except (json.JSONDecodeError, UnicodeDecodeError) as exc:
         raise ProtocolError(f"header is not JSON: {exc}") from None
     if not isinstance(header, dict):

@@ -7,21 +7,46 @@ continued beyond it by the geometric card (:mod:`ssn_engine.long_shadow`).
 
 from __future__ import annotations
 
+import math
 from typing import Any
 
 import numpy as np
 
 from . import long_shadow
 from .ao_edit import apply_edits
+from .camera import DEFAULT_FOV
 from .framing import CanvasShadow, Framing, frame_alpha, shadow_to_canvas
 from .hemisphere import NETWORK_SHAPE, render_light_map
 from .light_map import LightMap
 from .methods import GeometricCard, ShadowMethod
+from .methods.base import camera_limits
 from .methods.geometric import camera_at
 
 
 NO_LIGHT = "the light map has no light (no lights, or all at intensity 0)"
 HIDDEN = "this light casts no shadow visible in the image (it falls behind the cutout)"
+
+
+def camera_input(framing: Framing, horizon: float, fov: float = DEFAULT_FOV) -> tuple[float, float]:
+    """The frame's camera input for the canvas camera (``horizon`` a canvas row, ``fov`` degrees); a ValueError
+    in those terms (canvas rows, degrees) where it lies outside what the methods take (:func:`camera_limits`)."""
+    if not math.isfinite(horizon):
+        raise ValueError(f"horizon: expected a canvas row (a finite number of pixels from the top), got {horizon}")
+    h, f = framing.camera_input(horizon, fov)
+    (h_lo, h_hi), (f_lo, f_hi) = camera_limits(framing.n)
+    if not h_lo <= h <= h_hi:
+        lo, hi = framing.canvas_camera(h_lo, f)[0], framing.canvas_camera(h_hi, f)[0]
+        raise ValueError(
+            f"horizon: row {horizon:g} is too far from the cutout for the model; give a canvas row from "
+            f"{math.ceil(lo)} to {math.floor(hi)}"
+        )
+    if not f_lo <= f <= f_hi:
+        wide, narrow = framing.canvas_camera(h, f_lo)[1], framing.canvas_camera(h, f_hi)[1]
+        raise ValueError(
+            f"field of view: {fov:g} degrees is outside what the model takes for this cutout on this canvas; "
+            f"give {max(1.0, narrow):.1f} to {min(170.0, wide):.1f} degrees"
+        )
+    return h, f
 
 
 def no_shadow_reason(light_map: LightMap, shadow: CanvasShadow) -> str | None:
@@ -42,8 +67,7 @@ class ShadowSession:
         self.mask, self.framing = frame_alpha(alpha, method.resolution)
         self.cameras = None
         if horizon is not None:
-            args = (horizon,) if fov is None else (horizon, fov)
-            self.cameras = np.array([self.framing.camera_input(*args)])
+            self.cameras = np.array([camera_input(self.framing, horizon, DEFAULT_FOV if fov is None else fov)])
         elif fov is not None:
             raise ValueError("field of view: give the horizon row too (the camera input needs both)")
         self.predicted_ao = method.predict_ao(self.mask[None], self.cameras)[0]

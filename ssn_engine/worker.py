@@ -5,8 +5,8 @@ and answers requests over stdin/stdout or a loopback TCP socket. Every
 request header is checked before its buffers are read (known command, sizes
 that add up, at most ``MAX_REQUEST_BYTES`` of buffers, a bounded canvas); a
 refused request gets a ``BadRequest`` reply and the worker goes on serving.
-A loopback connection must first send ``auth`` with the worker's per-start
-token.
+Over a loopback socket (:mod:`ssn_engine.loopback`) a connection reaches it
+only after ``auth`` with the worker's per-start token.
 """
 
 from __future__ import annotations
@@ -14,11 +14,8 @@ from __future__ import annotations
 import collections
 import ctypes
 import dataclasses
-import hmac
 import itertools
 import os
-import secrets
-import socket
 import sys
 import time
 import traceback
@@ -80,6 +77,19 @@ def _u8(image: np.ndarray) -> Buffer:
     return to_buffer(np.rint(np.clip(image, 0, 1) * 255).astype(np.uint8))
 
 
+def _check_alpha(alpha: np.ndarray) -> None:
+    """A float alpha holds coverage in [0, 1] (NaN reads as transparent, above 1 as opaque); negative or
+    infinite values are a host's bug, refused rather than guessed at."""
+    if alpha.dtype.kind != "f":
+        return
+    bad = alpha[np.isinf(alpha) | (alpha < 0)]
+    if bad.size:
+        raise RequestError(
+            "BadRequest",
+            f"alpha: a float alpha holds coverage from 0 to 1, got {bad[0]:g} ({bad.size} negative or infinite values)",
+        )
+
+
 def _camera(camera: Any) -> tuple[float, float]:
     """set_cutout's optional ``camera``: {"horizon": canvas row, "fov": degrees (default 45)}."""
     if not isinstance(camera, dict) or not isinstance(camera.get("horizon"), (int, float)):
@@ -101,9 +111,17 @@ class Worker:
         self._ids = itertools.count(1)
 
     # -- helpers -------------------------------------------------------------
-    def _session(self, header: dict) -> ShadowSession:
+    @staticmethod
+    def _cutout_key(header: dict) -> str | None:
+        """The request's cutout id: a string, or None where it names none (an unknown cutout)."""
         key = header.get("cutout")
-        if key not in self.sessions:
+        if key is not None and not isinstance(key, str):
+            raise RequestError("BadRequest", f"cutout: expected an id that set_cutout answered (a string), got {key!r}")
+        return key
+
+    def _session(self, header: dict) -> ShadowSession:
+        key = self._cutout_key(header)
+        if key is None or key not in self.sessions:
             raise RequestError("UnknownCutout", f"unknown cutout {key!r}: send set_cutout first")
         self.sessions.move_to_end(key)
         return self.sessions[key]
@@ -134,6 +152,7 @@ class Worker:
         if "alpha" not in buffers:
             raise RequestError("BadRequest", "alpha: buffer missing")
         alpha = to_array(buffers["alpha"])  # 2D and bounded: check_request
+        _check_alpha(alpha)
         horizon, fov = _camera(header["camera"]) if header.get("camera") is not None else (None, None)
         session = ShadowSession(alpha, self.loaded.method, horizon, fov)
         key = f"c{next(self._ids)}"
@@ -248,8 +267,8 @@ class Worker:
         return dataclasses.replace(scaled, canvas_height=height)
 
     def release(self, header: dict, buffers: dict) -> tuple[dict, dict]:
-        key = header.get("cutout")
-        if key in self.sessions:  # an unhashable key raises TypeError (BadRequest), as in _session
+        key = self._cutout_key(header)
+        if key is not None and key in self.sessions:
             del self.sessions[key]
         return {}, {}
 
@@ -320,10 +339,10 @@ class Worker:
                         f"{MAX_CANVAS_SIDE} pixels a side and {MAX_CANVAS_PIXELS / 1e6:.0f} megapixels",
                     )
 
-    def serve(self, reader: IO[bytes], writer: IO[bytes], token: str | None = None) -> bool:
-        """Answer requests until the stream ends (False) or a shutdown (True). With a ``token``, the first
-        request must be ``auth`` carrying it, or the conversation ends (False) after an Unauthorized reply."""
-        authorised, lost = token is None, False
+    def serve(self, reader: IO[bytes], writer: IO[bytes]) -> bool:
+        """Answer requests until the stream ends (False) or a shutdown (True). An ``auth`` is answered ``ok``:
+        the loopback socket checked its token before the conversation reached the worker."""
+        lost = False
         while True:
             try:
                 header, specs = read_header(reader)
@@ -338,17 +357,6 @@ class Worker:
                 continue
             lost = False
             rid = header.get("id")
-            if not authorised:
-                given = header.get("token")
-                assert token is not None  # not authorised: a token was given
-                if (
-                    header.get("cmd") != "auth"
-                    or not isinstance(given, str)
-                    or not hmac.compare_digest(given.encode(), token.encode())
-                ):
-                    _refuse(writer, rid, "Unauthorized", "this worker needs its token: send auth first")
-                    return False
-                authorised = True
             try:
                 self.check_request(header, specs)
             except RequestError as exc:
@@ -425,36 +433,3 @@ def serve_stdio(loaded: LoadedMethod) -> None:
     sys.stdout = sys.stderr
     print(f"ssn-shadow worker ready: {loaded.note}", file=sys.stderr, flush=True)
     Worker(loaded).serve(reader, writer)
-
-
-def serve_tcp(
-    loaded: LoadedMethod,
-    port: int = 0,
-    announce: Any = None,
-    token: str | None = None,
-    idle_timeout: float | None = None,
-) -> None:
-    """Serve one connection at a time on 127.0.0.1:``port``. The first line on ``announce`` (stdout) names the
-    port and the per-start token (random unless given) that each connection's ``auth`` must carry. With
-    ``idle_timeout`` (seconds) the worker exits when no connection comes for that long, and drops a connection
-    that sends nothing for that long."""
-    tune_malloc()
-    worker = Worker(loaded)
-    token = token or secrets.token_urlsafe(24)
-    with socket.create_server(("127.0.0.1", port)) as server:
-        bound = server.getsockname()
-        print(f"listening {bound[0]}:{bound[1]} token={token}", file=announce or sys.stdout, flush=True)
-        server.settimeout(idle_timeout)
-        while True:
-            try:
-                conn, _ = server.accept()
-            except TimeoutError:
-                print(f"no connection for {idle_timeout:g} s: exiting", file=sys.stderr, flush=True)
-                return
-            conn.settimeout(idle_timeout)
-            with conn, conn.makefile("rb") as reader, conn.makefile("wb") as writer:
-                try:
-                    if worker.serve(reader, writer, token):
-                        return
-                except (ConnectionError, OSError) as exc:  # TimeoutError included: an idle client
-                    print(f"connection dropped: {exc}", file=sys.stderr, flush=True)

@@ -2,7 +2,8 @@
 
 Every CLI case runs ``ssn_engine.cli.main`` in a fresh folder and records the exit status, the first line of
 stderr and whether every file in the folder is byte-identical afterwards; every worker case feeds one request
-to :class:`ssn_engine.worker.Worker` over a byte stream, then a ``hello`` that must still be answered.
+to :class:`ssn_engine.worker.Worker` over a byte stream, then a ``hello`` that must still be answered; the
+loopback cases send a new connection's first bytes to :func:`ssn_engine.loopback.authenticate` over a socket pair.
 
 usage: python tools/bad_input_table.py [--out docs/bad_input.md]
 """
@@ -16,6 +17,7 @@ import hashlib
 import io
 import json
 import os
+import socket
 import sys
 import tempfile
 from pathlib import Path
@@ -24,6 +26,7 @@ import numpy as np
 from PIL import Image
 
 from ssn_engine import cli
+from ssn_engine.loopback import authenticate
 from ssn_engine.methods import load_method
 from ssn_engine.protocol import read_message
 from ssn_engine.worker import Worker
@@ -51,6 +54,10 @@ def _prepare(folder: Path) -> None:
     (folder / "notes.png").write_text("not an image")
     (folder / "truncated.png").write_bytes((folder / "cutout.png").read_bytes()[:60])
     (folder / "broken.json").write_text("{broken")
+    (folder / "nested.json").write_text("[" * 200_000 + "]" * 200_000)
+    (folder / "zero.png").write_bytes(b"")
+    (folder / "locked.png").write_bytes(b"the user's read-only layer")
+    (folder / "locked.png").chmod(0o444)
     (folder / "far.json").write_text(
         json.dumps(
             {"format": "ssn-shadow-elm", "version": 1, "lights": [{"u": 2, "v": 0.5, "softness": 0.01, "intensity": 1}]}
@@ -66,6 +73,7 @@ CLI_CASES = [
     ("cutout file missing", ["render", "nope.png", "--layer", "out.png"]),
     ("a text file named .png", ["render", "notes.png", "--layer", "out.png"]),
     ("truncated PNG", ["render", "truncated.png", "--layer", "out.png"]),
+    ("empty (0-byte) file", ["render", "zero.png", "--layer", "out.png"]),
     ("RGB PNG (no alpha)", ["render", "photo.png", "--layer", "out.png"]),
     ("JPEG", ["render", "photo.jpg", "--layer", "out.png"]),
     ("RGBA opaque everywhere", ["render", "opaque.png", "--layer", "out.png"]),
@@ -76,6 +84,9 @@ CLI_CASES = [
     ("`--composite` is the background", ["render", "cutout.png", "--composite", "bg.png", "--background", "bg.png"]),
     ("`--layer` and `--composite` the same path", ["render", "cutout.png", "--layer", "o.png", "--composite", "o.png"]),
     ("output folder missing", ["render", "cutout.png", "--layer", "layer.png", "--composite", "no/c.png"]),
+    ("`--layer` is a read-only file", ["render", "cutout.png", "--layer", "locked.png"]),
+    ("`--layer` ends with a slash", ["render", "cutout.png", "--layer", "layer.png/"]),
+    ("`--background` without `--composite`", ["render", "cutout.png", "--layer", "out.png", "--background", "bg.png"]),
     (
         "background of another size",
         ["render", "cutout.png", "--layer", "layer.png", "--composite", "c.png", "--background", "small_bg.png"],
@@ -83,9 +94,13 @@ CLI_CASES = [
     ("background not an image", ["render", "cutout.png", "--composite", "c.png", "--background", "notes.png"]),
     ("light map not JSON", ["render", "cutout.png", "--layer", "out.png", "--light-map", "broken.json"]),
     ("light outside the map", ["render", "cutout.png", "--layer", "out.png", "--light-map", "far.json"]),
+    ("light map nested 200,000 deep", ["render", "cutout.png", "--layer", "out.png", "--light-map", "nested.json"]),
     ("AO edits not a list", ["render", "cutout.png", "--layer", "out.png", "--ao-edits", "edits.json"]),
+    ("AO edits nested 200,000 deep", ["render", "cutout.png", "--layer", "out.png", "--ao-edits", "nested.json"]),
     ("image above `--max-megapixels`", ["render", "cutout.png", "--layer", "out.png", "--max-megapixels", "0.01"]),
     ("`--fov` without `--horizon`", ["render", "cutout.png", "--layer", "out.png", "--fov", "40"]),
+    ("`--horizon nan`", ["render", "cutout.png", "--layer", "out.png", "--horizon", "nan"]),
+    ("`--horizon` a billion rows down", ["render", "cutout.png", "--layer", "out.png", "--horizon", "1e9"]),
     ("`demo --save-samples` folder missing", ["demo", "--out", "d.png", "--save-samples", "nowhere"]),
     ("disk full while writing (simulated)", ["render", "cutout.png", "--layer", "layer.png"]),
 ]
@@ -155,6 +170,7 @@ def worker_rows() -> list[tuple[str, str, str, str]]:
     setup = _message({"id": 0, "cmd": "set_cutout", "buffers": [entry(alpha.shape)]}, alpha.tobytes())
     cases = [
         ("a line that is not JSON", b"hello world\n", None),
+        ("a line of 200,000 `[` then 200,000 `]`", b"[" * 200_000 + b"]" * 200_000 + b"\n", None),
         ("unknown command", _message({"id": 1, "cmd": "launch"}), None),
         (
             "unknown dtype",
@@ -182,6 +198,15 @@ def worker_rows() -> list[tuple[str, str, str, str]]:
             None,
         ),
         ("empty alpha", _message({"id": 1, "cmd": "set_cutout", "buffers": [entry((4, 4))]}, bytes(16)), None),
+        (
+            "a float alpha holding -1 and inf",
+            _message(
+                {"id": 1, "cmd": "set_cutout", "buffers": [entry((1, 2), "float32")]},
+                np.array([[-1, np.inf]], np.float32).tobytes(),
+            ),
+            None,
+        ),
+        ("a cutout id that is a list", _message({"id": 1, "cmd": "get_ao", "cutout": [1]}), None),
         ("unknown cutout", _message({"id": 1, "cmd": "render", "cutout": "c999", "preset": "softbox"}), None),
         (
             "light map with a light outside the map",
@@ -223,7 +248,6 @@ def worker_rows() -> list[tuple[str, str, str, str]]:
             ),
             None,
         ),
-        ("loopback connection without the token", _message({"id": 1, "cmd": "hello"}), "token"),
     ]
     rows = []
     for label, data, mode in cases:
@@ -231,7 +255,7 @@ def worker_rows() -> list[tuple[str, str, str, str]]:
         worker._ids = iter(range(1, 10**6))
         stream = (setup if mode == "setup" else b"") + data + _message({"id": 99, "cmd": "hello"})
         writer = io.BytesIO()
-        worker.serve(io.BytesIO(stream), writer, "secret" if mode == "token" else None)
+        worker.serve(io.BytesIO(stream), writer)
         writer.seek(0)
         replies = []
         with contextlib.suppress(EOFError):
@@ -244,6 +268,20 @@ def worker_rows() -> list[tuple[str, str, str, str]]:
             answer, message = reply["error"]["type"], reply["error"]["message"]
         usable = replies[-1].get("id") == 99 and replies[-1].get("ok")
         rows.append((label, answer, message, "yes" if usable else "no (connection closed)"))
+    loopback_cases = [
+        ("loopback: a request before `auth`", _message({"id": 1, "cmd": "hello"})),
+        ("loopback: garbage before `auth`", b"garbage\n"),
+        ("loopback: `auth` with a wrong token", _message({"id": 1, "cmd": "auth", "token": "guess"})),
+    ]
+    for label, data in loopback_cases:
+        ours, theirs = socket.socketpair()
+        with ours, theirs:
+            theirs.sendall(data)
+            theirs.shutdown(socket.SHUT_WR)
+            admitted = authenticate(ours, "secret")
+            reply = json.loads(theirs.makefile("rb").readline())
+        error = reply.get("error", {})
+        rows.append((label, error.get("type", "ok"), error.get("message", ""), "yes" if admitted else "no (closed)"))
     return rows
 
 

@@ -4,15 +4,16 @@ from __future__ import annotations
 
 import json
 import re
+import shutil
 import subprocess
 import sys
 
 import numpy as np
 import pytest
-from engine_helpers import drawn_alpha, engine_env
+from engine_helpers import REPO, drawn_alpha, engine_env
 from PIL import Image
 
-from ssn_engine.cli import main
+from ssn_engine.cli import build_parser, main
 from ssn_engine.light_map import PRESETS, LightMap
 
 
@@ -205,7 +206,7 @@ def test_malformed_light_map(cutout_png, tmp_path, capsys, text, fragment):
     elm = tmp_path / "elm.json"
     elm.write_text(text)
     code, err = _error(capsys, "render", str(cutout_png), "--layer", str(tmp_path / "l.png"), "--light-map", str(elm))
-    assert code == 2 and fragment in err
+    assert code == 2 and f"error: {elm}: " in err and fragment in err  # the message names the file
 
 
 def test_missing_light_map_file(cutout_png, tmp_path, capsys):
@@ -356,3 +357,12 @@ def test_benchmark_prints_the_stage_table():
     verdict = lines[-1]  # agrees with the table as printed, also at a median of exactly the budget
     assert verdict.startswith("over budget: ") if over else verdict.startswith("within budget")
     assert all(name in verdict for name in over) and len(re.findall(r"\(\d+\.\d\d\)", verdict)) == len(over)
+
+
+def test_the_demos_default_output_is_ignored_by_git():
+    """`ssn-shadow demo` run in a checkout (as the README says) leaves no untracked file behind."""
+    if shutil.which("git") is None or not (REPO / ".git").exists():
+        pytest.skip("not a git checkout")
+    default = build_parser().parse_args(["demo"]).out
+    result = subprocess.run(["git", "check-ignore", "-q", default], cwd=REPO, capture_output=True, timeout=60)
+    assert result.returncode == 0, f"{default} is not git-ignored ({result.stderr!r})"

@@ -25,10 +25,10 @@ def message(header: dict, payload: bytes = b"") -> bytes:
     return json.dumps(header).encode() + b"\n" + payload
 
 
-def converse(worker: Worker, data: bytes, token: str | None = None) -> tuple[list[dict], bool]:
+def converse(worker: Worker, data: bytes) -> tuple[list[dict], bool]:
     """Feed ``data`` to the worker; its reply headers (buffers checked to be complete) and serve's result."""
     writer = io.BytesIO()
-    ended = worker.serve(io.BytesIO(data), writer, token)
+    ended = worker.serve(io.BytesIO(data), writer)
     writer.seek(0)
     replies = []
     while True:
@@ -87,13 +87,62 @@ def test_a_refused_declared_size_is_never_read(worker):
     assert [r["ok"] for r in replies] == [False, True] and "limit" in replies[0]["error"]["message"]
 
 
-def test_token_is_required_first(worker):
-    replies, ended = converse(worker, HELLO + HELLO, token="right")
-    assert not ended and len(replies) == 1 and replies[0]["error"]["type"] == "Unauthorized"
-    replies, _ = converse(worker, message({"id": 1, "cmd": "auth", "token": "wrong"}) + HELLO, token="right")
-    assert len(replies) == 1 and replies[0]["error"]["type"] == "Unauthorized"
-    replies, _ = converse(worker, message({"id": 1, "cmd": "auth", "token": "right"}) + HELLO, token="right")
-    assert [r["ok"] for r in replies] == [True, True]
+@pytest.mark.parametrize(
+    "line",
+    [
+        b"[" * 200_000 + b"]" * 200_000,  # past Python's recursion limit
+        b'{"id": 1, "cmd": "hello", "x": ' + b"[" * 600 + b"]" * 600 + b"}",  # within it, past the protocol's
+        b'{"id": 1, "cmd": "render", "cutout": "c1", "light_map": ' + b'{"a": ' * 40 + b"1" + b"}" * 41,
+    ],
+    ids=["200000-deep", "600-deep-field", "40-deep-light-map"],
+)
+def test_deeply_nested_json_is_refused_and_the_worker_goes_on(worker, line):
+    replies, ended = converse(worker, line + b"\n" + HELLO)
+    assert not ended and len(replies) == 2, replies
+    assert replies[0]["error"]["type"] == "BadRequest" and "nested more than 32" in replies[0]["error"]["message"]
+    assert replies[1] == {**replies[1], "id": 99, "ok": True}
+
+
+@pytest.mark.parametrize("value", [np.inf, -np.inf, -0.5])
+def test_a_float_alpha_must_hold_coverage_from_0_to_1(worker, value):
+    alpha = np.zeros((40, 50), np.float32)
+    alpha[10:30, 20:30] = 1.0
+    alpha[12, 22] = value
+    replies, _ = converse(
+        worker,
+        message({"id": 1, "cmd": "set_cutout", "buffers": [alpha_entry(alpha.shape, "float32")]}, alpha.tobytes()),
+    )
+    assert replies[0]["ok"] is False and replies[0]["error"]["type"] == "BadRequest"
+    assert f"alpha: a float alpha holds coverage from 0 to 1, got {value:g}" in replies[0]["error"]["message"]
+
+
+@pytest.mark.parametrize(
+    "camera, fragment",
+    [
+        ({"horizon": 1e9}, "horizon: row 1e+09 is too far from the cutout for the model; give a canvas row from"),
+        ({"horizon": 900, "fov": 1}, "field of view: 1 degrees is outside what the model takes for this cutout"),
+    ],
+)
+def test_a_camera_out_of_reach_is_answered_in_canvas_rows_and_degrees(worker, camera, fragment):
+    alpha = np.zeros((1800, 1800), np.uint8)
+    alpha[900:910, 900:905] = 255  # a small cutout on a large canvas: the frame sees it much enlarged
+    replies, _ = converse(
+        worker,
+        message(
+            {"id": 1, "cmd": "set_cutout", "camera": camera, "buffers": [alpha_entry(alpha.shape)]}, alpha.tobytes()
+        ),
+    )
+    assert replies[0]["error"]["type"] == "BadRequest" and fragment in replies[0]["error"]["message"], replies[0]
+    assert "frame" not in replies[0]["error"]["message"] and "focal" not in replies[0]["error"]["message"]
+
+
+@pytest.mark.parametrize("cmd", ["get_ao", "render", "release"])
+@pytest.mark.parametrize("key", [[1], {"c": 1}, 1])
+def test_a_cutout_id_that_is_no_string_is_named(worker, cmd, key):
+    replies, _ = converse(worker, message({"id": 1, "cmd": cmd, "cutout": key, "preset": "softbox"}) + HELLO)
+    assert replies[0]["error"]["type"] == "BadRequest", replies[0]
+    assert f"cutout: expected an id that set_cutout answered (a string), got {key!r}" in replies[0]["error"]["message"]
+    assert replies[1]["ok"] is True
 
 
 def test_a_real_cutout_after_refusals(worker):

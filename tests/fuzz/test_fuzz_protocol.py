@@ -5,6 +5,8 @@ from __future__ import annotations
 
 import io
 import json
+import socket
+import threading
 
 import numpy as np
 import pytest
@@ -12,6 +14,7 @@ from fuzz_settings import FUZZ
 from hypothesis import given
 from hypothesis import strategies as st
 
+from ssn_engine.loopback import authenticate
 from ssn_engine.methods import load_method
 from ssn_engine.protocol import ProtocolError, read_message
 from ssn_engine.worker import Worker
@@ -49,6 +52,19 @@ def requests(draw) -> bytes:
     return json.dumps(header).encode() + b"\n" + payload
 
 
+@st.composite
+def nested(draw) -> bytes:
+    """A header line nesting arrays and objects up to far past Python's recursion limit, balanced or not, alone
+    or inside a request's field."""
+    depth = draw(st.integers(1, 5) | st.integers(25, 40) | st.integers(900, 1100) | st.integers(10_000, 300_000))
+    opener, closer = draw(st.sampled_from([(b"[", b"]"), (b'{"a":', b"}"), (b'[{"a":', b"}]")]))
+    inner = opener * depth + b"1" + closer * draw(st.sampled_from([depth, depth // 2, 0]))
+    if draw(st.booleans()):
+        field = draw(fields)
+        inner = b'{"id": 7, "cmd": "render", "cutout": "c1", "' + field.encode() + b'": ' + inner + b"}"
+    return inner + b"\n"
+
+
 def converse(data: bytes) -> tuple[list[dict], bool]:
     writer = io.BytesIO()
     ended = WORKER.serve(io.BytesIO(data), writer)
@@ -62,7 +78,7 @@ def converse(data: bytes) -> tuple[list[dict], bool]:
 
 
 @FUZZ
-@given(stream=st.lists(requests() | st.binary(max_size=80).map(lambda b: b + b"\n"), min_size=1, max_size=4))
+@given(stream=st.lists(requests() | nested() | st.binary(max_size=80).map(lambda b: b + b"\n"), min_size=1, max_size=4))
 def test_random_requests_always_get_documented_replies(stream):
     try:
         replies, ended = converse(b"".join(stream) + HELLO)
@@ -75,10 +91,31 @@ def test_random_requests_always_get_documented_replies(stream):
 
 
 @FUZZ
-@given(data=st.binary(max_size=300))
+@given(data=st.binary(max_size=300) | nested())
 def test_the_reader_takes_any_bytes(data):
     """read_message on arbitrary bytes: a message, EOFError or ProtocolError, nothing else."""
     try:
         read_message(io.BytesIO(data))
     except (EOFError, ProtocolError):
         pass
+
+
+@FUZZ
+@given(data=st.binary(max_size=300) | nested() | requests())
+def test_a_loopback_connection_takes_any_first_bytes(data):
+    """authenticate on arbitrary first bytes: refused, with an Unauthorized reply where a line came."""
+    ours, theirs = socket.socketpair()
+    with ours, theirs:
+
+        def send() -> None:
+            theirs.sendall(data)
+            theirs.shutdown(socket.SHUT_WR)
+
+        sender = threading.Thread(target=send, daemon=True)
+        sender.start()  # a long line fills the socket's buffer before authenticate reads it
+        admitted = authenticate(ours, "secret")
+        ours.close()
+        reply = theirs.makefile("rb").readline()
+        sender.join(timeout=10)
+    assert not admitted
+    assert not reply or json.loads(reply)["error"]["type"] == "Unauthorized"
