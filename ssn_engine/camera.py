@@ -10,6 +10,7 @@ round(0.03 N).
 
 from __future__ import annotations
 
+import math
 from dataclasses import dataclass, field
 
 import numpy as np
@@ -119,16 +120,34 @@ def _axis_row(cam: Camera, y: float) -> float:
     return 0.5 * cam.n - float(cam.focal) * up / depth
 
 
-def _fit_span(n: int, fov: float, pitch: float, top: float, base: float) -> Camera:
+def _fit_span(n: int, fov: float, pitch: float, top: float, base: float) -> Camera | None:
     """The camera of a vertical card standing at the origin whose projection spans rows [top, base):
-    its height found by fixed-point iteration, the lens shift putting its foot on row ``base``."""
+    its height found by fixed-point iteration, the lens shift putting its foot on row ``base``. None where no
+    card does (a camera looking so steeply down through so wide a lens that the card's top would lie behind it)."""
     height = 0.5
     for _ in range(12):
         cam = Camera(n, height / 2, fov=fov, pitch=pitch)
-        height *= (base - top) / (_axis_row(cam, 0.0) - _axis_row(cam, height))
+        span = _span(cam, height)
+        if span is None:
+            return None
+        height *= (base - top) / span
     cam = Camera(n, height / 2, fov=fov, pitch=pitch)
+    span = _span(cam, height)
+    if span is None or abs(span - (base - top)) > 0.01 * (base - top):  # no card, or the iteration found none
+        return None
     cam.shift = base - _axis_row(cam, 0.0)
     return cam
+
+
+def _span(cam: Camera, height: float) -> float | None:
+    """Rows from the top to the foot of a card ``height`` tall, or None where its top or foot is not in front
+    of the camera (or the card shows upside down)."""
+    for y in (0.0, height):
+        ry, rz = y - float(cam.centre[1]), -float(cam.centre[2])
+        if ry * float(cam.view[1]) + rz * float(cam.view[2]) <= 1e-6:
+            return None
+    span = _axis_row(cam, 0.0) - _axis_row(cam, height)
+    return span if math.isfinite(span) and span > 0 else None
 
 
 def camera_for_span(
@@ -144,14 +163,18 @@ def camera_for_span(
     """
     if horizon is None or focal is None:
         cam = _fit_span(n, DEFAULT_FOV, DEFAULT_PITCH, top, base)
+        assert cam is not None  # the default camera always fits
         return cam, 2 * cam.target_height
     fov = fov_from_focal(n, focal)
     lo, hi = PITCH_RANGE  # horizon(lo) > horizon(hi)
     for _ in range(24):  # 90 degrees / 2^24: well below a pixel
         mid = 0.5 * (lo + hi)
-        if _fit_span(n, fov, mid, top, base).horizon > horizon:
+        fit = _fit_span(n, fov, mid, top, base)
+        if fit is not None and fit.horizon > horizon:
             lo = mid
-        else:
+        else:  # too high a horizon, or too steep a pitch for any card to span the rows: look less steeply down
             hi = mid
-    cam = _fit_span(n, fov, 0.5 * (lo + hi), top, base)
+    cam = _fit_span(n, fov, 0.5 * (lo + hi), top, base) or _fit_span(n, fov, lo, top, base)
+    if cam is None:
+        raise ValueError(f"no camera with a {fov:.0f} degree field of view frames this cutout")
     return cam, 2 * cam.target_height

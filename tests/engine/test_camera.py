@@ -106,6 +106,16 @@ def test_an_unreachable_horizon_gets_the_nearest_pitch():
     assert cam.pitch == pytest.approx(PITCH_RANGE[0], abs=1e-4)
 
 
+def test_a_wide_lens_looking_steeply_down_gets_the_steepest_card_it_can_fit():
+    """A horizon far above a cutout seen through a 100 degree lens: the steep pitches that would frame it put the
+    card's top behind the camera; the camera is the steepest one that still frames the card, not a crash."""
+    n, top, base = 128, 4.0, 70.0
+    cam, height = camera_for_span(n, top, base, -200.0, focal_from_fov(n, 100.0))
+    assert 0.0 < cam.pitch < PITCH_RANGE[1] and np.isfinite(height) and height > 0
+    assert cam.project(np.array([0.0, 0.0, 0.0]))[1] == pytest.approx(base, abs=1e-6)
+    assert cam.project(np.array([0.0, height, 0.0]))[1] == pytest.approx(top, abs=0.01 * (base - top))
+
+
 def test_focal_length_and_field_of_view_are_inverse():
     assert fov_from_focal(256, focal_from_fov(256, 45.0)) == pytest.approx(45.0)
     assert focal_from_fov(256, 90.0) == pytest.approx(128.0)
