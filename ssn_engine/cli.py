@@ -13,7 +13,7 @@ from pathlib import Path
 
 import numpy as np
 
-from . import defaults
+from .host_kit import defaults
 
 EXIT_OK, EXIT_ERROR, EXIT_USAGE = 0, 1, 2
 EXIT_NO_SHADOW = 3  # nothing casts a shadow or nothing lights it: nothing is written
@@ -125,7 +125,7 @@ def check_folder(label: str, folder: str | None) -> None:
 
 
 def _light_map(args: argparse.Namespace):
-    from .light_map import LightMap, preset
+    from .host_kit.light_map import LightMap, preset
     from .session import NO_LIGHT
 
     if args.light_map:
@@ -306,7 +306,7 @@ def cmd_demo(args: argparse.Namespace) -> int:
 
 
 def cmd_presets(args: argparse.Namespace) -> int:
-    from .light_map import PRESETS, preset
+    from .host_kit.light_map import PRESETS, preset
 
     if args.name:
         print(preset(args.name).to_json())
@@ -376,7 +376,7 @@ NEXT_STEP = {
 
 def _add_shadow_options(p: argparse.ArgumentParser) -> None:
     from .ao_edit import MAX_STRENGTH
-    from .light_map import DEFAULT_PRESET, PRESETS
+    from .host_kit.light_map import DEFAULT_PRESET, PRESETS
     from .methods import METHOD_NAMES
 
     light = p.add_mutually_exclusive_group()
@@ -496,7 +496,7 @@ def main(argv: Sequence[str] | None = None) -> int:
     """Run the CLI; returns the exit status."""
     args = build_parser().parse_args(argv)
     from .imageio import ImageFileError
-    from .light_map import LightMapError
+    from .host_kit.light_map import LightMapError
     from .methods import ModelError
 
     try:

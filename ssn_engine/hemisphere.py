@@ -15,7 +15,7 @@ from __future__ import annotations
 import numpy as np
 from scipy.special import erf
 
-from .light_map import ASPECT, LightMap
+from .host_kit.light_map import ASPECT, LightMap
 
 NETWORK_SHAPE = (16, 32)
 

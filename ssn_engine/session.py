@@ -15,7 +15,7 @@ from . import long_shadow
 from .ao_edit import apply_edits
 from .framing import CanvasShadow, Framing, frame_alpha, shadow_to_canvas
 from .hemisphere import NETWORK_SHAPE, render_light_map
-from .light_map import LightMap
+from .host_kit.light_map import LightMap
 from .methods import GeometricCard, ShadowMethod
 from .methods.geometric import camera_at
 

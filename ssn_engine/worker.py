@@ -31,9 +31,9 @@ from .ao_edit import AOEditError
 from .camera import DEFAULT_FOV
 from .compositing import preview_image, shadow_layer
 from .framing import EmptyAlphaError, Framing
-from .light_map import PRESETS, LightMap, LightMapError, preset
+from .host_kit.light_map import PRESETS, LightMap, LightMapError, preset
 from .methods import LoadedMethod, ModelError
-from .protocol import (
+from .host_kit.protocol import (
     PROTOCOL_VERSION,
     Buffer,
     BufferSpec,

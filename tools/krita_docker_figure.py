@@ -20,7 +20,7 @@ from PyQt5.QtWidgets import QApplication
 from plugin_krita.ssn_shadow.controller import PREVIEW_SIDE, ShadowController
 from plugin_krita.ssn_shadow.ui.panel import ShadowPanel
 from ssn_engine.methods import load_method
-from ssn_engine import protocol
+from ssn_engine.host_kit import protocol
 from ssn_engine.compositing import over, preview_image
 from ssn_engine.samples import pawn_cutout, studio_background
 from ssn_engine.session import ShadowSession

@@ -13,7 +13,7 @@ from dataclasses import dataclass
 import numpy as np
 from scipy.special import erf
 
-from ssn_engine.light_map import ASPECT, INTENSITY_RANGE, MAX_LIGHTS, SOFTNESS_RANGE, GaussianLight, LightMap
+from ssn_engine.host_kit.light_map import ASPECT, INTENSITY_RANGE, MAX_LIGHTS, SOFTNESS_RANGE, GaussianLight, LightMap
 
 
 @dataclass

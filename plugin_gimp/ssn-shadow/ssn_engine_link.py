@@ -1,7 +1,7 @@
 """Where the GIMP plug-in finds the engine: the host kit's modules and the worker they reach.
 
 The installed plug-in carries copies of the engine's stdlib-only modules in
-``engine_shared/`` (the host kit: protocol, client, engine config, light map
+``host_kit/`` (the host kit: protocol, client, engine config, light map
 and its editor, defaults) and the ``engine.json`` that ``ssn-shadow
 install-plugin gimp`` wrote; in a source checkout (tests) the modules come
 from ``ssn_engine`` itself. GIMP-free.
@@ -13,12 +13,28 @@ from pathlib import Path
 from typing import TYPE_CHECKING
 
 if TYPE_CHECKING:  # the copies are these modules
-    from ssn_engine import client, defaults, engine_config, light_editor, light_map, light_map_picture, protocol
+    from ssn_engine.host_kit import (
+        client,
+        defaults,
+        engine_config,
+        light_editor,
+        light_map,
+        light_map_picture,
+        protocol,
+    )
 else:
     try:  # installed plug-in
-        from engine_shared import client, defaults, engine_config, light_editor, light_map, light_map_picture, protocol
+        from host_kit import client, defaults, engine_config, light_editor, light_map, light_map_picture, protocol
     except ImportError:  # source checkout
-        from ssn_engine import client, defaults, engine_config, light_editor, light_map, light_map_picture, protocol
+        from ssn_engine.host_kit import (
+            client,
+            defaults,
+            engine_config,
+            light_editor,
+            light_map,
+            light_map_picture,
+            protocol,
+        )
 
 __all__ = [
     "client",

@@ -16,7 +16,7 @@ from ssn_engine.hemisphere import (
     texel_edges,
     texel_weights,
 )
-from ssn_engine.light_map import LightMap
+from ssn_engine.host_kit.light_map import LightMap
 
 
 @pytest.mark.parametrize("h", [1, 4, 16, 64])

@@ -8,7 +8,7 @@ from engine_helpers import drawn_alpha, one_light
 
 from ssn_engine import long_shadow
 from ssn_engine.framing import EmptyAlphaError
-from ssn_engine.light_map import preset
+from ssn_engine.host_kit.light_map import preset
 from ssn_engine.methods import GeometricCard
 from ssn_engine.session import ShadowSession
 

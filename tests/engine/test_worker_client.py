@@ -12,9 +12,9 @@ import numpy as np
 import pytest
 from engine_helpers import REPO, drawn_alpha
 
-from ssn_engine.client import EngineClient, EngineError, WorkerUnavailable
-from ssn_engine.light_map import PRESETS
-from ssn_engine.protocol import Buffer
+from ssn_engine.host_kit.client import EngineClient, EngineError, WorkerUnavailable
+from ssn_engine.host_kit.light_map import PRESETS
+from ssn_engine.host_kit.protocol import Buffer
 
 SERVE = [sys.executable, "-m", "ssn_engine", "serve"]
 CANVAS_W, CANVAS_H = 400, 300

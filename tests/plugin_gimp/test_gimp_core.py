@@ -15,8 +15,8 @@ from ssn_core import (
 )
 from ssn_pixels import plan_for_precision
 
-from ssn_engine.client import EngineClient, EngineError, WorkerUnavailable
-from ssn_engine.protocol import Buffer
+from ssn_engine.host_kit.client import EngineClient, EngineError, WorkerUnavailable
+from ssn_engine.host_kit.protocol import Buffer
 
 W, H = 160, 120
 

@@ -6,7 +6,7 @@ import pytest
 import ssn_settings as s
 from ssn_settings import SettingsError, ShadowSettings, resolve_light_map
 
-from ssn_engine import light_map
+from ssn_engine.host_kit import light_map
 
 
 def test_arguments_cover_every_setting():

@@ -8,8 +8,8 @@ from PyQt5.QtCore import QEventLoop, QTimer
 
 from plugin_krita.ssn_shadow.adapters.krita_document import Source, SourceError, WriteResult
 from plugin_krita.ssn_shadow.adapters.pixel_format import pixel_format
-from ssn_engine import protocol
-from ssn_engine.engine_config import EngineConfig
+from ssn_engine.host_kit import protocol
+from ssn_engine.host_kit.engine_config import EngineConfig
 
 REPO = Path(__file__).resolve().parents[2]
 

@@ -2,7 +2,7 @@ from krita_helpers import FakeHost, cutout_alpha, wait_until, worker_command
 from PyQt5.QtCore import QEventLoop, QTimer
 from plugin_krita.ssn_shadow.controller import ShadowController
 from plugin_krita.ssn_shadow.engine import EngineProcess
-from ssn_engine.engine_config import EngineConfig
+from ssn_engine.host_kit.engine_config import EngineConfig
 
 
 def make(host, command=worker_command):

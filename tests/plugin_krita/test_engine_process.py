@@ -4,7 +4,7 @@ import pytest
 
 from krita_helpers import cutout_alpha, wait_until, worker_command
 from plugin_krita.ssn_shadow.engine import EngineProcess
-from ssn_engine.engine_config import EngineConfig
+from ssn_engine.host_kit.engine_config import EngineConfig
 from plugin_krita.ssn_shadow.shared import protocol
 
 
