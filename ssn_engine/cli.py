@@ -14,6 +14,7 @@ from pathlib import Path
 import numpy as np
 
 from .host_kit import defaults
+from .host_kit.camera_rules import DEFAULT_FOV, FOV_RANGE
 
 EXIT_OK, EXIT_ERROR, EXIT_USAGE = 0, 1, 2
 EXIT_NO_SHADOW = 3  # nothing casts a shadow or nothing lights it: nothing is written
@@ -126,7 +127,7 @@ def check_folder(label: str, folder: str | None) -> None:
 
 def _light_map(args: argparse.Namespace):
     from .host_kit.light_map import LightMap, preset
-    from .session import NO_LIGHT
+    from .host_kit.shadow_notes import NO_LIGHT
 
     if args.light_map:
         try:
@@ -408,9 +409,9 @@ def _add_shadow_options(p: argparse.ArgumentParser) -> None:
     )
     p.add_argument(
         "--fov",
-        type=_number_in(1.0, 170.0),
+        type=_number_in(*FOV_RANGE),
         metavar="DEG",
-        help="with --horizon: the image's vertical field of view in degrees (default 45)",
+        help=f"with --horizon: the image's vertical field of view in degrees (default {DEFAULT_FOV:g})",
     )
 
 

@@ -28,7 +28,7 @@ import numpy as np
 
 from . import __version__
 from .ao_edit import AOEditError
-from .camera import DEFAULT_FOV
+from .host_kit.camera_rules import DEFAULT_FOV, check_fov
 from .compositing import preview_image, shadow_layer
 from .framing import EmptyAlphaError, Framing
 from .host_kit.light_map import PRESETS, LightMap, LightMapError, preset
@@ -80,15 +80,25 @@ def _u8(image: np.ndarray) -> Buffer:
 
 
 def _camera(camera: Any) -> tuple[float, float]:
-    """set_cutout's optional ``camera``: {"horizon": canvas row, "fov": degrees (default 45)}."""
+    """set_cutout's optional ``camera``: {"horizon": canvas row, "fov": degrees (default :data:`DEFAULT_FOV`)}."""
     if not isinstance(camera, dict) or not isinstance(camera.get("horizon"), (int, float)):
         raise RequestError("BadRequest", 'camera: expected {"horizon": ROW, "fov": DEGREES}')
-    fov = camera.get("fov", DEFAULT_FOV)
-    if not isinstance(fov, (int, float)) or not 1.0 <= fov <= 170.0:
-        raise RequestError("BadRequest", f"camera.fov: expected 1 to 170 degrees, got {fov!r}")
+    try:
+        fov = check_fov(camera.get("fov", DEFAULT_FOV), "camera.fov")
+    except ValueError as exc:
+        raise RequestError("BadRequest", str(exc)) from None
     if not np.isfinite(camera["horizon"]):
         raise RequestError("BadRequest", "camera.horizon: expected a finite canvas row")
     return float(camera["horizon"]), float(fov)
+
+
+def _cutout_reply(key: str, session: ShadowSession) -> dict:
+    """``set_cutout``'s and ``set_camera``'s reply: the cutout's id, its bounding box and, without a camera of
+    the image's own, the camera the model read from its outline."""
+    reply: dict[str, Any] = {"cutout": key, "bbox": list(session.framing.bbox)}
+    if session.camera_read is not None:
+        reply["camera_read"] = session.camera_read
+    return reply
 
 
 class Worker:
@@ -139,10 +149,15 @@ class Worker:
         self.sessions[key] = session
         while len(self.sessions) > MAX_SESSIONS:
             self.sessions.popitem(last=False)
-        reply = {"cutout": key, "bbox": list(session.framing.bbox)}
-        if session.camera_read is not None:
-            reply["camera_read"] = session.camera_read
-        return reply, {}
+        return _cutout_reply(key, session), {}
+
+    def set_camera(self, header: dict, buffers: dict) -> tuple[dict, dict]:
+        s = self._session(header)
+        if "camera" not in header:
+            raise RequestError("BadRequest", 'camera: expected {"horizon": ROW, "fov": DEGREES} or null')
+        horizon, fov = _camera(header["camera"]) if header["camera"] is not None else (None, None)
+        s.set_camera(horizon, fov)
+        return _cutout_reply(header["cutout"], s), {}
 
     def get_ao(self, header: dict, buffers: dict) -> tuple[dict, dict]:
         s = self._session(header)
@@ -245,7 +260,7 @@ class Worker:
             del self.sessions[key]
         return {}, {}
 
-    COMMANDS = ("hello", "set_cutout", "get_ao", "edit_ao", "render", "preview", "release")
+    COMMANDS = ("hello", "set_cutout", "set_camera", "get_ao", "edit_ao", "render", "preview", "release")
 
     def handle(self, header: dict, buffers: dict[str, Buffer]) -> tuple[dict, dict[str, Buffer]]:
         """Answer one request; never raises."""

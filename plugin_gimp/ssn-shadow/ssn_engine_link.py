@@ -14,6 +14,8 @@ from typing import TYPE_CHECKING
 
 if TYPE_CHECKING:  # the copies are these modules
     from ssn_engine.host_kit import (
+        ao_edits,
+        camera_rules,
         client,
         defaults,
         engine_config,
@@ -21,12 +23,14 @@ if TYPE_CHECKING:  # the copies are these modules
         light_map,
         light_map_picture,
         protocol,
+        shadow_notes,
+        sky_map,
     )
 else:
-    try:  # installed plug-in
-        from host_kit import client, defaults, engine_config, light_editor, light_map, light_map_picture, protocol
-    except ImportError:  # source checkout
-        from ssn_engine.host_kit import (
+    try:  # installed: the copy made by `ssn-shadow install-plugin`
+        from host_kit import (
+            ao_edits,
+            camera_rules,
             client,
             defaults,
             engine_config,
@@ -34,9 +38,27 @@ else:
             light_map,
             light_map_picture,
             protocol,
+            shadow_notes,
+            sky_map,
+        )
+    except ImportError:  # running from the repository (tests)
+        from ssn_engine.host_kit import (
+            ao_edits,
+            camera_rules,
+            client,
+            defaults,
+            engine_config,
+            light_editor,
+            light_map,
+            light_map_picture,
+            protocol,
+            shadow_notes,
+            sky_map,
         )
 
 __all__ = [
+    "ao_edits",
+    "camera_rules",
     "client",
     "defaults",
     "engine_config",
@@ -44,6 +66,8 @@ __all__ = [
     "light_map",
     "light_map_picture",
     "protocol",
+    "shadow_notes",
+    "sky_map",
     "connect",
 ]
 

@@ -25,9 +25,8 @@ from PyQt5.QtCore import QObject, QTimer, pyqtSignal
 from .adapters.krita_document import SourceError
 from .adapters.pixel_format import UnsupportedFormat, blend_mode, shadow_color
 from .engine import EngineError
-from .shared import defaults
+from .shared import camera_rules, defaults, protocol, shadow_notes
 from .shared import light_map as lm
-from .shared import protocol
 
 
 PREVIEW_SIDE = 320  # pixels: the longer side of the docker's live preview
@@ -86,6 +85,7 @@ class ShadowController(QObject):
         self.source = None
         self.cutout: str | None = None
         self._cutout_key: str | None = None
+        self._cutout_camera: dict | None = None  # the camera the worker's cutout has
         self._mask = b""
         self._in_flight = False
         self._pending: RenderJob | None = None
@@ -203,11 +203,13 @@ class ShadowController(QObject):
             "opacity": self.opacity,
         }
         if self.camera:
-            params["horizon"] = self.camera["horizon"] * width / source.width
+            params["horizon"] = camera_rules.scaled_camera(self.camera, width / source.width)["horizon"]
         else:
             params["read_horizon"] = True  # the horizon the model read, dotted
         background = protocol.Buffer("uint8", (height, width, 4), rgba)
-        self.engine.request("preview", params, {"background": background}, self._on_preview, self._on_preview_error)
+        self.engine.request(
+            "preview", {"background": background}, on_reply=self._on_preview, on_error=self._on_preview_error, **params
+        )
 
     def _on_preview(self, reply: dict, buffers: dict) -> None:
         self._preview_in_flight = False
@@ -263,29 +265,53 @@ class ShadowController(QObject):
     def _ensure_cutout(self, then: Any, job: RenderJob) -> None:
         source = self.source
         assert source is not None, "a job reads its source first"
-        key = f"{source.key}:{sorted(self.camera.items()) if self.camera else None}"  # the AO depends on both
-        if self.cutout is not None and key == self._cutout_key:
-            then()
+        camera = dict(self.camera) if self.camera else None
+        if self.cutout is not None and source.key == self._cutout_key:
+            if camera == self._cutout_camera:
+                then()
+                return
+            # A new camera for the same alpha: the worker predicts the AO again (it depends on the camera) and
+            # keeps the AO edits; the alpha is not sent again.
+            self.status.emit("info", "Analysing the cutout (ambient occlusion)...")
+
+            def on_camera(reply: dict, buffers: dict) -> None:
+                self._cutout_camera = camera
+                self._analysed(reply)
+                then()
+
+            self.engine.request(
+                "set_camera",
+                cutout=self.cutout,
+                camera=camera,
+                on_reply=on_camera,
+                on_error=lambda e: self._on_error(e, job),
+            )
             return
         self.status.emit("info", "Analysing the cutout (ambient occlusion)...")
         alpha = protocol.Buffer(source.dtype, (source.height, source.width), source.alpha)
 
         def on_cutout(reply: dict, buffers: dict) -> None:
-            self.cutout, self._cutout_key = reply["cutout"], key
-            self.cameraRead.emit(reply.get("camera_read"))
+            self.cutout, self._cutout_key, self._cutout_camera = reply["cutout"], source.key, camera
             if self.ao_edits:
                 self.engine.request(
                     "edit_ao",
-                    {"cutout": self.cutout, "edits": self.ao_edits},
-                    None,
-                    self._on_ao_edited,
-                    self._on_edit_error,
+                    cutout=self.cutout,
+                    edits=self.ao_edits,
+                    on_reply=self._on_ao_edited,
+                    on_error=self._on_edit_error,
                 )
-            self.engine.request("get_ao", {"cutout": self.cutout}, None, self._on_ao, None)
+            self._analysed(reply)
             then()
 
-        params = {"camera": self.camera} if self.camera else {}
-        self.engine.request("set_cutout", params, {"alpha": alpha}, on_cutout, lambda e: self._on_error(e, job))
+        params = {"camera": camera} if camera else {}
+        self.engine.request(
+            "set_cutout", {"alpha": alpha}, on_reply=on_cutout, on_error=lambda e: self._on_error(e, job), **params
+        )
+
+    def _analysed(self, reply: dict) -> None:
+        """A cutout analysed (with its camera): show the camera the model read, and fetch the AO map."""
+        self.cameraRead.emit(reply.get("camera_read"))
+        self.engine.request("get_ao", cutout=self.cutout, on_reply=self._on_ao)
 
     def _render(self, job: RenderJob) -> None:
         source = self.source
@@ -301,10 +327,9 @@ class ShadowController(QObject):
         blend = blend_mode(self.color)  # the mode of the colour rendered, whatever the colour is by the reply
         self.engine.request(
             "render",
-            params,
-            None,
-            lambda reply, buffers: self._on_rendered(job, source, blend, reply, buffers),
-            lambda e: self._on_error(e, job),
+            on_reply=lambda reply, buffers: self._on_rendered(job, source, blend, reply, buffers),
+            on_error=lambda e: self._on_error(e, job),
+            **params,
         )
 
     # -- replies --------------------------------------------------------------------
@@ -334,7 +359,7 @@ class ShadowController(QObject):
         if result.notice:
             self.status.emit("warning", result.notice)
         elif rect[2] == 0:
-            self.status.emit("warning", "No visible shadow with these lights (is every light at zero intensity?).")
+            self.status.emit("warning", shadow_notes.no_shadow_note(reply.get("no_shadow")))
         elif job.new_step:
             self.status.emit("info", f"Shadow {rect[2]} x {rect[3]} px in {elapsed:.0f} ms ({info['method']}).")
         if not self._in_flight:
@@ -364,7 +389,11 @@ class ShadowController(QObject):
             return
         self._edit_in_flight, self._edit_dirty = True, False
         self.engine.request(
-            "edit_ao", {"cutout": self.cutout, "edits": self.ao_edits}, None, self._on_ao_edited, self._on_edit_error
+            "edit_ao",
+            cutout=self.cutout,
+            edits=self.ao_edits,
+            on_reply=self._on_ao_edited,
+            on_error=self._on_edit_error,
         )
 
     def _on_ao_edited(self, reply: dict, buffers: dict) -> None:

@@ -6,6 +6,8 @@ from typing import TYPE_CHECKING
 
 if TYPE_CHECKING:  # the copies are these modules
     from ssn_engine.host_kit import (
+        ao_edits,
+        camera_rules,
         client,
         defaults,
         engine_config,
@@ -13,12 +15,14 @@ if TYPE_CHECKING:  # the copies are these modules
         light_map,
         light_map_picture,
         protocol,
+        shadow_notes,
+        sky_map,
     )
 else:
-    try:  # installed: copies made by `ssn-shadow install-plugin krita`
-        from .host_kit import client, defaults, engine_config, light_editor, light_map, light_map_picture, protocol
-    except ImportError:  # running from the repository (tests)
-        from ssn_engine.host_kit import (
+    try:  # installed: the copy made by `ssn-shadow install-plugin`
+        from .host_kit import (
+            ao_edits,
+            camera_rules,
             client,
             defaults,
             engine_config,
@@ -26,6 +30,34 @@ else:
             light_map,
             light_map_picture,
             protocol,
+            shadow_notes,
+            sky_map,
+        )
+    except ImportError:  # running from the repository (tests)
+        from ssn_engine.host_kit import (
+            ao_edits,
+            camera_rules,
+            client,
+            defaults,
+            engine_config,
+            light_editor,
+            light_map,
+            light_map_picture,
+            protocol,
+            shadow_notes,
+            sky_map,
         )
 
-__all__ = ["client", "defaults", "engine_config", "light_editor", "light_map", "light_map_picture", "protocol"]
+__all__ = [
+    "ao_edits",
+    "camera_rules",
+    "client",
+    "defaults",
+    "engine_config",
+    "light_editor",
+    "light_map",
+    "light_map_picture",
+    "protocol",
+    "shadow_notes",
+    "sky_map",
+]

@@ -14,7 +14,7 @@ from engine_helpers import REPO, drawn_alpha
 
 from ssn_engine.host_kit.client import EngineClient, EngineError, WorkerUnavailable
 from ssn_engine.host_kit.light_map import PRESETS
-from ssn_engine.host_kit.protocol import Buffer
+from ssn_engine.host_kit.protocol import PROTOCOL_VERSION, Buffer
 
 SERVE = [sys.executable, "-m", "ssn_engine", "serve"]
 CANVAS_W, CANVAS_H = 400, 300
@@ -80,7 +80,7 @@ def _bbox_of(alpha):
 def test_hello(client):
     reply, buffers = client.request("hello")
     assert reply["ok"] is True and buffers == {}
-    assert reply["protocol"] == 1
+    assert reply["protocol"] == PROTOCOL_VERSION
     assert reply["method"] in ("ssn", "geometric")
     assert isinstance(reply["method_note"], str) and reply["method_note"]
     assert reply["resolution"] == 256
@@ -310,7 +310,7 @@ def test_errors_and_the_worker_survives(client, cmd, params, buffers, kind, frag
     assert fragment in str(info.value)
     assert not isinstance(info.value, WorkerUnavailable)
     reply, _ = client.request("hello")  # still serving
-    assert reply["protocol"] == 1
+    assert reply["protocol"] == PROTOCOL_VERSION
 
 
 @pytest.mark.parametrize(
@@ -361,7 +361,7 @@ def test_killed_worker_is_reported_then_restarted(worker_env):
         with pytest.raises(WorkerUnavailable, match="restart"):
             c.request("render", cutout=key, preset="softbox")
         reply, _ = c.request("hello")  # a fresh worker
-        assert reply["protocol"] == 1 and c.running
+        assert reply["protocol"] == PROTOCOL_VERSION and c.running
         with pytest.raises(EngineError) as info:  # which has forgotten the old cutout
             c.request("render", cutout=key, preset="softbox")
         assert info.value.kind == "UnknownCutout"
@@ -401,7 +401,7 @@ def test_shutdown_then_a_fresh_worker(worker_env):
         c.request("shutdown")
         assert proc.wait(timeout=10) is not None
         reply, _ = c.request("hello")  # a clean shutdown is not a crash: starts a new worker
-        assert reply["protocol"] == 1
+        assert reply["protocol"] == PROTOCOL_VERSION
     finally:
         c.close()
 
@@ -420,7 +420,7 @@ def test_tcp_mode(worker_env):
             assert reply["error"]["type"] == "Unauthorized" and raw.recv(1) == b""  # and the connection ends
         c = EngineClient(address=("127.0.0.1", port), timeout=60, token=token)
         reply, _ = c.request("hello")
-        assert reply["protocol"] == 1
+        assert reply["protocol"] == PROTOCOL_VERSION
         key = c.request("set_cutout", {"alpha": buf(canvas_alpha(np.uint16))})[0]["cutout"]
         reply, buffers = c.request(
             "render", cutout=key, preset="softbox", format={"dtype": "uint16", "channels": "bgra"}
@@ -429,7 +429,7 @@ def test_tcp_mode(worker_env):
         c.close()
         # each connection is a fresh conversation with the same worker
         c2 = EngineClient(address=("127.0.0.1", port), timeout=60, token=token)
-        assert c2.request("hello")[0]["protocol"] == 1
+        assert c2.request("hello")[0]["protocol"] == PROTOCOL_VERSION
         c2.request("shutdown")
         assert proc.wait(timeout=10) == 0
         with pytest.raises(WorkerUnavailable, match=str(port)):

@@ -22,15 +22,14 @@ from PyQt5.QtWidgets import (
     QWidget,
 )
 
-from ..ao_edits import AoEdits
-from ..shared import defaults
+from ..shared import ao_edits, camera_rules, defaults
 from ..shared import light_map as lm
+
 from .ao_preview import AOPreview
 from .drag_preview import DragPreview
 from .light_map_widget import LightMapWidget, slider_to_softness, softness_to_slider
 
 LEVEL_COLOURS = {"info": "", "warning": "color: #d08000;", "error": "color: #d03030;"}
-DEFAULT_FOV = 45.0  # degrees, the engine's default camera
 NO_GUIDE = "Add a horizontal guide on the horizon first (drag one down from the top ruler), then press From guide."
 
 
@@ -47,7 +46,7 @@ class ShadowPanel(QWidget):
     def __init__(self, controller, parent: QWidget | None = None) -> None:
         super().__init__(parent)
         self.controller = controller
-        self.ao_edits = AoEdits()
+        self.ao_edits = ao_edits.AoEdits()
         self._syncing = False
         self._build()
         self._wire()
@@ -120,7 +119,7 @@ class ShadowPanel(QWidget):
         self.use_horizon.setToolTip("Without it the engine reads the camera from the cutout's outline")
         hrow = QHBoxLayout()
         self.horizon = QSpinBox()
-        self.horizon.setRange(-100000, 100000)
+        self.horizon.setRange(*(round(b) for b in camera_rules.EDITOR_HORIZON_RANGE))
         self.horizon.setSuffix(" px")
         self.horizon.setToolTip("The canvas row where the ground meets the sky (it may lie above or below the image)")
         self.from_guide = QPushButton("From guide")
@@ -129,10 +128,10 @@ class ShadowPanel(QWidget):
         hrow.addWidget(self.from_guide)
         cform = QFormLayout()
         self.fov = QDoubleSpinBox()
-        self.fov.setRange(10.0, 120.0)
+        self.fov.setRange(*camera_rules.EDITOR_FOV_RANGE)
         self.fov.setDecimals(0)
         self.fov.setSuffix("°")
-        self.fov.setValue(DEFAULT_FOV)
+        self.fov.setValue(camera_rules.DEFAULT_FOV)
         self.fov.setToolTip("The image's vertical field of view (a phone camera: about 50 degrees)")
         cform.addRow("Field of view", self.fov)
         self.camera_read = QLabel()
@@ -327,7 +326,7 @@ class ShadowPanel(QWidget):
         self.use_horizon.setChecked(camera is not None)
         if camera is not None:
             self.horizon.setValue(round(camera["horizon"]))
-            self.fov.setValue(camera.get("fov", DEFAULT_FOV))
+            self.fov.setValue(camera.get("fov", camera_rules.DEFAULT_FOV))
         for w in (self.horizon, self.fov):
             w.setEnabled(camera is not None)
         self._syncing = False
@@ -340,14 +339,13 @@ class ShadowPanel(QWidget):
             self.camera_read.setText("")
             self.camera_read.setVisible(False)
             return
+        shown = camera_rules.camera_read_settings(read)
         self._syncing = True
-        self.horizon.setValue(round(read["horizon"]))
-        self.fov.setValue(read["fov"])
+        self.horizon.setValue(round(shown["horizon"]))
+        self.fov.setValue(shown["fov"])
         self._syncing = False
-        self.camera_read.setText(
-            f"Read from the cutout's outline: horizon at row {round(read['horizon'])}, {read['fov']:.0f}° field of "
-            "view. If the shadow's perspective looks wrong, tick the box and correct them."
-        )
+        source = self.controller.source  # the cutout's image, whose camera the model read
+        self.camera_read.setText(camera_rules.camera_read_note(read, source.height if source is not None else 0))
         self.camera_read.setVisible(True)
 
     def _camera_edited(self) -> None:

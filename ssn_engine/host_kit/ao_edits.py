@@ -1,14 +1,33 @@
-"""The docker's list of AO edits (protocol ops), with undo of the last stroke or step."""
+"""The list of AO edits a host sends with ``edit_ao`` (stdlib only), with undo of the last stroke or step.
+
+An edit is a protocol op (docs/protocol.md, ``edit_ao``): a brush dab, a grow or shrink step, and, last, one
+global strength that scales the occlusion from 0 (none) to :data:`~.defaults.MAX_AO_STRENGTH`; a strength of 1
+keeps the predicted AO and sends no op.
+"""
 
 from __future__ import annotations
+
+from .defaults import MAX_AO_STRENGTH
+
+__all__ = ["AoEdits"]
 
 
 class AoEdits:
     """Brush strokes and grow/shrink steps in order, plus one global strength (last)."""
 
-    def __init__(self) -> None:
+    def __init__(self, strength: float = 1.0) -> None:
         self.steps: list[list[dict]] = []  # a brush stroke (several dabs) or one grow op per step
-        self.strength = 1.0
+        self.strength = strength
+
+    @property
+    def strength(self) -> float:
+        return self._strength
+
+    @strength.setter
+    def strength(self, value: float) -> None:
+        if not 0.0 <= value <= MAX_AO_STRENGTH:
+            raise ValueError(f"AO strength: expected 0 to {MAX_AO_STRENGTH:g}, got {value:g}")
+        self._strength = float(value)
 
     def brush(self, x: float, y: float, radius: float, strength: float, new_stroke: bool) -> None:
         dab = {"op": "brush", "x": round(x, 4), "y": round(y, 4), "radius": radius, "strength": strength}
