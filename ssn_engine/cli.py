@@ -14,6 +14,7 @@ from pathlib import Path
 import numpy as np
 
 from .host_kit import defaults
+from .host_kit.ao_edits import strength_edits
 from .host_kit.camera_rules import DEFAULT_FOV, FOV_RANGE
 
 EXIT_OK, EXIT_ERROR, EXIT_USAGE = 0, 1, 2
@@ -151,7 +152,7 @@ def _ao_edits(args: argparse.Namespace) -> list[dict]:
         if not isinstance(edits, list):
             raise CliError(f"{args.ao_edits}: expected a JSON list of AO edits")
     if args.ao_strength is not None:
-        edits.append({"op": "strength", "value": args.ao_strength})
+        edits.extend(strength_edits(args.ao_strength))
     return edits
 
 

@@ -174,4 +174,4 @@ class ShadowSettings:
 
     def ao_edits(self) -> list[dict[str, Any]]:
         """The AO edit list for ``edit_ao``; empty when the predicted AO is kept."""
-        return ao_edits.AoEdits(self.ao_strength).to_list()
+        return ao_edits.strength_edits(self.ao_strength)

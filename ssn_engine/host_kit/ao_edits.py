@@ -9,7 +9,15 @@ from __future__ import annotations
 
 from .defaults import MAX_AO_STRENGTH
 
-__all__ = ["AoEdits"]
+__all__ = ["AoEdits", "strength_edits"]
+
+
+def strength_edits(value: float) -> list[dict]:
+    """The edit list's last op for a global AO strength ``value`` in [0, MAX_AO_STRENGTH]: none at 1 (the
+    predicted AO kept), else one ``strength`` op."""
+    if not 0.0 <= value <= MAX_AO_STRENGTH:
+        raise ValueError(f"AO strength: expected 0 to {MAX_AO_STRENGTH:g}, got {value:g}")
+    return [] if value == 1.0 else [{"op": "strength", "value": float(value)}]
 
 
 class AoEdits:
@@ -25,8 +33,7 @@ class AoEdits:
 
     @strength.setter
     def strength(self, value: float) -> None:
-        if not 0.0 <= value <= MAX_AO_STRENGTH:
-            raise ValueError(f"AO strength: expected 0 to {MAX_AO_STRENGTH:g}, got {value:g}")
+        strength_edits(value)  # checks the range
         self._strength = float(value)
 
     def brush(self, x: float, y: float, radius: float, strength: float, new_stroke: bool) -> None:
@@ -51,7 +58,4 @@ class AoEdits:
 
     def to_list(self) -> list[dict]:
         """The protocol's ``edits`` list."""
-        ops = [op for step in self.steps for op in step]
-        if self.strength != 1.0:
-            ops.append({"op": "strength", "value": self.strength})
-        return ops
+        return [op for step in self.steps for op in step] + strength_edits(self.strength)

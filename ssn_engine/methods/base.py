@@ -20,7 +20,8 @@ class ShadowMethod(Protocol):
     ``masks`` and ``ao`` have shape (n, N, N), ``elms`` (n, 16, 32), all
     float32; results are float32 in [0, 1]. AO maps follow the conventions
     (A^(1/3), 1 fully exposed). ``render`` is the interactive path: it must
-    not redo the AO work.
+    not redo the AO work, nor resolve the camera where it is given one (a
+    session passes the camera it resolved once, a model's reading included).
     """
 
     name: str

@@ -277,7 +277,8 @@ class OnnxSSN:
         }
         card = None
         if self.card is not None:
-            card = self.card.card_shadows(masks, elms, self.cameras_for(masks, cameras))
+            resolved = cameras if cameras is not None else self.cameras_for(masks, None)  # a session passes its own
+            card = self.card.card_shadows(masks, elms, resolved)
             feeds["card"] = blur_frames(card, self.card_blur)[:, None]
         s = _run(self._sr, "shadow", feeds)[:, 0]
         share = small_lights_share(elms)

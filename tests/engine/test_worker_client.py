@@ -538,3 +538,70 @@ def test_a_cutout_without_a_camera_says_which_one_the_model_read(client):
     assert "camera_read" not in given
     for key in (reply["cutout"], given["cutout"]):
         client.request("release", cutout=key)
+
+
+class CountingWriter:
+    """A client's writer that counts the bytes it sends."""
+
+    def __init__(self, inner):
+        self.inner, self.sent = inner, 0
+
+    def writelines(self, chunks):
+        chunks = [bytes(c) for c in chunks]
+        self.sent += sum(len(c) for c in chunks)
+        self.inner.writelines(chunks)
+
+    def write(self, data):
+        self.sent += len(data)
+        return self.inner.write(data)
+
+    def flush(self):
+        self.inner.flush()
+
+
+def test_a_camera_change_sends_the_camera_not_the_alpha(client):
+    """set_camera gives a cutout a new camera: a few hundred bytes on the wire, no alpha-sized buffer; the AO is
+    predicted again with it, the AO edits are kept, and the model's reading comes back when it is unset."""
+    alpha = canvas_alpha()
+    reply, _ = client.request("set_cutout", {"alpha": buf(alpha)})
+    key, read = reply["cutout"], reply.get("camera_read")
+    client.request("edit_ao", cutout=key, edits=[{"op": "strength", "value": 0.5}])
+    _, before = client.request("get_ao", cutout=key)
+    counting = CountingWriter(client._writer)
+    client._writer = counting
+    try:
+        reply, _ = client.request("set_camera", cutout=key, camera={"horizon": -400.0, "fov": 40.0})
+    finally:
+        client._writer = counting.inner
+    assert counting.sent < 200 < alpha.nbytes  # the header alone
+    assert reply["cutout"] == key and "camera_read" not in reply  # the image's camera: nothing read
+    _, after = client.request("get_ao", cutout=key)
+    assert not np.array_equal(arr(before["ao"]), arr(after["ao"]))  # analysed again with the camera
+    fresh = client.request("set_cutout", {"alpha": buf(alpha)}, camera={"horizon": -400.0, "fov": 40.0})[0]["cutout"]
+    _, edited = client.request("edit_ao", cutout=fresh, edits=[{"op": "strength", "value": 0.5}])
+    assert np.array_equal(arr(after["ao"]), arr(edited["ao"]))  # the edits kept: as a new cutout with them
+    reply, _ = client.request("set_camera", cutout=key, camera=None)
+    assert reply.get("camera_read") == read  # back to the model's own reading
+    with pytest.raises(EngineError, match="camera"):
+        client.request("set_camera", cutout=key)
+    with pytest.raises(EngineError, match="camera.fov"):
+        client.request("set_camera", cutout=key, camera={"horizon": 10.0, "fov": 179.0})
+    with pytest.raises(EngineError) as unknown:
+        client.request("set_camera", cutout="nope", camera=None)
+    assert unknown.value.kind == "UnknownCutout"
+    for k in (key, fresh):
+        client.request("release", cutout=k)
+
+
+def test_a_worker_of_another_protocol_is_refused():
+    """The client's handshake: a worker that answers hello with another protocol version is stopped, with a
+    message that says how to make the plug-in and the engine match."""
+    script = (
+        "import json, sys, time; rid = json.loads(sys.stdin.buffer.readline())['id']; "
+        "sys.stdout.buffer.write(json.dumps({'id': rid, 'ok': True, 'protocol': 999}).encode() + b'\\n'); "
+        "sys.stdout.flush(); time.sleep(30)"
+    )
+    c = EngineClient(command=[sys.executable, "-c", script], timeout=30)
+    with pytest.raises(WorkerUnavailable, match="protocol 999, this plug-in") as refused:
+        c.request("set_cutout", {"alpha": buf(canvas_alpha())})
+    assert "install-plugin" in str(refused.value) and not c.running

@@ -175,21 +175,32 @@ def test_worker_crash_mid_session_recovers(qapp):
 
 
 def test_the_camera_reaches_the_worker_and_changes_the_shadow(qapp):
-    """A horizon set in the docker: the cutout is analysed again with it, and the shadow changes. Before it, the
-    worker says which camera the model read from the outline; after it, none."""
+    """A horizon set in the docker: the worker's cutout is analysed again with it (the camera alone is sent, not
+    the alpha again), and the shadow changes. Before it, the worker says which camera the model read from the
+    outline; after it, none."""
     host = FakeHost()
     c, engine, messages, _ = make(host)
-    reads = []
+    reads, sent = [], []
     c.cameraRead.connect(reads.append)
+    request = engine.request
+
+    def spy(cmd, buffers=None, **kwargs):
+        sent.append((cmd, sum(len(memoryview(b.data).cast("B")) for b in (buffers or {}).values())))
+        return request(cmd, buffers, **kwargs)
+
+    engine.request = spy
     try:
         c.generate()
         assert wait_until(lambda: not c.busy and host.writes), messages
         first_cutout = c.cutout
         assert wait_until(lambda: reads), messages
         assert reads[-1] is not None and set(reads[-1]) == {"horizon", "fov"}  # blind: the model read one
+        assert ("set_cutout", host.w * host.h) in sent
+        del sent[:]
         c.set_camera({"horizon": -400.0, "fov": 40.0})  # seen from high above
         assert wait_until(lambda: not c.busy and len(host.writes) == 2), messages
-        assert c.cutout != first_cutout  # a new analysis with the camera
+        assert c.cutout == first_cutout and ("set_camera", 0) in sent  # the same cutout, a new camera
+        assert all(cmd != "set_cutout" and nbytes == 0 for cmd, nbytes in sent), sent  # no alpha sent again
         assert reads[-1] is None
         assert host.writes[1][0] != host.writes[0][0]  # the shadow's rectangle moved or changed size
         assert not [m for m in messages if m[0] == "error"]
