@@ -52,7 +52,7 @@ MAX_CANVAS_SIDE = 32768  # pixels, either side of a set_cutout alpha
 MAX_CANVAS_PIXELS = 1 << 28  # 268 megapixels
 REQUEST_BUFFERS = {  # the buffers each command takes; the others take none
     "set_cutout": ("alpha",),
-    "preview": ("background", "cover"),
+    "preview": ("background",),
 }
 
 
@@ -214,10 +214,7 @@ class Worker:
             raise RequestError("BadRequest", "background: buffer missing")
         background = to_array(buffers["background"])  # uint8 (h, w, 3|4), bounded: check_request
         framing = self._preview_framing(s, background.shape[1], background.shape[0])
-        size = (framing.canvas_height, framing.canvas_width)
-        cover = to_array(buffers["cover"]) if "cover" in buffers else s.cover(framing)
-        if cover.shape != size:
-            raise RequestError("BadRequest", f"cover: expected the background's size {size[1]} x {size[0]}")
+        cover = s.cover(framing)
         horizon = header.get("horizon")
         if horizon is not None and (not isinstance(horizon, (int, float)) or not np.isfinite(horizon)):
             raise RequestError("BadRequest", f"horizon: expected a row number, got {horizon!r}")

@@ -214,17 +214,22 @@ def test_edit_ao(client):
 
 
 def test_preview_is_the_shadow_multiplied_onto_the_thumbnail(client):
-    """A dialog's preview (GIMP): the worker composites, hides the shadow under the cutout and draws the
-    horizon, so the host's Python does no pixel maths."""
-    alpha = drawn_alpha(160, 120, np.uint16)  # the thumbnail's cutout, at its own depth
+    """A host's preview: the worker composites, hides the shadow under the cutout and draws the horizon, so the
+    host's Python does no pixel maths."""
+    from scipy import ndimage
+
+    alpha = drawn_alpha(160, 120, np.uint16)  # a cutout at its own depth
     key = client.request("set_cutout", {"alpha": buf(alpha)})[0]["cutout"]
     background = np.full((120, 160, 4), 200, np.uint8)
-    sent = {"background": buf(background), "cover": buf(alpha)}
+    sent = {"background": buf(background)}
     reply, out = client.request("preview", sent, cutout=key, preset="high-sun", opacity=1.0)
     image = arr(out["image"])
     assert image.shape == (120, 160, 3) and image.dtype == np.uint8 and "no_shadow" not in reply
     assert image.min() < 120  # a dark contact shadow
-    assert (image[alpha > 0] == 200).all()  # the cutout, above the shadow layer, hides it
+    inside = ndimage.binary_erosion(alpha == alpha.max(), iterations=2)
+    assert (image[inside] == 200).all()  # the cutout, above the shadow layer, hides it (its framed mask)
+    with pytest.raises(EngineError, match="preview: unexpected buffer 'cover'; it takes background"):
+        client.request("preview", {**sent, "cover": buf(alpha)}, cutout=key, preset="high-sun")
     red = client.request("preview", sent, cutout=key, preset="high-sun", color=[1.0, 0.0, 0.0], horizon=30.4)[1]
     red = arr(red["image"])
     assert (red[..., 0][alpha == 0] >= 199).all() and red[..., 1].min() < 120  # a red shadow keeps the red
