@@ -2,7 +2,7 @@
 
 The plug-in folder ``ssn-shadow/`` is copied (or its files symlinked, for
 development) into GIMP's user plug-ins folder, gets copies of the engine's
-toolkit-free modules (``engine_shared/``) and an ``engine.json`` that says how
+toolkit-free modules (``host_kit/``) and an ``engine.json`` that says how
 to reach the engine: the Python that runs ``python -m ssn_engine serve``, or,
 with ``address``, a worker already listening on a loopback port (``ssn-shadow
 serve --port N``), e.g. for a GIMP that runs in a chroot or container.
@@ -17,7 +17,7 @@ import sys
 from collections.abc import Mapping
 from pathlib import Path
 
-from ssn_engine.plugin_files import CONFIG_NAME, SHARED_PACKAGE, copy_shared_modules, write_engine_config
+from ssn_engine.plugin_files import CONFIG_NAME, KIT_PACKAGE, copy_host_kit, write_engine_config
 
 PLUGIN_NAME = "ssn-shadow"
 SOURCE_DIR = Path(__file__).resolve().parent / PLUGIN_NAME
@@ -66,7 +66,7 @@ def _clear(dest: Path) -> None:
                 shutil.rmtree(child)
             else:
                 child.unlink()
-    shared = dest / SHARED_PACKAGE
+    shared = dest / KIT_PACKAGE
     if shared.is_dir() and not shared.is_symlink():
         shutil.rmtree(shared)
 
@@ -119,7 +119,7 @@ def install(
             shutil.copy2(source, target)
             if source.name == f"{PLUGIN_NAME}.py":
                 target.chmod(0o755)
-    copy_shared_modules(dest)
+    copy_host_kit(dest)
     if address is not None:
         write_address_config(dest, *address, token)
     else:

@@ -14,13 +14,13 @@ import zipfile
 from collections.abc import Mapping
 from pathlib import Path
 
-from ssn_engine.plugin_files import copy_shared_modules, write_engine_config
+from ssn_engine.plugin_files import copy_host_kit, write_engine_config
 
 PLUGIN_NAME = "ssn_shadow"
 HERE = Path(__file__).resolve().parent
 PACKAGE = HERE / PLUGIN_NAME
 DESKTOP = HERE / f"{PLUGIN_NAME}.desktop"
-_GENERATED = ("__pycache__", "*.pyc", "engine_shared", "engine.json", ".gitignore")
+_GENERATED = ("__pycache__", "*.pyc", "host_kit", "engine.json", ".gitignore")
 
 
 def default_pykrita_dir(
@@ -65,7 +65,7 @@ def install(dest: Path | None = None, python: str | None = None, link: bool = Fa
     else:
         shutil.copytree(PACKAGE, target, ignore=shutil.ignore_patterns(*_GENERATED))
         shutil.copy2(DESKTOP, desktop)
-    copy_shared_modules(target)
+    copy_host_kit(target)
     write_engine_config(target, _resolve_python(python))
     return target
 

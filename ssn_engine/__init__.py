@@ -1,7 +1,8 @@
 """ssn-shadow engine: soft shadows for 2D cutouts (SSN, Sheng et al., CVPR 2021).
 
-Heavy modules load lazily so that the toolkit-free parts (light_map,
-protocol, client) import without numpy.
+Heavy modules load lazily so that the host kit (:mod:`ssn_engine.host_kit`:
+the light map, the protocol, the client, the rules every front end shares)
+imports without numpy.
 """
 
 from __future__ import annotations

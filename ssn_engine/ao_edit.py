@@ -12,7 +12,7 @@ from typing import Any
 
 import numpy as np
 
-from . import defaults
+from .host_kit import defaults
 from skimage.morphology import dilation, disk, erosion
 
 MAX_GROW = 32  # frame pixels

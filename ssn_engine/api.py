@@ -7,6 +7,7 @@ import functools
 import numpy as np
 
 from .framing import ALPHA_THRESHOLD
+from .host_kit.sky_map import check_elm_shape
 from .methods import LoadedMethod, load_method
 from .methods.base import check_cameras
 
@@ -50,8 +51,7 @@ def predict_frames(
     method = default_method().method
     masks = _frames("masks", masks, method.resolution)
     elms = np.asarray(elms)
-    if elms.shape != (len(masks), 16, 32):
-        raise ValueError(f"elms: expected shape ({len(masks)}, 16, 32), got {elms.shape}")
+    check_elm_shape(elms.shape, len(masks))
     if not np.all(np.isfinite(elms)) or elms.min(initial=0.0) < 0:
         raise ValueError("elms: light values must be finite and non-negative")
     elms = elms.astype(np.float32)

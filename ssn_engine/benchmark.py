@@ -15,7 +15,7 @@ from PIL import Image
 from .compositing import shadow_layer
 from .framing import frame_alpha
 from .hemisphere import render_light_map
-from .light_map import GaussianLight, LightMap, preset
+from .host_kit.light_map import GaussianLight, LightMap, preset
 from .methods import GeometricCard, load_method
 from .samples import pawn_cutout
 from .session import ShadowSession

@@ -15,9 +15,10 @@ from dataclasses import dataclass, field
 
 import numpy as np
 
+from .host_kit.camera_rules import DEFAULT_FOV
+
 DISTANCE = 2.0
 TOP_MARGIN = 0.03
-DEFAULT_FOV = 45.0
 DEFAULT_PITCH = 15.0
 PITCH_RANGE = (-10.0, 80.0)  # pitches :func:`camera_for_span` searches; a horizon beyond them is clamped
 

@@ -17,7 +17,9 @@ from collections.abc import Iterator, Sequence
 from pathlib import Path
 from typing import TYPE_CHECKING
 
-from . import defaults
+from .host_kit import defaults
+from .host_kit.ao_edits import strength_edits
+from .host_kit.camera_rules import DEFAULT_FOV, FOV_RANGE
 
 if TYPE_CHECKING:
     import numpy as np
@@ -186,8 +188,8 @@ def check_folder(label: str, folder: str | None) -> None:
 
 
 def _light_map(args: argparse.Namespace):
-    from .light_map import LightMap, LightMapError, preset
-    from .session import NO_LIGHT
+    from .host_kit.light_map import LightMap, LightMapError, preset
+    from .host_kit.shadow_notes import NO_LIGHT
 
     if args.light_map:
         try:
@@ -206,7 +208,7 @@ def _light_map(args: argparse.Namespace):
 
 
 def _ao_edits(args: argparse.Namespace) -> list[dict]:
-    from .protocol import loads
+    from .host_kit.protocol import loads
 
     edits: list[dict] = []
     if args.ao_edits:
@@ -217,7 +219,7 @@ def _ao_edits(args: argparse.Namespace) -> list[dict]:
         if not isinstance(edits, list):
             raise CliError(f"{args.ao_edits}: expected a JSON list of AO edits")
     if args.ao_strength is not None:
-        edits.append({"op": "strength", "value": args.ao_strength})
+        edits.extend(strength_edits(args.ao_strength))
     return edits
 
 
@@ -385,7 +387,7 @@ def cmd_demo(args: argparse.Namespace) -> int:
 
 
 def cmd_presets(args: argparse.Namespace) -> int:
-    from .light_map import PRESETS, preset
+    from .host_kit.light_map import PRESETS, preset
 
     if args.name:
         print(preset(args.name).to_json())
@@ -456,7 +458,7 @@ NEXT_STEP = {
 
 def _add_shadow_options(p: argparse.ArgumentParser) -> None:
     from .ao_edit import MAX_STRENGTH
-    from .light_map import DEFAULT_PRESET, PRESETS
+    from .host_kit.light_map import DEFAULT_PRESET, PRESETS
     from .methods import METHOD_NAMES
 
     light = p.add_mutually_exclusive_group()
@@ -488,9 +490,9 @@ def _add_shadow_options(p: argparse.ArgumentParser) -> None:
     )
     p.add_argument(
         "--fov",
-        type=_number_in(1.0, 170.0),
+        type=_number_in(*FOV_RANGE),
         metavar="DEG",
-        help="with --horizon: the image's vertical field of view in degrees (default 45)",
+        help=f"with --horizon: the image's vertical field of view in degrees (default {DEFAULT_FOV:g})",
     )
 
 
@@ -593,7 +595,7 @@ def _run(argv: Sequence[str] | None, placed: list[Path]) -> int:
     args = build_parser().parse_args(argv)
     args.placed = placed
     from .imageio import ImageFileError
-    from .light_map import LightMapError
+    from .host_kit.light_map import LightMapError
     from .methods import ModelError
 
     try:

@@ -21,7 +21,8 @@ from dataclasses import dataclass
 import numpy as np
 from PIL import Image
 
-from .camera import DEFAULT_FOV, focal_from_fov, fov_from_focal, top_row
+from .camera import focal_from_fov, fov_from_focal, top_row
+from .host_kit.camera_rules import DEFAULT_FOV, check_fov
 from .stripes import for_each_stripe
 
 OBJECT_EXTENT = 0.5
@@ -88,9 +89,7 @@ class Framing:
         """The frame's camera input (horizon row h, focal length f; conventions "Camera input") for a canvas
         horizon row ``horizon`` (canvas pixels from the top edge; may lie outside the canvas) and the canvas's
         vertical field of view ``fov`` in degrees: h = k H + d, f = k F with F the canvas's focal length."""
-        if not 1.0 <= fov <= 170.0:
-            raise ValueError(f"field of view: expected 1 to 170 degrees, got {fov:g}")
-        return horizon * self.scale + self.offset_y, focal_from_fov(self.canvas_height, fov) * self.scale
+        return horizon * self.scale + self.offset_y, focal_from_fov(self.canvas_height, check_fov(fov)) * self.scale
 
     def canvas_camera(self, horizon: float, focal: float) -> tuple[float, float]:
         """The inverse of :meth:`camera_input`: the canvas horizon row and vertical field of view (degrees) of a

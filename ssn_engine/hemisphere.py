@@ -15,9 +15,8 @@ from __future__ import annotations
 import numpy as np
 from scipy.special import erf
 
-from .light_map import ASPECT, LightMap
-
-NETWORK_SHAPE = (16, 32)
+from .host_kit.light_map import ASPECT, LightMap
+from .host_kit.sky_map import NETWORK_SHAPE
 
 
 def texel_edges(h: int) -> tuple[np.ndarray, np.ndarray]:
@@ -89,24 +88,29 @@ def stratified_directions(h: int, samples: int, rng: np.random.Generator | None 
     return direction(e, a).reshape(h, 2 * h, samples, 3)
 
 
-def render_light_map(light_map: LightMap, h: int = NETWORK_SHAPE[0]) -> np.ndarray:
-    """Each texel's mean radiance under the Gaussian mixture, shape (h, 2h), float32.
-
-    Texel means are exact (separable erf integrals, azimuth wrapping), so even
-    a light much smaller than a texel keeps its energy at any resolution.
-    """
-    out = np.zeros((h, 2 * h), np.float64)
+def render_light_maps(
+    u: np.ndarray, v: np.ndarray, softness: np.ndarray, intensity: np.ndarray, h: int = NETWORK_SHAPE[0]
+) -> np.ndarray:
+    """Each texel's mean radiance under a batch of Gaussian mixtures, light ``k`` of map ``b`` given by
+    ``u[b, k]``, ``v[b, k]``, ``softness[b, k]`` and ``intensity[b, k]`` (intensity 0: no light): (B, h, 2h)
+    float32. The definition of :func:`ssn_engine.host_kit.sky_map.map_values` (separable erf integrals, the azimuth
+    wrapping), vectorised."""
+    u, v, softness, intensity = (np.asarray(a, np.float64) for a in (u, v, softness, intensity))
     edges = np.arange(2 * h + 1) / h  # x and y in map heights; x spans [0, 2)
-    for light in light_map:
-        s = np.sqrt(2.0 * light.softness)
-        norm = np.sqrt(np.pi / 2.0) * np.sqrt(light.softness) * h  # divided by texel size 1/h
-        ex = np.zeros(2 * h)
-        for shift in (-ASPECT, 0.0, ASPECT):
-            c = ASPECT * light.u + shift
-            ex += np.diff(erf((edges - c) / s))
-        ey = np.diff(erf((edges[: h + 1] - light.v) / s))
-        out += light.intensity * norm**2 * np.outer(ey, ex)
-    return out.astype(np.float32)
+    s = np.sqrt(2.0 * softness)[..., None]  # (B, K, 1)
+    ex = np.zeros(u.shape + (2 * h,))
+    for shift in (-ASPECT, 0.0, ASPECT):
+        ex += np.diff(erf((edges - (ASPECT * u + shift)[..., None]) / s), axis=-1)
+    ey = np.diff(erf((edges[: h + 1] - v[..., None]) / s), axis=-1)  # (B, K, h)
+    weight = intensity * (np.pi / 2.0) * softness * h * h  # the texel means' norm, squared
+    return np.einsum("bk,bky,bkx->byx", weight, ey, ex).astype(np.float32)
+
+
+def render_light_map(light_map: LightMap, h: int = NETWORK_SHAPE[0]) -> np.ndarray:
+    """Each texel's mean radiance under one light map, shape (h, 2h), float32 (:func:`render_light_maps`)."""
+    lights = [(g.u, g.v, g.softness, g.intensity) for g in light_map] or [(0.5, 0.5, 0.01, 0.0)]
+    u, v, softness, intensity = (np.array([column]) for column in zip(*lights, strict=True))
+    return render_light_maps(u, v, softness, intensity, h)[0]
 
 
 def network_elm(elm: np.ndarray) -> np.ndarray:

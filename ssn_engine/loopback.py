@@ -20,7 +20,7 @@ import time
 from typing import Any
 
 from .methods import LoadedMethod
-from .protocol import ProtocolError, encode_header, parse_header
+from .host_kit.protocol import ProtocolError, encode_header, parse_header
 from .worker import Worker, tune_malloc
 
 __all__ = ["AUTH_TIMEOUT", "authenticate", "serve_tcp"]

@@ -1,10 +1,10 @@
-"""Files every host plug-in gets at install time (stdlib only).
+"""Files every host plug-in gets at install time.
 
 The plug-ins run inside the host's own Python, which has no numpy, so they
-carry copies of the engine's stdlib-only modules, the host kit: the worker
-client and its protocol framing, the engine.json reader, the light map, its
-editor and its picture, and the shared defaults. ``engine.json`` names the
-Python that runs ``ssn-shadow serve``.
+carry a copy of the engine's stdlib-only package :mod:`ssn_engine.host_kit`
+(the worker client and its protocol framing, the engine.json reader, the
+light map, its editor and its picture, and every rule the hosts share).
+``engine.json`` names the Python that runs ``ssn-shadow serve``.
 """
 
 from __future__ import annotations
@@ -14,27 +14,20 @@ import shutil
 import sys
 from pathlib import Path
 
-SHARED_MODULES = (  # the host kit
-    "client.py",
-    "defaults.py",
-    "engine_config.py",
-    "light_editor.py",
-    "light_map.py",
-    "light_map_picture.py",
-    "protocol.py",
-)
-SHARED_PACKAGE = "engine_shared"
+KIT_DIR = Path(__file__).resolve().parent / "host_kit"
+KIT_PACKAGE = KIT_DIR.name  # the copy's name beside the plug-in: the same package, imported by that name
+KIT_MODULES = tuple(sorted(p.name for p in KIT_DIR.glob("*.py")))
 CONFIG_NAME = "engine.json"
 
 
-def copy_shared_modules(plugin_dir: Path) -> Path:
-    """Copy the toolkit-free engine modules into ``plugin_dir/engine_shared``."""
-    here = Path(__file__).resolve().parent
-    dest = Path(plugin_dir) / SHARED_PACKAGE
+def copy_host_kit(plugin_dir: Path) -> Path:
+    """Copy the host kit's modules into ``plugin_dir/host_kit`` (replacing an older copy); returns that folder."""
+    dest = Path(plugin_dir) / KIT_PACKAGE
+    if dest.is_dir() and not dest.is_symlink():
+        shutil.rmtree(dest)
     dest.mkdir(parents=True, exist_ok=True)
-    (dest / "__init__.py").write_text('"""Copies of ssn_engine modules made by ssn-shadow install-plugin."""\n')
-    for name in SHARED_MODULES:
-        shutil.copy2(here / name, dest / name)
+    for name in KIT_MODULES:
+        shutil.copy2(KIT_DIR / name, dest / name)
     return dest
 
 

@@ -14,17 +14,15 @@ import numpy as np
 
 from . import long_shadow
 from .ao_edit import apply_edits
-from .camera import DEFAULT_FOV
 from .framing import CanvasShadow, Framing, frame_alpha, shadow_to_canvas
-from .hemisphere import NETWORK_SHAPE, render_light_map
-from .light_map import LightMap
+from .hemisphere import render_light_map
+from .host_kit.camera_rules import DEFAULT_FOV, FOV_RANGE
+from .host_kit.light_map import LightMap
+from .host_kit.shadow_notes import HIDDEN, NO_LIGHT
+from .host_kit.sky_map import NETWORK_SHAPE
 from .methods import GeometricCard, ShadowMethod
 from .methods.base import camera_limits
 from .methods.geometric import camera_at
-
-
-NO_LIGHT = "the light map has no light (no lights, or all at intensity 0)"
-HIDDEN = "this light casts no shadow visible in the image (it falls behind the cutout)"
 
 
 def camera_input(framing: Framing, horizon: float, fov: float = DEFAULT_FOV) -> tuple[float, float]:
@@ -44,7 +42,7 @@ def camera_input(framing: Framing, horizon: float, fov: float = DEFAULT_FOV) -> 
         wide, narrow = framing.canvas_camera(h, f_lo)[1], framing.canvas_camera(h, f_hi)[1]
         raise ValueError(
             f"field of view: {fov:g} degrees is outside what the model takes for this cutout on this canvas; "
-            f"give {max(1.0, narrow):.1f} to {min(170.0, wide):.1f} degrees"
+            f"give {max(FOV_RANGE[0], narrow):.1f} to {min(FOV_RANGE[1], wide):.1f} degrees"
         )
     return h, f
 
@@ -65,17 +63,24 @@ class ShadowSession:
     ) -> None:
         self.method = method
         self.mask, self.framing = frame_alpha(alpha, method.resolution)
-        self.cameras = None
+        self.edits: list[dict[str, Any]] = []
+        self._card: GeometricCard | None = None  # traces long shadows for methods without a card of their own
+        self.set_camera(horizon, fov)
+
+    def set_camera(self, horizon: float | None = None, fov: float | None = None) -> None:
+        """Change the camera (as in the constructor; None: the method's reading or default one): the AO is
+        predicted again with it and the AO edits are applied to it again. The camera the method uses is resolved
+        here, once per camera (``used_cameras``), so that a light change resolves none."""
+        cameras = None
         if horizon is not None:
-            self.cameras = np.array([camera_input(self.framing, horizon, DEFAULT_FOV if fov is None else fov)])
+            cameras = np.array([camera_input(self.framing, horizon, DEFAULT_FOV if fov is None else fov)])
         elif fov is not None:
             raise ValueError("field of view: give the horizon row too (the camera input needs both)")
-        self.predicted_ao = method.predict_ao(self.mask[None], self.cameras)[0]
-        resolve = getattr(method, "cameras_for", None)  # a model's own reading of a blind call's camera
-        self.used_cameras = resolve(self.mask[None], self.cameras) if resolve is not None else self.cameras
-        self.edits: list[dict[str, Any]] = []
-        self.ao = self.predicted_ao
-        self._card: GeometricCard | None = None  # traces long shadows for methods without a card of their own
+        self.cameras = cameras
+        self.predicted_ao = self.method.predict_ao(self.mask[None], cameras)[0]
+        resolve = getattr(self.method, "cameras_for", None)  # a model's own reading of a blind call's camera
+        self.used_cameras = resolve(self.mask[None], cameras) if resolve is not None else cameras
+        self.ao = apply_edits(self.predicted_ao, self.edits) if self.edits else self.predicted_ao
 
     @property
     def camera_read(self) -> dict[str, float] | None:
@@ -100,7 +105,7 @@ class ShadowSession:
     def render_frame(self, light_map: LightMap) -> np.ndarray:
         """The frame shadow (N, N) for a light map."""
         elm = render_light_map(light_map, NETWORK_SHAPE[0])
-        return self.method.render(self.mask[None], self.ao[None], elm[None], self.cameras)[0]
+        return self.method.render(self.mask[None], self.ao[None], elm[None], self.used_cameras)[0]
 
     def to_canvas(
         self, frame: np.ndarray, light_map: LightMap, clip: bool = True, framing: Framing | None = None
@@ -130,6 +135,6 @@ class ShadowSession:
 
     def cover(self, framing: Framing) -> np.ndarray:
         """The cutout's alpha (h, w) on ``framing``'s canvas, resampled from the frame: what hides the shadow
-        in a small preview when the host sends no alpha of that size."""
+        in a preview."""
         mask = shadow_to_canvas(self.mask, framing, origin=(0.0, 0.0))  # with an origin: no fading at the frame's edges
         return mask.full_canvas(framing.canvas_width, framing.canvas_height)

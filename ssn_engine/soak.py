@@ -14,9 +14,9 @@ from pathlib import Path
 
 import numpy as np
 
-from .client import EngineClient, EngineError
-from .light_map import LightMap
-from .protocol import Buffer
+from .host_kit.client import EngineClient, EngineError
+from .host_kit.light_map import LightMap
+from .host_kit.protocol import Buffer
 
 WARMUP_SHARE = 0.2  # the first share of requests (model and caches filling up) before the reference RSS
 WINDOW = 0.2  # RSS compared as medians over windows of this share of the run (sessions come and go)

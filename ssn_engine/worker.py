@@ -25,12 +25,12 @@ import numpy as np
 
 from . import __version__
 from .ao_edit import AOEditError
-from .camera import DEFAULT_FOV
+from .host_kit.camera_rules import DEFAULT_FOV, check_fov
 from .compositing import preview_image, shadow_layer
 from .framing import EmptyAlphaError, Framing
-from .light_map import PRESETS, LightMap, LightMapError, preset
+from .host_kit.light_map import PRESETS, LightMap, LightMapError, preset
 from .methods import LoadedMethod, ModelError
-from .protocol import (
+from .host_kit.protocol import (
     PROTOCOL_VERSION,
     Buffer,
     BufferSpec,
@@ -50,7 +50,7 @@ MAX_CANVAS_PIXELS = 1 << 28  # 268 megapixels
 MAX_MARGIN = MAX_CANVAS_SIDE  # pixels a clipped layer may reach past each side of the canvas
 REQUEST_BUFFERS = {  # the buffers each command takes; the others take none
     "set_cutout": ("alpha",),
-    "preview": ("background", "cover"),
+    "preview": ("background",),
 }
 
 
@@ -91,15 +91,25 @@ def _check_alpha(alpha: np.ndarray) -> None:
 
 
 def _camera(camera: Any) -> tuple[float, float]:
-    """set_cutout's optional ``camera``: {"horizon": canvas row, "fov": degrees (default 45)}."""
+    """set_cutout's optional ``camera``: {"horizon": canvas row, "fov": degrees (default :data:`DEFAULT_FOV`)}."""
     if not isinstance(camera, dict) or not isinstance(camera.get("horizon"), (int, float)):
         raise RequestError("BadRequest", 'camera: expected {"horizon": ROW, "fov": DEGREES}')
-    fov = camera.get("fov", DEFAULT_FOV)
-    if not isinstance(fov, (int, float)) or not 1.0 <= fov <= 170.0:
-        raise RequestError("BadRequest", f"camera.fov: expected 1 to 170 degrees, got {fov!r}")
+    try:
+        fov = check_fov(camera.get("fov", DEFAULT_FOV), "camera.fov")
+    except ValueError as exc:
+        raise RequestError("BadRequest", str(exc)) from None
     if not np.isfinite(camera["horizon"]):
         raise RequestError("BadRequest", "camera.horizon: expected a finite canvas row")
     return float(camera["horizon"]), float(fov)
+
+
+def _cutout_reply(key: str, session: ShadowSession) -> dict:
+    """``set_cutout``'s and ``set_camera``'s reply: the cutout's id, its bounding box and, without a camera of
+    the image's own, the camera the model read from its outline."""
+    reply: dict[str, Any] = {"cutout": key, "bbox": list(session.framing.bbox)}
+    if session.camera_read is not None:
+        reply["camera_read"] = session.camera_read
+    return reply
 
 
 class Worker:
@@ -159,10 +169,15 @@ class Worker:
         self.sessions[key] = session
         while len(self.sessions) > MAX_SESSIONS:
             self.sessions.popitem(last=False)
-        reply = {"cutout": key, "bbox": list(session.framing.bbox)}
-        if session.camera_read is not None:
-            reply["camera_read"] = session.camera_read
-        return reply, {}
+        return _cutout_reply(key, session), {}
+
+    def set_camera(self, header: dict, buffers: dict) -> tuple[dict, dict]:
+        s = self._session(header)
+        if "camera" not in header:
+            raise RequestError("BadRequest", 'camera: expected {"horizon": ROW, "fov": DEGREES} or null')
+        horizon, fov = _camera(header["camera"]) if header["camera"] is not None else (None, None)
+        s.set_camera(horizon, fov)
+        return _cutout_reply(header["cutout"], s), {}
 
     def get_ao(self, header: dict, buffers: dict) -> tuple[dict, dict]:
         s = self._session(header)
@@ -226,10 +241,7 @@ class Worker:
             raise RequestError("BadRequest", "background: buffer missing")
         background = to_array(buffers["background"])  # uint8 (h, w, 3|4), bounded: check_request
         framing = self._preview_framing(s, background.shape[1], background.shape[0])
-        size = (framing.canvas_height, framing.canvas_width)
-        cover = to_array(buffers["cover"]) if "cover" in buffers else s.cover(framing)
-        if cover.shape != size:
-            raise RequestError("BadRequest", f"cover: expected the background's size {size[1]} x {size[0]}")
+        cover = s.cover(framing)
         horizon = header.get("horizon")
         if horizon is not None and (not isinstance(horizon, (int, float)) or not np.isfinite(horizon)):
             raise RequestError("BadRequest", f"horizon: expected a row number, got {horizon!r}")
@@ -272,7 +284,7 @@ class Worker:
             del self.sessions[key]
         return {}, {}
 
-    COMMANDS = ("hello", "set_cutout", "get_ao", "edit_ao", "render", "preview", "release")
+    COMMANDS = ("hello", "set_cutout", "set_camera", "get_ao", "edit_ao", "render", "preview", "release")
 
     def handle(self, header: dict, buffers: dict[str, Buffer]) -> tuple[dict, dict[str, Buffer]]:
         """Answer one request; never raises."""

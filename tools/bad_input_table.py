@@ -28,7 +28,7 @@ from PIL import Image
 from ssn_engine import cli
 from ssn_engine.loopback import authenticate
 from ssn_engine.methods import load_method
-from ssn_engine.protocol import read_message
+from ssn_engine.host_kit.protocol import read_message
 from ssn_engine.worker import Worker
 
 W, H = 120, 90

@@ -20,7 +20,7 @@ from PyQt5.QtWidgets import QApplication
 from plugin_krita.ssn_shadow.controller import PREVIEW_SIDE, ShadowController
 from plugin_krita.ssn_shadow.ui.panel import ShadowPanel
 from ssn_engine.methods import load_method
-from ssn_engine import protocol
+from ssn_engine.host_kit import camera_rules
 from ssn_engine.compositing import over, preview_image
 from ssn_engine.samples import pawn_cutout, studio_background
 from ssn_engine.session import ShadowSession
@@ -66,7 +66,7 @@ def main(argv: list[str] | None = None) -> int:
     panel.from_guide.click()  # the horizon from the sample's guide (row 520, where its floor meets the wall)
     # The live preview of a light drag, as the worker's preview command draws it
     height, width = pawn.shape[:2]
-    pw, ph, _ = protocol.preview_size(width, height, PREVIEW_SIDE)
+    pw, ph, _ = camera_rules.preview_size(width, height, PREVIEW_SIDE)
     framing = session.framing.scaled(pw / width)
     image = Image.fromarray(over(studio_background(), pawn)).resize((pw, ph), Image.Resampling.LANCZOS)
     shadow = session.render(controller.model.light_map, framing)

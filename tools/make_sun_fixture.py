@@ -19,7 +19,7 @@ ROOT = Path(__file__).resolve().parents[1]
 sys.path.insert(0, str(ROOT))
 
 from ssn_engine.hemisphere import render_light_map  # noqa: E402
-from ssn_engine.light_map import GaussianLight, LightMap  # noqa: E402
+from ssn_engine.host_kit.light_map import GaussianLight, LightMap  # noqa: E402
 from training.batches import camera_input  # noqa: E402
 from training.data.store import ViewStore  # noqa: E402
 

@@ -14,8 +14,8 @@ from PIL import Image, ImageDraw
 
 from ssn_engine.compositing import composite_shadow, over
 from ssn_engine.cli import DEMO_PRESET
-from ssn_engine.light_map import PRESETS, GaussianLight, LightMap, preset
-from ssn_engine.light_map_picture import map_rgb
+from ssn_engine.host_kit.light_map import PRESETS, GaussianLight, LightMap, preset
+from ssn_engine.host_kit.light_map_picture import map_rgb
 from ssn_engine.methods import ShadowMethod, load_method
 from ssn_engine.samples import pawn_cutout, studio_background
 from ssn_engine.session import ShadowSession

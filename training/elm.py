@@ -1,9 +1,8 @@
 """Random light maps, sampled and rendered in batches with numpy: the paper's Table 1 and the light families
 an artist uses (one small sun, two small lights, a broad sky).
 
-The rendering is the vectorised form of :func:`ssn_engine.hemisphere.render_light_map`
-(exact texel means of Gaussians via separable erf integrals, azimuth wrapping);
-``tests/training/test_train_elm.py`` checks that the two agree.
+The rendering is the engine's (:func:`ssn_engine.hemisphere.render_light_maps`: exact texel means of Gaussians,
+the definition in :mod:`ssn_engine.host_kit.sky_map`).
 """
 
 from __future__ import annotations
@@ -11,9 +10,9 @@ from __future__ import annotations
 from dataclasses import dataclass
 
 import numpy as np
-from scipy.special import erf
 
-from ssn_engine.light_map import ASPECT, INTENSITY_RANGE, MAX_LIGHTS, SOFTNESS_RANGE, GaussianLight, LightMap
+from ssn_engine.hemisphere import render_light_maps
+from ssn_engine.host_kit.light_map import INTENSITY_RANGE, MAX_LIGHTS, SOFTNESS_RANGE, GaussianLight, LightMap
 
 
 @dataclass
@@ -120,14 +119,4 @@ def sample_mixture(
 
 def render_lights(lights: LightBatch, h: int) -> np.ndarray:
     """Texel-mean radiance of every light map on an (h, 2h) grid: (B, h, 2h) float32."""
-    edges = np.arange(2 * h + 1) / h
-    s = np.sqrt(2.0 * lights.softness)[..., None]  # (B, K, 1)
-    ex = np.zeros(lights.u.shape + (2 * h,))
-    for shift in (-ASPECT, 0.0, ASPECT):
-        c = (ASPECT * lights.u + shift)[..., None]
-        ex += np.diff(erf((edges - c) / s), axis=-1)
-    ey = np.diff(erf((edges[: h + 1] - lights.v[..., None]) / s), axis=-1)  # (B, K, h)
-    norm2 = (np.pi / 2.0) * lights.softness * h * h
-    weight = lights.intensity * norm2
-    out = np.einsum("bk,bky,bkx->byx", weight, ey, ex)
-    return out.astype(np.float32)
+    return render_light_maps(lights.u, lights.v, lights.softness, lights.intensity, h)

@@ -250,7 +250,7 @@ def families_markdown(results: dict) -> str:
 def sun_grid(store, ids: list[int], rows: list[Row], path: Path, rows_hb: int, views: int = 3) -> None:
     """A picture grid: a few views under one sun at several elevations; ground truth, then every row."""
     from ssn_engine.hemisphere import render_light_map
-    from ssn_engine.light_map import GaussianLight, LightMap
+    from ssn_engine.host_kit.light_map import GaussianLight, LightMap
 
     pictures = []
     for i in [ids[int(j)] for j in np.linspace(0, len(ids) - 1, views).round()] if ids else []:

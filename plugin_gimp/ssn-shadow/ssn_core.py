@@ -14,7 +14,7 @@ from dataclasses import dataclass
 from typing import Any, Protocol
 
 from ssn_engine_link import client as engine_client
-from ssn_engine_link import protocol
+from ssn_engine_link import protocol, shadow_notes
 from ssn_pixels import BYTES_PER_SAMPLE, PixelPlan, is_blank, max_alpha
 from ssn_settings import ARG_BY_NAME, LAYER_PREFIX, SettingsError, ShadowSettings
 
@@ -47,6 +47,7 @@ class ShadowLayerData:
     height: int
     dtype: str
     data: bytes
+    no_shadow: str = ""  # why the layer is empty (the worker's reason), "" when it is not
 
 
 class Host(Protocol):
@@ -68,7 +69,9 @@ class Host(Protocol):
 
 
 class Engine(Protocol):
-    def request(self, cmd: str, buffers: dict | None = None, timeout: float | None = None, **params: Any) -> Any: ...
+    """The host kit's client (:class:`ssn_engine.host_kit.client.EngineClient`), or a stand-in."""
+
+    def request(self, cmd: str, buffers: dict | None = None, *, timeout: float | None = None, **params: Any) -> Any: ...
 
 
 def shadow_layer_name(source_name: str) -> str:
@@ -102,6 +105,13 @@ def upload_cutout(
     return str(reply["cutout"]), reply.get("camera_read")
 
 
+def set_camera(engine: Engine, cutout_id: str, camera: dict[str, float] | None) -> dict[str, float] | None:
+    """Give an uploaded cutout another camera (None: the one the model reads) without sending its alpha again: the
+    worker predicts its AO again. Returns the camera the model read, as :func:`upload_cutout` does."""
+    reply, _ = engine_call(engine, "set_camera", cutout=cutout_id, camera=camera)
+    return reply.get("camera_read")
+
+
 def render_shadow(
     engine: Engine, cutout_id: str, settings: ShadowSettings, dtype: str, canvas: tuple[int, int]
 ) -> ShadowLayerData:
@@ -112,7 +122,7 @@ def render_shadow(
     reply, buffers = engine_call(engine, "render", cutout=cutout_id, **settings.render_params(dtype, canvas))
     x, y, w, h = (int(reply[k]) for k in ("x", "y", "width", "height"))
     if w == 0 or h == 0:
-        return ShadowLayerData(x, y, 0, 0, dtype, b"")
+        return ShadowLayerData(x, y, 0, 0, dtype, b"", str(reply.get("no_shadow") or ""))
     layer = buffers.get("layer")
     if layer is None or layer.dtype != dtype or tuple(layer.shape) != (h, w, 4):
         got = "nothing" if layer is None else f"{layer.dtype} {tuple(layer.shape)}"
@@ -152,9 +162,7 @@ def compute_shadow(host: Host, engine: Engine, settings: ShadowSettings) -> tupl
                 f"Nothing to cast a shadow from: {cutout.source} is almost transparent (its most opaque pixel is "
                 f"{strongest:.0%} opaque). Cast from an opaque cutout, or select the object."
             )
-        raise ShadowError(
-            "These lights cast no visible shadow inside the canvas. Try a light lower in the sky or a higher opacity."
-        )
+        raise ShadowError(shadow_notes.no_shadow_note(shadow.no_shadow))
     return shadow, plan
 
 

@@ -19,14 +19,13 @@ gi.require_version("Gtk", "3.0")
 gi.require_version("GdkPixbuf", "2.0")
 from gi.repository import GdkPixbuf, Gimp, GimpUi, GLib, Gtk  # noqa: E402
 
-from ssn_core import ShadowError, release, settings_from_arguments, upload_cutout  # noqa: E402
+from ssn_core import ShadowError, release, set_camera, settings_from_arguments, upload_cutout  # noqa: E402
+from ssn_engine_link import camera_rules, light_editor, light_map, shadow_notes  # noqa: E402
 from ssn_engine_link import client as engine_client  # noqa: E402
-from ssn_engine_link import light_editor, light_map, protocol  # noqa: E402
 from ssn_gimp_host import config_values  # noqa: E402
 from ssn_light_area import LightMapArea  # noqa: E402
 from ssn_preview import PREVIEW_SIZE, render_preview  # noqa: E402
 from ssn_settings import PROCEDURE_NAME, SettingsError, editor_light_map  # noqa: E402
-from ssn_settings import camera_read_note, camera_read_settings  # noqa: E402
 
 CUSTOM = "(custom)"
 SELFTEST_ENV = "SSN_SHADOW_DIALOG_SELFTEST"
@@ -38,26 +37,27 @@ class ShadowPreview:
     """A thumbnail of the image with the shadow multiplied on, re-rendered while the light moves."""
 
     def __init__(self, host, engine, on_camera_read=None) -> None:
-        """``on_camera_read`` gets the ``camera_read_settings`` of each camera the model reads from the outline
-        (the first analysis, and each one after the image's horizon is turned off)."""
+        """``on_camera_read`` gets the editor's settings (:func:`camera_rules.camera_read_settings`) of each camera
+        the model reads from the outline (the first analysis, and each one after the image's horizon is turned
+        off). The image's cutout is uploaded once; a camera change sends the camera alone."""
         self.host, self.engine, self.on_camera_read = host, engine, on_camera_read
         self.widget = Gtk.Image()
         self.status = Gtk.Label(xalign=0.0)
         self.status.set_line_wrap(True)
         self.cutout_id: str | None = None
-        self.camera_read: dict | None = None  # the camera_read_settings of the model's reading, or None
+        self.camera_read: dict | None = None  # the model's reading (image rows), or None
         self._values = None
         self._timer = False
         width, height = host.image.get_width(), host.image.get_height()
         self.image_height = height
-        tw, th, _ = protocol.preview_size(width, height, PREVIEW_SIZE)
+        tw, th, _ = camera_rules.preview_size(width, height, PREVIEW_SIZE)
         try:
             self.thumbnail = host.thumbnail(tw, th)
             self.scale = self.thumbnail.width / width
-            # the thumbnail-sized cutout casts the shadow and hides it where it covers the image
-            self.small = host.read_cutout(host.pixel_plan(), size=(self.thumbnail.width, self.thumbnail.height))
-            self.camera: dict | None = None  # the camera the worker's cutout was analysed with
-            self._analysed(*upload_cutout(engine, self.small))
+            self.camera: dict | None = None  # the camera the worker's cutout was analysed with (image rows)
+            cutout_id, read = upload_cutout(engine, host.read_cutout(host.pixel_plan()))
+            self.cutout_id = cutout_id
+            self._analysed(read)
         except (ShadowError, engine_client.EngineError) as exc:
             self.status.set_text(str(exc))
 
@@ -84,13 +84,12 @@ class ShadowPreview:
             return
         try:
             settings = settings_from_arguments(values)
-            camera = settings.camera(self.scale)
+            camera = settings.camera()
             if camera != self.camera:  # a new horizon: the worker analyses the cutout again
-                release(self.engine, self.cutout_id)
-                self._analysed(*upload_cutout(self.engine, self.small, camera))
+                self._analysed(set_camera(self.engine, self.cutout_id, camera))
                 self.camera = camera
-            horizon = camera["horizon"] if camera is not None else None
-            rgb, no_shadow = render_preview(self.engine, self.cutout_id, settings, self.thumbnail, self.small, horizon)
+            horizon = camera_rules.scaled_camera(camera, self.scale)["horizon"] if camera is not None else None
+            rgb, no_shadow = render_preview(self.engine, self.cutout_id, settings, self.thumbnail, horizon)
         except (ShadowError, SettingsError) as exc:
             self.status.set_text(str(exc))
             return
@@ -98,16 +97,15 @@ class ShadowPreview:
         self.widget.set_from_pixbuf(
             GdkPixbuf.Pixbuf.new_from_bytes(GLib.Bytes.new(rgb), GdkPixbuf.Colorspace.RGB, False, 8, w, h, 3 * w)
         )
-        self.status.set_text("No visible shadow with these lights." if no_shadow else self._camera_note())
+        self.status.set_text(shadow_notes.no_shadow_note(no_shadow) if no_shadow else self._camera_note())
 
-    def _analysed(self, cutout_id: str, camera_read: dict | None) -> None:
-        self.cutout_id = cutout_id
-        self.camera_read = camera_read_settings(camera_read, self.scale) if camera_read is not None else None
-        if self.camera_read is not None and self.on_camera_read is not None:
-            self.on_camera_read(self.camera_read)
+    def _analysed(self, camera_read: dict | None) -> None:
+        self.camera_read = camera_read
+        if camera_read is not None and self.on_camera_read is not None:
+            self.on_camera_read(camera_rules.camera_read_settings(camera_read))
 
     def _camera_note(self) -> str:
-        return "" if self.camera_read is None else camera_read_note(self.camera_read, self.image_height)
+        return "" if self.camera_read is None else camera_rules.camera_read_note(self.camera_read, self.image_height)
 
     def close(self) -> None:
         if self.cutout_id is not None:

@@ -1,7 +1,7 @@
 """Where the GIMP plug-in finds the engine: the host kit's modules and the worker they reach.
 
 The installed plug-in carries copies of the engine's stdlib-only modules in
-``engine_shared/`` (the host kit: protocol, client, engine config, light map
+``host_kit/`` (the host kit: protocol, client, engine config, light map
 and its editor, defaults) and the ``engine.json`` that ``ssn-shadow
 install-plugin gimp`` wrote; in a source checkout (tests) the modules come
 from ``ssn_engine`` itself. GIMP-free.
@@ -13,14 +13,52 @@ from pathlib import Path
 from typing import TYPE_CHECKING
 
 if TYPE_CHECKING:  # the copies are these modules
-    from ssn_engine import client, defaults, engine_config, light_editor, light_map, light_map_picture, protocol
+    from ssn_engine.host_kit import (
+        ao_edits,
+        camera_rules,
+        client,
+        defaults,
+        engine_config,
+        light_editor,
+        light_map,
+        light_map_picture,
+        protocol,
+        shadow_notes,
+        sky_map,
+    )
 else:
-    try:  # installed plug-in
-        from engine_shared import client, defaults, engine_config, light_editor, light_map, light_map_picture, protocol
-    except ImportError:  # source checkout
-        from ssn_engine import client, defaults, engine_config, light_editor, light_map, light_map_picture, protocol
+    try:  # installed: the copy made by `ssn-shadow install-plugin`
+        from host_kit import (
+            ao_edits,
+            camera_rules,
+            client,
+            defaults,
+            engine_config,
+            light_editor,
+            light_map,
+            light_map_picture,
+            protocol,
+            shadow_notes,
+            sky_map,
+        )
+    except ImportError:  # running from the repository (tests)
+        from ssn_engine.host_kit import (
+            ao_edits,
+            camera_rules,
+            client,
+            defaults,
+            engine_config,
+            light_editor,
+            light_map,
+            light_map_picture,
+            protocol,
+            shadow_notes,
+            sky_map,
+        )
 
 __all__ = [
+    "ao_edits",
+    "camera_rules",
     "client",
     "defaults",
     "engine_config",
@@ -28,6 +66,8 @@ __all__ = [
     "light_map",
     "light_map_picture",
     "protocol",
+    "shadow_notes",
+    "sky_map",
     "connect",
 ]
 

@@ -155,28 +155,21 @@ class GimpHost:
     def source_name(self) -> str:
         return self.drawable.get_name()
 
-    def read_cutout(self, plan: PixelPlan, size: tuple[int, int] | None = None) -> Cutout:
-        """The selection if there is one, else the layer's alpha, as a canvas-sized buffer.
-
-        ``size`` (width, height) reads a scaled-down canvas, for the dialog's preview.
-        """
+    def read_cutout(self, plan: PixelPlan) -> Cutout:
+        """The selection if there is one, else the layer's alpha, as a canvas-sized buffer."""
         width, height = self.image.get_width(), self.image.get_height()
-        scale = 1.0
-        if size is not None:
-            scale = size[0] / width
-            width, height = size
         _, non_empty, *_ = Gimp.Selection.bounds(self.image)
         if non_empty:
             buffer = self.image.get_selection().get_buffer()
             rect = Gegl.Rectangle.new(0, 0, width, height)
-            data = buffer.get(rect, scale, plan.selection_format, Gegl.AbyssPolicy.NONE)
+            data = buffer.get(rect, 1.0, plan.selection_format, Gegl.AbyssPolicy.NONE)
             return Cutout(width, height, plan.alpha_dtype, bytes(data), "the selection")
         if not self.drawable.has_alpha():
             raise ShadowError(no_cutout_message(self.drawable.get_name()))
         _, off_x, off_y = self.drawable.get_offsets()
         # The canvas rectangle in the layer's coordinates; outside the layer the abyss is transparent.
-        rect = Gegl.Rectangle.new(round(-off_x * scale), round(-off_y * scale), width, height)
-        data = self._visible_alpha().get(rect, scale, plan.layer_alpha_format, Gegl.AbyssPolicy.NONE)
+        rect = Gegl.Rectangle.new(-off_x, -off_y, width, height)
+        data = self._visible_alpha().get(rect, 1.0, plan.layer_alpha_format, Gegl.AbyssPolicy.NONE)
         return Cutout(width, height, plan.alpha_dtype, bytes(data), f'the layer "{self.drawable.get_name()}"')
 
     def _visible_alpha(self) -> Gegl.Buffer:

@@ -1,17 +1,17 @@
 """The dialog's preview, toolkit-free: a thumbnail of the image with the shadow the engine multiplies on.
 
-The preview casts the shadow of a thumbnail-sized cutout (the framing scales
-with the cutout, so its geometry matches the full-size result). The worker's
-``preview`` command composites it as GIMP's Multiply layer would, hides it
-where the cutout above it covers the image, and draws the horizon; the
-plug-in only shows the bytes.
+The image's cutout is uploaded once, at the image's size; the worker's
+``preview`` command casts its shadow on the thumbnail through the cutout's
+framing scaled to it (as the Krita docker's live preview does), composites it
+as GIMP's Multiply layer would, hides it where the cutout covers the image,
+and draws the horizon; the plug-in only shows the bytes.
 """
 
 from __future__ import annotations
 
 from dataclasses import dataclass
 
-from ssn_core import Cutout, Engine, ShadowError, engine_call
+from ssn_core import Engine, ShadowError, engine_call
 from ssn_engine_link import protocol
 from ssn_settings import ShadowSettings
 
@@ -33,20 +33,16 @@ def render_preview(
     cutout_id: str,
     settings: ShadowSettings,
     thumbnail: Thumbnail,
-    cover: Cutout,
     horizon: float | None = None,
 ) -> tuple[bytes, str]:
     """The thumbnail with the shadow multiplied on (packed RGB, the thumbnail's size) and why no shadow shows
-    ("" when one does). ``cover`` is the thumbnail-sized cutout; ``horizon``, a thumbnail row, is drawn, and
-    without it the horizon the model read from the cutout's outline (dotted)."""
+    ("" when one does). ``horizon``, a thumbnail row, is drawn, and without it the horizon the model read from the
+    cutout's outline (dotted)."""
     edits = settings.ao_edits()
     if edits:
         engine_call(engine, "edit_ao", cutout=cutout_id, edits=edits)
     w, h = thumbnail.width, thumbnail.height
-    buffers = {
-        "background": protocol.Buffer("uint8", (h, w, thumbnail.channels), thumbnail.data),
-        "cover": protocol.Buffer(cover.dtype, (cover.height, cover.width), cover.data),
-    }
+    buffers = {"background": protocol.Buffer("uint8", (h, w, thumbnail.channels), thumbnail.data)}
     params = settings.render_params("uint8", (w, h))
     params = {key: params[key] for key in ("light_map", "preset", "color", "opacity") if key in params}
     if horizon is not None:

@@ -12,7 +12,7 @@ import math
 from dataclasses import dataclass
 from typing import Any
 
-from ssn_engine_link import defaults, light_map
+from ssn_engine_link import ao_edits, camera_rules, defaults, light_map
 
 PROCEDURE_NAME = "plug-in-ssn-shadow"
 MENU_LABEL = "Soft _Shadow (SSN)..."
@@ -75,10 +75,16 @@ ARGUMENTS: tuple[ArgSpec, ...] = (
         "Hori_zon row",
         "The image row (pixels from the top) where the ground meets the sky; it may lie outside the image",
         0.0,
-        -100000.0,
-        100000.0,
+        *camera_rules.EDITOR_HORIZON_RANGE,
     ),
-    ArgSpec("fov", "double", "_Field of view", "The image's vertical field of view in degrees", 45.0, 10.0, 120.0),
+    ArgSpec(
+        "fov",
+        "double",
+        "_Field of view",
+        "The image's vertical field of view in degrees",
+        camera_rules.DEFAULT_FOV,
+        *camera_rules.EDITOR_FOV_RANGE,
+    ),
     ArgSpec(
         "keep-whole-shadow",
         "boolean",
@@ -142,7 +148,7 @@ class ShadowSettings:
     opacity: float = defaults.OPACITY
     ao_strength: float = 1.0
     horizon: float | None = None  # the image's horizon row, or None: the engine's default camera
-    fov: float = 45.0
+    fov: float = camera_rules.DEFAULT_FOV
     keep_whole: bool = False  # the layer keeps a long shadow whole, past the canvas plus its margin
 
     def __post_init__(self) -> None:
@@ -162,9 +168,9 @@ class ShadowSettings:
         object.__setattr__(self, "fov", _unit(self.fov, "fov", *spec.bounds))
         resolve_light_map(self.light_map)  # validate now, before any pixel is read
 
-    def camera(self, scale: float = 1.0) -> dict[str, float] | None:
-        """``set_cutout``'s camera for an image scaled by ``scale`` (the preview's thumbnail), or None."""
-        return None if self.horizon is None else {"horizon": self.horizon * scale, "fov": self.fov}
+    def camera(self) -> dict[str, float] | None:
+        """The image's camera for ``set_cutout`` and ``set_camera`` (image rows), or None: the one the model reads."""
+        return None if self.horizon is None else {"horizon": self.horizon, "fov": self.fov}
 
     def render_params(self, dtype: str, canvas: tuple[int, int]) -> dict[str, Any]:
         """Parameters of the worker's ``render`` command (without the cutout id) for a ``canvas`` (width,
@@ -180,26 +186,4 @@ class ShadowSettings:
 
     def ao_edits(self) -> list[dict[str, Any]]:
         """The AO edit list for ``edit_ao``; empty when the predicted AO is kept."""
-        return [] if self.ao_strength == 1.0 else [{"op": "strength", "value": self.ao_strength}]
-
-
-def camera_read_settings(read: dict[str, float], scale: float = 1.0) -> dict[str, float]:
-    """The ``horizon`` and ``fov`` settings of a camera the model read from a cutout ``scale`` times the image's
-    size (the preview's thumbnail), within the settings' bounds: where the horizon option starts when turned on."""
-
-    def within(value: float, name: str) -> float:
-        lo, hi = ARG_BY_NAME[name].bounds
-        return float(min(max(round(value), lo), hi))
-
-    return {"horizon": within(read["horizon"] / scale, "horizon"), "fov": within(read["fov"], "fov")}
-
-
-def camera_read_note(read: dict[str, float], image_height: int) -> str:
-    """The preview's note on a camera the model read (``camera_read_settings``, image rows): where its horizon is
-    drawn (dotted blue), or that it lies above or below the image, where the preview cannot show it."""
-    horizon = read["horizon"]
-    where = "dotted blue" if 0 <= horizon < image_height else ("above the image" if horizon < 0 else "below the image")
-    return (
-        f"Camera read from the cutout's outline: horizon at row {horizon:.0f} ({where}), "
-        f"{read['fov']:.0f}° field of view. If the shadow's perspective looks wrong, set the image's horizon."
-    )
+        return ao_edits.strength_edits(self.ao_strength)

@@ -33,6 +33,7 @@ from .engine import EngineError
 from .model import ShadowModel
 from .properties import Property
 from .scheduling import Drag, LatestWins, RenderJob, RenderQueue
+from .shared import shadow_notes
 
 PREVIEW_SIDE = 320  # pixels: the longer side of the docker's live preview
 PAUSE_MS = 300  # a drag that rests this long writes the layer
@@ -60,6 +61,7 @@ class ShadowController(QObject):
         self.source: Source | None = None
         self.cutout: str | None = None
         self._cutout_key: str | None = None
+        self._cutout_camera: dict | None = None  # the camera the worker's cutout has
         self._mask = b""
         self._renders = RenderQueue()
         self._edits = LatestWins()
@@ -173,7 +175,7 @@ class ShadowController(QObject):
         if not self._previews.begin():
             return  # latest wins: sent with the map of the moment when the reply comes
         params, buffers = worker_requests.preview(self.model, cutout, source, drag.background)
-        self.engine.request("preview", params, buffers, self._on_preview, self._on_preview_error)
+        self.engine.request("preview", buffers, on_reply=self._on_preview, on_error=self._on_preview_error, **params)
 
     def _on_preview(self, reply: dict, buffers: dict) -> None:
         if self._previews.end():
@@ -223,25 +225,52 @@ class ShadowController(QObject):
         source = self.source
         assert source is not None, "a job reads its source first"
         camera = self.model.camera
-        key = worker_requests.cutout_key(source, camera)
-        if self.cutout is not None and key == self._cutout_key:
-            then()
+        if self.cutout is not None and source.key == self._cutout_key:
+            if camera == self._cutout_camera:
+                then()
+                return
+            # A new camera for the same alpha: the worker predicts the AO again (it depends on the camera) and
+            # keeps the AO edits; the alpha is not sent again.
+            self.model.report_status("info", "Analysing the cutout (ambient occlusion)...")
+
+            def on_camera(reply: dict, buffers: dict) -> None:
+                self._cutout_camera = camera
+                self._analysed(reply)
+                then()
+
+            self.engine.request(
+                "set_camera",
+                cutout=self.cutout,
+                camera=camera,
+                on_reply=on_camera,
+                on_error=lambda e: self._on_error(e, job),
+            )
             return
         self.model.report_status("info", "Analysing the cutout (ambient occlusion)...")
 
         def on_cutout(reply: dict, buffers: dict) -> None:
-            self.cutout, self._cutout_key = reply["cutout"], key
-            self.model.report_camera_read(reply.get("camera_read"))
+            self.cutout, self._cutout_key, self._cutout_camera = reply["cutout"], source.key, camera
             edits = self.model.ao_edit_list()
             if edits:
                 self.engine.request(
-                    "edit_ao", {"cutout": self.cutout, "edits": edits}, None, self._on_ao_edited, self._on_edit_error
+                    "edit_ao",
+                    cutout=self.cutout,
+                    edits=edits,
+                    on_reply=self._on_ao_edited,
+                    on_error=self._on_edit_error,
                 )
-            self.engine.request("get_ao", {"cutout": self.cutout}, None, self._on_ao, None)
+            self._analysed(reply)
             then()
 
         params, buffers = worker_requests.set_cutout(source, camera)
-        self.engine.request("set_cutout", params, buffers, on_cutout, lambda e: self._on_error(e, job))
+        self.engine.request(
+            "set_cutout", buffers, on_reply=on_cutout, on_error=lambda e: self._on_error(e, job), **params
+        )
+
+    def _analysed(self, reply: dict) -> None:
+        """A cutout analysed (with its camera): report the camera the model read, and fetch the AO map."""
+        self.model.report_camera_read(reply.get("camera_read"))
+        self.engine.request("get_ao", cutout=self.cutout, on_reply=self._on_ao)
 
     def _render(self, job: RenderJob) -> None:
         source, cutout = self.source, self.cutout
@@ -250,10 +279,9 @@ class ShadowController(QObject):
         params, blend = worker_requests.render(self.model, cutout, source)  # the blend of the colour rendered
         self.engine.request(
             "render",
-            params,
-            None,
-            lambda reply, buffers: self._on_rendered(job, source, blend, reply, buffers),
-            lambda e: self._on_error(e, job),
+            on_reply=lambda reply, buffers: self._on_rendered(job, source, blend, reply, buffers),
+            on_error=lambda e: self._on_error(e, job),
+            **params,
         )
 
     # -- replies --------------------------------------------------------------------
@@ -282,9 +310,7 @@ class ShadowController(QObject):
         if result.notice:
             self.model.report_status("warning", result.notice)
         elif rect[2] == 0:
-            self.model.report_status(
-                "warning", "No visible shadow with these lights (is every light at zero intensity?)."
-            )
+            self.model.report_status("warning", shadow_notes.no_shadow_note(reply.get("no_shadow")))
         elif job.new_step:
             self.model.report_status("info", f"Shadow {rect[2]} x {rect[3]} px in {elapsed:.0f} ms ({info['method']}).")
         if not self._renders.in_flight:
@@ -311,8 +337,13 @@ class ShadowController(QObject):
     def _send_edits(self) -> None:
         if not self._edits.begin():
             return
-        edits = {"cutout": self.cutout, "edits": self.model.ao_edit_list()}
-        self.engine.request("edit_ao", edits, None, self._on_ao_edited, self._on_edit_error)
+        self.engine.request(
+            "edit_ao",
+            cutout=self.cutout,
+            edits=self.model.ao_edit_list(),
+            on_reply=self._on_ao_edited,
+            on_error=self._on_edit_error,
+        )
 
     def _on_ao_edited(self, reply: dict, buffers: dict) -> None:
         again = self._edits.end()

@@ -1,9 +1,14 @@
-"""An asynchronous client for the engine worker, run as a QProcess (docs/protocol.md).
+"""The host kit's engine client as a QProcess: asynchronous, for Krita's event loop (docs/protocol.md).
 
-Requests are written at once and answered in order; each reply calls its
-callback from the Qt event loop, so the UI never waits. A worker that cannot
-start, exits, or misses a deadline fails every pending request with a
-message for people, and the next request starts a fresh worker.
+Requests are numbered, framed and checked by the kit's client
+(:class:`~ssn_engine.host_kit.client.Requests`, the ``hello`` handshake of
+:func:`~ssn_engine.host_kit.client.check_hello`,
+:func:`~ssn_engine.host_kit.client.reply_error`), with the kit's request
+signature; this adapter only moves the bytes. Requests are written at once
+and answered in order; each reply calls its callback from the Qt event loop,
+so the UI never waits. A worker that cannot start, exits, speaks another
+protocol or misses a deadline fails every pending request with a message for
+people, and the next request starts a fresh worker.
 """
 
 from __future__ import annotations
@@ -14,9 +19,9 @@ from collections.abc import Callable
 from dataclasses import dataclass
 from typing import Any
 
-from PyQt5.QtCore import QObject, QProcess, QProcessEnvironment, QTimer, pyqtSignal
-
 from pathlib import Path
+
+from PyQt5.QtCore import QObject, QProcess, QProcessEnvironment, QTimer, pyqtSignal
 
 from .shared import client, engine_config, protocol
 
@@ -68,7 +73,7 @@ class EngineProcess(QObject):
         self._decoder = protocol.MessageDecoder()
         self._pending: collections.OrderedDict[int, _Pending] = collections.OrderedDict()
         self._stderr: collections.deque[str] = collections.deque(maxlen=40)
-        self._next_id = 1
+        self._requests = client.Requests()
         self._command: EngineConfig | None = None
         self.info: dict[str, Any] = {}
         self._watchdog = QTimer(self)
@@ -99,17 +104,15 @@ class EngineProcess(QObject):
         self.stateChanged.emit("starting")
         proc.start(self._command.command[0], list(self._command.command[1:]))
         self._watchdog.start()
-        self._send("hello", {}, None, self._on_hello, None, self.timeout_s)
+        self._send("hello", None, self._on_hello, None, self.timeout_s, {})
 
     def _on_hello(self, reply: dict, buffers: dict) -> None:
-        if reply.get("protocol") != protocol.PROTOCOL_VERSION:
-            self._fail_all(
-                f"the shadow engine speaks protocol {reply.get('protocol')!r}, this plug-in "
-                f"{protocol.PROTOCOL_VERSION}; re-run 'ssn-shadow install-plugin krita' from the engine's Python."
-            )
+        try:
+            self.info = client.check_hello(reply)
+        except EngineError as exc:
+            self._fail_all(str(exc))
             self.stop()
             return
-        self.info = reply
         self.stateChanged.emit("ready")
         self.ready.emit(reply)
 
@@ -139,7 +142,7 @@ class EngineProcess(QObject):
         """Ask the worker to exit, then stop it."""
         proc = self._proc
         if proc is not None and proc.state() != QProcess.ProcessState.NotRunning:
-            self._send("shutdown", {}, None, None, None, 5.0)
+            self._send("shutdown", None, None, None, 5.0, {})
             proc.waitForFinished(3000)
         self.stop()
 
@@ -147,32 +150,39 @@ class EngineProcess(QObject):
     def request(
         self,
         cmd: str,
-        params: dict[str, Any] | None = None,
         buffers: dict[str, protocol.Buffer] | None = None,
+        *,
         on_reply: OnReply | None = None,
         on_error: OnError | None = None,
-        timeout_s: float | None = None,
+        timeout: float | None = None,
+        **params: Any,
     ) -> int:
-        """Send one command; ``on_reply(header, buffers)`` or ``on_error(EngineError)`` follows."""
+        """Send one command with its ``buffers`` and header ``params`` (the kit's request signature);
+        ``on_reply(header, buffers)`` or ``on_error(EngineError)`` follows. Returns the request's id."""
         if not self.running:
             self.stop()
             try:
                 self._start()
             except engine_config.EngineConfigError as exc:
-                self._deliver_error(on_error, EngineError("WorkerUnavailable", str(exc)))
+                self._deliver_error(on_error, client.WorkerUnavailable(str(exc)))
                 return -1
-        return self._send(cmd, params or {}, buffers, on_reply, on_error, timeout_s or self.timeout_s)
+        return self._send(cmd, buffers, on_reply, on_error, timeout or self.timeout_s, params)
 
-    def _send(self, cmd, params, buffers, on_reply, on_error, timeout_s) -> int:
-        rid = self._next_id
-        self._next_id += 1
-        buffers = buffers or {}
+    def _send(
+        self,
+        cmd: str,
+        buffers: dict[str, protocol.Buffer] | None,
+        on_reply: OnReply | None,
+        on_error: OnError | None,
+        timeout_s: float,
+        params: dict[str, Any],
+    ) -> int:
         proc = self._proc
         assert proc is not None, "_send follows _start"
+        rid, chunks = self._requests.encode(cmd, buffers, **params)
         self._pending[rid] = _Pending(rid, cmd, time.monotonic() + timeout_s, timeout_s, on_reply, on_error)
-        proc.write(protocol.encode_header({"id": rid, "cmd": cmd, **params}, buffers))
-        for b in buffers.values():
-            proc.write(bytes(memoryview(b.data).cast("B")))
+        for chunk in chunks:
+            proc.write(bytes(chunk))
         return rid
 
     # -- replies ---------------------------------------------------------------
@@ -192,15 +202,12 @@ class EngineProcess(QObject):
         pending = self._pending.pop(rid, None) if isinstance(rid, int) else None
         if pending is None:
             return
-        if header.get("ok"):
+        error = client.reply_error(header)
+        if error is None:
             if pending.on_reply is not None:
                 pending.on_reply(header, buffers)
         else:
-            error = header.get("error") or {}
-            self._deliver_error(
-                pending.on_error,
-                EngineError(error.get("type", "Internal"), error.get("message", "unknown engine error")),
-            )
+            self._deliver_error(pending.on_error, error)
 
     @staticmethod
     def _deliver_error(on_error: OnError | None, error: EngineError) -> None:
@@ -242,4 +249,4 @@ class EngineProcess(QObject):
     def _fail_all(self, message: str) -> None:
         pending, self._pending = list(self._pending.values()), collections.OrderedDict()
         for p in pending:
-            self._deliver_error(p.on_error, EngineError("WorkerUnavailable", message))
+            self._deliver_error(p.on_error, client.WorkerUnavailable(message))

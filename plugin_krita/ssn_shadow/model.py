@@ -21,14 +21,12 @@ from contextlib import contextmanager
 
 from PyQt5.QtCore import QObject, pyqtSignal
 
-from .ao_edits import AoEdits
 from .properties import Property
-from .shared import defaults
+from .shared import ao_edits, camera_rules, defaults
 from .shared import light_map as lm
 
-__all__ = ["DEFAULT_FOV", "EDITS", "READY", "ShadowModel"]
+__all__ = ["EDITS", "READY", "ShadowModel"]
 
-DEFAULT_FOV = 45.0  # degrees, the engine's default camera
 READY = "Select the cutout's layer (or a selection) and press Generate."
 EDITS = ("light_map", "camera", "color", "opacity", "ao_edits")
 _CAMERA = ("use_horizon", "horizon", "fov")
@@ -53,10 +51,10 @@ class ShadowModel(QObject):
     light_map: Property[lm.LightMap] = Property(lm.preset(lm.DEFAULT_PRESET))
     use_horizon: Property[bool] = Property(False)  # the image's own horizon is given (else the engine reads one)
     horizon: Property[float] = Property(0.0)  # the horizon's canvas row (may lie outside the canvas)
-    fov: Property[float] = Property(DEFAULT_FOV)  # the image's vertical field of view, degrees
+    fov: Property[float] = Property(camera_rules.DEFAULT_FOV)  # the image's vertical field of view, degrees
     color: Property[tuple[float, float, float]] = Property((0.0, 0.0, 0.0))  # the shadow's colour, linear 0..1
     opacity: Property[float] = Property(defaults.OPACITY)
-    ao_edits: Property[AoEdits] = Property(AoEdits())  # brush strokes and grow/shrink steps
+    ao_edits: Property[ao_edits.AoEdits] = Property(ao_edits.AoEdits())  # brush strokes and grow/shrink steps
     ao_strength: Property[float] = Property(1.0)  # scales the contact shadow (AO), 0..MAX_AO_STRENGTH
     status: Property[tuple[str, str]] = Property(("info", READY), readonly=True)  # (level, text for people)
     camera_read: Property[dict | None] = Property(None, readonly=True)  # {"horizon", "fov"} the engine read
@@ -128,7 +126,7 @@ class ShadowModel(QObject):
         """No AO edits, full strength."""
         with self.quietly():
             self.ao_strength = 1.0
-        self._set_ao_edits(AoEdits(), True)
+        self._set_ao_edits(ao_edits.AoEdits(), True)
 
     def horizon_from_guides(self, guides: list[float]) -> bool:
         """Give the horizon on the first horizontal guide (canvas row); False when there is no guide."""
@@ -138,7 +136,7 @@ class ShadowModel(QObject):
         self.use_horizon = True
         return True
 
-    def _set_ao_edits(self, edits: AoEdits, new_step: bool) -> None:
+    def _set_ao_edits(self, edits: ao_edits.AoEdits, new_step: bool) -> None:
         with self.quietly():
             self.ao_edits = edits
         self.modified.emit("ao_edits")
@@ -162,7 +160,7 @@ class ShadowModel(QObject):
         """The cutout is another layer: its AO is new, so the edits of the old one go (saved, no render)."""
         if self.ao_edits.steps or self.ao_strength != 1.0:
             with self.quietly():
-                self.ao_edits, self.ao_strength = AoEdits(), 1.0
+                self.ao_edits, self.ao_strength = ao_edits.AoEdits(), 1.0
             self.modified.emit("ao_edits")
 
     @contextmanager

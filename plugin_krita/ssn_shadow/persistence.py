@@ -23,9 +23,8 @@ import json
 import math
 from typing import Any
 
-from .ao_edits import AoEdits
 from .model import ShadowModel
-from .shared import defaults
+from .shared import ao_edits, camera_rules, defaults
 from .shared import light_map as lm
 
 __all__ = ["ANNOTATION", "DocumentModels", "SettingsError", "dump", "restore"]
@@ -34,7 +33,6 @@ ANNOTATION = "ssn_shadow/settings"  # the annotation's type (its name in the doc
 DESCRIPTION = "Soft Shadow docker settings (ssn-shadow)"
 FORMAT = "ssn-shadow-krita-settings"
 VERSION = 1
-FOV_RANGE = (10.0, 120.0)  # degrees, the docker's field-of-view range
 AO_OPS = ("brush", "grow")
 
 
@@ -77,8 +75,8 @@ def restore(model: ShadowModel, data: bytes) -> None:
     given = horizon.get("given")
     if not isinstance(given, bool):
         raise SettingsError(f"horizon.given: expected true or false, got {given!r}")
-    row = _number(horizon.get("row"), "horizon.row", -math.inf, math.inf)
-    fov = _number(horizon.get("fov"), "horizon.fov", *FOV_RANGE)
+    row = _number(horizon.get("row"), "horizon.row", *camera_rules.EDITOR_HORIZON_RANGE)
+    fov = _number(horizon.get("fov"), "horizon.fov", *camera_rules.EDITOR_FOV_RANGE)
     color = settings.get("color")
     if not isinstance(color, list) or len(color) != 3:
         raise SettingsError(f"color: expected [red, green, blue], got {color!r}")
@@ -95,7 +93,7 @@ def restore(model: ShadowModel, data: bytes) -> None:
         model.light_map = light_map
         model.horizon, model.fov, model.use_horizon = row, fov, given
         model.color, model.opacity = rgb, opacity
-        model.ao_edits, model.ao_strength = AoEdits(steps), strength
+        model.ao_edits, model.ao_strength = ao_edits.AoEdits(steps), strength
 
 
 def _object(settings: dict, key: str) -> dict:

@@ -5,11 +5,59 @@ from __future__ import annotations
 from typing import TYPE_CHECKING
 
 if TYPE_CHECKING:  # the copies are these modules
-    from ssn_engine import client, defaults, engine_config, light_editor, light_map, light_map_picture, protocol
+    from ssn_engine.host_kit import (
+        ao_edits,
+        camera_rules,
+        client,
+        defaults,
+        engine_config,
+        light_editor,
+        light_map,
+        light_map_picture,
+        protocol,
+        shadow_notes,
+        sky_map,
+    )
 else:
-    try:  # installed: copies made by `ssn-shadow install-plugin krita`
-        from .engine_shared import client, defaults, engine_config, light_editor, light_map, light_map_picture, protocol
+    try:  # installed: the copy made by `ssn-shadow install-plugin`
+        from .host_kit import (
+            ao_edits,
+            camera_rules,
+            client,
+            defaults,
+            engine_config,
+            light_editor,
+            light_map,
+            light_map_picture,
+            protocol,
+            shadow_notes,
+            sky_map,
+        )
     except ImportError:  # running from the repository (tests)
-        from ssn_engine import client, defaults, engine_config, light_editor, light_map, light_map_picture, protocol
+        from ssn_engine.host_kit import (
+            ao_edits,
+            camera_rules,
+            client,
+            defaults,
+            engine_config,
+            light_editor,
+            light_map,
+            light_map_picture,
+            protocol,
+            shadow_notes,
+            sky_map,
+        )
 
-__all__ = ["client", "defaults", "engine_config", "light_editor", "light_map", "light_map_picture", "protocol"]
+__all__ = [
+    "ao_edits",
+    "camera_rules",
+    "client",
+    "defaults",
+    "engine_config",
+    "light_editor",
+    "light_map",
+    "light_map_picture",
+    "protocol",
+    "shadow_notes",
+    "sky_map",
+]

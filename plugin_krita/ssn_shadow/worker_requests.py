@@ -7,14 +7,9 @@ from typing import Any
 from .adapters.krita_document import Source
 from .adapters.pixel_format import blend_mode, shadow_color
 from .model import ShadowModel
-from .shared import protocol
+from .shared import camera_rules, protocol
 
-__all__ = ["cutout_key", "preview", "render", "set_cutout"]
-
-
-def cutout_key(source: Source, camera: dict | None) -> str:
-    """What the worker's cutout (and its AO) depends on: the alpha and the camera."""
-    return f"{source.key}:{sorted(camera.items()) if camera else None}"
+__all__ = ["preview", "render", "set_cutout"]
 
 
 def set_cutout(source: Source, camera: dict | None) -> tuple[dict[str, Any], dict[str, protocol.Buffer]]:
@@ -49,7 +44,7 @@ def preview(
     }
     camera = model.camera
     if camera:
-        params["horizon"] = camera["horizon"] * width / source.width
+        params["horizon"] = camera_rules.scaled_camera(camera, width / source.width)["horizon"]
     else:
         params["read_horizon"] = True
     return params, {"background": protocol.Buffer("uint8", (height, width, 4), rgba)}

@@ -7,6 +7,8 @@ from typing import Protocol
 import numpy as np
 
 from ..camera import focal_from_fov
+from ..host_kit.camera_rules import FOV_RANGE
+from ..host_kit.sky_map import check_elm_shape
 
 
 class ShadowMethod(Protocol):
@@ -18,7 +20,8 @@ class ShadowMethod(Protocol):
     ``masks`` and ``ao`` have shape (n, N, N), ``elms`` (n, 16, 32), all
     float32; results are float32 in [0, 1]. AO maps follow the conventions
     (A^(1/3), 1 fully exposed). ``render`` is the interactive path: it must
-    not redo the AO work.
+    not redo the AO work, nor resolve the camera where it is given one (a
+    session passes the camera it resolved once, a model's reading included).
     """
 
     name: str
@@ -37,8 +40,8 @@ def check_batch(
     """Raise ValueError with the offending argument's name when shapes or values are off."""
     if masks.ndim != 3 or masks.shape[1:] != (n, n):
         raise ValueError(f"masks: expected shape (n, {n}, {n}), got {masks.shape}")
-    if elms is not None and (elms.ndim != 3 or elms.shape[1:] != (16, 32) or len(elms) != len(masks)):
-        raise ValueError(f"elms: expected shape ({len(masks)}, 16, 32), got {elms.shape}")
+    if elms is not None:
+        check_elm_shape(elms.shape, len(masks))
     if ao is not None and ao.shape != masks.shape:
         raise ValueError(f"ao: expected shape {masks.shape}, got {ao.shape}")
     if cameras is not None:
@@ -50,8 +53,10 @@ HORIZON_REACH = 100  # camera input: horizon rows within this many frames above 
 
 def camera_limits(n: int) -> tuple[tuple[float, float], tuple[float, float]]:
     """The camera input's bounds for frames of ``n`` pixels: horizon rows within ``HORIZON_REACH`` frames of the
-    frame, focal lengths of a field of view from 1 to 170 degrees; ((horizon lo, hi), (focal lo, hi))."""
-    return (n / 2 - HORIZON_REACH * n, n / 2 + HORIZON_REACH * n), (focal_from_fov(n, 170.0), focal_from_fov(n, 1.0))
+    frame, focal lengths of a field of view in :data:`~ssn_engine.host_kit.camera_rules.FOV_RANGE`; ((horizon lo,
+    hi), (focal lo, hi))."""
+    lo, hi = FOV_RANGE
+    return (n / 2 - HORIZON_REACH * n, n / 2 + HORIZON_REACH * n), (focal_from_fov(n, hi), focal_from_fov(n, lo))
 
 
 def clamp_cameras(cameras: np.ndarray, n: int) -> np.ndarray:
@@ -74,5 +79,6 @@ def check_cameras(cameras: np.ndarray, count: int, n: int) -> None:
     ):
         raise ValueError(
             f"cameras: horizon rows must lie within {HORIZON_REACH} frames of the frame and focal "
-            f"lengths in [{lo:.1f}, {hi:.0f}] pixels (a field of view from 1 to 170 degrees)"
+            f"lengths in [{lo:.1f}, {hi:.0f}] pixels (a field of view from {FOV_RANGE[0]:g} to {FOV_RANGE[1]:g} "
+            "degrees)"
         )

@@ -18,7 +18,8 @@ from typing import TYPE_CHECKING
 
 import numpy as np
 
-from ..camera import DEFAULT_FOV, focal_from_fov
+from ..camera import focal_from_fov
+from ..host_kit.camera_rules import DEFAULT_FOV
 from ..framing import EmptyAlphaError, Framing, frame_alpha
 from .base import clamp_cameras
 

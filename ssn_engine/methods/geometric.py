@@ -25,10 +25,9 @@ from __future__ import annotations
 import collections
 
 import numpy as np
-from PIL import Image
 
 from ..camera import Camera, camera_for_span, fov_from_focal
-from ..frames import frame_key
+from ..frames import frame_key, resample_frames
 from ..hemisphere import stratified_directions, texel_centres, texel_weights
 from .base import check_batch
 
@@ -45,9 +44,8 @@ WIDE_KEPT = 256  # texel shadows kept per card on the wider grid (about 100 kB e
 
 
 def _resize(image: np.ndarray, size: int) -> np.ndarray:
-    if image.shape[0] == size:
-        return image.astype(np.float32)
-    return np.asarray(Image.fromarray(image.astype(np.float32), "F").resize((size, size), Image.Resampling.BILINEAR))
+    """One (H, H) frame resampled to (size, size) (:func:`~ssn_engine.frames.resample_frames`)."""
+    return resample_frames(image[None], size)[0]
 
 
 class _Card:

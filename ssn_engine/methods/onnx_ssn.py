@@ -43,7 +43,8 @@ import numpy as np
 from scipy import ndimage
 
 from ..frames import frame_key, resample_frames
-from ..hemisphere import NETWORK_SHAPE, light_concentration, network_elm
+from ..hemisphere import light_concentration, network_elm
+from ..host_kit.sky_map import NETWORK_SHAPE
 from .base import check_batch
 from .camera_estimate import INPUT, estimate_cameras
 from .geometric import GeometricCard, camera_at
@@ -233,7 +234,7 @@ class OnnxSSN:
             ao = _run(self._aop, "ao", {"mask": mask})
             if self._aop_camera is not None:
                 _run(self._aop_camera, "ao", {"mask": mask, "camera": np.array([[0.5, 1.2]], np.float32)})
-            feeds = {"mask": mask, "ao": ao, "elm": np.zeros((1, 16, 32), np.float32)}
+            feeds = {"mask": mask, "ao": ao, "elm": np.zeros((1, *NETWORK_SHAPE), np.float32)}
             if self.card is not None:
                 feeds["card"] = mask
             s = _run(self._sr, "shadow", feeds)
@@ -276,7 +277,8 @@ class OnnxSSN:
         }
         card = None
         if self.card is not None:
-            card = self.card.card_shadows(masks, elms, self.cameras_for(masks, cameras))
+            resolved = cameras if cameras is not None else self.cameras_for(masks, None)  # a session passes its own
+            card = self.card.card_shadows(masks, elms, resolved)
             feeds["card"] = blur_frames(card, self.card_blur)[:, None]
         s = _run(self._sr, "shadow", feeds)[:, 0]
         share = small_lights_share(elms)

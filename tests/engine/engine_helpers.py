@@ -14,7 +14,7 @@ if str(REPO) not in sys.path:
     sys.path.insert(0, str(REPO))
 
 from ssn_engine.hemisphere import render_light_map  # noqa: E402
-from ssn_engine.light_map import LightMap  # noqa: E402
+from ssn_engine.host_kit.light_map import LightMap  # noqa: E402
 
 
 @functools.lru_cache(maxsize=1)

@@ -13,7 +13,7 @@ from ssn_engine import api
 from ssn_engine.ao_edit import scale_strength
 from ssn_engine.framing import frame_alpha
 from ssn_engine.hemisphere import render_light_map
-from ssn_engine.light_map import GaussianLight, LightMap
+from ssn_engine.host_kit.light_map import GaussianLight, LightMap
 
 N = 256
 

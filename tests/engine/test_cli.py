@@ -14,7 +14,7 @@ from engine_helpers import REPO, drawn_alpha, engine_env
 from PIL import Image
 
 from ssn_engine.cli import build_parser, main
-from ssn_engine.light_map import PRESETS, LightMap
+from ssn_engine.host_kit.light_map import PRESETS, LightMap
 
 
 def run_cli(*args, timeout=300):

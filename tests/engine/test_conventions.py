@@ -8,7 +8,8 @@ from pathlib import Path
 
 import pytest
 
-from ssn_engine import camera, framing, hemisphere
+from ssn_engine import camera, framing
+from ssn_engine.host_kit import camera_rules, sky_map
 from ssn_engine.methods import load_method
 
 REPO = Path(__file__).resolve().parents[2]
@@ -19,8 +20,8 @@ SHARED = REPO.parent / "shared" / "docs" / "conventions.md"
 def test_the_code_keeps_the_numbers():
     assert load_method("ssn").method.resolution == 256  # the shipped model
     assert camera.top_row(256) == round(0.03 * 256) == 8
-    assert hemisphere.NETWORK_SHAPE == (16, 32)
-    assert camera.DISTANCE == 2.0 and camera.DEFAULT_FOV == 45.0 and camera.DEFAULT_PITCH == 15.0
+    assert sky_map.NETWORK_SHAPE == (16, 32)
+    assert camera.DISTANCE == 2.0 and camera_rules.DEFAULT_FOV == 45.0 and camera.DEFAULT_PITCH == 15.0
     assert framing.OBJECT_EXTENT == 0.5
     f = camera.focal_from_fov(256, 50.0)
     assert math.isclose(f, 128 / math.tan(math.radians(25.0)))

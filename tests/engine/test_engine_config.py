@@ -4,8 +4,8 @@ import json
 
 import pytest
 
-from ssn_engine import client
-from ssn_engine.engine_config import (
+from ssn_engine.host_kit import client
+from ssn_engine.host_kit.engine_config import (
     ADDRESS_ENV,
     CONFIG_ENV,
     EngineConfig,

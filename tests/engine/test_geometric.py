@@ -10,7 +10,7 @@ from ssn_engine.ao_edit import apply_edits
 from ssn_engine.camera import Camera
 from ssn_engine.framing import frame_alpha
 from ssn_engine.hemisphere import render_light_map, stratified_directions, texel_weights
-from ssn_engine.light_map import GaussianLight, LightMap
+from ssn_engine.host_kit.light_map import GaussianLight, LightMap
 from ssn_engine.methods import GeometricCard
 from ssn_engine.methods.geometric import AREA_SHARE
 

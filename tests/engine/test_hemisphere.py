@@ -8,7 +8,6 @@ from engine_helpers import one_light
 from scipy import integrate
 
 from ssn_engine.hemisphere import (
-    NETWORK_SHAPE,
     network_elm,
     render_light_map,
     soft_shadow,
@@ -16,7 +15,8 @@ from ssn_engine.hemisphere import (
     texel_edges,
     texel_weights,
 )
-from ssn_engine.light_map import LightMap
+from ssn_engine.host_kit.light_map import LightMap
+from ssn_engine.host_kit.sky_map import NETWORK_SHAPE
 
 
 @pytest.mark.parametrize("h", [1, 4, 16, 64])

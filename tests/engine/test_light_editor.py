@@ -3,10 +3,10 @@
 import numpy as np
 import pytest
 
-from ssn_engine import light_map
+from ssn_engine.host_kit import light_map
 from ssn_engine.hemisphere import render_light_map
-from ssn_engine.light_editor import STROKE_GAP_S, LightMapEditor
-from ssn_engine.light_map_picture import map_rgb, overlay_markers
+from ssn_engine.host_kit.light_editor import STROKE_GAP_S, LightMapEditor
+from ssn_engine.host_kit.light_map_picture import map_rgb, overlay_markers
 
 
 def editor(clock=None):

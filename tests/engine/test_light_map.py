@@ -1,4 +1,4 @@
-"""The light-map editor model (ssn_engine.light_map): editing, hit testing, JSON, presets."""
+"""The light-map editor model (ssn_engine.host_kit.light_map): editing, hit testing, JSON, presets."""
 
 from __future__ import annotations
 
@@ -10,8 +10,8 @@ import sys
 
 import pytest
 
-from ssn_engine import light_map as lm_mod
-from ssn_engine.light_map import (
+from ssn_engine.host_kit import light_map as lm_mod
+from ssn_engine.host_kit.light_map import (
     DEFAULT_PRESET,
     MAX_LIGHTS,
     PRESETS,
@@ -297,13 +297,13 @@ def test_blocking_numpy_really_blocks_it():
 
 
 def test_plugin_copy_of_shared_modules_imports_without_numpy(tmp_path):
-    from ssn_engine.plugin_files import SHARED_MODULES, copy_shared_modules
+    from ssn_engine.plugin_files import KIT_MODULES, copy_host_kit
 
-    dest = copy_shared_modules(tmp_path)
-    assert {p.name for p in dest.iterdir()} == {"__init__.py", *SHARED_MODULES}
+    dest = copy_host_kit(tmp_path)
+    assert {p.name for p in dest.iterdir()} == set(KIT_MODULES)
     body = f"""
 sys.path.insert(0, {str(tmp_path)!r})
-from engine_shared import {", ".join(m.removesuffix(".py") for m in SHARED_MODULES)}
+from host_kit import {", ".join(m.removesuffix(".py") for m in KIT_MODULES)}
 import io
 buf = io.BytesIO()
 protocol.write_message(buf, {{'id': 1, 'cmd': 'hello'}}, {{'a': protocol.Buffer('uint8', (2, 2), b'abcd')}})

@@ -17,7 +17,7 @@ from onnx import TensorProto, helper  # noqa: E402
 from ssn_engine import api  # noqa: E402
 from ssn_engine.framing import frame_alpha  # noqa: E402
 from ssn_engine.hemisphere import render_light_map  # noqa: E402
-from ssn_engine.light_map import preset  # noqa: E402
+from ssn_engine.host_kit.light_map import preset  # noqa: E402
 from ssn_engine.methods import GeometricCard, ModelError, OnnxSSN, load_method  # noqa: E402
 from ssn_engine.methods.onnx_ssn import blur_frames, floor_for, reach_weights, small_lights_share  # noqa: E402
 

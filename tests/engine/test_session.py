@@ -8,7 +8,7 @@ from engine_helpers import drawn_alpha, one_light
 
 from ssn_engine import long_shadow
 from ssn_engine.framing import EmptyAlphaError
-from ssn_engine.light_map import preset
+from ssn_engine.host_kit.light_map import preset
 from ssn_engine.methods import GeometricCard
 from ssn_engine.session import ShadowSession
 
@@ -167,3 +167,57 @@ def test_the_camera_read_from_the_outline_is_the_one_the_shadow_uses():
     assert given.camera_read is None
     np.testing.assert_allclose(given.used_cameras, blind.used_cameras, rtol=1e-6)
     assert ShadowSession(alpha, GeometricCard(resolution=128)).camera_read is None
+
+
+def test_a_light_change_resolves_no_camera(monkeypatch):
+    """The shipped model reads a blind cutout's camera from its mask: once, when the cutout (or its camera) is
+    set, not on every light change (no estimator run, no digest of the mask); the render gets the camera read."""
+    from pathlib import Path
+
+    import ssn_engine
+    from ssn_engine.methods import OnnxSSN
+    from ssn_engine.methods import onnx_ssn
+
+    model = OnnxSSN(Path(ssn_engine.__file__).parent / "models")
+    if model._camera is None:
+        pytest.skip("the shipped model has no camera estimator")
+    calls = {"cameras_for": 0, "estimate": 0}
+    cameras_for, estimate = model.cameras_for, onnx_ssn.estimate_cameras
+
+    def counted_cameras_for(masks, cameras):
+        calls["cameras_for"] += 1
+        return cameras_for(masks, cameras)
+
+    def counted_estimate(*args):
+        calls["estimate"] += 1
+        return estimate(*args)
+
+    monkeypatch.setattr(model, "cameras_for", counted_cameras_for)
+    monkeypatch.setattr(onnx_ssn, "estimate_cameras", counted_estimate)
+    session = ShadowSession(drawn_alpha(200, 150), model)
+    assert calls["estimate"] == 1 and session.used_cameras is not None
+    calls.update(cameras_for=0, estimate=0)
+    renders = []
+    render = model.render
+    monkeypatch.setattr(model, "render", lambda *args: renders.append(args[3]) or render(*args))
+    for u in (0.3, 0.5, 0.7):
+        session.render(one_light(u, 0.4))
+    assert calls == {"cameras_for": 0, "estimate": 0}
+    assert all(np.array_equal(c, session.used_cameras) for c in renders)
+
+
+def test_set_camera_analyses_again_and_keeps_the_ao_edits(counting):
+    """A new camera predicts the AO again (on the kept frame) and re-applies the AO edits: the same AO as a new
+    session with that camera and those edits."""
+    alpha = drawn_alpha(200, 150)
+    session = ShadowSession(alpha, counting)
+    edits = [{"op": "strength", "value": 2.0}]
+    session.set_ao_edits(edits)
+    session.set_camera(40.0, 50.0)
+    assert counting.ao_calls == 2
+    fresh = ShadowSession(alpha, counting, 40.0, 50.0)
+    fresh.set_ao_edits(edits)
+    assert np.array_equal(session.ao, fresh.ao) and session.cameras is not None
+    assert np.array_equal(session.render_frame(preset("softbox")), fresh.render_frame(preset("softbox")))
+    session.set_camera(None)
+    assert session.cameras is None and session.edits == edits

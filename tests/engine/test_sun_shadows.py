@@ -18,7 +18,7 @@ from ssn_engine import api
 from ssn_engine.frames import resample_frames
 from ssn_engine.framing import frame_alpha
 from ssn_engine.hemisphere import render_light_map
-from ssn_engine.light_map import GaussianLight, LightMap, preset
+from ssn_engine.host_kit.light_map import GaussianLight, LightMap, preset
 from ssn_engine.methods import GeometricCard
 from ssn_engine.session import ShadowSession
 from training.metrics import shadow_direction, shadow_extent, sun_geometry, zncc

@@ -12,9 +12,9 @@ import numpy as np
 import pytest
 from engine_helpers import REPO, drawn_alpha
 
-from ssn_engine.client import EngineClient, EngineError, WorkerUnavailable
-from ssn_engine.light_map import PRESETS
-from ssn_engine.protocol import Buffer
+from ssn_engine.host_kit.client import EngineClient, EngineError, WorkerUnavailable
+from ssn_engine.host_kit.light_map import PRESETS
+from ssn_engine.host_kit.protocol import PROTOCOL_VERSION, Buffer
 
 SERVE = [sys.executable, "-m", "ssn_engine", "serve"]
 CANVAS_W, CANVAS_H = 400, 300
@@ -80,7 +80,7 @@ def _bbox_of(alpha):
 def test_hello(client):
     reply, buffers = client.request("hello")
     assert reply["ok"] is True and buffers == {}
-    assert reply["protocol"] == 1
+    assert reply["protocol"] == PROTOCOL_VERSION
     assert reply["method"] in ("ssn", "geometric")
     assert isinstance(reply["method_note"], str) and reply["method_note"]
     assert reply["resolution"] == 256
@@ -214,17 +214,22 @@ def test_edit_ao(client):
 
 
 def test_preview_is_the_shadow_multiplied_onto_the_thumbnail(client):
-    """A dialog's preview (GIMP): the worker composites, hides the shadow under the cutout and draws the
-    horizon, so the host's Python does no pixel maths."""
-    alpha = drawn_alpha(160, 120, np.uint16)  # the thumbnail's cutout, at its own depth
+    """A host's preview: the worker composites, hides the shadow under the cutout and draws the horizon, so the
+    host's Python does no pixel maths."""
+    from scipy import ndimage
+
+    alpha = drawn_alpha(160, 120, np.uint16)  # a cutout at its own depth
     key = client.request("set_cutout", {"alpha": buf(alpha)})[0]["cutout"]
     background = np.full((120, 160, 4), 200, np.uint8)
-    sent = {"background": buf(background), "cover": buf(alpha)}
+    sent = {"background": buf(background)}
     reply, out = client.request("preview", sent, cutout=key, preset="high-sun", opacity=1.0)
     image = arr(out["image"])
     assert image.shape == (120, 160, 3) and image.dtype == np.uint8 and "no_shadow" not in reply
     assert image.min() < 120  # a dark contact shadow
-    assert (image[alpha > 0] == 200).all()  # the cutout, above the shadow layer, hides it
+    inside = ndimage.binary_erosion(alpha == alpha.max(), iterations=2)
+    assert (image[inside] == 200).all()  # the cutout, above the shadow layer, hides it (its framed mask)
+    with pytest.raises(EngineError, match="preview: unexpected buffer 'cover'; it takes background"):
+        client.request("preview", {**sent, "cover": buf(alpha)}, cutout=key, preset="high-sun")
     red = client.request("preview", sent, cutout=key, preset="high-sun", color=[1.0, 0.0, 0.0], horizon=30.4)[1]
     red = arr(red["image"])
     assert (red[..., 0][alpha == 0] >= 199).all() and red[..., 1].min() < 120  # a red shadow keeps the red
@@ -310,7 +315,7 @@ def test_errors_and_the_worker_survives(client, cmd, params, buffers, kind, frag
     assert fragment in str(info.value)
     assert not isinstance(info.value, WorkerUnavailable)
     reply, _ = client.request("hello")  # still serving
-    assert reply["protocol"] == 1
+    assert reply["protocol"] == PROTOCOL_VERSION
 
 
 @pytest.mark.parametrize(
@@ -363,7 +368,7 @@ def test_killed_worker_is_reported_then_restarted(worker_env):
         with pytest.raises(WorkerUnavailable, match="restart"):
             c.request("render", cutout=key, preset="softbox")
         reply, _ = c.request("hello")  # a fresh worker
-        assert reply["protocol"] == 1 and c.running
+        assert reply["protocol"] == PROTOCOL_VERSION and c.running
         with pytest.raises(EngineError) as info:  # which has forgotten the old cutout
             c.request("render", cutout=key, preset="softbox")
         assert info.value.kind == "UnknownCutout"
@@ -403,7 +408,7 @@ def test_shutdown_then_a_fresh_worker(worker_env):
         c.request("shutdown")
         assert proc.wait(timeout=10) is not None
         reply, _ = c.request("hello")  # a clean shutdown is not a crash: starts a new worker
-        assert reply["protocol"] == 1
+        assert reply["protocol"] == PROTOCOL_VERSION
     finally:
         c.close()
 
@@ -422,7 +427,7 @@ def test_tcp_mode(worker_env):
             assert reply["error"]["type"] == "Unauthorized" and raw.recv(1) == b""  # and the connection ends
         c = EngineClient(address=("127.0.0.1", port), timeout=60, token=token)
         reply, _ = c.request("hello")
-        assert reply["protocol"] == 1
+        assert reply["protocol"] == PROTOCOL_VERSION
         key = c.request("set_cutout", {"alpha": buf(canvas_alpha(np.uint16))})[0]["cutout"]
         reply, buffers = c.request(
             "render", cutout=key, preset="softbox", format={"dtype": "uint16", "channels": "bgra"}
@@ -431,7 +436,7 @@ def test_tcp_mode(worker_env):
         c.close()
         # each connection is a fresh conversation with the same worker
         c2 = EngineClient(address=("127.0.0.1", port), timeout=60, token=token)
-        assert c2.request("hello")[0]["protocol"] == 1
+        assert c2.request("hello")[0]["protocol"] == PROTOCOL_VERSION
         c2.request("shutdown")
         assert proc.wait(timeout=10) == 0
         with pytest.raises(WorkerUnavailable, match=str(port)):
@@ -559,3 +564,70 @@ def test_a_clipped_layer_reaches_past_the_canvas_by_its_margin_only(client):
     assert grown["y"] >= -40 and grown["x"] >= -40
     dy, dx = canvas["y"] - grown["y"], canvas["x"] - grown["x"]
     np.testing.assert_array_equal(b[dy : dy + a.shape[0], dx : dx + a.shape[1]], a)
+
+
+class CountingWriter:
+    """A client's writer that counts the bytes it sends."""
+
+    def __init__(self, inner):
+        self.inner, self.sent = inner, 0
+
+    def writelines(self, chunks):
+        chunks = [bytes(c) for c in chunks]
+        self.sent += sum(len(c) for c in chunks)
+        self.inner.writelines(chunks)
+
+    def write(self, data):
+        self.sent += len(data)
+        return self.inner.write(data)
+
+    def flush(self):
+        self.inner.flush()
+
+
+def test_a_camera_change_sends_the_camera_not_the_alpha(client):
+    """set_camera gives a cutout a new camera: a few hundred bytes on the wire, no alpha-sized buffer; the AO is
+    predicted again with it, the AO edits are kept, and the model's reading comes back when it is unset."""
+    alpha = canvas_alpha()
+    reply, _ = client.request("set_cutout", {"alpha": buf(alpha)})
+    key, read = reply["cutout"], reply.get("camera_read")
+    client.request("edit_ao", cutout=key, edits=[{"op": "strength", "value": 0.5}])
+    _, before = client.request("get_ao", cutout=key)
+    counting = CountingWriter(client._writer)
+    client._writer = counting
+    try:
+        reply, _ = client.request("set_camera", cutout=key, camera={"horizon": -400.0, "fov": 40.0})
+    finally:
+        client._writer = counting.inner
+    assert counting.sent < 200 < alpha.nbytes  # the header alone
+    assert reply["cutout"] == key and "camera_read" not in reply  # the image's camera: nothing read
+    _, after = client.request("get_ao", cutout=key)
+    assert not np.array_equal(arr(before["ao"]), arr(after["ao"]))  # analysed again with the camera
+    fresh = client.request("set_cutout", {"alpha": buf(alpha)}, camera={"horizon": -400.0, "fov": 40.0})[0]["cutout"]
+    _, edited = client.request("edit_ao", cutout=fresh, edits=[{"op": "strength", "value": 0.5}])
+    assert np.array_equal(arr(after["ao"]), arr(edited["ao"]))  # the edits kept: as a new cutout with them
+    reply, _ = client.request("set_camera", cutout=key, camera=None)
+    assert reply.get("camera_read") == read  # back to the model's own reading
+    with pytest.raises(EngineError, match="camera"):
+        client.request("set_camera", cutout=key)
+    with pytest.raises(EngineError, match="camera.fov"):
+        client.request("set_camera", cutout=key, camera={"horizon": 10.0, "fov": 179.0})
+    with pytest.raises(EngineError) as unknown:
+        client.request("set_camera", cutout="nope", camera=None)
+    assert unknown.value.kind == "UnknownCutout"
+    for k in (key, fresh):
+        client.request("release", cutout=k)
+
+
+def test_a_worker_of_another_protocol_is_refused():
+    """The client's handshake: a worker that answers hello with another protocol version is stopped, with a
+    message that says how to make the plug-in and the engine match."""
+    script = (
+        "import json, sys, time; rid = json.loads(sys.stdin.buffer.readline())['id']; "
+        "sys.stdout.buffer.write(json.dumps({'id': rid, 'ok': True, 'protocol': 999}).encode() + b'\\n'); "
+        "sys.stdout.flush(); time.sleep(30)"
+    )
+    c = EngineClient(command=[sys.executable, "-c", script], timeout=30)
+    with pytest.raises(WorkerUnavailable, match="protocol 999, this plug-in") as refused:
+        c.request("set_cutout", {"alpha": buf(canvas_alpha())})
+    assert "install-plugin" in str(refused.value) and not c.running

@@ -13,7 +13,8 @@ import time
 import pytest
 
 from ssn_engine import loopback
-from ssn_engine.client import EngineClient
+from ssn_engine.host_kit.client import EngineClient
+from ssn_engine.host_kit.protocol import PROTOCOL_VERSION
 from ssn_engine.methods import load_method
 
 TOKEN = "the-token"
@@ -53,7 +54,7 @@ def test_a_silent_or_half_sent_connection_does_not_hold_the_worker(port):
     try:
         start = time.monotonic()
         client = EngineClient(address=("127.0.0.1", port), timeout=loopback.AUTH_TIMEOUT - 1, token=TOKEN)
-        assert client.request("hello")[0]["protocol"] == 1
+        assert client.request("hello")[0]["protocol"] == PROTOCOL_VERSION
         client.close()
         assert time.monotonic() - start < loopback.AUTH_TIMEOUT  # served before their deadline passed
     finally:

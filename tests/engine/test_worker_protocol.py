@@ -10,7 +10,7 @@ import numpy as np
 import pytest
 
 from ssn_engine.methods import load_method
-from ssn_engine.protocol import read_message
+from ssn_engine.host_kit.protocol import read_message
 from ssn_engine.worker import MAX_REQUEST_BYTES, Worker
 
 HELLO = b'{"id": 99, "cmd": "hello"}\n'
@@ -161,7 +161,7 @@ def test_a_real_cutout_after_refusals(worker):
 
 def test_the_sans_io_decoder_reads_what_the_worker_writes_in_any_pieces(worker):
     """Krita's QProcess client feeds MessageDecoder whatever arrives: the same messages as the stream reader."""
-    from ssn_engine.protocol import MessageDecoder
+    from ssn_engine.host_kit.protocol import MessageDecoder
 
     alpha = np.zeros((40, 50), np.uint8)
     alpha[10:35, 20:30] = 255

@@ -12,7 +12,7 @@ from hypothesis import strategies as st
 
 from ssn_engine import predict_frames
 from ssn_engine.ao_edit import AOEditError, apply_edits
-from ssn_engine.light_map import MAX_LIGHTS, LightMap, LightMapError
+from ssn_engine.host_kit.light_map import MAX_LIGHTS, LightMap, LightMapError
 
 numbers = (
     st.floats(allow_nan=True, allow_infinity=True)

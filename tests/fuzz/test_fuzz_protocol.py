@@ -16,7 +16,7 @@ from hypothesis import strategies as st
 
 from ssn_engine.loopback import authenticate
 from ssn_engine.methods import load_method
-from ssn_engine.protocol import ProtocolError, read_message
+from ssn_engine.host_kit.protocol import ProtocolError, read_message
 from ssn_engine.worker import Worker
 
 HELLO = b'{"id": 99, "cmd": "hello"}\n'

@@ -10,13 +10,16 @@ from ssn_core import (
     ShadowLayerData,
     make_shadow,
     release,
+    set_camera,
     settings_from_arguments,
     upload_cutout,
 )
 from ssn_pixels import max_alpha, plan_for_precision
 
-from ssn_engine.client import EngineClient, EngineError, WorkerUnavailable
-from ssn_engine.protocol import Buffer
+from ssn_engine.host_kit import camera_rules
+from ssn_engine.host_kit.client import EngineClient, EngineError, WorkerUnavailable
+from ssn_engine.host_kit.protocol import Buffer
+from ssn_engine.host_kit.shadow_notes import HIDDEN
 
 W, H = 160, 120
 
@@ -81,7 +84,7 @@ class FakeEngine:
             dtype = params["format"]["dtype"]
             shape = (h, w + (1 if self.bad_layer else 0), 4)
             data = np.full(shape, 0.5, dtype) if dtype.startswith("float") else np.full(shape, 7, dtype)
-            reply = {"ok": True, "x": 3, "y": 4, "width": w, "height": h}
+            reply = {"ok": True, "x": 3, "y": 4, "width": w, "height": h, **({} if w else {"no_shadow": HIDDEN})}
             return reply, ({"layer": Buffer(dtype, shape, data.tobytes())} if w else {})
         return {"ok": True}, {}
 
@@ -130,7 +133,7 @@ def test_ao_strength_sends_an_edit():
         (FakeEngine("render", EngineError("LightMapError", "lights[0].u: bad")), "lights[0].u"),
         (FakeEngine("set_cutout", WorkerUnavailable("could not start the shadow engine")), "could not start"),
         (FakeEngine("render", OSError("broken pipe")), "Lost contact"),
-        (FakeEngine(size=(0, 0)), "no visible shadow"),
+        (FakeEngine(size=(0, 0)), f"No visible shadow: {HIDDEN.split(' (')[0]}"),
         (FakeEngine(bad_layer=True), "malformed layer"),
     ],
 )
@@ -225,52 +228,48 @@ def test_max_alpha_of_every_cutout_dtype():
 
 @pytest.mark.parametrize("precision", ["u8-non-linear", "u16-linear", "float-perceptual"])
 def test_dialog_preview_from_the_real_worker(real_engine, precision):
-    """The dialog's preview: the worker composites the thumbnail (any cutout depth, no 8-bit cut in Python),
-    the cutout hides its own shadow, and a horizon setting draws the line at the thumbnail's scale (without
-    one: the horizon the model read, dotted)."""
-    from ssn_engine_link import protocol
+    """The dialog's preview: the image's cutout is uploaded once at its size and the worker casts its shadow on
+    a thumbnail through the cutout's framing scaled to it (any cutout depth, no 8-bit cut in Python); the cutout
+    hides its own shadow, and a horizon setting draws the line at the thumbnail's scale (without one: the horizon
+    the model read, dotted)."""
     from ssn_preview import PREVIEW_SIZE, Thumbnail, render_preview
 
-    assert protocol.preview_size(1024, 512, PREVIEW_SIZE) == (384, 192, 0.375)
-    assert protocol.preview_size(100, 50, PREVIEW_SIZE) == (100, 50, 1.0)
+    assert camera_rules.preview_size(1024, 512, PREVIEW_SIZE) == (384, 192, 0.375)
+    assert camera_rules.preview_size(100, 50, PREVIEW_SIZE) == (100, 50, 1.0)
     host = FakeHost(precision)
-    small = host.read_cutout(host.plan)
-    thumbnail = Thumbnail(W, H, 4, bytes([230, 230, 230, 255]) * (W * H))
-    key, read = upload_cutout(real_engine, small)
+    tw, th, scale = camera_rules.preview_size(W, H, W // 2)  # a thumbnail at half the image's size
+    thumbnail = Thumbnail(tw, th, 4, bytes([230, 230, 230, 255]) * (tw * th))
+    key, read = upload_cutout(real_engine, host.read_cutout(host.plan))
     assert read is not None and set(read) == {"horizon", "fov"}  # no horizon set: the model read one
     settings = settings_from_arguments({**ARGS, "light-map": "high-sun", "use-horizon": True, "horizon": 40.0})
-    camera = settings.camera(0.5)  # the thumbnail at half the image's size
-    assert camera is not None
-    rgb, no_shadow = render_preview(real_engine, key, settings, thumbnail, small, camera["horizon"])
-    image = np.frombuffer(rgb, np.uint8).reshape(H, W, 3)
+    camera = settings.camera()
+    assert camera is not None and scale == 0.5
+    assert set_camera(real_engine, key, camera) is None  # the image's camera: nothing read
+    horizon = camera_rules.scaled_camera(camera, scale)["horizon"]
+    rgb, no_shadow = render_preview(real_engine, key, settings, thumbnail, horizon)
+    image = np.frombuffer(rgb, np.uint8).reshape(th, tw, 3)
     assert not no_shadow and image.min() < 150
-    opaque = host.alpha.astype("f4") >= host.alpha.max()
+    opaque = np.zeros((th, tw), bool)
+    opaque[11:49, 36:44] = True  # inside the pawn (rows 20-100, columns 70-90 of the image), at half the size
     opaque[20] = False  # the horizon row
     assert (image[opaque] == 230).all()  # hidden under the opaque cutout
     assert tuple(image[20, 0]) == (255, 140, 0)  # horizon 40 at scale 0.5
     # no horizon set: the one the model read, dotted blue
     blind = settings_from_arguments({**ARGS, "light-map": "high-sun"})
-    blind_rgb = np.frombuffer(render_preview(real_engine, key, blind, thumbnail, small)[0], np.uint8).reshape(H, W, 3)
+    assert set_camera(real_engine, key, blind.camera()) == read  # back to the model's reading
+    blind_rgb = np.frombuffer(render_preview(real_engine, key, blind, thumbnail)[0], np.uint8).reshape(th, tw, 3)
     dotted = np.all(blind_rgb == (40, 170, 255), axis=-1)
-    assert dotted[int(read["horizon"]), ::2].all() and dotted.sum() == (W + 1) // 2  # one dotted row
+    row = int(np.nonzero(dotted.any(axis=1))[0][0])
+    assert abs(row - read["horizon"] * scale) <= 1 and dotted.sum() == (tw + 1) // 2  # one dotted row
     dark = settings_from_arguments({**ARGS, "light-map": '{"format": "ssn-shadow-elm", "version": 1, "lights": []}'})
-    assert render_preview(real_engine, key, dark, thumbnail, small)[1]
+    assert render_preview(real_engine, key, dark, thumbnail)[1]
     release(real_engine, key)
-
-
-def test_a_camera_read_from_a_thumbnail_becomes_the_image_settings():
-    """The model's reading of the preview's thumbnail, as the dialog's horizon and field of view: scaled to the
-    image's rows, rounded, and kept within the settings' bounds."""
-    from ssn_settings import camera_read_settings
-
-    assert camera_read_settings({"horizon": 40.4, "fov": 47.6}, 0.5) == {"horizon": 81.0, "fov": 48.0}
-    assert camera_read_settings({"horizon": -9e6, "fov": 150.0}) == {"horizon": -100000.0, "fov": 120.0}
 
 
 def test_the_preview_note_says_where_the_read_horizon_is():
     """The line under the preview names the dotted blue line only where the preview draws it: a horizon read
     above or below the image is said to lie there."""
-    from ssn_settings import camera_read_note
+    from ssn_engine.host_kit.camera_rules import camera_read_note
 
     assert "horizon at row 80 (dotted blue), 48° field of view" in camera_read_note({"horizon": 80.0, "fov": 48.0}, 300)
     assert "row -42 (above the image)" in camera_read_note({"horizon": -42.0, "fov": 48.0}, 300)

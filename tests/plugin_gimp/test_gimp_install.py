@@ -8,7 +8,7 @@ from pathlib import Path
 import pytest
 
 from plugin_gimp import install as inst
-from ssn_engine.plugin_files import SHARED_MODULES
+from ssn_engine.plugin_files import KIT_MODULES
 
 
 @pytest.mark.parametrize(
@@ -41,8 +41,8 @@ def test_copy_install(tmp_path):
         "ssn_engine_link.py",
     ):
         assert (dest / module).is_file(), module
-    for module in (*SHARED_MODULES, "__init__.py"):
-        assert (dest / "engine_shared" / module).is_file()
+    for module in KIT_MODULES:
+        assert (dest / "host_kit" / module).is_file()
     config = json.loads((dest / "engine.json").read_text())
     assert config["python"] == "/opt/venv/bin/python" and config["args"] == ["-m", "ssn_engine", "serve"]
 
@@ -71,7 +71,7 @@ def test_address_install(tmp_path):
 
 
 def test_installed_plugin_imports_shared_copies(tmp_path):
-    """The installed modules find engine_shared (not ssn_engine) when run from the plug-in folder."""
+    """The installed modules find host_kit (not ssn_engine) when run from the plug-in folder."""
     import subprocess
 
     dest = inst.install(tmp_path / "ssn-shadow")
@@ -87,4 +87,4 @@ def test_installed_plugin_imports_shared_copies(tmp_path):
         env=env,
     )
     assert out.returncode == 0, out.stderr
-    assert out.stdout.strip() == "engine_shared.light_map engine_shared.light_editor"
+    assert out.stdout.strip() == "host_kit.light_map host_kit.light_editor"

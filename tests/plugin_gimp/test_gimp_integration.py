@@ -31,8 +31,8 @@ import pytest
 from loopback_worker import loopback_worker
 
 from plugin_gimp.install import install
-from ssn_engine.client import EngineClient
-from ssn_engine.protocol import Buffer
+from ssn_engine.host_kit.client import EngineClient
+from ssn_engine.host_kit.protocol import Buffer
 
 pytestmark = pytest.mark.gimp
 

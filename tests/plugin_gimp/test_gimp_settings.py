@@ -6,7 +6,7 @@ import pytest
 import ssn_settings as s
 from ssn_settings import SettingsError, ShadowSettings, resolve_light_map
 
-from ssn_engine import light_map
+from ssn_engine.host_kit import camera_rules, light_map
 
 
 def test_arguments_cover_every_setting():
@@ -116,6 +116,6 @@ def test_camera_only_with_a_horizon_and_scaled_for_the_preview():
     assert ShadowSettings().camera() is None
     st = ShadowSettings(horizon=300.0, fov=50.0)
     assert st.camera() == {"horizon": 300.0, "fov": 50.0}
-    assert st.camera(0.25) == {"horizon": 75.0, "fov": 50.0}
+    assert camera_rules.scaled_camera(st.camera(), 0.25) == {"horizon": 75.0, "fov": 50.0}
     with pytest.raises(SettingsError, match="fov"):
         ShadowSettings(horizon=10.0, fov=5.0)

@@ -15,8 +15,8 @@ from PyQt5.QtCore import QEventLoop, QTimer
 
 from plugin_krita.ssn_shadow.adapters.krita_document import Source, SourceError, WriteResult
 from plugin_krita.ssn_shadow.adapters.pixel_format import pixel_format
-from ssn_engine import protocol
-from ssn_engine.engine_config import EngineConfig
+from ssn_engine.host_kit import camera_rules
+from ssn_engine.host_kit.engine_config import EngineConfig
 
 REPO = Path(__file__).resolve().parents[2]
 HERE = Path(__file__).resolve().parent
@@ -162,5 +162,5 @@ class FakeHost:
 
     def preview_background(self, source, side):
         """A mid-grey image of the document's size scaled down as Krita's adapter scales it."""
-        w, h, _ = protocol.preview_size(self.w, self.h, side)
+        w, h, _ = camera_rules.preview_size(self.w, self.h, side)
         return w, h, bytes([128, 128, 128, 255]) * (w * h)

@@ -2,7 +2,7 @@ from krita_helpers import FakeHost, cutout_alpha, wait_until, worker_command
 from PyQt5.QtCore import QEventLoop, QTimer
 from plugin_krita.ssn_shadow.controller import ShadowController
 from plugin_krita.ssn_shadow.engine import EngineProcess
-from ssn_engine.engine_config import EngineConfig
+from ssn_engine.host_kit.engine_config import EngineConfig
 
 
 def make(host, command=worker_command):
@@ -179,23 +179,34 @@ def test_worker_crash_mid_session_recovers(qapp):
 
 
 def test_the_camera_reaches_the_worker_and_changes_the_shadow(qapp):
-    """A horizon set in the docker: the cutout is analysed again with it, and the shadow changes. Before it, the
-    worker says which camera the model read from the outline; after it, none."""
+    """A horizon set in the docker: the worker's cutout is analysed again with it (the camera alone is sent, not
+    the alpha again), and the shadow changes. Before it, the worker says which camera the model read from the
+    outline; after it, none."""
     host = FakeHost()
     c, engine, messages, _ = make(host)
-    reads = []
+    reads, sent = [], []
     c.model.camera_read_changed.connect(reads.append)
+    request = engine.request
+
+    def spy(cmd, buffers=None, **kwargs):
+        sent.append((cmd, sum(len(memoryview(b.data).cast("B")) for b in (buffers or {}).values())))
+        return request(cmd, buffers, **kwargs)
+
+    engine.request = spy
     try:
         c.generate()
         assert wait_until(lambda: not c.busy and host.writes), messages
         first_cutout = c.cutout
         assert wait_until(lambda: reads), messages
         assert reads[-1] is not None and set(reads[-1]) == {"horizon", "fov"}  # blind: the model read one
+        assert ("set_cutout", host.w * host.h) in sent
+        del sent[:]
         c.model.horizon, c.model.fov = -400.0, 40.0  # seen from high above
         assert len(host.writes) == 1  # not given yet: the same camera, nothing rendered
         c.model.use_horizon = True
         assert wait_until(lambda: not c.busy and len(host.writes) == 2), messages
-        assert c.cutout != first_cutout  # a new analysis with the camera
+        assert c.cutout == first_cutout and ("set_camera", 0) in sent  # the same cutout, a new camera
+        assert all(cmd != "set_cutout" and nbytes == 0 for cmd, nbytes in sent), sent  # no alpha sent again
         assert reads[-1] is None
         assert host.writes[1][0] != host.writes[0][0]  # the shadow's rectangle moved or changed size
         assert not [m for m in messages if m[0] == "error"]

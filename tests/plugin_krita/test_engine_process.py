@@ -4,7 +4,7 @@ import pytest
 
 from krita_helpers import cutout_alpha, wait_until, worker_command
 from plugin_krita.ssn_shadow.engine import EngineProcess
-from ssn_engine.engine_config import EngineConfig
+from ssn_engine.host_kit.engine_config import EngineConfig
 from plugin_krita.ssn_shadow.shared import protocol
 
 
@@ -28,19 +28,19 @@ def test_real_worker_round_trip(qapp):
     try:
         calls = Calls()
         alpha = protocol.Buffer("uint8", (160, 200), cutout_alpha())
-        engine.request("set_cutout", {}, {"alpha": alpha}, calls.ok, calls.err)
+        engine.request("set_cutout", {"alpha": alpha}, on_reply=calls.ok, on_error=calls.err)
         assert wait_until(lambda: calls.done), "no reply"
         assert not calls.errors, calls.errors
         cutout = calls.replies[0][0]["cutout"]
-        assert engine.info["protocol"] == 1 and engine.info["resolution"] > 0
+        assert engine.info["protocol"] == protocol.PROTOCOL_VERSION and engine.info["resolution"] > 0
         render = Calls()
         params = {"cutout": cutout, "preset": "softbox", "format": {"dtype": "uint8", "channels": "bgra"}}
-        engine.request("render", params, None, render.ok, render.err)
+        engine.request("render", on_reply=render.ok, on_error=render.err, **params)
         assert wait_until(lambda: render.done)
         header, buffers = render.replies[0]
         assert header["width"] > 0 and buffers["layer"].shape == (header["height"], header["width"], 4)
         bad = Calls()
-        engine.request("render", {"cutout": "nope", "preset": "softbox"}, None, bad.ok, bad.err)
+        engine.request("render", cutout="nope", preset="softbox", on_reply=bad.ok, on_error=bad.err)
         assert wait_until(lambda: bad.done)
         assert bad.errors[0].kind == "UnknownCutout" and engine.running  # an error does not end the worker
     finally:
@@ -52,11 +52,11 @@ def test_missing_worker_gives_a_message_then_restarts(qapp):
     engine = EngineProcess(lambda: commands.pop(0) if len(commands) > 1 else commands[0])
     try:
         calls = Calls()
-        engine.request("hello", {}, None, calls.ok, calls.err)
+        engine.request("hello", on_reply=calls.ok, on_error=calls.err)
         assert wait_until(lambda: calls.done)
         assert calls.errors and "could not start the shadow engine" in str(calls.errors[0])
         again = Calls()
-        engine.request("hello", {}, None, again.ok, again.err)
+        engine.request("hello", on_reply=again.ok, on_error=again.err)
         assert wait_until(lambda: again.done) and again.replies, again.errors
     finally:
         engine.shutdown()
@@ -65,7 +65,7 @@ def test_missing_worker_gives_a_message_then_restarts(qapp):
 def test_crashing_worker(qapp):
     engine = EngineProcess(lambda: worker_command("-c", "import sys; print('boom', file=sys.stderr); sys.exit(3)"))
     calls = Calls()
-    engine.request("hello", {}, None, calls.ok, calls.err)
+    engine.request("hello", on_reply=calls.ok, on_error=calls.err)
     assert wait_until(lambda: calls.done)
     message = str(calls.errors[0])
     assert "exited with code 3" in message and "restart on the next request" in message and "boom" in message
@@ -75,7 +75,7 @@ def test_crashing_worker(qapp):
 def test_hanging_worker_is_stopped(qapp):
     engine = EngineProcess(lambda: worker_command("-c", "import time; time.sleep(60)"), timeout_s=1.0)
     calls = Calls()
-    engine.request("hello", {}, None, calls.ok, calls.err)
+    engine.request("hello", on_reply=calls.ok, on_error=calls.err)
     assert wait_until(lambda: calls.done, 15)
     assert "did not answer 'hello' within 1 s" in str(calls.errors[0])
     assert not engine.running
@@ -87,7 +87,7 @@ def test_garbage_output_is_a_clear_error(qapp):
     script = "import sys, time; sys.stdout.write('{not json\\n'); sys.stdout.flush(); time.sleep(5)"
     engine = EngineProcess(lambda: worker_command("-c", script))
     calls = Calls()
-    engine.request("hello", {}, None, calls.ok, calls.err)
+    engine.request("hello", on_reply=calls.ok, on_error=calls.err)
     assert wait_until(lambda: calls.done, 15)
     assert "malformed reply" in str(calls.errors[0])
     engine.stop()

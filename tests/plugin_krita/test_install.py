@@ -26,10 +26,10 @@ def test_install_copies_or_links(tmp_path, link):
     assert pkg.is_symlink() == link
     for name in (
         "__init__.py",
-        "engine_shared/light_map.py",
-        "engine_shared/protocol.py",
-        "engine_shared/client.py",
-        "engine_shared/defaults.py",
+        "host_kit/light_map.py",
+        "host_kit/protocol.py",
+        "host_kit/client.py",
+        "host_kit/defaults.py",
     ):
         assert (pkg / name).is_file(), name
     config = json.loads((pkg / "engine.json").read_text())
@@ -43,7 +43,7 @@ def test_zip_is_importable_by_krita(tmp_path):
     z = build_zip(tmp_path / "ssn-shadow-krita.zip")
     names = zipfile.ZipFile(z).namelist()
     assert "ssn_shadow.desktop" in names and "ssn_shadow/" in names
-    assert "ssn_shadow/engine.json" in names and "ssn_shadow/engine_shared/protocol.py" in names
+    assert "ssn_shadow/engine.json" in names and "ssn_shadow/host_kit/protocol.py" in names
     assert not any("__pycache__" in n for n in names)
     importer = Path("/usr/share/krita/pykrita/plugin_importer/plugin_importer.py")
     if not importer.exists():
@@ -56,7 +56,7 @@ def test_zip_is_importable_by_krita(tmp_path):
     (tmp_path / "res").mkdir()
     imported = plugin_importer.PluginImporter(str(z), str(tmp_path / "res"), lambda p: True).import_all()
     assert [p["name"] for p in imported] == ["ssn_shadow"]
-    assert (tmp_path / "res/pykrita/ssn_shadow/engine_shared/light_map.py").is_file()
+    assert (tmp_path / "res/pykrita/ssn_shadow/host_kit/light_map.py").is_file()
 
 
 def test_the_krita_benchmark_ships_its_driver(tmp_path):

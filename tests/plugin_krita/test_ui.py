@@ -6,7 +6,7 @@ from PyQt5.QtTest import QTest
 from PyQt5.QtWidgets import QApplication
 
 from krita_helpers import FakeHost
-from plugin_krita.ssn_shadow.ao_edits import AoEdits
+from ssn_engine.host_kit.ao_edits import AoEdits
 from plugin_krita.ssn_shadow.controller import ShadowController
 from plugin_krita.ssn_shadow.persistence import ANNOTATION, DocumentModels
 from plugin_krita.ssn_shadow.shared import light_map as lm
@@ -20,7 +20,7 @@ class NoEngine:
     def __init__(self):
         self.sent, self.params = [], []
 
-    def request(self, cmd, params=None, buffers=None, on_reply=None, on_error=None, timeout_s=None):
+    def request(self, cmd, buffers=None, *, on_reply=None, on_error=None, timeout=None, **params):
         self.sent.append(cmd)
         self.params.append(params)
         return len(self.sent)

@@ -8,7 +8,7 @@ import numpy as np
 import pytest
 
 from ssn_engine.hemisphere import render_light_map, soft_shadow, texel_weights
-from ssn_engine.light_map import LightMap
+from ssn_engine.host_kit.light_map import LightMap
 from training import make_dataset
 from training.data import spans
 from training.data.store import ViewStore

@@ -6,7 +6,7 @@ import numpy as np
 import pytest
 
 from ssn_engine.hemisphere import render_light_map, soft_shadow, stratified_directions
-from ssn_engine.light_map import LightMap
+from ssn_engine.host_kit.light_map import LightMap
 from training.data import meshes, procedural, sources
 from training.data import render_bases as rb
 from training.data.raycast import ray_hits

@@ -6,7 +6,7 @@ import numpy as np
 import pytest
 
 from ssn_engine.hemisphere import render_light_map
-from ssn_engine.light_map import MAX_LIGHTS, SOFTNESS_RANGE
+from ssn_engine.host_kit.light_map import MAX_LIGHTS, SOFTNESS_RANGE
 from training.elm import render_lights, sample_lights
 
 

@@ -8,7 +8,7 @@ import numpy as np
 from PIL import Image
 
 from ssn_engine.hemisphere import render_light_map
-from ssn_engine.light_map import LightMap
+from ssn_engine.host_kit.light_map import LightMap
 
 from .items import stable_hash
 from .store import ViewStore

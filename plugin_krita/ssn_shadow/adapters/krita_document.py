@@ -29,7 +29,7 @@ from typing import TYPE_CHECKING
 if TYPE_CHECKING:
     from krita import Document, Node
 
-from ..shared import protocol
+from ..shared import camera_rules
 from .pixel_format import (
     PixelFormat,
     Rect,
@@ -186,7 +186,7 @@ def preview_background(document: Document, source_node: Node, side: int) -> tupl
     from PyQt5.QtCore import Qt
     from PyQt5.QtGui import QImage
 
-    width, height, _ = protocol.preview_size(document.width(), document.height(), side)
+    width, height, _ = camera_rules.preview_size(document.width(), document.height(), side)
     shadow = shadow_of(source_node)
     if shadow is None:
         image = document.projection(0, 0, document.width(), document.height())

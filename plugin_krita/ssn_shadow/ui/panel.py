@@ -28,10 +28,11 @@ from PyQt5.QtWidgets import (
     QWidget,
 )
 
-from ..model import DEFAULT_FOV, ShadowModel
+from ..model import ShadowModel
 from ..properties import Binding, bind
-from ..shared import defaults
+from ..shared import camera_rules, defaults
 from ..shared import light_map as lm
+
 from .ao_preview import AOPreview
 from .drag_preview import DragPreview
 from .light_map_widget import LightMapWidget, slider_to_softness, softness_to_slider
@@ -127,7 +128,7 @@ class ShadowPanel(QWidget):
         self.use_horizon.setToolTip("Without it the engine reads the camera from the cutout's outline")
         hrow = QHBoxLayout()
         self.horizon = QSpinBox()
-        self.horizon.setRange(-100000, 100000)
+        self.horizon.setRange(*(round(b) for b in camera_rules.EDITOR_HORIZON_RANGE))
         self.horizon.setSuffix(" px")
         self.horizon.setToolTip("The canvas row where the ground meets the sky (it may lie above or below the image)")
         self.from_guide = QPushButton("From guide")
@@ -136,10 +137,10 @@ class ShadowPanel(QWidget):
         hrow.addWidget(self.from_guide)
         cform = QFormLayout()
         self.fov = QDoubleSpinBox()
-        self.fov.setRange(10.0, 120.0)
+        self.fov.setRange(*camera_rules.EDITOR_FOV_RANGE)
         self.fov.setDecimals(0)
         self.fov.setSuffix("°")
-        self.fov.setValue(DEFAULT_FOV)
+        self.fov.setValue(camera_rules.DEFAULT_FOV)
         self.fov.setToolTip("The image's vertical field of view (a phone camera: about 50 degrees)")
         cform.addRow("Field of view", self.fov)
         self.camera_read = QLabel()
@@ -350,10 +351,8 @@ class ShadowPanel(QWidget):
             self.camera_read.setText("")
             self.camera_read.setVisible(False)
             return
-        self.camera_read.setText(
-            f"Read from the cutout's outline: horizon at row {round(read['horizon'])}, {read['fov']:.0f}° field of "
-            "view. If the shadow's perspective looks wrong, tick the box and correct them."
-        )
+        source = self.controller.source  # the cutout's image, whose camera the model read
+        self.camera_read.setText(camera_rules.camera_read_note(read, source.height if source is not None else 0))
         self.camera_read.setVisible(True)
 
     # -- shadow ----------------------------------------------------------------------------

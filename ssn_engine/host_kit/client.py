@@ -1,9 +1,18 @@
-"""A blocking client for the engine worker (stdlib only, used by the plug-ins).
+"""The client of the engine worker (stdlib only): one request signature and one version handshake for every host.
 
-It spawns ``ssn-shadow serve`` (or connects to one on a loopback port),
-sends requests and returns replies. A worker that is missing, crashes or
-hangs raises :class:`WorkerUnavailable` with a message for the user; the next
-request starts a fresh worker.
+:class:`Requests` numbers and frames requests, :func:`check_hello` is the
+handshake (the worker must speak this kit's protocol) and :func:`reply_error`
+turns a refused reply into :class:`EngineError`, without any I/O: the
+blocking :class:`EngineClient` here (the GIMP filter, the soak test) and the
+Krita docker's QProcess adapter both speak through them. A request is
+``request(cmd, buffers, **params)``: the command, its named buffers and its
+header parameters (docs/protocol.md).
+
+:class:`EngineClient` spawns ``ssn-shadow serve`` (or connects to one on a
+loopback port), checks its protocol with ``hello``, sends requests and
+returns replies. A worker that is missing, crashes, hangs or speaks another
+protocol raises :class:`WorkerUnavailable` with a message for the user; the
+next request starts a fresh worker.
 """
 
 from __future__ import annotations
@@ -17,10 +26,21 @@ import subprocess
 import threading
 from collections.abc import Sequence
 from pathlib import Path
-from typing import IO
+from typing import IO, Any
 
 from .engine_config import EngineConfig, worker_environment
-from .protocol import Buffer, ProtocolError, read_message, write_message
+from .protocol import PROTOCOL_VERSION, Buffer, ProtocolError, encode_header, read_message, write_message
+
+__all__ = [
+    "EngineClient",
+    "EngineError",
+    "Requests",
+    "WorkerUnavailable",
+    "check_hello",
+    "connect",
+    "reply_error",
+    "shared_client",
+]
 
 
 class EngineError(RuntimeError):
@@ -36,6 +56,41 @@ class WorkerUnavailable(EngineError):
 
     def __init__(self, message: str) -> None:
         super().__init__("WorkerUnavailable", message)
+
+
+def reply_error(reply: dict) -> EngineError | None:
+    """The error a reply carries (None when it is ``ok``)."""
+    if reply.get("ok"):
+        return None
+    error = reply.get("error") or {}
+    return EngineError(error.get("type", "Internal"), error.get("message", "unknown engine error"))
+
+
+def check_hello(reply: dict) -> dict:
+    """The version handshake: ``hello``'s reply when the worker speaks this kit's :data:`PROTOCOL_VERSION`, else
+    :class:`WorkerUnavailable` saying how to make them match."""
+    if reply.get("protocol") != PROTOCOL_VERSION:
+        raise WorkerUnavailable(
+            f"the shadow engine speaks protocol {reply.get('protocol')!r}, this plug-in {PROTOCOL_VERSION}: "
+            "re-run 'ssn-shadow install-plugin' from the engine's Python."
+        )
+    return reply
+
+
+class Requests:
+    """Request ids and framing for one worker connection (no I/O)."""
+
+    def __init__(self) -> None:
+        self._ids = itertools.count(1)
+
+    def encode(
+        self, cmd: str, buffers: dict[str, Buffer] | None = None, **params: Any
+    ) -> tuple[int, list[bytes | memoryview]]:
+        """A new request's id and the bytes to send, in order: its header line, then its buffers."""
+        rid = next(self._ids)
+        chunks: list[bytes | memoryview] = [encode_header({"id": rid, "cmd": cmd, **params}, buffers)]
+        chunks.extend(memoryview(b.data).cast("B") for b in (buffers or {}).values())
+        return rid, chunks
 
 
 class EngineClient:
@@ -59,8 +114,9 @@ class EngineClient:
         self._reader: IO[bytes] | None = None
         self._writer: IO[bytes] | None = None
         self._stderr: collections.deque[str] = collections.deque(maxlen=40)
-        self._ids = itertools.count(1)
+        self._requests = Requests()
         self._lock = threading.Lock()
+        self.info: dict[str, Any] = {}  # the hello reply of the worker this client talks to
 
     # -- connection --------------------------------------------------------
     @property
@@ -143,9 +199,10 @@ class EngineClient:
 
     # -- requests ------------------------------------------------------------
     def request(
-        self, cmd: str, buffers: dict[str, Buffer] | None = None, timeout: float | None = None, **params
+        self, cmd: str, buffers: dict[str, Buffer] | None = None, *, timeout: float | None = None, **params: Any
     ) -> tuple[dict, dict[str, Buffer]]:
-        """Send one command; return the reply header and buffers, or raise EngineError."""
+        """Send one command with its ``buffers`` and header ``params``; return the reply header and buffers, or
+        raise EngineError. A new worker is started (or connected to) first, and its protocol checked."""
         with self._lock:
             if self._proc is not None and self._proc.poll() is not None:
                 # It died between requests (crash, OOM kill): say so once, with its last words,
@@ -154,32 +211,47 @@ class EngineClient:
             if not self.running:
                 self.close()
                 self._start()
-            header = {"id": next(self._ids), "cmd": cmd, **params}
-            result: list = []
-
-            def exchange() -> None:
-                reader, writer = self._reader, self._writer
-                assert reader is not None and writer is not None  # connected by _start above
+                hello, _ = self._exchange("hello", None, timeout, {})
                 try:
-                    write_message(writer, header, buffers)
-                    result.append(read_message(reader))
-                except (OSError, EOFError, ProtocolError, ValueError) as exc:
-                    result.append(exc)
-
-            worker = threading.Thread(target=exchange, daemon=True)
-            worker.start()
-            worker.join(self.timeout if timeout is None else timeout)
-            if worker.is_alive():
-                raise self._died(f"did not answer '{cmd}' within {self.timeout if timeout is None else timeout:g} s")
-            if isinstance(result[0], BaseException):
-                raise self._died(f"stopped unexpectedly during '{cmd}' ({result[0]})")
-            reply, reply_buffers = result[0]
+                    self.info = check_hello(hello)
+                except WorkerUnavailable:
+                    self.close()
+                    raise
+            reply, reply_buffers = self._exchange(cmd, buffers, timeout, params)
             if cmd == "shutdown" and reply.get("ok"):
                 self.close()  # it exits as asked: the next request starts a fresh one
-        if not reply.get("ok"):
-            error = reply.get("error") or {}
-            raise EngineError(error.get("type", "Internal"), error.get("message", "unknown engine error"))
+        error = reply_error(reply)
+        if error is not None:
+            raise error
         return reply, reply_buffers
+
+    def _exchange(
+        self, cmd: str, buffers: dict[str, Buffer] | None, timeout: float | None, params: dict[str, Any]
+    ) -> tuple[dict, dict[str, Buffer]]:
+        """One request and its reply, within ``timeout`` (None: the client's); a worker that fails to answer is
+        stopped (WorkerUnavailable)."""
+        _, chunks = self._requests.encode(cmd, buffers, **params)
+        result: list = []
+
+        def exchange() -> None:
+            reader, writer = self._reader, self._writer
+            assert reader is not None and writer is not None  # connected by _start
+            try:
+                writer.writelines(chunks)
+                writer.flush()
+                result.append(read_message(reader))
+            except (OSError, EOFError, ProtocolError, ValueError) as exc:
+                result.append(exc)
+
+        limit = self.timeout if timeout is None else timeout
+        worker = threading.Thread(target=exchange, daemon=True)
+        worker.start()
+        worker.join(limit)
+        if worker.is_alive():
+            raise self._died(f"did not answer '{cmd}' within {limit:g} s")
+        if isinstance(result[0], BaseException):
+            raise self._died(f"stopped unexpectedly during '{cmd}' ({result[0]})")
+        return result[0]
 
 
 IDLE_TIMEOUT = 900.0  # seconds a shared worker waits for the next call before it exits

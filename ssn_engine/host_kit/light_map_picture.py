@@ -1,8 +1,7 @@
 """The light map drawn for the editor (stdlib only): the Gaussians tone-mapped, and the light markers.
 
-Each texel shows its mean radiance under the lights, exactly the light map
-the engine gives the model (:func:`ssn_engine.hemisphere.render_light_map`:
-separable erf integrals, the azimuth wrapping), tone-mapped ``v / (1 + v)``
+Each texel shows its mean radiance under the lights, the light map the
+engine gives the model (:func:`.sky_map.map_values`), tone-mapped ``v / (1 + v)``
 from night blue to warm white, as packed RGB bytes that a host shows as a
 QImage or a GdkPixbuf. Only the rows and columns where a light is above
 ``CUTOFF`` are visited, so a 192 x 96 picture of a few lights costs a few
@@ -13,7 +12,8 @@ from __future__ import annotations
 
 import math
 
-from .light_map import ASPECT, LightMap
+from .light_map import LightMap
+from .sky_map import map_values
 
 NIGHT = (0.10, 0.13, 0.20)
 LIGHT = (1.0, 0.96, 0.85)
@@ -29,40 +29,12 @@ _LUT = [
 ]  # RGB of 256 tone levels
 
 
-def _texel_means(centre: float, sigma2: float, count: int, scale: float, shifts: tuple[float, ...]) -> list[float]:
-    """Means over ``count`` texels of width ``1 / scale`` (map heights) of ``exp(-(x - centre)^2 / (2 sigma2))``
-    and its copies at ``shifts`` (the azimuth wraps around), as in :func:`ssn_engine.hemisphere.render_light_map`."""
-    s = math.sqrt(2.0 * sigma2)
-    norm = math.sqrt(math.pi / 2.0) * math.sqrt(sigma2) * scale
-    edges = [[math.erf((k / scale - centre - shift) / s) for k in range(count + 1)] for shift in shifts]
-    return [norm * sum(e[k + 1] - e[k] for e in edges) for k in range(count)]
-
-
-def map_values(lights: LightMap, width: int, height: int) -> list[list[float]]:
-    """Each texel's mean radiance on a width x height grid (u across, v down): the engine's light map."""
-    rows = [[0.0] * width for _ in range(height)]
-    for light in lights:
-        if light.intensity <= 0:
-            continue
-        ex = _texel_means(ASPECT * light.u, light.softness, width, height, (-ASPECT, 0.0, ASPECT))
-        cols = [(j, f) for j, f in enumerate(ex) if f >= CUTOFF]
-        ey = _texel_means(light.v, light.softness, height, height, (0.0,))
-        for i, g in enumerate(ey):
-            g *= light.intensity
-            if g < CUTOFF:
-                continue
-            row = rows[i]
-            for j, f in cols:
-                row[j] += g * f
-    return rows
-
-
 def map_rgb(lights: LightMap, width: int = PICTURE_SIZE[0], height: int = PICTURE_SIZE[1]) -> bytes:
     """RGB888 bytes (height x width x 3) of the tone-mapped light map."""
     dark = _LUT[0] * width
     return b"".join(
         b"".join([_LUT[int(255 * v / (1.0 + v) + 0.5)] for v in row]) if any(row) else dark
-        for row in map_values(lights, width, height)
+        for row in map_values(lights, width, height, CUTOFF)
     )
 
 

@@ -12,19 +12,12 @@ from __future__ import annotations
 import json
 from typing import IO, Any, NamedTuple
 
-PROTOCOL_VERSION = 1
+PROTOCOL_VERSION = 2  # 2: set_camera
 DTYPES = {"uint8": 1, "uint16": 2, "float16": 2, "float32": 4}
 MAX_HEADER = 1 << 20
 MAX_DIMS = 4
 MAX_DEPTH = 32  # nesting of JSON arrays and objects: a header, a light map, a list of AO edits
 CHUNK = 1 << 20  # bytes read at once
-
-
-def preview_size(width: int, height: int, limit: int) -> tuple[int, int, float]:
-    """The size of a ``preview`` command's background for a canvas, and its scale: the longer side at most
-    ``limit``, the aspect kept as the worker expects (each side rounded)."""
-    scale = min(1.0, limit / max(width, height, 1))
-    return max(1, round(width * scale)), max(1, round(height * scale)), scale
 
 
 class ProtocolError(RuntimeError):

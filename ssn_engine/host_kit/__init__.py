@@ -1,0 +1,8 @@
+"""The host kit: what every front end (the Krita docker, the GIMP filter, the engine's CLI and worker) shares.
+
+Standard library only: the plug-ins run in the host's own Python and carry a
+copy of this package (:mod:`ssn_engine.plugin_files`). Each rule a host and
+the engine must agree on is defined here once: the worker protocol and its
+client, the light map, its editor and picture, the camera rules, the AO edit
+list, the shared defaults and wording.
+"""
