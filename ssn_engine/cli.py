@@ -176,18 +176,19 @@ def load_cutout(args: argparse.Namespace) -> np.ndarray:
 
 def _make_shadow(cutout_rgba: np.ndarray, args: argparse.Namespace, stage: Stages):
     """The canvas shadow of a cutout; returns (CanvasShadow, loaded method, the camera the model read from the
-    outline or None: ShadowSession.camera_read). The light map and AO edits are read first, so a bad one costs no
+    outline or None: the session's camera_read; one session per object on the layer). The light map and AO edits are read first, so a bad one costs no
     inference."""
     from .framing import EmptyAlphaError
+    from .layer_session import open_session
     from .methods import load_method
-    from .session import ShadowSession, no_shadow_reason
+    from .session import no_shadow_reason
 
     lights, edits = _light_map(args), _ao_edits(args)
     stage("loading the model")
     loaded = load_method(args.method)
     stage("analysing the cutout")
     try:
-        session = ShadowSession(cutout_rgba[..., 3], loaded.method, args.horizon, args.fov)
+        session = open_session(cutout_rgba[..., 3], loaded.method, args.horizon, args.fov)
     except EmptyAlphaError as exc:
         raise NoShadow(f"{args.cutout}: {exc}") from None
     session.set_ao_edits(edits)
