@@ -10,8 +10,8 @@ rule (docs/engine.md, "Several objects on one layer"):
 2. A part is *large* when its area is at least ``MIN_AREA_SHARE`` of the largest part's and its height at least
    ``MIN_HEIGHT_SHARE`` of the largest part's height. Large parts, from the largest down, become objects, except
    that a large part joins an object already found when most of its bounding box (``INSIDE_SHARE``) lies inside
-   that object's, or when their columns overlap (by ``OVERLAP_SHARE`` of the narrower) and their contact rows
-   (lowest rows) lie within ``CONTACT_SHARE`` of the object's height: one thing seen in front of the other.
+   that object's (a piece held in front of a body). Parts whose columns merely overlap stay apart: two horses side
+   by side on one ground overlap in columns (a head over the other's back) without being one thing.
 3. Every other part joins the object nearest to it (pixel distance) when it lies within ``REACH_SHARE`` of that
    object's height: a person's detached hand stays with the person. A part farther away is an object of its own
    (a ball across the floor), unless it is a speck (its longer side under ``SPECK_SHARE`` of the largest part's
@@ -33,8 +33,6 @@ GRID = 512  # cells along the layer's longer side on which the parts are found
 MIN_AREA_SHARE = 0.04  # of the largest part's area: at or above, a part may be an object of its own
 MIN_HEIGHT_SHARE = 0.2  # of the largest part's height: likewise
 INSIDE_SHARE = 0.5  # of a large part's bounding box inside an object's: it is part of that object
-OVERLAP_SHARE = 0.5  # of the narrower one's width: columns that overlap this much ...
-CONTACT_SHARE = 0.1  # ... with contact rows this close (share of the object's height): one object
 REACH_SHARE = 0.2  # of an object's height: a small part this close to it belongs to it
 SPECK_SHARE = 0.02  # of the largest part's height: a farther part whose longer side is below it casts nothing
 MAX_OBJECTS = 8  # objects per layer (each costs a shadow inference per light change)
@@ -107,17 +105,11 @@ def _cells(alpha: np.ndarray, bbox: tuple[int, int, int, int]) -> tuple[np.ndarr
     return visible.reshape(rows, cell, cols, cell).any(axis=(1, 3)), cell
 
 
-def _joins(group: _Group, box: tuple[slice, slice]) -> bool:
-    """Whether a large part with grid box ``box`` belongs to ``group``: mostly inside its box, or in front of or
-    behind it (columns overlapping, contact rows close)."""
+def _inside(group: _Group, box: tuple[slice, slice]) -> bool:
+    """Whether most of grid box ``box`` (``INSIDE_SHARE``) lies inside ``group``'s box."""
     r0, r1, c0, c1 = box[0].start, box[0].stop, box[1].start, box[1].stop
     inside = max(0, min(r1, group.r1) - max(r0, group.r0)) * max(0, min(c1, group.c1) - max(c0, group.c0))
-    if inside >= INSIDE_SHARE * (r1 - r0) * (c1 - c0):
-        return True
-    overlap = min(c1, group.c1) - max(c0, group.c0)
-    return overlap >= OVERLAP_SHARE * min(c1 - c0, group.c1 - group.c0) and abs(
-        r1 - group.r1
-    ) <= CONTACT_SHARE * max(group.height, r1 - r0)
+    return inside >= INSIDE_SHARE * (r1 - r0) * (c1 - c0)
 
 
 def split_objects(alpha: np.ndarray) -> LayerObjects:
@@ -144,7 +136,7 @@ def split_objects(alpha: np.ndarray) -> LayerObjects:
     groups: list[_Group] = []
     for i in sorted(np.flatnonzero(large), key=lambda i: -areas[i]):
         box = boxes[i]
-        home = next((g for g in groups if _joins(g, box)), None)
+        home = next((g for g in groups if _inside(g, box)), None)
         if home is None:
             groups.append(_Group([], box[0].start, box[1].start, box[0].stop, box[1].stop, 0))
             home = groups[-1]
