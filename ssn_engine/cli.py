@@ -188,7 +188,7 @@ def _make_shadow(cutout_rgba: np.ndarray, args: argparse.Namespace, stage: Stage
     loaded = load_method(args.method)
     stage("analysing the cutout")
     try:
-        session = open_session(cutout_rgba[..., 3], loaded.method, args.horizon, args.fov)
+        session = open_session(cutout_rgba[..., 3], loaded.method, args.horizon, args.fov, split=not args.one_object)
     except EmptyAlphaError as exc:
         raise NoShadow(f"{args.cutout}: {exc}") from None
     session.set_ao_edits(edits)
@@ -412,6 +412,12 @@ def _add_shadow_options(p: argparse.ArgumentParser) -> None:
         type=_number_in(1.0, 170.0),
         metavar="DEG",
         help="with --horizon: the image's vertical field of view in degrees (default 45)",
+    )
+    p.add_argument(
+        "--one-object",
+        action="store_true",
+        help="cast one shadow from the whole alpha, framed as one object (default: each separate object on the "
+        "layer casts its own; docs/engine.md, 'Several objects on one layer')",
     )
 
 

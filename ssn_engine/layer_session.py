@@ -39,10 +39,14 @@ from .session import ShadowSession
 
 
 def open_session(
-    alpha: np.ndarray, method: ShadowMethod, horizon: float | None = None, fov: float | None = None
+    alpha: np.ndarray,
+    method: ShadowMethod,
+    horizon: float | None = None,
+    fov: float | None = None,
+    split: bool = True,
 ) -> ShadowSession | LayerSession:
-    """The shadow session for a layer's alpha: a :class:`ShadowSession` where it holds one object, else a
-    :class:`LayerSession` of its objects.
+    """The shadow session for a layer's alpha: a :class:`ShadowSession` where it holds one object (or where
+    ``split`` is False: the whole alpha as one object), else a :class:`LayerSession` of its objects.
 
     Parameters
     ----------
@@ -52,13 +56,15 @@ def open_session(
         The shadow method.
     horizon, fov : float, optional
         The camera: the horizon as a canvas row and the canvas's vertical field of view in degrees.
+    split : bool
+        Whether to split the alpha into objects (:func:`ssn_engine.objects.split_objects`).
 
     Returns
     -------
     ShadowSession or LayerSession
     """
-    layer = split_objects(alpha)
-    if len(layer.objects) == 1:
+    layer = split_objects(alpha) if split else None
+    if layer is None or len(layer.objects) == 1:
         return ShadowSession(alpha, method, horizon, fov)
     return LayerSession([layer.alpha_of(i, alpha) for i in range(len(layer.objects))], alpha, method, horizon, fov)
 

@@ -49,3 +49,15 @@ def test_each_object_on_a_layer_casts_its_own_shadow(tmp_path, capsys, scene, bl
         region = (alone > 2 / 255) & (alpha < 3)
         assert peak_alpha(alone, region) > 0.1
         assert peak_alpha(together, region) == pytest.approx(peak_alpha(alone, region), rel=0.1), f"object {i}"
+
+
+def test_one_object_frames_the_whole_alpha_as_one(tmp_path, capsys):
+    """--one-object keeps the single frame of the whole alpha: the far pawn then casts the faint shadow a shared
+    frame gives it, not its own."""
+    alphas = pawn_scene(W, H, SCENES["two"])
+    camera = ["--horizon", "300", "--fov", "45"]
+    layer = np.maximum.reduce(alphas)
+    one, _ = layer_alpha(tmp_path, "one", layer, [*camera, "--one-object"], capsys)
+    alone, _ = layer_alpha(tmp_path, "alone", alphas[1], camera, capsys)
+    region = (alone > 2 / 255) & (alphas[1] < 3)
+    assert peak_alpha(one, region) < 0.8 * peak_alpha(alone, region)
