@@ -175,9 +175,9 @@ def load_cutout(args: argparse.Namespace) -> np.ndarray:
 
 
 def _make_shadow(cutout_rgba: np.ndarray, args: argparse.Namespace, stage: Stages):
-    """The canvas shadow of a cutout; returns (CanvasShadow, loaded method, the camera the model read from the
-    outline or None: the session's camera_read; one session per object on the layer). The light map and AO edits are read first, so a bad one costs no
-    inference."""
+    """The canvas shadow of a cutout (one session per object on the layer unless --one-object); returns
+    (CanvasShadow, loaded method, the camera the model read from the outline or None: the session's camera_read).
+    The light map and AO edits are read first, so a bad one costs no inference."""
     from .framing import EmptyAlphaError
     from .layer_session import open_session
     from .methods import load_method

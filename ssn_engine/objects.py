@@ -23,11 +23,12 @@ from __future__ import annotations
 
 import math
 from dataclasses import dataclass
+from typing import cast
 
 import numpy as np
 from scipy import ndimage
 
-from .framing import ALPHA_THRESHOLD, MIN_CUTOUT, alpha_bbox
+from .framing import MIN_CUTOUT, alpha_bbox, alpha_threshold
 
 GRID = 512  # cells along the layer's longer side on which the parts are found
 MIN_AREA_SHARE = 0.04  # of the largest part's area: at or above, a part may be an object of its own
@@ -98,11 +99,9 @@ def _cells(alpha: np.ndarray, bbox: tuple[int, int, int, int]) -> tuple[np.ndarr
     x0, y0, x1, y1 = bbox
     cell = max(1, math.ceil(max(x1 - x0, y1 - y0) / GRID))
     rows, cols = math.ceil((y1 - y0) / cell), math.ceil((x1 - x0) / cell)
-    threshold = {np.dtype(np.uint8): ALPHA_THRESHOLD * 255, np.dtype(np.uint16): ALPHA_THRESHOLD * 65535}
     visible = np.zeros((rows * cell, cols * cell), bool)
-    crop = alpha[y0:y1, x0:x1]
-    visible[: y1 - y0, : x1 - x0] = np.nan_to_num(crop) > threshold.get(crop.dtype, ALPHA_THRESHOLD)
-    return visible.reshape(rows, cell, cols, cell).any(axis=(1, 3)), cell
+    visible[: y1 - y0, : x1 - x0] = alpha[y0:y1, x0:x1] > alpha_threshold(alpha.dtype)
+    return np.asarray(visible.reshape(rows, cell, cols, cell).any(axis=(1, 3))), cell
 
 
 def _inside(group: _Group, box: tuple[slice, slice]) -> bool:
@@ -127,7 +126,7 @@ def split_objects(alpha: np.ndarray) -> LayerObjects:
     """
     bbox = alpha_bbox(alpha)
     visible, cell = _cells(alpha, bbox)
-    labels, count = ndimage.label(visible, structure=np.ones((3, 3), bool))
+    labels, count = cast(tuple[np.ndarray, int], ndimage.label(visible, structure=np.ones((3, 3), bool)))
     boxes = ndimage.find_objects(labels)
     areas = np.bincount(labels.ravel(), minlength=count + 1)[1:]
     heights = np.array([b[0].stop - b[0].start for b in boxes])
@@ -142,7 +141,7 @@ def split_objects(alpha: np.ndarray) -> LayerObjects:
             home = groups[-1]
         home.take(i + 1, box, int(areas[i]))
     speck = max(MIN_CUTOUT / cell, SPECK_SHARE * heights[largest])
-    _attach(labels, boxes, areas, groups, list(np.flatnonzero(~large)), speck)
+    _attach(labels, boxes, areas, groups, [int(i) for i in np.flatnonzero(~large)], speck)
     groups.sort(key=lambda g: -g.area)
     while len(groups) > MAX_OBJECTS:
         extra = groups.pop()
@@ -177,14 +176,8 @@ def _attach(
     """Give each part (an index into ``boxes``, largest first) to the group nearest it when within reach (or
     ``anywhere``); a part out of reach becomes a group of its own, which later parts may join, unless it is a speck
     (its longer side under ``speck`` cells: left out)."""
-    nearest = None
+    distance, nearest = _nearest_groups(labels, groups, len(boxes))
     for i in sorted(parts, key=lambda i: -areas[i]):
-        if nearest is None:  # (again after a new group)
-            owner = np.full(len(boxes) + 1, -1, np.intp)
-            for index, group in enumerate(groups):
-                owner[group.labels] = index
-            distance, (rows, cols) = ndimage.distance_transform_edt(owner[labels] < 0, return_indices=True)
-            nearest = owner[labels[rows, cols]]
         box = boxes[i]
         where = labels[box] == i + 1
         d = distance[box][where]
@@ -194,7 +187,17 @@ def _attach(
             group.take(i + 1, box, int(areas[i]))
         elif max(box[0].stop - box[0].start, box[1].stop - box[1].start) >= speck:
             groups.append(_Group([i + 1], box[0].start, box[1].start, box[0].stop, box[1].stop, int(areas[i])))
-            nearest = None
+            distance, nearest = _nearest_groups(labels, groups, len(boxes))
+
+
+def _nearest_groups(labels: np.ndarray, groups: list[_Group], count: int) -> tuple[np.ndarray, np.ndarray]:
+    """For every grid cell, the distance (cells) to the nearest cell of a group and that group's index."""
+    owner = np.full(count + 1, -1, np.intp)
+    for index, group in enumerate(groups):
+        owner[group.labels] = index
+    found = ndimage.distance_transform_edt(owner[labels] < 0, return_indices=True)
+    distance, (rows, cols) = cast(tuple[np.ndarray, np.ndarray], found)
+    return distance, owner[labels[rows, cols]]
 
 
 __all__ = ["LayerObject", "LayerObjects", "split_objects"]
