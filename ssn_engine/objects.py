@@ -15,7 +15,8 @@ rule (docs/engine.md, "Several objects on one layer"):
 3. Every other part joins the object nearest to it (pixel distance) when it lies within ``REACH_SHARE`` of that
    object's height: a person's detached hand stays with the person. A part farther away is an object of its own
    (a ball across the floor), unless it is a speck (its longer side under ``SPECK_SHARE`` of the largest part's
-   height, or under the framing's ``MIN_CUTOUT`` pixels), whose shadow would not show: it is left out.
+   height, or under the framing's ``MIN_CUTOUT`` pixels), whose shadow would not show: it is left out. A speck is
+   never an object; an alpha of specks only is one object, framed whole as a single session frames it.
 4. At most ``MAX_OBJECTS`` objects: the smallest beyond them join their nearest object.
 """
 
@@ -131,7 +132,13 @@ def split_objects(alpha: np.ndarray) -> LayerObjects:
     areas = np.bincount(labels.ravel(), minlength=count + 1)[1:]
     heights = np.array([b[0].stop - b[0].start for b in boxes])
     largest = int(np.argmax(areas))
+    sides = np.array([max(b[0].stop - b[0].start, b[1].stop - b[1].start) for b in boxes])
+    # A cell of c pixels may hold one visible pixel: n cells span at least (n - 2) c + 2 pixels.
+    speck = max(MIN_CUTOUT if cell == 1 else math.ceil(MIN_CUTOUT / cell) + 2, SPECK_SHARE * heights[largest])
     large = (areas >= MIN_AREA_SHARE * areas[largest]) & (heights >= MIN_HEIGHT_SHARE * heights[largest])
+    large &= sides >= speck
+    if not large.any():  # specks only (a noisy alpha): one object, as a single session frames it
+        return LayerObjects((LayerObject(bbox, int(areas.sum())),), np.where(labels > 0, 0, -1), cell, bbox[:2])
     groups: list[_Group] = []
     for i in sorted(np.flatnonzero(large), key=lambda i: -areas[i]):
         box = boxes[i]
@@ -140,7 +147,6 @@ def split_objects(alpha: np.ndarray) -> LayerObjects:
             groups.append(_Group([], box[0].start, box[1].start, box[0].stop, box[1].stop, 0))
             home = groups[-1]
         home.take(i + 1, box, int(areas[i]))
-    speck = max(MIN_CUTOUT / cell, SPECK_SHARE * heights[largest])
     _attach(labels, boxes, areas, groups, [int(i) for i in np.flatnonzero(~large)], speck)
     groups.sort(key=lambda g: -g.area)
     while len(groups) > MAX_OBJECTS:
@@ -185,7 +191,7 @@ def _attach(
         group = groups[int(nearest[box][where][k])]
         if anywhere or d[k] <= REACH_SHARE * group.height + 1:
             group.take(i + 1, box, int(areas[i]))
-        elif max(box[0].stop - box[0].start, box[1].stop - box[1].start) >= speck:
+        elif max(box[0].stop - box[0].start, box[1].stop - box[1].start) >= speck:  # else left out
             groups.append(_Group([i + 1], box[0].start, box[1].start, box[0].stop, box[1].stop, int(areas[i])))
             distance, nearest = _nearest_groups(labels, groups, len(boxes))
 

@@ -92,3 +92,10 @@ def test_alpha_depths_and_a_large_canvas_are_split_alike(dtype):
 def test_an_empty_alpha_is_refused():
     with pytest.raises(EmptyAlphaError):
         split_objects(np.zeros((50, 50), np.uint8))
+
+
+def test_specks_only_are_one_object():
+    rng = np.random.default_rng(0)
+    noise = ((rng.random((H, W)) > 0.995) * 255).astype(np.uint8)  # scattered single pixels
+    objects = split_objects(noise)
+    assert len(objects.objects) == 1 and np.array_equal(objects.alpha_of(0, noise), noise)
