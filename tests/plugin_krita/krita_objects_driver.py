@@ -9,6 +9,7 @@ import json
 import os
 import traceback
 from pathlib import Path
+from typing import Any
 
 from krita import Krita
 from krita_driver import activate, pixel, wait_for
@@ -25,7 +26,7 @@ def paint(node, boxes):
 
 
 def main(*args):
-    out = {"layers": {}}
+    out: dict[str, Any] = {"layers": {}}
     try:
         from ssn_shadow.adapters.host import KritaHost
         from ssn_shadow.controller import ShadowController
