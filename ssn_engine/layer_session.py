@@ -34,7 +34,7 @@ from .hemisphere import NETWORK_SHAPE, render_light_map
 from .light_map import LightMap
 from .methods import ShadowMethod
 from .methods.onnx_ssn import small_lights_share
-from .objects import split_objects
+from .objects import LayerObjects, split_objects
 from .session import ShadowSession
 
 
@@ -66,7 +66,7 @@ def open_session(
     layer = split_objects(alpha) if split else None
     if layer is None or len(layer.objects) == 1:
         return ShadowSession(alpha, method, horizon, fov)
-    return LayerSession([layer.alpha_of(i, alpha) for i in range(len(layer.objects))], alpha, method, horizon, fov)
+    return LayerSession(layer, alpha, method, horizon, fov)
 
 
 def combine_shadows(shadows: list[CanvasShadow], hard_share: float) -> CanvasShadow:
@@ -89,13 +89,14 @@ def combine_shadows(shadows: list[CanvasShadow], hard_share: float) -> CanvasSha
 
 
 class LayerSession:
-    """Shadow rendering for a layer of several objects: one :class:`ShadowSession` per object (``parts``, largest
-    first), combined (module docstring). It answers the calls of a :class:`ShadowSession`; ``framing`` and ``mask``
-    are the whole layer's, as a single session would frame it."""
+    """Shadow rendering for a layer of several objects (``objects``, split from the canvas ``alpha``): one
+    :class:`ShadowSession` per object (``parts``, largest first), combined (module docstring). It answers the calls
+    of a :class:`ShadowSession`; ``framing`` and ``mask`` are the whole layer's, as a single session would frame
+    it."""
 
     def __init__(
         self,
-        alphas: list[np.ndarray],
+        objects: LayerObjects,
         alpha: np.ndarray,
         method: ShadowMethod,
         horizon: float | None = None,
@@ -103,11 +104,15 @@ class LayerSession:
     ) -> None:
         self.method = method
         self.mask, self.framing = frame_alpha(alpha, method.resolution)
-        main = ShadowSession(alphas[0], method, horizon, fov)
+        main = ShadowSession(objects.alpha_of(0, alpha), method, horizon, fov)
         read = main.camera_read
         if read is not None:  # the largest object's reading, the camera of them all
             horizon, fov = read["horizon"], read["fov"]
-        self.parts = [main, *(ShadowSession(a, method, horizon, fov) for a in alphas[1:])]
+        # one object's canvas-sized alpha at a time
+        others = (
+            ShadowSession(objects.alpha_of(i, alpha), method, horizon, fov) for i in range(1, len(objects.objects))
+        )
+        self.parts = [main, *others]
         self._read = read
         self._layer_camera = None if read is None else self.framing.camera_input(read["horizon"], read["fov"])
         self.edits: list[dict[str, Any]] = []
