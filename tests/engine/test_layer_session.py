@@ -120,3 +120,21 @@ def test_a_preview_of_a_smaller_canvas(method):
     layer = np.maximum.reduce(alphas).astype(np.float32) / 255
     layer = layer[: H // 4 * 4, : W // 4 * 4].reshape(H // 4, 4, W // 4, 4).mean(axis=(1, 3))
     assert np.abs(cover - layer).mean() < 0.01
+
+
+def test_a_method_that_reads_no_camera(geometric):
+    """The geometric card reads no camera: each object assumes the default one in its own frame."""
+    alphas = pawn_scene(W, H, TWO)
+    session = open_session(np.maximum.reduce(alphas), geometric)
+    assert isinstance(session, LayerSession) and session.camera_read is None
+    light = preset("low-sun-left")
+    layer = session.render(light).full_canvas(W, H)
+    for alpha in alphas:
+        alone = ShadowSession(alpha, geometric).render(light).full_canvas(W, H)
+        region = (alone > 2 / 255) & (alpha < 3)
+        assert peak_alpha(layer, region) == pytest.approx(peak_alpha(alone, region), rel=0.1)
+
+
+def test_a_field_of_view_without_a_horizon_is_refused(method):
+    with pytest.raises(ValueError, match="horizon"):
+        open_session(np.maximum.reduce(pawn_scene(W, H, TWO)), method, None, 40.0)
