@@ -62,11 +62,10 @@ class LayerObjects:
 
     def alpha_of(self, index: int, alpha: np.ndarray) -> np.ndarray:
         """The canvas alpha of object ``index`` alone: ``alpha`` where its cells lie, 0 elsewhere."""
-        x0, y0, x1, y1 = self.objects[index].bbox
-        ox, oy = self.origin
-        own = self.cells == index
-        rows = np.repeat(own, self.cell, axis=0)[y0 - oy : y1 - oy]
-        cells = np.repeat(rows, self.cell, axis=1)[:, x0 - ox : x1 - ox]
+        x0, y0, x1, y1 = self.objects[index].bbox  # its top-left corner is a cell's
+        ox, oy, c = *self.origin, self.cell
+        own = self.cells[(y0 - oy) // c : -(-(y1 - oy) // c), (x0 - ox) // c : -(-(x1 - ox) // c)] == index
+        cells = np.repeat(np.repeat(own, c, axis=0), c, axis=1)[: y1 - y0, : x1 - x0]
         out = np.zeros_like(alpha)
         out[y0:y1, x0:x1] = np.where(cells, alpha[y0:y1, x0:x1], 0)
         return out
