@@ -6,7 +6,7 @@ import numpy as np
 import pytest
 from engine_helpers import disc, pawn_scene
 
-from ssn_engine.framing import EmptyAlphaError
+from ssn_engine.framing import EmptyAlphaError, alpha_bbox
 from ssn_engine.objects import MAX_OBJECTS, split_objects
 
 W, H = 1000, 600
@@ -99,3 +99,26 @@ def test_specks_only_are_one_object():
     noise = ((rng.random((H, W)) > 0.995) * 255).astype(np.uint8)  # scattered single pixels
     objects = split_objects(noise)
     assert len(objects.objects) == 1 and np.array_equal(objects.alpha_of(0, noise), noise)
+
+
+@pytest.mark.parametrize("seed", range(12))
+def test_random_blobs_split_into_objects_that_each_cast(seed):
+    """Whatever the alpha, every object of a split casts (its alpha frames: no EmptyAlphaError) and objects do not
+    share pixels."""
+    rng = np.random.default_rng(seed)
+    h, w = (int(v) for v in rng.integers(40, 1400, 2))
+    layer = np.zeros((h, w), np.uint8)
+    for _ in range(int(rng.integers(1, 30))):  # rectangles and discs of all sizes, some tiny
+        cy, cx, r = rng.random() * h, rng.random() * w, rng.random() ** 3 * min(h, w) / 3 + 0.5
+        layer = np.maximum(layer, disc(w, h, cx, cy, r))
+    if not layer.any():
+        layer[h // 2, w // 2] = 255
+    try:
+        objects = split_objects(layer)
+    except EmptyAlphaError:  # a layer too small to cast at all
+        return
+    alphas = [objects.alpha_of(i, layer) for i in range(len(objects.objects))]
+    assert np.all(np.sum([a > 0 for a in alphas], axis=0) <= 1)
+    if len(alphas) > 1:
+        for alpha in alphas:
+            alpha_bbox(alpha)
