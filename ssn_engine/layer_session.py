@@ -81,11 +81,16 @@ def combine_shadows(shadows: list[CanvasShadow], hard_share: float) -> CanvasSha
     lit = np.ones_like(darkest)
     for s in shown:
         rows, cols = slice(s.y - y0, s.y - y0 + s.shape[0]), slice(s.x - x0, s.x - x0 + s.shape[1])
-        values = np.clip(s.values, 0.0, 1.0)
+        values = s.rows(slice(0, s.shape[0]))  # a new array, clipped to [0, 1]
         np.maximum(darkest[rows, cols], values, out=darkest[rows, cols])
-        lit[rows, cols] *= 1.0 - values
-    share = np.float32(hard_share)
-    return CanvasShadow(share * darkest + (1.0 - share) * (1.0 - lit), x0, y0)
+        np.subtract(1.0, values, out=values)
+        lit[rows, cols] *= values
+    # in place, canvas-sized: hard_share * darkest + (1 - hard_share) * (1 - lit)
+    darkest *= np.float32(hard_share)
+    np.subtract(1.0, lit, out=lit)
+    lit *= np.float32(1.0 - hard_share)
+    darkest += lit
+    return CanvasShadow(darkest, x0, y0)
 
 
 class LayerSession:
