@@ -15,10 +15,10 @@ from PIL import Image
 from .compositing import shadow_layer
 from .framing import frame_alpha
 from .hemisphere import render_light_map
+from .layer_session import open_session
 from .host_kit.light_map import GaussianLight, LightMap, preset
 from .methods import GeometricCard, load_method
 from .samples import pawn_cutout
-from .session import ShadowSession
 from .worker import tune_malloc
 
 
@@ -121,10 +121,10 @@ def run_benchmark(repeats: int = 20, method: str = "auto") -> dict[str, np.ndarr
     variant = _alternating(list(range(VARIANTS)))
 
     def end_to_end() -> None:  # a new alpha each time (made here, not kept: 12 MB each)
-        session = ShadowSession(_cropped_top(cutout[..., 3], top + 6 * variant()), m)
+        session = open_session(_cropped_top(cutout[..., 3], top + 6 * variant()), m)  # as set_cutout: split too
         shadow_layer(session.render(light))
 
-    session = ShadowSession(cutout[..., 3], m)
+    session = open_session(cutout[..., 3], m)
     e2e_repeats = max(3, repeats // 4)
     results["end to end 4000x3000 (frame+AO+SR+layer)"] = _time(end_to_end, e2e_repeats, warmup=1)
     results["light moved 4000x3000 (SR+to canvas+layer)"] = _time(

@@ -244,13 +244,14 @@ def load_cutout(args: argparse.Namespace) -> np.ndarray:
 
 
 def _make_shadow(cutout_rgba: np.ndarray, args: argparse.Namespace, stage: Stages):
-    """The canvas shadow of a cutout; returns (CanvasShadow, loaded method, the camera the model read from the
-    outline or None: ShadowSession.camera_read). The light map and AO edits are read first, so a bad one costs no
-    inference."""
+    """The canvas shadow of a cutout (one session per object on the layer unless --one-object); returns
+    (CanvasShadow, loaded method, the camera the model read from the outline or None: the session's camera_read).
+    The light map and AO edits are read first, so a bad one costs no inference."""
     from .ao_edit import AOEditError
     from .framing import EmptyAlphaError
+    from .layer_session import open_session
     from .methods import load_method
-    from .session import ShadowSession, no_shadow_reason
+    from .session import no_shadow_reason
 
     lights, edits = _light_map(args), _ao_edits(args)
     stage("loading the model")
@@ -258,7 +259,7 @@ def _make_shadow(cutout_rgba: np.ndarray, args: argparse.Namespace, stage: Stage
         loaded = load_method(args.method)
     stage("analysing the cutout")
     try:
-        session = ShadowSession(cutout_rgba[..., 3], loaded.method, args.horizon, args.fov)
+        session = open_session(cutout_rgba[..., 3], loaded.method, args.horizon, args.fov, split=not args.one_object)
     except EmptyAlphaError as exc:
         raise NoShadow(f"{args.cutout}: {exc}") from None
     try:
@@ -493,6 +494,12 @@ def _add_shadow_options(p: argparse.ArgumentParser) -> None:
         type=_number_in(*FOV_RANGE),
         metavar="DEG",
         help=f"with --horizon: the image's vertical field of view in degrees (default {DEFAULT_FOV:g})",
+    )
+    p.add_argument(
+        "--one-object",
+        action="store_true",
+        help="cast one shadow from the whole alpha, framed as one object (default: each separate object on the "
+        "layer casts its own; docs/engine.md, 'Several objects on one layer')",
     )
 
 

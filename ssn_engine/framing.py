@@ -177,7 +177,8 @@ def _as_unit_float(alpha: np.ndarray) -> np.ndarray:
     return np.clip(values, 0.0, 1.0)
 
 
-def _threshold(dtype: np.dtype) -> float:
+def alpha_threshold(dtype: np.dtype) -> float:
+    """``ALPHA_THRESHOLD`` in the units of an alpha of ``dtype``: at or below it a pixel is background."""
     if dtype == np.uint8:
         return ALPHA_THRESHOLD * 255
     if dtype == np.uint16:
@@ -189,7 +190,7 @@ def alpha_bbox(alpha: np.ndarray) -> tuple[int, int, int, int]:
     """Bounding box (x0, y0, x1, y1) of the visible alpha; EmptyAlphaError when there is none."""
     if alpha.ndim != 2 or alpha.size == 0:
         raise ValueError(f"alpha must be a non-empty 2D array, got shape {alpha.shape}")
-    visible = alpha > _threshold(alpha.dtype)
+    visible = alpha > alpha_threshold(alpha.dtype)
     rows = np.flatnonzero(visible.any(axis=1))
     if rows.size == 0:
         raise EmptyAlphaError("the selection or layer alpha is empty (fully transparent): nothing to cast a shadow")

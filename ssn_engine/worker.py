@@ -1,7 +1,8 @@
 """The engine worker behind ``ssn-shadow serve`` (protocol: docs/protocol.md).
 
-It keeps one method (model) loaded and one :class:`ShadowSession` per cutout,
-and answers requests over stdin/stdout or a loopback TCP socket. Every
+It keeps one method (model) loaded and one session per cutout (one :class:`ShadowSession` per object on the
+layer: :func:`ssn_engine.layer_session.open_session`), and answers requests over stdin/stdout or a loopback TCP
+socket. Every
 request header is checked before its buffers are read (known command, sizes
 that add up, at most ``MAX_REQUEST_BYTES`` of buffers, a bounded canvas); a
 refused request gets a ``BadRequest`` reply and the worker goes on serving.
@@ -29,6 +30,7 @@ from .host_kit.camera_rules import DEFAULT_FOV, check_fov
 from .compositing import preview_image, shadow_layer
 from .framing import EmptyAlphaError, Framing
 from .host_kit.light_map import PRESETS, LightMap, LightMapError, preset
+from .layer_session import LayerSession, open_session
 from .methods import LoadedMethod, ModelError
 from .host_kit.protocol import (
     PROTOCOL_VERSION,
@@ -41,6 +43,8 @@ from .host_kit.protocol import (
     write_message,
 )
 from .session import ShadowSession, no_shadow_reason
+
+Session = ShadowSession | LayerSession
 
 MAX_SESSIONS = 8
 MAX_PREVIEW_SIDE = 4096  # pixels, either side of a preview's background
@@ -103,7 +107,7 @@ def _camera(camera: Any) -> tuple[float, float]:
     return float(camera["horizon"]), float(fov)
 
 
-def _cutout_reply(key: str, session: ShadowSession) -> dict:
+def _cutout_reply(key: str, session: Session) -> dict:
     """``set_cutout``'s and ``set_camera``'s reply: the cutout's id, its bounding box and, without a camera of
     the image's own, the camera the model read from its outline."""
     reply: dict[str, Any] = {"cutout": key, "bbox": list(session.framing.bbox)}
@@ -117,7 +121,7 @@ class Worker:
 
     def __init__(self, loaded: LoadedMethod) -> None:
         self.loaded = loaded
-        self.sessions: collections.OrderedDict[str, ShadowSession] = collections.OrderedDict()
+        self.sessions: collections.OrderedDict[str, Session] = collections.OrderedDict()
         self._ids = itertools.count(1)
 
     # -- helpers -------------------------------------------------------------
@@ -129,7 +133,7 @@ class Worker:
             raise RequestError("BadRequest", f"cutout: expected an id that set_cutout answered (a string), got {key!r}")
         return key
 
-    def _session(self, header: dict) -> ShadowSession:
+    def _session(self, header: dict) -> Session:
         key = self._cutout_key(header)
         if key is None or key not in self.sessions:
             raise RequestError("UnknownCutout", f"unknown cutout {key!r}: send set_cutout first")
@@ -164,7 +168,7 @@ class Worker:
         alpha = to_array(buffers["alpha"])  # 2D and bounded: check_request
         _check_alpha(alpha)
         horizon, fov = _camera(header["camera"]) if header.get("camera") is not None else (None, None)
-        session = ShadowSession(alpha, self.loaded.method, horizon, fov)
+        session = open_session(alpha, self.loaded.method, horizon, fov)
         key = f"c{next(self._ids)}"
         self.sessions[key] = session
         while len(self.sessions) > MAX_SESSIONS:
@@ -262,7 +266,7 @@ class Worker:
         }
 
     @staticmethod
-    def _preview_framing(s: ShadowSession, width: int, height: int) -> Framing:
+    def _preview_framing(s: Session, width: int, height: int) -> Framing:
         """The cutout's framing for a preview background of ``width`` x ``height``: the cutout's canvas or the
         canvas scaled down (its aspect kept within a pixel, as a host's thumbnail rounds it)."""
         cw, ch = s.framing.canvas_width, s.framing.canvas_height

@@ -75,3 +75,27 @@ def engine_env(**extra: str) -> dict[str, str]:
     env["PYTHONPATH"] = str(REPO) + (os.pathsep + env["PYTHONPATH"] if env.get("PYTHONPATH") else "")
     env.update(extra)
     return env
+
+
+def pawn_scene(width: int, height: int, pawns: list[tuple[int, int, int]]) -> list[np.ndarray]:
+    """The sample pawn's alpha (uint8) at several places on one ``width`` x ``height`` canvas, one alpha per pawn:
+    ``pawns`` lists (pawn height, base row, centre column)."""
+    from ssn_engine.samples import pawn_cutout
+
+    out = []
+    for size, base, centre in pawns:
+        alpha = pawn_cutout((width, height), size, base)[..., 3]
+        out.append(np.roll(alpha, centre - width // 2, axis=1))
+    return out
+
+
+def disc(width: int, height: int, cx: float, cy: float, r: float) -> np.ndarray:
+    """A filled disc (uint8 alpha 255) on a ``width`` x ``height`` canvas."""
+    yy, xx = np.mgrid[0:height, 0:width]
+    return (((xx + 0.5 - cx) ** 2 + (yy + 0.5 - cy) ** 2 < r * r) * 255).astype(np.uint8)
+
+
+def peak_alpha(shadow: np.ndarray, region: np.ndarray) -> float:
+    """The peak of a shadow on a region of the canvas, robust to a few saturated contact pixels: its 95th
+    percentile there."""
+    return float(np.percentile(shadow[region], 95))

@@ -58,12 +58,12 @@ def build(case):
         image.insert_layer(parent, None, 0)
     image.insert_layer(layer, parent, 0)
     layer.set_offsets(c["x"], c["y"])
-    # the cutout: an opaque red-ish block (rect in layer coordinates), transparent elsewhere
+    # the cutout: opaque red-ish blocks (rect, or rects: several objects, in layer coordinates), transparent elsewhere
     px = bytearray(c["w"] * c["h"] * 4)
-    x0, y0, x1, y1 = c["rect"]
-    for yy in range(y0, y1):
-        row = yy * c["w"] * 4
-        px[row + x0 * 4 : row + x1 * 4] = bytes([200, 60, 40, c.get("alpha_value", 255)]) * (x1 - x0)
+    for x0, y0, x1, y1 in c.get("rects", [c["rect"]]):
+        for yy in range(y0, y1):
+            row = yy * c["w"] * 4
+            px[row + x0 * 4 : row + x1 * 4] = bytes([200, 60, 40, 255]) * (x1 - x0)
     if not has_alpha:
         layer.fill(Gimp.FillType.WHITE)
     layer.get_buffer().set(Gegl.Rectangle.new(0, 0, c["w"], c["h"]), "R'G'B'A u8", bytes(px))
