@@ -36,11 +36,11 @@ def ground_region(mask: np.ndarray, horizon: float) -> np.ndarray:
 
 
 def masked_gaussian(image: np.ndarray, region: np.ndarray, sigma: float) -> np.ndarray:
-    """Gaussian blur of ``image`` over ``region`` only (normalised convolution); 0 outside ``region``."""
-    w = region.astype(np.float64)
-    num = ndimage.gaussian_filter(np.where(region, image, 0.0).astype(np.float64), sigma, mode="nearest")
-    den = ndimage.gaussian_filter(w, sigma, mode="nearest")
-    return np.where(region & (den > 1e-6), num / np.maximum(den, 1e-6), 0.0)
+    """Gaussian blur of ``image`` over ``region`` only (normalised convolution); 0 outside ``region``.
+    Float32 (the filters are the metrics' main cost on a canvas)."""
+    num = ndimage.gaussian_filter(np.where(region, image, 0.0).astype(np.float32), sigma, mode="nearest")
+    den = ndimage.gaussian_filter(region.astype(np.float32), sigma, mode="nearest")
+    return np.where(region & (den > 1e-6), num / np.maximum(den, 1e-6), 0.0).astype(np.float32)
 
 
 def region_zncc(p: np.ndarray, g: np.ndarray, region: np.ndarray) -> float:
@@ -70,8 +70,8 @@ def bandpass_zncc(p: np.ndarray, g: np.ndarray, region: np.ndarray) -> float:
 def gradient_energy(image: np.ndarray, region: np.ndarray, sigma: float = GRADIENT_SIGMA) -> float:
     """sum |grad image|^2 over pixel pairs inside ``region`` after a Gaussian of ``sigma`` over ``region``."""
     smooth = masked_gaussian(image, region, sigma)
-    dy = np.diff(smooth, axis=0)[region[1:] & region[:-1]]
-    dx = np.diff(smooth, axis=1)[region[:, 1:] & region[:, :-1]]
+    dy = np.diff(smooth, axis=0)[region[1:] & region[:-1]].astype(np.float64)
+    dx = np.diff(smooth, axis=1)[region[:, 1:] & region[:, :-1]].astype(np.float64)
     return float((dy * dy).sum() + (dx * dx).sum())
 
 

@@ -181,7 +181,8 @@ def run_scoring(
             if (i + 1) % 12 == 0 or i + 1 == len(todo):
                 log(f"[{i + 1}/{len(todo)}] predictions")
     rows = []
-    for group in groups:
+    for i, group in enumerate(groups):
+        log(f"[{i + 1}/{len(groups)}] scoring {group.name}")
         mask = cases.read_mask(data, group)
         for angle in cases.ANGLES:
             truth = cases.read_truth(data, group, angle)
