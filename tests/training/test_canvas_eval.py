@@ -261,6 +261,7 @@ def test_scoring_runs_the_given_python_and_scores_each_mode(tmp_path):
     (repo / "ssn_engine" / "__main__.py").write_text(FAKE_ENGINE)
     data = tmp_path / "data"
     shutil.copytree(FIXTURE, data)
+    cases.write_groups(data, cases.read_groups(data)[:1])  # one group: six engine runs
     result = score.run_scoring(data, tmp_path / "out", repo, sys.executable, log=lambda _: None)
     summary = result["summary"]
     assert summary["camera"]["angle"]["all"]["zncc"] > 0.999
