@@ -338,3 +338,14 @@ def test_mitsuba_casts_the_same_shadow_as_the_canvas_renderer():
     cap = random_cap(30.0, -30.0, 12.0, 500, np.random.default_rng(0))
     off = np.degrees(np.arccos(np.clip(cap @ direction(np.radians(30.0), np.radians(-30.0)), -1, 1)))
     assert off.max() <= 6.0 and abs((off <= 3.0).mean() - 0.25) < 0.06
+
+
+def test_a_subset_of_groups_keeps_the_pitches_even_and_the_shapes_distinct():
+    items = [_item(f"s{i}", "object" if i < 4 else "animal", f"c{i}") for i in range(6)]
+    groups = cases.make_groups(items, 2, 64, 48)
+    picked = score.spread(groups, 6)
+    assert sorted(g.pitch for g in picked) == [0.0, 0.0, 15.0, 15.0, 30.0, 30.0]
+    assert len({g.shape for g in picked}) == 6
+    assert score.spread(groups, None) == groups == score.spread(groups, 99)
+    with pytest.raises(ValueError, match="at least 1"):
+        score.spread(groups, 0)

@@ -29,7 +29,7 @@ def _render(args: argparse.Namespace) -> int:
 def _score(args: argparse.Namespace) -> int:
     from .score import run_scoring
 
-    run_scoring(args.data, args.out, args.repo, args.python, args.modes, args.engine_args, args.jobs)
+    run_scoring(args.data, args.out, args.repo, args.python, args.modes, args.engine_args, args.jobs, args.max_groups)
     return 0
 
 
@@ -72,6 +72,7 @@ def build_parser() -> argparse.ArgumentParser:
     s.add_argument("--modes", nargs="+", choices=["camera", "blind"], default=["camera", "blind"])
     s.add_argument("--engine-args", default="", help="extra 'ssn-shadow render' options, e.g. '--method geometric'")
     s.add_argument("--jobs", type=int, default=1, help="CLI runs at once (default %(default)s)")
+    s.add_argument("--max-groups", type=int, help="score only this many groups, spread over the set (quicker)")
     s.set_defaults(func=_score)
 
     t = sub.add_parser("sheet", help="picture sheet: truth vs prediction under the three sizes")

@@ -146,6 +146,33 @@ def _revision(repo: Path) -> str:
     return done.stdout.strip() or "unknown"
 
 
+def spread(groups: list[cases.Group], count: int | None) -> list[cases.Group]:
+    """``count`` of ``groups`` (all of them when None or not fewer), picked one at a time to even out the
+    pitches first, then to use distinct shapes, then to keep the kinds in the set's proportions."""
+    if count is None or count >= len(groups):
+        return groups
+    if count < 1:
+        raise ValueError(f"max_groups must be at least 1, got {count}")
+    kinds = {g.kind: sum(h.kind == g.kind for h in groups) for g in groups}
+    chosen: list[cases.Group] = []
+
+    def cost(k: int) -> tuple[int, int, float, int]:
+        g = groups[k]
+        return (
+            sum(c.pitch == g.pitch for c in chosen),
+            sum(c.shape == g.shape for c in chosen),
+            sum(c.kind == g.kind for c in chosen) / kinds[g.kind],
+            k,
+        )
+
+    left = list(range(len(groups)))
+    for _ in range(count):
+        best = min(left, key=cost)
+        left.remove(best)
+        chosen.append(groups[best])
+    return [g for g in groups if g in chosen]
+
+
 def run_scoring(
     data: Path,
     out: Path,
@@ -154,9 +181,13 @@ def run_scoring(
     modes: list[str] | tuple[str, ...] = MODES,
     engine_args: str = "",
     jobs: int = 1,
+    max_groups: int | None = None,
     log=print,
 ) -> dict:
     """Make the missing predictions, score every case, write ``OUT/scores.json`` and ``OUT/table.md``.
+
+    ``max_groups`` scores only that many groups, spread evenly over the set (quicker, every kind and pitch
+    still present when it is at least 6); None scores them all.
 
     Returns
     -------
@@ -164,7 +195,7 @@ def run_scoring(
         ``settings``, ``cases`` (one row per case and mode) and ``summary`` (per mode, by angle, kind, pitch).
     """
     data, out, repo = Path(data), Path(out), Path(repo)
-    groups = cases.read_groups(data)
+    groups = spread(cases.read_groups(data), max_groups)
     todo = [(g, a, m) for m in modes for g in groups for a in cases.ANGLES]
     seconds: dict[tuple[str, float, str], float] = {}
 
@@ -210,6 +241,7 @@ def run_scoring(
             "revision": _revision(repo),
             "python": python,
             "engine_args": engine_args,
+            "groups": len(groups),
         },
         "cases": rows,
         "summary": summary,
@@ -230,5 +262,6 @@ __all__ = [
     "read_layer",
     "run_cli",
     "run_scoring",
+    "spread",
     "summarise",
 ]
