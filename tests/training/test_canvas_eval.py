@@ -349,3 +349,12 @@ def test_a_subset_of_groups_keeps_the_pitches_even_and_the_shapes_distinct():
     assert score.spread(groups, None) == groups == score.spread(groups, 99)
     with pytest.raises(ValueError, match="at least 1"):
         score.spread(groups, 0)
+
+
+def test_scoring_an_unfinished_set_names_the_missing_truths(tmp_path):
+    data = tmp_path / "data"
+    shutil.copytree(FIXTURE, data)
+    group = cases.read_groups(data)[1]
+    cases.truth_path(data, group, 12.0).unlink()
+    with pytest.raises(FileNotFoundError, match="1 truths are missing.*render"):
+        score.run_scoring(data, tmp_path / "out", ROOT, sys.executable, log=lambda _: None)

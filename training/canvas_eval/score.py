@@ -196,6 +196,12 @@ def run_scoring(
     """
     data, out, repo = Path(data), Path(out), Path(repo)
     groups = spread(cases.read_groups(data), max_groups)
+    missing = [p for g in groups for a in cases.ANGLES if not (p := cases.truth_path(data, g, a)).is_file()]
+    if missing:
+        raise FileNotFoundError(
+            f"{len(missing)} truths are missing, e.g. {missing[0]}: finish the set with "
+            "'python -m training.canvas_eval render' first"
+        )
     todo = [(g, a, m) for m in modes for g in groups for a in cases.ANGLES]
     seconds: dict[tuple[str, float, str], float] = {}
 
