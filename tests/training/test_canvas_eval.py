@@ -269,6 +269,7 @@ def test_scoring_runs_the_given_python_and_scores_each_mode(tmp_path):
     assert summary["blind"]["angle"]["all"]["dark_ratio"] == pytest.approx(0.5, abs=0.01)
     assert set(summary["camera"]["angle"]) == {"all", "0.53", "3.0", "12.0"}
     assert len(result["cases"]) == 2 * 3 * len(cases.read_groups(data))
+    assert not list((tmp_path / "out").rglob("*.part.png"))  # every layer renamed into place
     table = (tmp_path / "out" / "table.md").read_text()
     assert "blind (camera inferred)" in table and "| 12.0 deg |" in table
     stamp = score.prediction_path(tmp_path / "out", "camera", cases.read_groups(data)[0], 3.0).stat().st_mtime_ns

@@ -209,9 +209,11 @@ def run_scoring(
         group, angle, mode = task
         layer = prediction_path(out, mode, group, angle)
         if not layer.is_file():
+            part = layer.with_name(layer.stem + ".part.png")  # renamed when complete: an interrupted run resumes
             seconds[(group.name, angle, mode)] = run_cli(
-                cli_command(python, data, group, angle, mode, layer, engine_args), repo, layer
+                cli_command(python, data, group, angle, mode, part, engine_args), repo, part
             )
+            os.replace(part, layer)
 
     with ThreadPoolExecutor(max(1, jobs)) as pool:
         for i, _ in enumerate(pool.map(make, todo)):
