@@ -1,0 +1,99 @@
+"""Render the canvas-scale test set (:mod:`.cases`) to a folder, resuming where a previous run stopped."""
+
+from __future__ import annotations
+
+import time
+from dataclasses import asdict, replace
+from pathlib import Path
+
+import numpy as np
+
+from training.data import meshes, sources
+from training.data.items import stable_hash
+
+from . import cases, disk, render
+
+
+def planned_groups(width: int, height: int, shapes: int | None, lights: int, seed: int) -> list[cases.Group]:
+    """The test set's groups: the picked held-out shapes (the first ``shapes`` of them, None: all)."""
+    items = cases.pick_shapes(sources.manifest_items())
+    return cases.make_groups(items[:shapes], lights, width, height, seed)
+
+
+def _same_plan(a: cases.Group, b: cases.Group) -> bool:
+    skip = {"horizon", "fov"}
+    return {k: v for k, v in asdict(a).items() if k not in skip} == {
+        k: v for k, v in asdict(b).items() if k not in skip
+    }
+
+
+def group_scene(group: cases.Group) -> tuple[np.ndarray, meshes.Mesh, meshes.Topology, render.CanvasCamera]:
+    """A group's yawed vertices, its mesh and topology, and its canvas camera."""
+    item = next((it for it in sources.manifest_items() if it.id == group.shape), None)
+    if item is None:
+        raise ValueError(f"{group.name}: shape {group.shape!r} is not in the meshes' manifest")
+    mesh = sources.build_mesh(item)
+    vertices = np.ascontiguousarray(meshes.yawed(mesh.vertices, group.yaw))
+    return vertices, mesh, meshes.topology(mesh), render.canvas_camera(vertices, group.width, group.height, group.pitch)
+
+
+def truth_directions(group: cases.Group, angle: float) -> np.ndarray:
+    """The disk's directions a group's truth at size ``angle`` is rendered with (camera basis)."""
+    rng = np.random.default_rng([group.seed, stable_hash(group.name), int(round(100 * angle))])
+    return disk.disk_directions(group.elevation, group.azimuth, angle, disk.samples_for(angle), rng)
+
+
+def render_group(root: Path, group: cases.Group, angles: tuple[float, ...], log=print) -> cases.Group:
+    """Render one group's cutout and every missing truth; returns the group with its canvas camera."""
+    vertices, mesh, topo, canvas = group_scene(group)
+    group = replace(group, horizon=canvas.horizon, fov=canvas.fov)
+    if not cases.cutout_path(root, group).is_file():
+        cases.write_cutout(root, group, render.canvas_mask(vertices, mesh.faces, topo, canvas))
+    for angle in angles:
+        if cases.truth_path(root, group, angle).is_file():
+            continue
+        t0 = time.perf_counter()
+        dirs = canvas.camera.to_world(truth_directions(group, angle))
+        s = render.disk_shadow(vertices, mesh.faces, topo, canvas, dirs)
+        cases.write_truth(root, group, angle, s)
+        log(f"  {group.name} {angle:g} deg: {len(dirs)} directions, {time.perf_counter() - t0:.1f} s")
+    return group
+
+
+def render_set(
+    root: Path,
+    width: int = 1024,
+    height: int = 768,
+    shapes: int | None = None,
+    lights: int = 2,
+    seed: int = 0,
+    angles: tuple[float, ...] = cases.ANGLES,
+    log=print,
+) -> list[cases.Group]:
+    """Render (or finish rendering) the test set under ``root``; returns its groups.
+
+    Raises
+    ------
+    ValueError
+        ``root`` holds a test set planned with other settings.
+    """
+    root = Path(root)
+    plan = planned_groups(width, height, shapes, lights, seed)
+    if (root / "cases.json").is_file():
+        done = cases.read_groups(root)
+        if len(done) != len(plan) or not all(_same_plan(a, b) for a, b in zip(done, plan, strict=True)):
+            raise ValueError(f"{root} holds a test set rendered with other settings; choose another folder")
+    groups = list(plan)
+    t_start = time.perf_counter()
+    for i, group in enumerate(plan):
+        log(
+            f"[{i + 1}/{len(plan)}] {group.name} ({group.kind}, pitch {group.pitch:g}, light {group.elevation:g} / "
+            f"{group.azimuth:g} deg)"
+        )
+        groups[i] = render_group(root, group, angles, log)
+        cases.write_groups(root, groups[: i + 1] + plan[i + 1 :])
+    log(f"done: {len(plan)} groups x {len(angles)} sizes in {time.perf_counter() - t_start:.0f} s")
+    return groups
+
+
+__all__ = ["group_scene", "planned_groups", "render_group", "render_set", "truth_directions"]
