@@ -2,8 +2,8 @@
 
 python -m training.canvas_eval render [--out data/canvas_test] [--width 1024 --height 768] [--shapes 12]
 python -m training.canvas_eval score --method cli [--data data/canvas_test] [--repo DIR] [--python EXE]
-                                     --out runs/canvas_eval/NAME
-python -m training.canvas_eval sheet --predictions runs/canvas_eval/NAME [--out docs/img/canvas_eval_sheet.png]
+                                     --out data/canvas_eval/NAME
+python -m training.canvas_eval sheet --predictions data/canvas_eval/NAME [--out docs/img/canvas_eval_sheet.png]
 python -m training.canvas_eval mitsuba [--data data/canvas_test] [--groups 3]
 """
 
