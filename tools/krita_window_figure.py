@@ -62,7 +62,7 @@ def inside(*_args: object) -> None:  # pragma: no cover - runs in Krita (kritaru
     say("waited")
     docker.controller.host.active_document = lambda: doc
     docker.panel.from_guide.click()
-    docker.panel.presets.setCurrentIndex(docker.panel.presets.findText("low-sun-left"))
+    docker.panel.presets.setCurrentIndex(docker.panel.presets.findData("low-sun-left"))
     docker.panel.presets.activated.emit(docker.panel.presets.currentIndex())
     say("generate")
     docker.panel.generate.click()

@@ -121,6 +121,8 @@ class FakeHost:
         self.reads = 0
         self.document = FakeDocument("a.kra")
         self.closed: list[FakeDocument] = []
+        self.shadow: str | None = None  # the shadow layer's id on the "canvas"
+        self.kept_active = 0
 
     def active_document(self):
         return self.document
@@ -158,7 +160,15 @@ class FakeHost:
     def write(self, source, pixels, rect, new_step, blend):
         self.writes.append((rect, len(pixels), new_step))
         self.blends.append(blend)
-        return WriteResult("shadow-node", new_step)
+        if new_step or self.shadow is None:  # a new layer replaces the old one
+            self.shadow = f"shadow-{len(self.writes)}"
+        return WriteResult("shadow-node", new_step, "", self.shadow)
+
+    def shadow_layer_id(self, source):
+        return self.shadow
+
+    def keep_source_active(self, source):
+        self.kept_active += 1
 
     def preview_background(self, source, side):
         """A mid-grey image of the document's size scaled down as Krita's adapter scales it."""
