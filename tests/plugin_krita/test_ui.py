@@ -325,6 +325,9 @@ def test_ao_preview_zooms_on_the_cutout_and_stretches_the_occlusion(qapp):
     left, top, size = preview.view
     assert size < 0.75 and left <= 28 / n and left + size >= 36 / n and top <= 20 / n and top + size >= 44 / n
     assert contrast_table(bytes(ao))[0xE6] < 0xA0  # AO 0.9 (a pale 230) shown mid-grey: 4 times the contrast
+    ao[10 * n + 5] = 0x60  # the darkest contact shadow: occlusion 159
+    table = contrast_table(bytes(ao))
+    assert table[0x60] < 0x20 and table[0xF6] == 0xFF  # faint occlusion (9) far away: white, no grey swirls
     x, y = preview.to_frame(preview.frame_rect().center())
     assert abs(x - (left + size / 2)) < 1e-6 and abs(y - (top + size / 2)) < 1e-6
     dabs = []

@@ -1,0 +1,38 @@
+"""The docker in a real Krita window (kritarunner) on a 1366 x 768 screen: its width, and Krita's undo."""
+
+import sys
+
+import pytest
+from krita_helpers import run_kritarunner
+
+from plugin_krita.install import install
+from plugin_krita.ssn_shadow.shared import light_map as lm
+
+pytestmark = pytest.mark.krita
+
+
+def test_the_docker_fits_krita_default_dock_and_follows_undo(tmp_path):
+    pykrita = tmp_path / "pykrita"
+    install(dest=pykrita, python=sys.executable)
+    home = tmp_path / "home"
+    (home / ".config").mkdir(parents=True)
+    # a fresh profile; OpenGL off, which the virtual X server cannot run (it changes no dock size)
+    (home / ".config" / "kritadisplayrc").write_text("[General]\nOpenGLRenderer=none\n")
+    env = {"HOME": str(home), "XDG_CONFIG_HOME": str(home / ".config"), "XDG_DATA_HOME": str(home / "data")}
+    data = run_kritarunner(pykrita, "krita_docker_driver", "main", tmp_path / "result.json", env, "1366x768x24")
+
+    layout = data["layout"]
+    assert layout["window"][2:] == layout["screen"][2:], layout
+    # at Krita's default dock width the controls fit: no horizontal scroll bar, nothing cut off on the right
+    assert layout["docker_width"] == layout["layers_docker_width"], layout
+    assert not layout["horizontal_scroll_bar"] and layout["body_min_width"] <= layout["viewport_width"], layout
+    assert layout["map_right"] < layout["viewport_width"] and layout["presets_right"] < layout["viewport_width"]
+    assert layout["generate_visible"], layout
+
+    first, second = data["undo"]
+    assert second["names"] == ["Background", "Shadow: Person", "Person"], data["undo"]  # the first shadow is back
+    # the cutout's layer stays active (the next brush stroke lands on it, not on the shadow brought back)
+    assert first["active"] == second["active"] == "Person", data["undo"]
+    # and the docker shows the lights that shadow was made with
+    assert second["light_map"] == data["first_light_map"] == lm.preset("low-sun-left").to_dict()
+    assert second["preset"] == "Low sun, left"
