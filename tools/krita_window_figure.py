@@ -85,7 +85,7 @@ def inside(*_args: object) -> None:  # pragma: no cover - runs in Krita (kritaru
     wait(2.0)
     out = Path(os.environ["SSN_FIGURE_OUT"])
     QApplication.primaryScreen().grabWindow(0).save(str(out))
-    docker.widget().ensureWidgetVisible(docker.panel.from_guide)  # the Camera group, scrolled into view
+    docker.panel.scroll.ensureWidgetVisible(docker.panel.from_guide)  # the Camera group, scrolled into view
     wait(1.0)
     QApplication.primaryScreen().grabWindow(0).save(str(out.with_name(out.stem + "-camera" + out.suffix)))
     say("grabbed")

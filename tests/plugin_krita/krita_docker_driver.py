@@ -1,7 +1,7 @@
 """Runs inside real Krita (kritarunner): the docker in a Krita window on a 1366 x 768 screen, and Krita's undo.
 
 ``kritarunner -s krita_docker_driver -f main`` (a fresh profile, on a virtual 1366 x 768 X screen) shows a
-window as big as the screen with the docker at Krita's default place and width, generates two shadows
+window of a fresh profile's size with the docker at Krita's default place and width, generates two shadows
 through the docker's panel and undoes them with Krita's undo action; it writes $SSN_TEST_RESULT.
 """
 
@@ -47,19 +47,30 @@ def main(*args):
         window = k.openWindow()
         window.addView(doc)
         qwin = window.qwindow()
-        qwin.setGeometry(QApplication.primaryScreen().availableGeometry())  # no window manager maximises it
+        # A profile without a saved window geometry: Krita 5.1 opens its window at two thirds of a screen wider
+        # than 1024 px, centred (KisMainWindow::initializeGeometry); the virtual screen has no window manager.
+        screen = QApplication.primaryScreen().availableGeometry()
+        w, h = screen.width() * 2 // 3, screen.height() * 2 // 3
+        qwin.setGeometry(screen.x() + (screen.width() - w) // 2, screen.y() + (screen.height() - h) // 2, w, h)
         qwin.show()
         pump(2.0)
+        layers = next(d for d in qwin.findChildren(QDockWidget) if d.objectName() == "KisLayerBox")
+        default_width = layers.width()  # the right dock column of a fresh profile
         docker = SoftShadowDocker()
         docker.setObjectName(DOCKER_ID)
         qwin.addDockWidget(Qt.DockWidgetArea.RightDockWidgetArea, docker)  # where Krita puts a new docker
         docker.show()
+        pump(1.0)
+        widened = docker.width()
+        # Krita restores its dock column's width (its workspace) rather than widening it for a new docker
+        qwin.resizeDocks([docker], [default_width], Qt.Orientation.Horizontal)
         pump(2.0)
         panel = docker.panel
-        layers = next(d for d in qwin.findChildren(QDockWidget) if d.objectName() == "KisLayerBox")
         out["layout"] = {
             "screen": list(QApplication.primaryScreen().availableGeometry().getRect()),
             "window": list(qwin.geometry().getRect()),
+            "default_width": default_width,
+            "widened_to": widened,
             "docker_width": docker.width(),
             "layers_docker_width": layers.width(),
             "viewport_width": panel.scroll.viewport().width(),

@@ -22,9 +22,11 @@ def test_the_docker_fits_krita_default_dock_and_follows_undo(tmp_path):
     data = run_kritarunner(pykrita, "krita_docker_driver", "main", tmp_path / "result.json", env, "1366x768x24")
 
     layout = data["layout"]
-    assert layout["window"][2:] == layout["screen"][2:], layout
-    # at Krita's default dock width the controls fit: no horizontal scroll bar, nothing cut off on the right
-    assert layout["docker_width"] == layout["layers_docker_width"], layout
+    assert layout["window"][2] == layout["screen"][2] * 2 // 3, layout  # a fresh profile's window
+    # at Krita's default dock width the controls fit: no horizontal scroll bar, nothing cut off on the right;
+    # and the docker does not widen the dock column much when it is added
+    assert layout["docker_width"] == layout["layers_docker_width"] == layout["default_width"], layout
+    assert layout["widened_to"] <= layout["default_width"] + 20, layout
     assert not layout["horizontal_scroll_bar"] and layout["body_min_width"] <= layout["viewport_width"], layout
     assert layout["map_right"] < layout["viewport_width"] and layout["presets_right"] < layout["viewport_width"]
     assert layout["generate_visible"], layout

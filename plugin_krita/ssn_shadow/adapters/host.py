@@ -69,7 +69,14 @@ class KritaHost:
             if action is None or any(action is known for known in self._watched):
                 continue
             self._watched.append(action)
-            action.triggered.connect(lambda *_: QTimer.singleShot(0, changed))
+            action.triggered.connect(lambda *_: QTimer.singleShot(0, lambda: self._after_history(changed)))
+
+    def _after_history(self, changed: Callable[[], None]) -> None:
+        """Krita carries an undo out in its image's strokes, then activates a layer through a queued signal."""
+        document = self.active_document()
+        if document is not None:
+            document.waitForDone()
+        QTimer.singleShot(0, changed)
 
     def horizontal_guides(self, document: Document | None) -> list[float]:
         return horizontal_guides(document)

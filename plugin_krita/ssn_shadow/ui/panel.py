@@ -54,6 +54,7 @@ PRESET_TITLES = {  # the presets' names for people (files and the CLI use the ke
     "two-lights": "Two lights",
     "rim-light": "Rim light",
 }
+PANEL_WIDTH = 300  # pixels: the panel's preferred width (it fits narrower docks: the map and previews scale)
 HINT_WIDTH = 240  # pixels: the width a wrapped label's size hint assumes (the layout asks at its real width)
 UNKNOWN = "\u2014"  # a camera field's text while no camera is known (an em dash)
 CAMERA_NOTES = {
@@ -149,6 +150,10 @@ class ShadowPanel(QWidget):
         self._build()
         self._wire()
         self.show_model(controller.model)
+
+    def sizeHint(self) -> QSize:  # noqa: N802 (Qt's API)
+        """As wide as a narrow dock (added to Krita's dock column, the docker does not widen it)."""
+        return QSize(PANEL_WIDTH, super().sizeHint().height())
 
     # -- layout ----------------------------------------------------------------------
     def _build(self) -> None:
