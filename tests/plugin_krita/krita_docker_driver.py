@@ -16,6 +16,7 @@ from PyQt5.QtWidgets import QApplication, QDockWidget
 
 RESULT = os.environ.get("SSN_TEST_RESULT", "/tmp/ssn_krita_docker.json")
 W, H = 480, 360
+NARROW = 260  # pixels: a dock column narrower than Krita's default
 out = {"log": []}
 
 
@@ -80,6 +81,16 @@ def main(*args):
             "presets_right": panel.presets.mapTo(panel.scroll.viewport(), panel.presets.rect().topRight()).x(),
             "generate_visible": panel.generate.isVisible() and not panel.generate.visibleRegion().isEmpty(),
         }
+        qwin.resizeDocks([docker], [NARROW], Qt.Orientation.Horizontal)  # the user narrows the dock column
+        pump(1.0)
+        out["narrow"] = {
+            "docker_width": docker.width(),
+            "viewport_width": panel.scroll.viewport().width(),
+            "horizontal_scroll_bar": panel.scroll.horizontalScrollBar().isVisible(),
+            "map_right": panel.map_widget.mapTo(panel.scroll.viewport(), panel.map_widget.rect().topRight()).x(),
+        }
+        qwin.resizeDocks([docker], [default_width], Qt.Orientation.Horizontal)
+        pump(0.5)
 
         controller = docker.controller
         doc.setActiveNode(person)

@@ -30,6 +30,10 @@ def test_the_docker_fits_krita_default_dock_and_follows_undo(tmp_path):
     assert not layout["horizontal_scroll_bar"] and layout["body_min_width"] <= layout["viewport_width"], layout
     assert layout["map_right"] < layout["viewport_width"] and layout["presets_right"] < layout["viewport_width"]
     assert layout["generate_visible"], layout
+    # and in a narrower dock too (Krita's font here; a larger one has 60 px to spare): the map scales down
+    narrow = data["narrow"]
+    assert narrow["docker_width"] == 260 and not narrow["horizontal_scroll_bar"], narrow
+    assert narrow["map_right"] < narrow["viewport_width"], narrow
 
     first, second = data["undo"]
     assert second["names"] == ["Background", "Shadow: Person", "Person"], data["undo"]  # the first shadow is back

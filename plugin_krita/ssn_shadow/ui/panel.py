@@ -108,11 +108,12 @@ class SteadyLabel(QLabel):
         self.setSizePolicy(policy)
 
     def heightForWidth(self, width: int) -> int:  # noqa: N802 (Qt's API)
-        inner = max(1, width - self.contentsMargins().left() - self.contentsMargins().right())
+        margins = self.contentsMargins()
+        inner = max(1, width - margins.left() - margins.right())
         metrics = self.fontMetrics()
         flags = int(Qt.TextFlag.TextWordWrap)
         tallest = max(metrics.boundingRect(0, 0, inner, 100000, flags, text).height() for text in self.texts)
-        return max(super().heightForWidth(width), tallest + self.contentsMargins().top() + self.contentsMargins().bottom())
+        return max(super().heightForWidth(width), tallest + margins.top() + margins.bottom())
 
     def sizeHint(self) -> QSize:
         return QSize(HINT_WIDTH, self.heightForWidth(HINT_WIDTH))
