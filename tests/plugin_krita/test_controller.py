@@ -94,6 +94,8 @@ def test_a_light_drag_previews_in_the_docker_and_writes_the_layer_once(qapp):
         c.model.edit_light_map(c.model.light_map, False)
         c.generate()
         assert wait_until(lambda: not c.busy and len(host.writes) == 1)
+        assert wait_until(lambda: shown)  # the image with its new shadow, after Generate
+        shown.clear()
         for i in range(20):  # a drag, faster than the rest delay
             moved(c, 0.2 + 0.02 * i, 0.6, i == 0, dragging=True)
             _spin(40)
