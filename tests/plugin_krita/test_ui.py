@@ -353,3 +353,22 @@ def test_ao_edits_stay_with_their_cutout(qapp):
     c.generate()
     assert c.model.ao_edit_list() == [] and c.model.ao_strength == 1.0
     assert json.loads(host.document.annotations[ANNOTATION][1])["ao_edits"] == {"steps": [], "strength": 1.0}
+
+
+def test_generate_and_the_status_stay_in_view_while_the_controls_scroll(qapp):
+    """In a short dock the controls scroll; Generate and the status line stay where they are, in view."""
+    c = ShadowController(NoEngine(), FakeHost())
+    panel = ShadowPanel(c)
+    panel.resize(300, 420)
+    panel.show()
+    QApplication.processEvents()
+    bar = panel.scroll.verticalScrollBar()
+    assert bar.maximum() > 0  # the controls scroll
+    places = []
+    for value in (0, bar.maximum() // 2, bar.maximum()):
+        bar.setValue(value)
+        QApplication.processEvents()
+        for w in (panel.generate, panel.message):
+            assert not w.visibleRegion().isEmpty()
+        places.append((panel.generate.mapTo(panel, QPoint(0, 0)), panel.message.mapTo(panel, QPoint(0, 0))))
+    assert places[0] == places[1] == places[2]
