@@ -204,6 +204,7 @@ def test_the_panel_fits_a_narrow_dock(qapp):
     c = ShadowController(NoEngine(), FakeHost())
     panel = ShadowPanel(c)
     assert panel.body.minimumSizeHint().width() <= 260
+    assert panel.minimumSizeHint().width() <= 260 + panel.scroll.verticalScrollBar().sizeHint().width()  # the footer
     panel.resize(260 + panel.scroll.verticalScrollBar().sizeHint().width(), 600)
     panel.show()
     QApplication.processEvents()
