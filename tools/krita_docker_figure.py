@@ -71,12 +71,14 @@ def main(argv: list[str] | None = None) -> int:
     image = Image.fromarray(over(studio_background(), pawn)).resize((pw, ph), Image.Resampling.LANCZOS)
     shadow = session.render(controller.model.light_map, framing)
     shown = preview_image(np.asarray(image), shadow, session.cover(framing), horizon=520.0 * pw / width)
-    panel.drag_preview.set_image(shown.tobytes(), pw, ph)
-    panel.resize(340, panel.heightForWidth(340) if panel.hasHeightForWidth() else panel.sizeHint().height())
+    panel.preview.set_image(shown.tobytes(), pw, ph)
+    panel.resize(340, 900)
     panel.show()
-    for _ in range(10):
+    for _ in range(40):  # tall enough that the controls do not scroll: the whole panel
         app.processEvents()
-    panel.resize(340, panel.sizeHint().height())
+        if panel.scroll.verticalScrollBar().maximum() == 0:
+            break
+        panel.resize(340, panel.height() + panel.scroll.verticalScrollBar().maximum())
     for _ in range(10):
         app.processEvents()
     panel.grab().save(args.out)

@@ -62,7 +62,7 @@ def inside(*_args: object) -> None:  # pragma: no cover - runs in Krita (kritaru
     say("waited")
     docker.controller.host.active_document = lambda: doc
     docker.panel.from_guide.click()
-    docker.panel.presets.setCurrentIndex(docker.panel.presets.findText("low-sun-left"))
+    docker.panel.presets.setCurrentIndex(docker.panel.presets.findData("low-sun-left"))
     docker.panel.presets.activated.emit(docker.panel.presets.currentIndex())
     say("generate")
     docker.panel.generate.click()
@@ -85,7 +85,7 @@ def inside(*_args: object) -> None:  # pragma: no cover - runs in Krita (kritaru
     wait(2.0)
     out = Path(os.environ["SSN_FIGURE_OUT"])
     QApplication.primaryScreen().grabWindow(0).save(str(out))
-    docker.widget().ensureWidgetVisible(docker.panel.from_guide)  # the Camera group, scrolled into view
+    docker.panel.scroll.ensureWidgetVisible(docker.panel.from_guide)  # the Camera group, scrolled into view
     wait(1.0)
     QApplication.primaryScreen().grabWindow(0).save(str(out.with_name(out.stem + "-camera" + out.suffix)))
     say("grabbed")

@@ -16,7 +16,15 @@ without its shadow layer as a thumbnail, with the shadow the worker multiplies
 on (coalesced the same way). Krita's scripting API can only recomposite the
 whole image, which on a large canvas allows a few layer updates a second; so
 the layer is written when the drag rests (``PAUSE_MS``) and when it ends, one
-undo step for the whole drag.
+undo step for the whole drag. After a render that is an undo step of its own
+(Generate, a preset, the camera...) the preview shows the image with its new
+shadow and the horizon, so the horizon the engine used is always in view.
+
+Each layer write records which settings made that shadow layer
+(:meth:`model.ShadowModel.record_shadow`); after Krita's undo or redo,
+:meth:`ShadowController.history_changed` shows the settings of the shadow
+layer the canvas now shows, and gives the cutout's layer back the focus where
+the undo made its shadow layer the active one.
 """
 
 from __future__ import annotations
@@ -30,7 +38,7 @@ from . import worker_requests
 from .adapters.krita_document import Source, SourceError
 from .adapters.pixel_format import UnsupportedFormat
 from .engine import EngineError
-from .model import ShadowModel
+from .model import Settings, ShadowModel
 from .properties import Property
 from .scheduling import Drag, LatestWins, RenderJob, RenderQueue
 from .shared import shadow_notes
@@ -69,6 +77,8 @@ class ShadowController(QObject):
         self.renders = 0
         self.previews = 0
         self._layer_map: Any = None  # the light map of the last layer render sent
+        self._background: tuple[int, int, bytes] | None = None  # the preview's image without its shadow
+        self._preview_due = False  # a render that is an undo step of its own: the preview follows it
         self._drag: Drag | None = None
         self._pause = QTimer(self)
         self._pause.setSingleShot(True)
@@ -86,8 +96,30 @@ class ShadowController(QObject):
         model.edited.connect(self._edited)
         self.forget_cutout()
 
+    def watch_history(self) -> None:
+        """Follow Krita's undo and redo (:meth:`history_changed`); call again when Krita may have made its
+        actions anew (another window)."""
+        if hasattr(self.host, "watch_history"):
+            self.host.watch_history(self.history_changed)
+
+    def history_changed(self) -> None:
+        """Krita undid or redid a step: the docker shows the settings of the shadow layer now on the canvas
+        (where it knows them), and the cutout's layer stays active where the step made its shadow active."""
+        source = self.source
+        if source is None or self.host.active_document() != source.document:
+            return
+        self.host.keep_source_active(source)
+        settings = self.model.shadow_shown(self.host.shadow_layer_id(source))
+        if settings is None:
+            return
+        self._layer_map = settings.light_map.copy()
+        if self.cutout is not None:  # the AO edits it shows (a camera of its own re-sends the cutout anyway)
+            self._send_edits()
+        self._refresh_preview()
+
     def generate(self) -> None:
         """Read the source again and render; the layer write is one new undo step."""
+        self._preview_due = True
         self._schedule(RenderJob(new_step=True, reread=True, started=time.perf_counter()))
 
     def horizon_from_guide(self) -> None:
@@ -109,7 +141,7 @@ class ShadowController(QObject):
     def forget_cutout(self) -> None:
         """Another document or view: the next render reads its source afresh."""
         self.cutout, self._cutout_key, self.source = None, None, None
-        self._drag = None
+        self._drag, self._background, self._preview_due = None, None, False
         self._pause.stop()
 
     # -- the model's edits ----------------------------------------------------------
@@ -126,9 +158,11 @@ class ShadowController(QObject):
         else:
             self._rerender(new_step)
 
-    def _rerender(self, new_step: bool) -> None:
-        """Re-render at once when Live is on and a shadow exists."""
+    def _rerender(self, new_step: bool, preview: bool = True) -> None:
+        """Re-render at once when Live is on and a shadow exists; ``preview``: a new undo step updates the
+        preview when it is written (a drag's updates it already)."""
         if self.live and self.source is not None:
+            self._preview_due = self._preview_due or (new_step and preview)
             self._schedule(RenderJob(new_step=new_step, reread=False, started=time.perf_counter()))
 
     def _light_map_set(self, new_step: bool) -> None:
@@ -139,7 +173,7 @@ class ShadowController(QObject):
         light_map = self.model.light_map
         if drag is not None:  # the drag's layer: its undo step unless a rest already wrote one
             if light_map != self._layer_map or not drag.wrote:
-                self._rerender(new_step or not drag.wrote)
+                self._rerender(new_step or not drag.wrote, preview=False)
             return
         if light_map == self._layer_map and not new_step:
             return
@@ -152,29 +186,40 @@ class ShadowController(QObject):
         if not self.live or source is None:
             return
         if self._drag is None:
-            background = None
-            if self.cutout is not None:  # else (the worker restarted) the layer alone follows
-                try:
-                    background = self.host.preview_background(source, PREVIEW_SIDE)
-                except Exception as exc:  # the UI boundary: no preview, the layer still follows
-                    self.model.report_status("warning", f"No live preview: {type(exc).__name__}: {exc}")
-            self._drag = Drag(background)
+            self._drag = Drag(self._take_background(source))
+        self._background = self._drag.background
         self._pause.start(PAUSE_MS)
         self._request_preview()
 
     def _drag_rested(self) -> None:
         if self._drag is not None and self.model.light_map != self._layer_map:
-            self._rerender(not self._drag.wrote)
+            self._rerender(not self._drag.wrote, preview=False)
             self._drag.wrote = True
 
     # -- preview ------------------------------------------------------------------
+    def _take_background(self, source: Source) -> tuple[int, int, bytes] | None:
+        """The image without its shadow for the preview (None: no preview; the layer still follows)."""
+        if self.cutout is None:  # the worker restarted: the layer alone follows
+            return None
+        try:
+            return self.host.preview_background(source, PREVIEW_SIDE)
+        except Exception as exc:  # the UI boundary
+            self.model.report_status("warning", f"No live preview: {type(exc).__name__}: {exc}")
+            return None
+
+    def _refresh_preview(self) -> None:
+        """Show the image with the shadow now on the canvas (and its horizon) in the preview."""
+        if self.source is not None and self._drag is None:
+            self._background = self._take_background(self.source)
+            self._request_preview()
+
     def _request_preview(self) -> None:
-        drag, source, cutout = self._drag, self.source, self.cutout
-        if drag is None or drag.background is None or source is None or cutout is None:
+        background, source, cutout = self._background, self.source, self.cutout
+        if background is None or source is None or cutout is None:
             return
         if not self._previews.begin():
             return  # latest wins: sent with the map of the moment when the reply comes
-        params, buffers = worker_requests.preview(self.model, cutout, source, drag.background)
+        params, buffers = worker_requests.preview(self.model, cutout, source, background)
         self.engine.request("preview", buffers, on_reply=self._on_preview, on_error=self._on_preview_error, **params)
 
     def _on_preview(self, reply: dict, buffers: dict) -> None:
@@ -276,16 +321,19 @@ class ShadowController(QObject):
         source, cutout = self.source, self.cutout
         assert source is not None and cutout is not None, "a job reads its source and sends its cutout first"
         self._layer_map = self.model.light_map.copy()
-        params, blend = worker_requests.render(self.model, cutout, source)  # the blend of the colour rendered
+        model, settings = self.model, self.model.settings()  # the settings this shadow is rendered from
+        params, blend = worker_requests.render(model, cutout, source)  # the blend of the colour rendered
         self.engine.request(
             "render",
-            on_reply=lambda reply, buffers: self._on_rendered(job, source, blend, reply, buffers),
+            on_reply=lambda reply, buffers: self._on_rendered(job, source, blend, reply, buffers, (model, settings)),
             on_error=lambda e: self._on_error(e, job),
             **params,
         )
 
     # -- replies --------------------------------------------------------------------
-    def _on_rendered(self, job: RenderJob, source: Source, blend: str, reply: dict, buffers: dict) -> None:
+    def _on_rendered(
+        self, job: RenderJob, source: Source, blend: str, reply: dict, buffers: dict, made: tuple[ShadowModel, Settings]
+    ) -> None:
         nxt = self._renders.finish()
         if nxt is not None:
             self._run(nxt)  # the worker renders the next frame while this one is written
@@ -297,6 +345,8 @@ class ShadowController(QObject):
         except Exception as exc:  # the UI boundary
             self._fail(f"Soft Shadow could not write the shadow layer: {type(exc).__name__}: {exc}")
             return
+        if result.layer_id:
+            made[0].record_shadow(result.layer_id, made[1])
         self.renders += 1
         elapsed = 1e3 * (time.perf_counter() - job.started) if job.started else 0.0
         info = {
@@ -315,6 +365,9 @@ class ShadowController(QObject):
             self.model.report_status("info", f"Shadow {rect[2]} x {rect[3]} px in {elapsed:.0f} ms ({info['method']}).")
         if not self._renders.in_flight:
             self._set_busy(False)
+            if self._preview_due and self._drag is None:
+                self._preview_due = False
+                self._refresh_preview()
         self.rendered.emit(info)
 
     def _on_error(self, error: EngineError, job: RenderJob) -> None:

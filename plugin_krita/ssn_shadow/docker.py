@@ -3,7 +3,7 @@
 from __future__ import annotations
 
 from krita import DockWidget, Krita
-from PyQt5.QtWidgets import QApplication, QFrame, QScrollArea
+from PyQt5.QtWidgets import QApplication
 
 from .adapters.host import KritaHost
 from .controller import ShadowController
@@ -25,13 +25,9 @@ class SoftShadowDocker(DockWidget):
         host = KritaHost(Krita.instance())
         self.models = DocumentModels(host)
         self.controller = ShadowController(self.engine, host, self.models.model_for(host.active_document()), self)
-        self.panel = ShadowPanel(self.controller)
-        # Docked in a short window, the panel scrolls instead of squeezing its controls over each other.
-        scroll = QScrollArea()
-        scroll.setWidgetResizable(True)
-        scroll.setFrameShape(QFrame.NoFrame)
-        scroll.setWidget(self.panel)
-        self.setWidget(scroll)
+        self.panel = ShadowPanel(self.controller)  # its controls scroll in a short dock, Generate stays in view
+        self.setWidget(self.panel)
+        self.controller.watch_history()
         app = QApplication.instance()
         if app is not None:
             app.aboutToQuit.connect(self.engine.shutdown)
@@ -41,6 +37,7 @@ class SoftShadowDocker(DockWidget):
         source afresh."""
         try:
             self.controller.forget_cutout()
+            self.controller.watch_history()  # a new window has its own undo action
             self.controller.set_model(self.models.model_for(self.controller.host.active_document()))
             self.panel.show_model(self.controller.model)
         except Exception as exc:  # never crash the host

@@ -8,7 +8,8 @@ opacity, AO edits) are saved in the document (:mod:`persistence`).
 
 Signals besides each property's ``<name>_changed``:
 
-- ``modified(name)``: a setting saved with the document changed (by a user edit);
+- ``modified(name)``: a setting saved with the document changed (by a user edit), or ``"shadows"``: the
+  record of which settings made which shadow layer changed;
 - ``edited(what, new_step)``: a user edit the shadow depends on, ``what`` one of :data:`EDITS`;
   ``new_step``: the shadow layer's write starts a new undo step (the first change of a slider drag, a
   click) or continues the current one (the rest of the drag).
@@ -18,6 +19,7 @@ from __future__ import annotations
 
 from collections.abc import Iterator
 from contextlib import contextmanager
+from dataclasses import dataclass
 
 from PyQt5.QtCore import QObject, pyqtSignal
 
@@ -25,11 +27,28 @@ from .properties import Property
 from .shared import ao_edits, camera_rules, defaults
 from .shared import light_map as lm
 
-__all__ = ["EDITS", "READY", "ShadowModel"]
+AoEdits = ao_edits.AoEdits  # the kit's AO edit list (a model property shares the module's name)
 
+__all__ = ["EDITS", "MAX_SHADOW_RECORDS", "READY", "Settings", "ShadowModel"]
+
+MAX_SHADOW_RECORDS = 32  # shadow layers whose settings are kept (the newest; older undo steps forget theirs)
 READY = "Select the cutout's layer (or a selection) and press Generate."
 EDITS = ("light_map", "camera", "color", "opacity", "ao_edits")
 _CAMERA = ("use_horizon", "horizon", "fov")
+
+
+@dataclass(frozen=True)
+class Settings:
+    """The settings a shadow is rendered from (a snapshot: its light map and AO edits are copies)."""
+
+    light_map: lm.LightMap
+    use_horizon: bool
+    horizon: float
+    fov: float
+    color: tuple[float, float, float]
+    opacity: float
+    ao_edits: AoEdits
+    ao_strength: float
 
 
 class ShadowModel(QObject):
@@ -54,7 +73,7 @@ class ShadowModel(QObject):
     fov: Property[float] = Property(camera_rules.DEFAULT_FOV)  # the image's vertical field of view, degrees
     color: Property[tuple[float, float, float]] = Property((0.0, 0.0, 0.0))  # the shadow's colour, linear 0..1
     opacity: Property[float] = Property(defaults.OPACITY)
-    ao_edits: Property[ao_edits.AoEdits] = Property(ao_edits.AoEdits())  # brush strokes and grow/shrink steps
+    ao_edits: Property[AoEdits] = Property(AoEdits())  # brush strokes and grow/shrink steps
     ao_strength: Property[float] = Property(1.0)  # scales the contact shadow (AO), 0..MAX_AO_STRENGTH
     status: Property[tuple[str, str]] = Property(("info", READY), readonly=True)  # (level, text for people)
     camera_read: Property[dict | None] = Property(None, readonly=True)  # {"horizon", "fov"} the engine read
@@ -66,12 +85,35 @@ class ShadowModel(QObject):
         self._quiet = False
         self._light_edit = False
         self._camera = self.camera
+        self.shadows: dict[str, Settings] = {}  # a shadow layer's id: the settings it was rendered from
 
     # -- derived -----------------------------------------------------------------------------
     @property
     def camera(self) -> dict | None:
         """The camera the engine uses: ``{"horizon": row, "fov": degrees}``, or None (it reads one itself)."""
         return {"horizon": float(self.horizon), "fov": float(self.fov)} if self.use_horizon else None
+
+    def settings(self) -> Settings:
+        """A snapshot of the settings now."""
+        return Settings(
+            self.light_map.copy(),
+            self.use_horizon,
+            self.horizon,
+            self.fov,
+            self.color,
+            self.opacity,
+            self.ao_edits.copy(),
+            self.ao_strength,
+        )
+
+    def apply(self, settings: Settings) -> None:
+        """Show ``settings`` (loaded, or those of the shadow layer an undo brought back): no edit, nothing
+        rendered or saved."""
+        with self.quietly():
+            self.light_map = settings.light_map.copy()
+            self.horizon, self.fov, self.use_horizon = settings.horizon, settings.fov, settings.use_horizon
+            self.color, self.opacity = settings.color, settings.opacity
+            self.ao_edits, self.ao_strength = settings.ao_edits.copy(), settings.ao_strength
 
     def ao_edit_list(self) -> list[dict]:
         """The protocol's ``edits`` list (AO edits, then the strength)."""
@@ -126,7 +168,7 @@ class ShadowModel(QObject):
         """No AO edits, full strength."""
         with self.quietly():
             self.ao_strength = 1.0
-        self._set_ao_edits(ao_edits.AoEdits(), True)
+        self._set_ao_edits(AoEdits(), True)
 
     def horizon_from_guides(self, guides: list[float]) -> bool:
         """Give the horizon on the first horizontal guide (canvas row); False when there is no guide."""
@@ -136,7 +178,7 @@ class ShadowModel(QObject):
         self.use_horizon = True
         return True
 
-    def _set_ao_edits(self, edits: ao_edits.AoEdits, new_step: bool) -> None:
+    def _set_ao_edits(self, edits: AoEdits, new_step: bool) -> None:
         with self.quietly():
             self.ao_edits = edits
         self.modified.emit("ao_edits")
@@ -156,11 +198,33 @@ class ShadowModel(QObject):
                 self.horizon = float(round(read["horizon"]))
                 self.fov = float(round(read["fov"]))
 
+    def record_shadow(self, layer_id: str, settings: Settings) -> None:
+        """The shadow layer ``layer_id`` now shows a shadow rendered from ``settings`` (saved with the document,
+        the newest :data:`MAX_SHADOW_RECORDS` layers)."""
+        if self.shadows.get(layer_id) == settings:
+            return
+        self.shadows.pop(layer_id, None)
+        self.shadows[layer_id] = settings
+        while len(self.shadows) > MAX_SHADOW_RECORDS:
+            del self.shadows[next(iter(self.shadows))]
+        self.modified.emit("shadows")
+
+    def shadow_shown(self, layer_id: str | None) -> Settings | None:
+        """The canvas shows the shadow layer ``layer_id`` (after an undo or redo): show the settings it was
+        rendered from, where they are known and differ, and return them (else None). No render: the canvas
+        already shows that shadow; the settings are saved as the image's current ones."""
+        settings = self.shadows.get(layer_id) if layer_id is not None else None
+        if settings is None or settings == self.settings():
+            return None
+        self.apply(settings)
+        self.modified.emit("shadows")
+        return settings
+
     def clear_ao_edits(self) -> None:
         """The cutout is another layer: its AO is new, so the edits of the old one go (saved, no render)."""
         if self.ao_edits.steps or self.ao_strength != 1.0:
             with self.quietly():
-                self.ao_edits, self.ao_strength = ao_edits.AoEdits(), 1.0
+                self.ao_edits, self.ao_strength = AoEdits(), 1.0
             self.modified.emit("ao_edits")
 
     @contextmanager

@@ -14,7 +14,14 @@ The file format (version 1)::
      "light_map": {...the light-map file's object...},
      "horizon": {"given": false, "row": 412.0, "fov": 45.0},
      "color": [0.0, 0.0, 0.0], "opacity": 0.85,
-     "ao_edits": {"steps": [[{"op": "brush", ...}, ...], [{"op": "grow", "pixels": 2}]], "strength": 1.0}}
+     "ao_edits": {"steps": [[{"op": "brush", ...}, ...], [{"op": "grow", "pixels": 2}]], "strength": 1.0},
+     "shadows": {"<shadow layer's unique id>": {...the same five settings...}, ...}}
+
+``shadows`` (optional) records the settings each shadow layer was rendered
+from, so that an undo that brings back an older shadow layer brings back its
+light map and the rest (:meth:`model.ShadowModel.shadow_shown`); Krita keeps
+a layer's unique id in the .kra. A record that cannot be read is dropped
+(the rest is read).
 """
 
 from __future__ import annotations
@@ -23,7 +30,7 @@ import json
 import math
 from typing import Any
 
-from .model import ShadowModel
+from .model import Settings, ShadowModel
 from .shared import ao_edits, camera_rules, defaults
 from .shared import light_map as lm
 
@@ -41,16 +48,10 @@ class SettingsError(ValueError):
 
 
 def dump(model: ShadowModel) -> bytes:
-    """The model's settings as the annotation's bytes (UTF-8 JSON)."""
-    data = {
-        "format": FORMAT,
-        "version": VERSION,
-        "light_map": model.light_map.to_dict(),
-        "horizon": {"given": model.use_horizon, "row": model.horizon, "fov": model.fov},
-        "color": list(model.color),
-        "opacity": model.opacity,
-        "ao_edits": {"steps": model.ao_edits.steps, "strength": model.ao_strength},
-    }
+    """The model's settings (and its shadow layers' records) as the annotation's bytes (UTF-8 JSON)."""
+    data = {"format": FORMAT, "version": VERSION, **_settings_dict(model.settings())}
+    if model.shadows:
+        data["shadows"] = {layer: _settings_dict(settings) for layer, settings in model.shadows.items()}
     return json.dumps(data, separators=(",", ":")).encode("utf-8")
 
 
@@ -67,6 +68,31 @@ def restore(model: ShadowModel, data: bytes) -> None:
         raise SettingsError(f"format: expected {FORMAT!r}, got {settings.get('format')!r}")
     if settings.get("version") != VERSION:
         raise SettingsError(f"version: this Soft Shadow reads version {VERSION}, got {settings.get('version')!r}")
+    current = _settings(settings)
+    shadows = settings.get("shadows", {})
+    if not isinstance(shadows, dict):
+        raise SettingsError(f"shadows: expected an object, got {shadows!r}")
+    records = {}
+    for layer, record in shadows.items():
+        try:
+            records[str(layer)] = _settings(record if isinstance(record, dict) else {})
+        except SettingsError:
+            continue  # that layer's settings are lost; its shadow stays as it is
+    model.apply(current)
+    model.shadows = records
+
+
+def _settings_dict(s: Settings) -> dict[str, Any]:
+    return {
+        "light_map": s.light_map.to_dict(),
+        "horizon": {"given": s.use_horizon, "row": s.horizon, "fov": s.fov},
+        "color": list(s.color),
+        "opacity": s.opacity,
+        "ao_edits": {"steps": s.ao_edits.steps, "strength": s.ao_strength},
+    }
+
+
+def _settings(settings: dict) -> Settings:
     try:
         light_map = lm.LightMap.from_dict(settings.get("light_map"))
     except lm.LightMapError as exc:
@@ -89,11 +115,7 @@ def restore(model: ShadowModel, data: bytes) -> None:
     ao = _object(settings, "ao_edits")
     steps = _ao_steps(ao.get("steps"))
     strength = _number(ao.get("strength"), "ao_edits.strength", 0.0, defaults.MAX_AO_STRENGTH)
-    with model.quietly():
-        model.light_map = light_map
-        model.horizon, model.fov, model.use_horizon = row, fov, given
-        model.color, model.opacity = rgb, opacity
-        model.ao_edits, model.ao_strength = ao_edits.AoEdits(steps), strength
+    return Settings(light_map, given, row, fov, rgb, opacity, ao_edits.AoEdits(steps), strength)
 
 
 def _object(settings: dict, key: str) -> dict:

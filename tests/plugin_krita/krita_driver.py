@@ -279,12 +279,13 @@ def run_case(depth, with_window):
         docker.show()
         for _ in range(20):
             QApplication.processEvents()
-        scroll = docker.widget()
+        scroll = docker.panel.scroll
         case["docker"] = {
-            "scrolls": type(scroll).__name__ == "QScrollArea" and scroll.widget() is docker.panel,
-            "panel_height": docker.panel.height(),
-            "panel_min_height": docker.panel.minimumSizeHint().height(),
-            "scroll_range": scroll.verticalScrollBar().maximum() if hasattr(scroll, "verticalScrollBar") else 0,
+            "scrolls": docker.widget() is docker.panel and scroll.widget() is docker.panel.body,
+            "panel_height": docker.panel.body.height(),
+            "panel_min_height": docker.panel.body.minimumSizeHint().height(),
+            "scroll_range": scroll.verticalScrollBar().maximum(),
+            "generate_shown": not docker.panel.generate.visibleRegion().isEmpty(),
         }
         docker.hide()
 

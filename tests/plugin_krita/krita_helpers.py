@@ -33,9 +33,12 @@ def need(tool: str) -> str:
     return path
 
 
-def run_kritarunner(pykrita: Path, module: str, function: str, result: Path, env_extra: dict[str, str]) -> dict:
+def run_kritarunner(
+    pykrita: Path, module: str, function: str, result: Path, env_extra: dict[str, str], screen: str = ""
+) -> dict:
     """Run ``function`` of the driver ``module`` (in this folder) in a fresh Krita (kritarunner) on a virtual X
-    server, with the plug-in installed in ``pykrita``; returns the JSON the driver wrote to ``result``.
+    server (``screen``: its size, e.g. "1366x768x24"; else xvfb-run's), with the plug-in installed in
+    ``pykrita``; returns the JSON the driver wrote to ``result``.
 
     Needs Debian's krita (kritarunner) and xvfb-run: Krita's undo action exists only with a window, which
     kritarunner can open on an X server but not on the offscreen platform.
@@ -61,11 +64,22 @@ def run_kritarunner(pykrita: Path, module: str, function: str, result: Path, env
     # random number, and retry.
     for _attempt in range(3):
         proc = subprocess.run(
-            [xvfb, "-a", "-n", str(random.randint(200, 900)), kritarunner, "-s", module, "-f", function],
+            [
+                xvfb,
+                "-a",
+                "-n",
+                str(random.randint(200, 900)),
+                *(["-s", f"-screen 0 {screen}"] if screen else []),
+                kritarunner,
+                "-s",
+                module,
+                "-f",
+                function,
+            ],
             env=env,
             capture_output=True,
             text=True,
-            timeout=180,
+            timeout=300,
         )
         if result.exists() or "could not connect to display" not in proc.stderr:
             break
@@ -121,6 +135,8 @@ class FakeHost:
         self.reads = 0
         self.document = FakeDocument("a.kra")
         self.closed: list[FakeDocument] = []
+        self.shadow: str | None = None  # the shadow layer's id on the "canvas"
+        self.kept_active = 0
 
     def active_document(self):
         return self.document
@@ -158,7 +174,15 @@ class FakeHost:
     def write(self, source, pixels, rect, new_step, blend):
         self.writes.append((rect, len(pixels), new_step))
         self.blends.append(blend)
-        return WriteResult("shadow-node", new_step)
+        if new_step or self.shadow is None:  # a new layer replaces the old one
+            self.shadow = f"shadow-{len(self.writes)}"
+        return WriteResult("shadow-node", new_step, "", self.shadow)
+
+    def shadow_layer_id(self, source):
+        return self.shadow
+
+    def keep_source_active(self, source):
+        self.kept_active += 1
 
     def preview_background(self, source, side):
         """A mid-grey image of the document's size scaled down as Krita's adapter scales it."""

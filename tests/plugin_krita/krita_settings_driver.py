@@ -94,7 +94,7 @@ def save(*args):
         out["shown_new"] = shown(panel)
 
         # the user's settings, through the panel's widgets (the colour dialog aside)
-        panel.presets.setCurrentIndex(panel.presets.findText("two-lights"))
+        panel.presets.setCurrentIndex(panel.presets.findData("two-lights"))
         panel.presets.activated.emit(panel.presets.currentIndex())
         doc.setHorizontalGuides([123.0])
         panel.from_guide.click()

@@ -94,6 +94,8 @@ def test_a_light_drag_previews_in_the_docker_and_writes_the_layer_once(qapp):
         c.model.edit_light_map(c.model.light_map, False)
         c.generate()
         assert wait_until(lambda: not c.busy and len(host.writes) == 1)
+        assert wait_until(lambda: shown)  # the image with its new shadow, after Generate
+        shown.clear()
         for i in range(20):  # a drag, faster than the rest delay
             moved(c, 0.2 + 0.02 * i, 0.6, i == 0, dragging=True)
             _spin(40)
@@ -189,7 +191,8 @@ def test_the_camera_reaches_the_worker_and_changes_the_shadow(qapp):
     request = engine.request
 
     def spy(cmd, buffers=None, **kwargs):
-        sent.append((cmd, sum(len(memoryview(b.data).cast("B")) for b in (buffers or {}).values())))
+        alpha = (buffers or {}).get("alpha")
+        sent.append((cmd, len(memoryview(alpha.data).cast("B")) if alpha is not None else 0))
         return request(cmd, buffers, **kwargs)
 
     engine.request = spy
@@ -228,3 +231,48 @@ def test_cancel_stops_waiting_for_a_hung_worker(qapp):
     assert messages[-1][0] == "warning" and "Cancelled" in messages[-1][1]
     c.cancel()  # idle: nothing happens
     assert messages[-1][1].startswith("Cancelled")
+
+
+def test_after_generate_the_preview_shows_the_shadow_and_horizon(qapp):
+    """Not only while a light is dragged: after each Generate the docker's preview shows the image with the
+    shadow and the horizon the engine used (the only place the horizon is drawn)."""
+    host = FakeHost()
+    c, engine, messages, _ = make(host)
+    previews = []
+    c.previewed.connect(lambda rgb, w, h: previews.append((w, h)))
+    try:
+        c.generate()
+        assert wait_until(lambda: not c.busy and previews), messages
+        assert previews == [(200, 160)]  # the fake image's size (under the preview's 320 px)
+    finally:
+        engine.shutdown()
+
+
+def test_an_undo_brings_back_the_settings_of_the_shadow_it_shows(qapp):
+    """Krita's undo brings back an older shadow layer: the docker shows the light map that shadow was made with
+    (and keeps the cutout's layer active); an undo that leaves a shadow without a record changes nothing."""
+    from plugin_krita.ssn_shadow.shared import light_map as lm
+
+    host = FakeHost()
+    c, engine, messages, _ = make(host)
+    try:
+        c.live = False
+        c.model.light_map = lm.preset("low-sun-left")
+        c.generate()
+        assert wait_until(lambda: not c.busy and len(host.writes) == 1), messages
+        first = host.shadow
+        c.model.light_map = lm.preset("low-sun-right")
+        c.model.opacity = 0.5
+        c.generate()
+        assert wait_until(lambda: not c.busy and len(host.writes) == 2), messages
+        assert host.shadow != first and set(c.model.shadows) == {first, host.shadow}
+
+        host.shadow = first  # Ctrl+Z, twice: the first shadow layer is back on the canvas
+        c.history_changed()
+        assert c.model.light_map == lm.preset("low-sun-left") and c.model.opacity == 0.85
+        assert host.kept_active == 1 and len(host.writes) == 2  # nothing rendered: the canvas shows it already
+        host.shadow = "a-layer-the-docker-never-wrote"
+        c.history_changed()
+        assert c.model.light_map == lm.preset("low-sun-left") and len(host.writes) == 2
+    finally:
+        engine.shutdown()

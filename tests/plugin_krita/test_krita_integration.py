@@ -95,10 +95,11 @@ def test_generate_in_real_krita(pykrita, tmp_path, depth):
         before, after = case["before_camera"], case["with_camera"]
         assert after["names"].count("Shadow: Person") == 1
         assert after["total"] != before["total"], (before["total"], after["total"])
-        # docked 650 px tall: the panel keeps its full height and scrolls, its controls do not overlap
+        # docked 650 px tall: the controls keep their full height and scroll, they do not overlap; Generate
+        # stays in view below them
         docker = case["docker"]
         assert docker["scrolls"] and docker["panel_height"] >= docker["panel_min_height"], docker
-        assert docker["scroll_range"] > 0, docker
+        assert docker["scroll_range"] > 0 and docker["generate_shown"], docker
     # A light drag: the docker previews it on a thumbnail of the image without the old shadow (hidden in a
     # clone of the document), the canvas is left alone, and the release writes the layer as one undo step
     drag = case["drag"]

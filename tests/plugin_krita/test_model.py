@@ -5,7 +5,7 @@ import json
 import pytest
 from krita_helpers import FakeDocument, FakeHost
 
-from plugin_krita.ssn_shadow.model import READY, ShadowModel
+from plugin_krita.ssn_shadow.model import MAX_SHADOW_RECORDS, READY, ShadowModel
 from plugin_krita.ssn_shadow.persistence import ANNOTATION, DocumentModels, SettingsError, dump, restore
 from plugin_krita.ssn_shadow.shared import light_map as lm
 
@@ -169,3 +169,22 @@ def test_a_widget_that_rounds_a_loaded_value_does_not_change_it(qapp):
     edits, saved = record(m)
     panel = ShadowPanel(ShadowController(NoEngine(), host, m))
     assert panel.opacity.value() == 33 and m.opacity == 0.333 and not edits and not saved
+
+
+def test_shadow_records_are_saved_and_read_back(qapp):
+    """The settings each shadow layer was made from travel with the document; a broken record is dropped."""
+    m = ShadowModel()
+    saved = []
+    m.modified.connect(saved.append)
+    m.light_map = lm.preset("two-lights")
+    m.record_shadow("layer-a", m.settings())
+    m.record_shadow("layer-a", m.settings())  # the same: no change
+    assert saved == ["light_map", "shadows"]
+    data = json.loads(dump(m))
+    data["shadows"]["layer-b"] = {"light_map": "nonsense"}
+    back = ShadowModel()
+    restore(back, json.dumps(data).encode())
+    assert list(back.shadows) == ["layer-a"] and back.shadows["layer-a"].light_map == lm.preset("two-lights")
+    for i in range(MAX_SHADOW_RECORDS + 3):
+        m.record_shadow(f"layer-{i}", m.settings())
+    assert len(m.shadows) == MAX_SHADOW_RECORDS and "layer-a" not in m.shadows

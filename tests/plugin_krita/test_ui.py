@@ -110,10 +110,13 @@ def test_panel_state(qapp):
     assert not panel.busy.isVisible() and not panel.cancel.isVisible() and "restart" in panel.message.text()
 
     m = c.model
-    panel.presets.setCurrentIndex(panel.presets.findText("two-lights"))
+    assert panel.presets.currentText() == "Softbox"  # the default lights: the preset's name for people
+    panel.presets.setCurrentIndex(panel.presets.findData("two-lights"))
     panel.presets.activated.emit(panel.presets.currentIndex())
     assert len(m.light_map) == 2 and panel.map_widget.light_map == m.light_map
     assert panel.map_widget.light_map is not m.light_map  # the model keeps its own copy
+    assert panel.presets.currentText() == "Two lights"
+    assert panel.presets.itemText(panel.presets.findData("low-sun-left")) == "Low sun, left"
 
     panel.live.setChecked(False)
     assert c.live is False
@@ -127,6 +130,9 @@ def test_panel_state(qapp):
     assert "rgb(26, 26, 76)" in panel.color_button.styleSheet()
     panel.intensity.setValue(250)
     assert m.light_map.lights[panel.map_widget.selected].intensity == 2.5
+    assert panel.presets.currentText() == "Custom"  # an edit: no preset's lights any more
+    m.light_map = lm.preset("low-sun-right")
+    assert panel.presets.currentText() == "Low sun, right"
     panel.ao_strength.setValue(150)
     assert m.ao_strength == 1.5 and m.ao_edit_list() == [{"op": "strength", "value": 1.5}]
     panel.grow.click()
@@ -157,10 +163,53 @@ def test_a_drag_on_the_map_previews_and_the_release_renders_the_layer(qapp):
     assert engine.sent[1:] == ["set_cutout"]  # the layer's render (the cutout first: its key is new here)
     assert c.model.light_map == w.light_map
 
-    assert not panel.drag_preview.isVisible()
+    assert panel.preview.isVisible() and panel.preview.image is None  # its place is kept before any preview
     c.previewed.emit(bytes([90, 90, 90]) * (200 * 160), 200, 160)
-    assert panel.drag_preview.isVisible() and panel.drag_preview.image.size().width() == 200
-    assert panel.drag_preview.heightForWidth(250) == 200 and panel.drag_preview.heightForWidth(400) == 220
+    assert panel.preview.isVisible() and panel.preview.image.size().width() == 200
+    assert panel.preview.heightForWidth(240) == 150 and panel.preview.heightForWidth(400) == 200
+
+
+def test_the_first_preview_of_a_drag_moves_nothing_under_the_mouse(qapp):
+    """The first light drag after Generate: the preview's first image comes mid-drag; the map stays where it
+    is, and the light ends where the mouse was released."""
+    engine = NoEngine()
+    host = FakeHost()
+    c = ShadowController(engine, host)
+    panel = ShadowPanel(c)
+    panel.resize(300, 700)
+    panel.show()
+    QApplication.processEvents()
+    c.source, c.cutout = host.read_source(host.document), "c1"  # as after a Generate
+    w = panel.map_widget
+    light = w.light_map.lights[0]
+    at_press = w.mapTo(panel, QPoint(0, 0))
+    QTest.mousePress(w, Qt.LeftButton, Qt.NoModifier, pos(w, light.u, light.v))
+    target = pos(w, light.u + 0.1, light.v + 0.1)
+    QApplication.sendEvent(w, QMouseEvent(QEvent.MouseMove, QPointF(target), Qt.NoButton, Qt.LeftButton, Qt.NoModifier))
+    c.previewed.emit(bytes([90, 90, 90]) * (320 * 240), 320, 240)  # the drag's first preview
+    QApplication.processEvents()
+    assert w.mapTo(panel, QPoint(0, 0)) == at_press
+    QApplication.sendEvent(w, QMouseEvent(QEvent.MouseMove, QPointF(target), Qt.NoButton, Qt.LeftButton, Qt.NoModifier))
+    QTest.mouseRelease(w, Qt.LeftButton, Qt.NoModifier, target)
+    QApplication.processEvents()
+    assert w.mapTo(panel, QPoint(0, 0)) == at_press
+    moved = c.model.light_map.lights[0]
+    assert abs(moved.u - (light.u + 0.1)) < 0.01 and abs(moved.v - (light.v + 0.1)) < 0.02
+
+
+def test_the_panel_fits_a_narrow_dock(qapp):
+    """Krita's default dock is 400 px wide (measured in Krita 5.1.5 with a fresh profile under a 1366 x 768
+    screen); with a vertical scroll bar and a larger font than this test's it leaves less: the controls fit
+    260 px, the map and previews scaled to it."""
+    c = ShadowController(NoEngine(), FakeHost())
+    panel = ShadowPanel(c)
+    assert panel.body.minimumSizeHint().width() <= 260
+    assert panel.minimumSizeHint().width() <= 260 + panel.scroll.verticalScrollBar().sizeHint().width()  # the footer
+    panel.resize(260 + panel.scroll.verticalScrollBar().sizeHint().width(), 600)
+    panel.show()
+    QApplication.processEvents()
+    assert not panel.scroll.horizontalScrollBar().isVisible()
+    assert panel.map_widget.width() <= 260 and panel.presets.width() <= 260
 
 
 def test_ui_errors_are_shown_not_raised(qapp):
@@ -198,21 +247,44 @@ def test_horizon_from_guide(qapp):
 
 def test_the_camera_read_from_the_outline_is_shown_and_ticking_starts_from_it(qapp):
     """Without a horizon of the image's own, the docker shows the camera the model read (disabled fields and a
-    line of text); ticking the box sends that camera, and the line goes away."""
+    note); ticking the box sends that camera. Before any camera is known the fields show a dash, not a value."""
     c = ShadowController(NoEngine(), FakeHost())
     panel = ShadowPanel(c)
     m = c.model
     edits = []
     m.edited.connect(lambda what, step: edits.append(what))
-    assert panel.camera_read.isHidden()
+    assert panel.horizon.text() == "\u2014" and panel.fov.text() == "\u2014"  # not "0 px" and "45°"
+    assert "At Generate" in panel.camera_read.text()
     m.report_camera_read({"horizon": 412.4, "fov": 47.2})
     assert not panel.use_horizon.isChecked() and not panel.horizon.isEnabled() and m.camera is None
     assert panel.horizon.value() == 412 and panel.fov.value() == 47 and not edits  # shown, not an edit
-    assert not panel.camera_read.isHidden() and "row 412" in panel.camera_read.text()
+    assert panel.horizon.text() == "412 px" and panel.fov.text() == "47°"
+    assert "row 412" in panel.camera_read.text()
     panel.use_horizon.setChecked(True)
-    assert m.camera == {"horizon": 412.0, "fov": 47.0} and panel.camera_read.isHidden() and edits == ["camera"]
+    assert m.camera == {"horizon": 412.0, "fov": 47.0} and "Given" in panel.camera_read.text() and edits == ["camera"]
     m.report_camera_read(None)  # the cutout analysed with that camera: nothing read
-    assert panel.camera_read.isHidden() and panel.horizon.value() == 412
+    assert panel.horizon.value() == 412 and panel.horizon.text() == "412 px"
+
+
+def test_ticking_the_horizon_box_moves_nothing(qapp):
+    """Ticking "The image's horizon is at" changes the note under the fields, not the layout: the controls
+    below stay under the mouse."""
+    c = ShadowController(NoEngine(), FakeHost())
+    panel = ShadowPanel(c)
+    panel.resize(280, 900)
+    panel.show()
+    c.model.report_camera_read({"horizon": 412.4, "fov": 47.2})
+    QApplication.processEvents()
+    below = [panel.color_button, panel.opacity, panel.fov]
+
+    def places():
+        return [w.mapTo(panel.body, QPoint(0, 0)) for w in below] + [panel.body.height()]
+
+    before = places()
+    for tick in (True, False, True):
+        panel.use_horizon.setChecked(tick)
+        QApplication.processEvents()
+        assert places() == before, tick
 
 
 def test_the_panel_shows_the_active_documents_model(qapp):
@@ -254,6 +326,9 @@ def test_ao_preview_zooms_on_the_cutout_and_stretches_the_occlusion(qapp):
     left, top, size = preview.view
     assert size < 0.75 and left <= 28 / n and left + size >= 36 / n and top <= 20 / n and top + size >= 44 / n
     assert contrast_table(bytes(ao))[0xE6] < 0xA0  # AO 0.9 (a pale 230) shown mid-grey: 4 times the contrast
+    ao[10 * n + 5] = 0x60  # the darkest contact shadow: occlusion 159
+    table = contrast_table(bytes(ao))
+    assert table[0x60] < 0x20 and table[0xF6] == 0xFF  # faint occlusion (9) far away: white, no grey swirls
     x, y = preview.to_frame(preview.frame_rect().center())
     assert abs(x - (left + size / 2)) < 1e-6 and abs(y - (top + size / 2)) < 1e-6
     dabs = []
@@ -279,3 +354,22 @@ def test_ao_edits_stay_with_their_cutout(qapp):
     c.generate()
     assert c.model.ao_edit_list() == [] and c.model.ao_strength == 1.0
     assert json.loads(host.document.annotations[ANNOTATION][1])["ao_edits"] == {"steps": [], "strength": 1.0}
+
+
+def test_generate_and_the_status_stay_in_view_while_the_controls_scroll(qapp):
+    """In a short dock the controls scroll; Generate and the status line stay where they are, in view."""
+    c = ShadowController(NoEngine(), FakeHost())
+    panel = ShadowPanel(c)
+    panel.resize(300, 420)
+    panel.show()
+    QApplication.processEvents()
+    bar = panel.scroll.verticalScrollBar()
+    assert bar.maximum() > 0  # the controls scroll
+    places = []
+    for value in (0, bar.maximum() // 2, bar.maximum()):
+        bar.setValue(value)
+        QApplication.processEvents()
+        for w in (panel.generate, panel.message):
+            assert not w.visibleRegion().isEmpty()
+        places.append((panel.generate.mapTo(panel, QPoint(0, 0)), panel.message.mapTo(panel, QPoint(0, 0))))
+    assert places[0] == places[1] == places[2]

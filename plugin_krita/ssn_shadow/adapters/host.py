@@ -2,6 +2,7 @@
 
 from __future__ import annotations
 
+from collections.abc import Callable
 from typing import TYPE_CHECKING
 
 from PyQt5.QtCore import QTimer
@@ -14,9 +15,11 @@ from .krita_document import (
     Source,
     WriteResult,
     horizontal_guides,
+    keep_source_active,
     preview_background,
     read_annotation,
     read_source,
+    shadow_layer_id,
     write_annotation,
 )
 
@@ -27,6 +30,7 @@ class KritaHost:
     def __init__(self, krita: Krita) -> None:
         self.krita = krita
         self.writer = LayerWriter()
+        self._watched: list[object] = []  # the undo and redo actions followed (Krita makes them per window)
 
     def active_document(self) -> Document | None:
         return self.krita.activeDocument()
@@ -48,6 +52,31 @@ class KritaHost:
     def preview_background(self, source: Source, side: int) -> tuple[int, int, bytes]:
         """The image without the source's shadow, at most ``side`` pixels a side: (width, height, RGBA)."""
         return preview_background(source.document, source.node, side)
+
+    def shadow_layer_id(self, source: Source) -> str | None:
+        """The unique id of the source's shadow layer now in the image, or None."""
+        return shadow_layer_id(source.node)
+
+    def keep_source_active(self, source: Source) -> None:
+        """The source active again where the active layer is its shadow layer."""
+        keep_source_active(source.document, source.node)
+
+    def watch_history(self, changed: Callable[[], None]) -> None:
+        """Call ``changed`` after each undo and redo (Ctrl+Z, the Edit menu, the Undo History docker's buttons
+        trigger these actions), once Krita has carried it out and activated a layer through its event loop."""
+        for name in ("edit_undo", "edit_redo"):
+            action = self.krita.action(name)
+            if action is None or any(action is known for known in self._watched):
+                continue
+            self._watched.append(action)
+            action.triggered.connect(lambda *_: QTimer.singleShot(0, lambda: self._after_history(changed)))
+
+    def _after_history(self, changed: Callable[[], None]) -> None:
+        """Krita carries an undo out in its image's strokes, then activates a layer through a queued signal."""
+        document = self.active_document()
+        if document is not None:
+            document.waitForDone()
+        QTimer.singleShot(0, changed)
 
     def horizontal_guides(self, document: Document | None) -> list[float]:
         return horizontal_guides(document)

@@ -169,6 +169,27 @@ def shadow_of(source_node: Node) -> Node | None:
     return None
 
 
+def shadow_layer_id(source_node: Node) -> str | None:
+    """The unique id of the source's shadow layer now in the image (None: none, or the source is gone)."""
+    try:
+        shadow = shadow_of(source_node)
+    except SourceError:
+        return None
+    return node_id(shadow) if shadow is not None else None
+
+
+def keep_source_active(document: Document, source_node: Node) -> None:
+    """Where the active layer is the source's shadow layer (an undo that brought it back makes it active), make
+    the source active again, so that the next brush stroke lands on the cutout."""
+    active = document.activeNode()
+    try:
+        shadow = shadow_of(source_node)
+    except SourceError:  # the source is no longer in the image
+        return
+    if active is not None and shadow is not None and node_id(active) == node_id(shadow):
+        document.setActiveNode(source_node)
+
+
 def _path_of(node: Node) -> list[int]:
     """Child indices from the root down to ``node``."""
     path = []
@@ -215,6 +236,7 @@ class WriteResult:
     node: Node
     created: bool
     notice: str = ""
+    layer_id: str = ""  # the shadow layer's unique id (Krita keeps it across undo and in the .kra)
 
 
 class LayerWriter:
@@ -241,7 +263,7 @@ class LayerWriter:
         existing = shadow_of(source_node)
         if existing is not None and not new_step:
             self._write_in_place(document, existing, pixels, rect)
-            return WriteResult(existing, False)
+            return WriteResult(existing, False, "", node_id(existing))
         if existing is not None:
             # A copy keeps its mode without the extra undo command setBlendingMode would add.
             node = existing.duplicate()
@@ -260,7 +282,7 @@ class LayerWriter:
         notice = self._insert_below(document, source_node, node)
         document.waitForDone()
         document.setActiveNode(source_node)  # Krita makes an added layer active; keep the source active
-        return WriteResult(node, True, notice)
+        return WriteResult(node, True, notice, node_id(node))
 
     def _rect_of(self, node: Node) -> Rect:
         rect = self._rects.get(node_id(node))

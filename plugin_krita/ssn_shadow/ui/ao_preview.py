@@ -2,7 +2,10 @@
 
 It shows the part of the frame around the cutout (zoomed in, not the whole
 frame), with the occlusion's contrast stretched so that the contact shadow
-is plainly visible. Coordinates handed out are fractions of the engine's
+is plainly visible, and occlusion fainter than :data:`NOISE_FLOOR` of the
+darkest shown white: the network's faint occlusion far from the object
+(which the stretch would turn into grey swirls over the whole frame) casts
+no visible shadow. Coordinates handed out are fractions of the engine's
 N x N frame (x right, y down), as the protocol's AO edits expect.
 """
 
@@ -17,13 +20,22 @@ from PyQt5.QtWidgets import QSizePolicy, QWidget
 
 VIEW_MARGIN = 0.35  # share of the cutout's larger side shown around it
 MAX_STRETCH = 4.0  # the occlusion is darkened at most this many times
+NOISE_FLOOR = 0.12  # occlusion below this share of the darkest is shown white (it ramps in up to twice that)
 
 
 def contrast_table(ao: bytes) -> bytes:
-    """A byte translation table that stretches the occlusion (255 - AO) so its darkest value shows nearly black."""
+    """A byte translation table that stretches the occlusion (255 - AO) so its darkest value shows nearly black,
+    and shows occlusion fainter than :data:`NOISE_FLOOR` of the darkest as none."""
     occlusion = 255 - min(ao) if ao else 0
     k = min(MAX_STRETCH, 230 / max(occlusion, 1))
-    return bytes(max(0, 255 - round((255 - v) * k)) for v in range(256))
+    floor = NOISE_FLOOR * occlusion
+
+    def shown(v: int) -> int:
+        o = 255 - v
+        ramp = min(1.0, max(0.0, (o - floor) / max(floor, 1e-6)))  # 0 below the floor, 1 from twice it
+        return max(0, 255 - round(o * k * ramp))
+
+    return bytes(shown(v) for v in range(256))
 
 
 def view_of(mask: bytes, n: int) -> tuple[float, float, float]:

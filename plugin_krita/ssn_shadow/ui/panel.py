@@ -4,11 +4,16 @@ The panel shows one document's :class:`model.ShadowModel` (the controller's
 current one) through bindings: each widget shows a property and its edits set
 that property. It reaches Krita only through the controller's actions
 (Generate, From guide, Cancel).
+
+Its layout holds still under the mouse: the controls scroll in a body as
+narrow as a default dock (the map and previews scale to the width, labels
+wrap), Generate and the status stay in a footer below it, the shadow preview
+and the camera note keep their space whatever they show.
 """
 
 from __future__ import annotations
 
-from PyQt5.QtCore import Qt
+from PyQt5.QtCore import QSize, Qt
 from PyQt5.QtGui import QColor
 from PyQt5.QtWidgets import (
     QCheckBox,
@@ -22,6 +27,8 @@ from PyQt5.QtWidgets import (
     QProgressBar,
     QPushButton,
     QRadioButton,
+    QScrollArea,
+    QSizePolicy,
     QSlider,
     QSpinBox,
     QVBoxLayout,
@@ -34,17 +41,100 @@ from ..shared import camera_rules, defaults
 from ..shared import light_map as lm
 
 from .ao_preview import AOPreview
-from .drag_preview import DragPreview
 from .light_map_widget import LightMapWidget, slider_to_softness, softness_to_slider
+from .shadow_preview import ShadowPreview
 
 LEVEL_COLOURS = {"info": "", "warning": "color: #d08000;", "error": "color: #d03030;"}
+CUSTOM = "Custom"  # the preset box when the lights are no preset's
+PRESET_TITLES = {  # the presets' names for people (files and the CLI use the keys)
+    "high-sun": "High sun",
+    "low-sun-left": "Low sun, left",
+    "low-sun-right": "Low sun, right",
+    "overcast": "Overcast",
+    "softbox": "Softbox",
+    "two-lights": "Two lights",
+    "rim-light": "Rim light",
+}
+PANEL_WIDTH = 300  # pixels: the panel's preferred width (it fits narrower docks: the map and previews scale)
+HINT_WIDTH = 240  # pixels: the width a wrapped label's size hint assumes (the layout asks at its real width)
+UNKNOWN = "\u2014"  # a camera field's text while no camera is known (an em dash)
+CAMERA_NOTES = {
+    "unknown": "At Generate the engine reads the horizon and field of view from the cutout's outline; tick "
+    "the box to give them yourself.",
+    "given": "Given: the shadow's perspective follows this horizon and field of view. Untick the box to let the "
+    "engine read them from the cutout's outline.",
+}
+
+
+def preset_title(name: str) -> str:
+    """A preset's name for people ("low-sun-left": "Low sun, left")."""
+    return PRESET_TITLES.get(name) or name.replace("-", " ").capitalize()
+
+
+class CameraField:
+    """A spin box mixin that shows a dash instead of its value while no camera is known."""
+
+    unit = ""
+
+    def set_unknown(self, unknown: bool) -> None:
+        self._unknown = unknown
+        self.setSuffix("" if unknown else self.unit)  # type: ignore[attr-defined]  # also redraws the text
+
+    def textFromValue(self, value) -> str:  # noqa: N802 (Qt's API)
+        if getattr(self, "_unknown", False):
+            return UNKNOWN
+        return super().textFromValue(value)  # type: ignore[misc]
+
+
+class HorizonField(CameraField, QSpinBox):
+    unit = " px"
+
+
+class FovField(CameraField, QDoubleSpinBox):
+    unit = "°"
+
+
+class SteadyLabel(QLabel):
+    """A word-wrapped label as tall as the tallest of its possible texts, so that a change of text moves
+    nothing below it."""
+
+    def __init__(self, texts: list[str], parent: QWidget | None = None) -> None:
+        super().__init__(parent)
+        self.texts = texts
+        self.setWordWrap(True)
+        policy = QSizePolicy(QSizePolicy.Policy.Ignored, QSizePolicy.Policy.Fixed)  # it wraps to any width
+        policy.setHeightForWidth(True)
+        self.setSizePolicy(policy)
+
+    def heightForWidth(self, width: int) -> int:  # noqa: N802 (Qt's API)
+        margins = self.contentsMargins()
+        inner = max(1, width - margins.left() - margins.right())
+        metrics = self.fontMetrics()
+        flags = int(Qt.TextFlag.TextWordWrap)
+        tallest = max(metrics.boundingRect(0, 0, inner, 1 << 20, flags, text).height() for text in self.texts)
+        return max(super().heightForWidth(width), tallest + margins.top() + margins.bottom())
+
+    def sizeHint(self) -> QSize:
+        return QSize(HINT_WIDTH, self.heightForWidth(HINT_WIDTH))
+
+    def minimumSizeHint(self) -> QSize:
+        return QSize(0, self.heightForWidth(HINT_WIDTH))
 
 
 def _slider(lo: int, hi: int, value: int) -> QSlider:
     s = QSlider(Qt.Orientation.Horizontal)
     s.setRange(lo, hi)
     s.setValue(value)
+    s.setMinimumWidth(60)
     return s
+
+
+def _form(parent: QWidget | None = None) -> QFormLayout:
+    """A form whose fields go below their labels where the dock is too narrow for both on one line."""
+    form = QFormLayout(parent) if parent is not None else QFormLayout()
+    form.setRowWrapPolicy(QFormLayout.RowWrapPolicy.WrapLongRows)
+    form.setFieldGrowthPolicy(QFormLayout.FieldGrowthPolicy.AllNonFixedFieldsGrow)
+    return form
 
 
 class ShadowPanel(QWidget):
@@ -61,22 +151,37 @@ class ShadowPanel(QWidget):
         self._wire()
         self.show_model(controller.model)
 
+    def sizeHint(self) -> QSize:  # noqa: N802 (Qt's API)
+        """As wide as a narrow dock (added to Krita's dock column, the docker does not widen it)."""
+        return QSize(PANEL_WIDTH, super().sizeHint().height())
+
     # -- layout ----------------------------------------------------------------------
     def _build(self) -> None:
-        root = QVBoxLayout(self)
+        outer = QVBoxLayout(self)
+        outer.setContentsMargins(0, 0, 0, 0)
+        # The controls scroll; Generate and the status below them stay in view.
+        self.scroll = QScrollArea()
+        self.scroll.setWidgetResizable(True)
+        self.scroll.setFrameShape(QScrollArea.Shape.NoFrame)
+        self.body = QWidget()
+        root = QVBoxLayout(self.body)
         root.setContentsMargins(4, 4, 4, 4)
 
         light_box = QGroupBox("Light")
         lv = QVBoxLayout(light_box)
         self.presets = QComboBox()
-        self.presets.addItem("Preset…")
-        self.presets.addItems(list(lm.PRESETS))
+        self.presets.setSizeAdjustPolicy(QComboBox.SizeAdjustPolicy.AdjustToMinimumContentsLengthWithIcon)
+        self.presets.setMinimumContentsLength(8)
+        self.presets.addItem(CUSTOM)
+        for name in lm.PRESETS:
+            self.presets.addItem(preset_title(name), name)
+        self.presets.setToolTip("The lights' preset (Custom: edited lights)")
         lv.addWidget(self.presets)
-        self.drag_preview = DragPreview()
-        lv.addWidget(self.drag_preview)
+        self.preview = ShadowPreview()
+        lv.addWidget(self.preview)
         self.map_widget = LightMapWidget(lm.LightMap())
         lv.addWidget(self.map_widget)
-        form = QFormLayout()
+        form = _form()
         self.softness = _slider(0, 100, 50)
         self.intensity = _slider(0, 300, 100)
         form.addRow("Softness", self.softness)
@@ -87,6 +192,7 @@ class ShadowPanel(QWidget):
             "Click: add · drag: move · wheel: softness · Shift+wheel: intensity · right-click / Del: remove"
         )
         hint.setWordWrap(True)
+        hint.setSizePolicy(QSizePolicy.Policy.Ignored, QSizePolicy.Policy.Preferred)
         hint.setStyleSheet("color: gray; font-size: 8pt;")
         lv.addWidget(hint)
         root.addWidget(light_box)
@@ -95,18 +201,25 @@ class ShadowPanel(QWidget):
         av = QVBoxLayout(ao_box)
         self.ao_preview = AOPreview()
         av.addWidget(self.ao_preview)
+        legend = QLabel("Dark: the contact shadow under the object (blue). Paint to darken or lighten it.")
+        legend.setWordWrap(True)
+        legend.setSizePolicy(QSizePolicy.Policy.Ignored, QSizePolicy.Policy.Preferred)
+        legend.setStyleSheet("color: gray; font-size: 8pt;")
+        av.addWidget(legend)
         tools = QHBoxLayout()
         self.darken = QRadioButton("Darken")
         self.lighten = QRadioButton("Lighten")
         self.darken.setChecked(True)
         tools.addWidget(self.darken)
         tools.addWidget(self.lighten)
+        av.addLayout(tools)
+        grow_row = QHBoxLayout()
         self.grow = QPushButton("Grow")
         self.shrink = QPushButton("Shrink")
-        tools.addWidget(self.grow)
-        tools.addWidget(self.shrink)
-        av.addLayout(tools)
-        aform = QFormLayout()
+        grow_row.addWidget(self.grow)
+        grow_row.addWidget(self.shrink)
+        av.addLayout(grow_row)
+        aform = _form()
         self.brush_size = _slider(1, 25, 5)  # radius in % of the frame
         self.brush_strength = _slider(5, 100, 50)
         self.ao_strength = _slider(0, round(100 * defaults.MAX_AO_STRENGTH), 100)
@@ -115,7 +228,8 @@ class ShadowPanel(QWidget):
         aform.addRow("AO strength", self.ao_strength)
         av.addLayout(aform)
         arow = QHBoxLayout()
-        self.ao_undo = QPushButton("Undo AO edit")
+        self.ao_undo = QPushButton("Undo AO")
+        self.ao_undo.setToolTip("Undo the last AO brush stroke or grow step")
         self.ao_reset = QPushButton("Reset AO")
         arow.addWidget(self.ao_undo)
         arow.addWidget(self.ao_reset)
@@ -124,27 +238,34 @@ class ShadowPanel(QWidget):
 
         camera_box = QGroupBox("Camera")
         cv = QVBoxLayout(camera_box)
-        self.use_horizon = QCheckBox("The image's horizon is at")
-        self.use_horizon.setToolTip("Without it the engine reads the camera from the cutout's outline")
+        self.use_horizon = QCheckBox("Horizon at")
+        self.use_horizon.setToolTip(
+            "Tick to give the image's horizon and field of view; without it the engine reads the camera from the "
+            "cutout's outline"
+        )
         hrow = QHBoxLayout()
-        self.horizon = QSpinBox()
+        self.horizon = HorizonField()
         self.horizon.setRange(*(round(b) for b in camera_rules.EDITOR_HORIZON_RANGE))
-        self.horizon.setSuffix(" px")
+        self.horizon.setSuffix(HorizonField.unit)
+        self.horizon.setMinimumWidth(80)  # narrower than its range's widest text, which few rows need
         self.horizon.setToolTip("The canvas row where the ground meets the sky (it may lie above or below the image)")
         self.from_guide = QPushButton("From guide")
         self.from_guide.setToolTip("Use the first horizontal guide as the horizon")
         hrow.addWidget(self.horizon, 1)
         hrow.addWidget(self.from_guide)
-        cform = QFormLayout()
-        self.fov = QDoubleSpinBox()
+        cform = _form()
+        self.fov = FovField()
         self.fov.setRange(*camera_rules.EDITOR_FOV_RANGE)
         self.fov.setDecimals(0)
-        self.fov.setSuffix("°")
+        self.fov.setSuffix(FovField.unit)
         self.fov.setValue(camera_rules.DEFAULT_FOV)
         self.fov.setToolTip("The image's vertical field of view (a phone camera: about 50 degrees)")
         cform.addRow("Field of view", self.fov)
-        self.camera_read = QLabel()
-        self.camera_read.setWordWrap(True)
+        sample = camera_rules.camera_read_note(  # the longest reading
+            {"horizon": camera_rules.EDITOR_HORIZON_RANGE[0], "fov": camera_rules.EDITOR_FOV_RANGE[1]}, 0
+        )
+        self.camera_read = SteadyLabel([CAMERA_NOTES["unknown"], sample, CAMERA_NOTES["given"]])
+        self.camera_read.setStyleSheet("color: gray;")
         cv.addWidget(self.use_horizon)
         cv.addLayout(hrow)
         cv.addLayout(cform)
@@ -152,39 +273,48 @@ class ShadowPanel(QWidget):
         root.addWidget(camera_box)
 
         shadow_box = QGroupBox("Shadow")
-        sf = QFormLayout(shadow_box)
+        sf = _form(shadow_box)
         self.color_button = QPushButton()
         self.color_button.setToolTip("Shadow colour")
         self.opacity = _slider(0, 100, round(100 * defaults.OPACITY))
         sf.addRow("Colour", self.color_button)
         sf.addRow("Opacity", self.opacity)
         root.addWidget(shadow_box)
+        root.addStretch(1)
+        self.scroll.setWidget(self.body)
+        outer.addWidget(self.scroll, 1)
 
+        footer = QVBoxLayout()
+        footer.setContentsMargins(4, 2, 4, 4)
         row = QHBoxLayout()
         self.live = QCheckBox("Live")
-        self.live.setToolTip("Follow the lights as they change: a preview above the map while a light is dragged")
+        self.live.setToolTip("Follow the lights as they change: the preview follows a dragged light")
         self.generate = QPushButton("Generate shadow")
         self.generate.setDefault(True)
         row.addWidget(self.live)
         row.addWidget(self.generate, 1)
-        root.addLayout(row)
+        footer.addLayout(row)
         self.busy = QProgressBar()
         self.busy.setRange(0, 0)  # an indeterminate busy indicator
         self.busy.setMaximumHeight(8)
         self.busy.setTextVisible(False)
-        self.busy.setVisible(False)
         self.cancel = QPushButton("Cancel")
         self.cancel.setToolTip("Stop waiting for the shadow engine (it restarts with the next Generate)")
-        self.cancel.setVisible(False)
         busy_row = QHBoxLayout()
         busy_row.addWidget(self.busy, 1)
         busy_row.addWidget(self.cancel)
-        root.addLayout(busy_row)
+        for w in (self.busy, self.cancel):  # hidden while idle, keeping their place
+            keep = w.sizePolicy()
+            keep.setRetainSizeWhenHidden(True)
+            w.setSizePolicy(keep)
+            w.setVisible(False)
+        footer.addLayout(busy_row)
         self.message = QLabel()
         self.message.setWordWrap(True)
         self.message.setTextInteractionFlags(Qt.TextInteractionFlag.TextSelectableByMouse)
-        root.addWidget(self.message)
-        root.addStretch(1)
+        self.message.setSizePolicy(QSizePolicy.Policy.Ignored, QSizePolicy.Policy.Preferred)
+        footer.addWidget(self.message)
+        outer.addLayout(footer)
 
     def _wire(self) -> None:
         """The connections that do not depend on the document: actions, tools, the controller's state."""
@@ -210,7 +340,7 @@ class ShadowPanel(QWidget):
         bind(c, "live", self.live.setChecked, self.live.toggled, guard(lambda on: setattr(c, "live", on)))
         bind(c, "busy", guard(self._show_busy))
         c.aoChanged.connect(guard(self.ao_preview.set_images))
-        c.previewed.connect(guard(self.drag_preview.set_image))
+        c.previewed.connect(guard(self.preview.set_image))
         c.engineReady.connect(guard(self._engine_ready))
 
     def show_model(self, model: ShadowModel) -> None:
@@ -218,6 +348,8 @@ class ShadowPanel(QWidget):
         for binding in self._bindings:
             binding.disconnect()
         self.model, guard = model, self._guard
+        if self.controller.source is None:  # another document: its image comes with its next Generate
+            self.preview.clear()
         self._bindings = [
             bind(model, "light_map", guard(self._show_light_map)),
             bind(
@@ -237,18 +369,18 @@ class ShadowPanel(QWidget):
             bind(
                 model,
                 "horizon",
-                lambda v: self.horizon.setValue(round(v)),
+                guard(lambda v: self._show_camera_fields()),
                 self.horizon.editingFinished,
                 guard(lambda: setattr(model, "horizon", float(self.horizon.value()))),
             ),
             bind(
                 model,
                 "fov",
-                self.fov.setValue,
+                guard(lambda v: self._show_camera_fields()),
                 self.fov.editingFinished,
                 guard(lambda: setattr(model, "fov", float(self.fov.value()))),
             ),
-            bind(model, "camera_read", guard(lambda _: self._show_camera_read())),
+            bind(model, "camera_read", guard(lambda _: self._show_camera_fields())),
             bind(model, "color", guard(self._show_colour)),
             bind(
                 model,
@@ -293,14 +425,21 @@ class ShadowPanel(QWidget):
                 self.map_widget.editor.load(light_map.copy())
             finally:
                 self._showing_map = False
+        self._show_preset(light_map)
         self._sync_light_controls()
 
     def _choose_preset(self, index: int) -> None:
-        if index <= 0:
-            return
-        name = self.presets.itemText(index)
+        name = self.presets.itemData(index)
+        if name is not None:
+            self.model.light_map = lm.preset(name)
+
+    def _show_preset(self, light_map: lm.LightMap) -> None:
+        """The preset box names the preset the lights are, or says Custom."""
+        for i in range(1, self.presets.count()):
+            if lm.preset(self.presets.itemData(i)) == light_map:
+                self.presets.setCurrentIndex(i)
+                return
         self.presets.setCurrentIndex(0)
-        self.model.light_map = lm.preset(name)
 
     def _lights_changed(self, live: bool, new_stroke: bool) -> None:
         if self._showing_map:
@@ -341,19 +480,26 @@ class ShadowPanel(QWidget):
         self.use_horizon.setChecked(given)
         for w in (self.horizon, self.fov):
             w.setEnabled(given)
-        self._show_camera_read()
+        self._show_camera_fields()
 
-    def _show_camera_read(self) -> None:
-        """Without a horizon of the image's own, say which camera the model read from the outline (the disabled
-        fields show it, so that ticking the box starts from it)."""
-        read = self.model.camera_read
-        if read is None or self.model.use_horizon:
-            self.camera_read.setText("")
-            self.camera_read.setVisible(False)
-            return
-        source = self.controller.source  # the cutout's image, whose camera the model read
-        self.camera_read.setText(camera_rules.camera_read_note(read, source.height if source is not None else 0))
-        self.camera_read.setVisible(True)
+    def _show_camera_fields(self) -> None:
+        """The fields show the given camera, else the one the model read from the outline (so that ticking the
+        box starts from it), else a dash; the note below says which (in a space that does not change)."""
+        m = self.model
+        read = m.camera_read
+        unknown = not m.use_horizon and read is None
+        self.horizon.setValue(round(m.horizon))
+        self.fov.setValue(m.fov)
+        self.horizon.set_unknown(unknown)
+        self.fov.set_unknown(unknown)
+        if m.use_horizon:
+            note = CAMERA_NOTES["given"]
+        elif read is None:
+            note = CAMERA_NOTES["unknown"]
+        else:
+            source = self.controller.source  # the cutout's image, whose camera the model read
+            note = camera_rules.camera_read_note(read, source.height if source is not None else 0)
+        self.camera_read.setText(note)
 
     # -- shadow ----------------------------------------------------------------------------
     def _show_colour(self, rgb: tuple[float, float, float]) -> None:

@@ -1,0 +1,136 @@
+"""Runs inside real Krita (kritarunner): the docker in a Krita window on a 1366 x 768 screen, and Krita's undo.
+
+``kritarunner -s krita_docker_driver -f main`` (a fresh profile, on a virtual 1366 x 768 X screen) shows a
+window of a fresh profile's size with the docker at Krita's default place and width, generates two shadows
+through the docker's panel and undoes them with Krita's undo action; it writes $SSN_TEST_RESULT.
+"""
+
+import json
+import os
+import time
+import traceback
+
+from krita import Krita
+from PyQt5.QtCore import Qt
+from PyQt5.QtWidgets import QApplication, QDockWidget
+
+RESULT = os.environ.get("SSN_TEST_RESULT", "/tmp/ssn_krita_docker.json")
+W, H = 480, 360
+NARROW = 260  # pixels: a dock column narrower than Krita's default
+out = {"log": []}
+
+
+def pump(seconds):
+    deadline = time.monotonic() + seconds
+    while time.monotonic() < deadline:
+        QApplication.processEvents()
+        time.sleep(0.01)
+
+
+def wait_idle(controller, timeout_s=120.0):
+    deadline = time.monotonic() + timeout_s
+    pump(0.2)
+    while controller.busy and time.monotonic() < deadline:
+        pump(0.05)
+    pump(0.5)
+
+
+def main(*args):
+    try:
+        from ssn_shadow.docker import DOCKER_ID, SoftShadowDocker
+        from ssn_shadow.shared import light_map as lm
+
+        k = Krita.instance()
+        doc = k.createDocument(W, H, "ssn-docker", "RGBA", "U8", "", 72.0)
+        person = doc.createNode("Person", "paintlayer")
+        person.setPixelData(bytes([200, 90, 40, 255]) * (80 * 180), 200, 90, 80, 180)
+        doc.rootNode().addChildNode(person, doc.rootNode().childNodes()[0])
+        window = k.openWindow()
+        window.addView(doc)
+        qwin = window.qwindow()
+        # A profile without a saved window geometry: Krita 5.1 opens its window at two thirds of a screen wider
+        # than 1024 px, centred (KisMainWindow::initializeGeometry); the virtual screen has no window manager.
+        screen = QApplication.primaryScreen().availableGeometry()
+        w, h = screen.width() * 2 // 3, screen.height() * 2 // 3
+        qwin.setGeometry(screen.x() + (screen.width() - w) // 2, screen.y() + (screen.height() - h) // 2, w, h)
+        qwin.show()
+        pump(2.0)
+        layers = next(d for d in qwin.findChildren(QDockWidget) if d.objectName() == "KisLayerBox")
+        default_width = layers.width()  # the right dock column of a fresh profile
+        docker = SoftShadowDocker()
+        docker.setObjectName(DOCKER_ID)
+        qwin.addDockWidget(Qt.DockWidgetArea.RightDockWidgetArea, docker)  # where Krita puts a new docker
+        docker.show()
+        pump(1.0)
+        widened = docker.width()
+        # Krita restores its dock column's width (its workspace) rather than widening it for a new docker
+        qwin.resizeDocks([docker], [default_width], Qt.Orientation.Horizontal)
+        pump(2.0)
+        panel = docker.panel
+        out["layout"] = {
+            "screen": list(QApplication.primaryScreen().availableGeometry().getRect()),
+            "window": list(qwin.geometry().getRect()),
+            "default_width": default_width,
+            "widened_to": widened,
+            "docker_width": docker.width(),
+            "layers_docker_width": layers.width(),
+            "viewport_width": panel.scroll.viewport().width(),
+            "body_min_width": panel.body.minimumSizeHint().width(),
+            "horizontal_scroll_bar": panel.scroll.horizontalScrollBar().isVisible(),
+            "map_right": panel.map_widget.mapTo(panel.scroll.viewport(), panel.map_widget.rect().topRight()).x(),
+            "presets_right": panel.presets.mapTo(panel.scroll.viewport(), panel.presets.rect().topRight()).x(),
+            "generate_visible": panel.generate.isVisible() and not panel.generate.visibleRegion().isEmpty(),
+        }
+        qwin.resizeDocks([docker], [NARROW], Qt.Orientation.Horizontal)  # the user narrows the dock column
+        pump(1.0)
+        out["narrow"] = {
+            "docker_width": docker.width(),
+            "viewport_width": panel.scroll.viewport().width(),
+            "horizontal_scroll_bar": panel.scroll.horizontalScrollBar().isVisible(),
+            "map_right": panel.map_widget.mapTo(panel.scroll.viewport(), panel.map_widget.rect().topRight()).x(),
+        }
+        qwin.resizeDocks([docker], [default_width], Qt.Orientation.Horizontal)
+        pump(0.5)
+
+        controller = docker.controller
+        doc.setActiveNode(person)
+        pump(0.5)
+        controller.host.active_document = lambda: doc  # kritarunner's window may not be the active one
+        controller.set_model(docker.models.model_for(doc))
+        panel.show_model(controller.model)
+        controller.watch_history()
+        controller.live = False
+        controller.model.light_map = lm.preset("low-sun-left")
+        panel.generate.click()
+        wait_idle(controller)
+        first = controller.model.light_map.to_dict()
+        controller.model.light_map = lm.preset("low-sun-right")
+        panel.generate.click()
+        wait_idle(controller)
+        doc.setActiveNode(person)
+        pump(0.5)
+        undo = k.action("edit_undo")
+        steps = out["undo"] = []
+        for _ in range(2):  # the new shadow goes, then the first one comes back
+            text = undo.text()
+            undo.trigger()
+            doc.waitForDone()
+            pump(1.5)
+            active = doc.activeNode()
+            steps.append(
+                {
+                    "text": text,
+                    "names": [n.name() for n in doc.rootNode().childNodes()],
+                    "active": active.name() if active is not None else None,
+                    "light_map": controller.model.light_map.to_dict(),
+                    "preset": panel.presets.currentText(),
+                }
+            )
+        out["first_light_map"] = first
+        out["messages"] = list(controller.model.status)
+        docker.engine.shutdown()
+        out["done"] = True
+    except Exception:
+        out["error"] = traceback.format_exc()
+    with open(RESULT, "w") as f:
+        json.dump(out, f, indent=1)
