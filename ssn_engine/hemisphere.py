@@ -16,8 +16,8 @@ import numpy as np
 from scipy.special import erf
 
 from .light_map import ASPECT, LightMap
+from .model_config import NETWORK_SHAPE
 
-NETWORK_SHAPE = (16, 32)
 
 
 def texel_edges(h: int) -> tuple[np.ndarray, np.ndarray]:

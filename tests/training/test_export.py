@@ -76,7 +76,7 @@ def test_the_engine_loads_the_export(exported):
 
 
 def test_fixed_group_norm_is_group_norm():
-    from training.export import FixedGroupNorm
+    from training.onnx_graphs import FixedGroupNorm
 
     gn = torch.nn.GroupNorm(4, 8)
     with torch.no_grad():
@@ -289,7 +289,7 @@ def test_a_camera_taking_aop_exports_beside_the_plain_one_and_serves_calls_with_
     engine runs it for calls that give the camera input and the plain AOP for blind ones; --aop refuses it."""
     from ssn_engine.methods import OnnxSSN
     from training import checkpoint
-    from training.onnx_weights import rebuild
+    from training.graph_weights import rebuild
 
     run = tmp_path / "aop_cam"
     assert train_main(["--module", "aop", "--camera", "--run", str(run), *TINY], store=FakeStore(res=32)) == 0
