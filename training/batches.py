@@ -86,7 +86,7 @@ def moved_cameras(cameras: np.ndarray, n: int, error: tuple[float, float], rng: 
 def card_bases(
     card: GeometricCard, mask: np.ndarray, camera: tuple[float, float] | None, resolution: int
 ) -> np.ndarray:
-    """The shadow bases of a frame mask's card (or proxy) on the full R x R grid, (2, T, R*R) uint8 (x 255): every
+    """The shadow bases of a frame mask's card on the full R x R grid, (2, T, R*R) uint8 (x 255): every
     texel's shadow along its centre direction and over its area (:func:`card_shadow` picks one per texel, as the
     engine does); a card traced on a coarser grid is resampled as the engine resamples its shadows (the resampling
     is linear, so the bases' weighted sum is the engine's resampled shadow)."""
@@ -134,7 +134,7 @@ def load_view(
     predict_ao_camera=None,
 ) -> CachedView:
     """Load view ``i`` of ``store`` and bring it to ``resolution`` (``with_occ`` False: no bases, for AOP;
-    ``card``: the bases of this card method (the geometric card, or the height proxy) for the blind camera
+    ``card``: the bases of this card method (the geometric card) for the blind camera
     (:func:`blind_camera` of ``camera_error``, drawn with ``rng``) and the true camera; ``predict_ao``: a
     function of masks (B, R, R) -> AO maps whose prediction the view keeps; ``predict_ao_camera``: one of masks and
     camera inputs (B, 2) in frames, given the view's true camera)."""

@@ -27,7 +27,7 @@ def pick_items(count: int) -> list[sources.Item]:
     items.sort(key=lambda it: rows[it.id])
     idx = np.linspace(0, len(items) - 1, count).round().astype(int)
     picked = [items[i] for i in idx]
-    try:
+    try:  # anny (the people) is optional here: without it the benchmark runs on the meshes alone
         import anny  # noqa: F401
 
         from training.data.humans import human_items
@@ -73,7 +73,7 @@ def stages(mesh, topo, yaw, pitch, fov, n, hb, samples, rng) -> dict[str, float]
 def embree_seconds_per_view(mesh, n: int, hb: int, samples: int, texels: int = 32) -> float:
     """Seconds per view of brute-force shadow rays in Embree (Mitsuba 3 llvm_ad_rgb, one thread),
     extrapolated from ``texels`` texels: the alternative this renderer was chosen against."""
-    import drjit as dr
+    import drjit as dr  # the reference extra, needed only for this comparison
     import mitsuba as mi
 
     mi.set_variant("llvm_ad_rgb")

@@ -24,8 +24,12 @@ from pathlib import Path
 from .camera_net import install, train, write_examples
 
 
-def main(argv: list[str] | None = None) -> None:
-    parser = argparse.ArgumentParser(description=__doc__, formatter_class=argparse.RawDescriptionHelpFormatter)
+def parse_args(argv: list[str] | None = None) -> argparse.Namespace:
+    parser = argparse.ArgumentParser(
+        prog="python -m training.camera_estimator",
+        description=__doc__,
+        formatter_class=argparse.RawDescriptionHelpFormatter,
+    )
     parser.add_argument("--data", default="data/heights128", help="a `training.heights make` folder")
     parser.add_argument("--out", default="runs/camera")
     parser.add_argument("--minutes", type=float, default=30.0, help="training time; 0: only --install")
@@ -54,7 +58,11 @@ def main(argv: list[str] | None = None) -> None:
     )
     parser.add_argument("--init-from", help="start from the weights of an exported camera.onnx (a fine-tune)")
     parser.add_argument("--install", help="then install the estimator into this model folder (ssn_engine/models)")
-    args = parser.parse_args(argv)
+    return parser.parse_args(argv)
+
+
+def main(argv: list[str] | None = None) -> None:
+    args = parse_args(argv)
     if args.write_examples:
         write_examples(Path(args.data), Path(args.write_examples), args.sharp_input)
         return

@@ -24,10 +24,14 @@ import numpy as np
 import torch
 
 from ssn_engine.frames import resample_frames
+from ssn_engine.hemisphere import network_elm
+from ssn_engine.methods.geometric import GeometricCard
+from ssn_engine.methods.onnx_ssn import apply_floor
 
-from .data.views import pitch_groups
 from .batches import irradiance_to_shadow, view_key
 from .checkpoint import load_models
+from .data.store import ViewStore
+from .data.views import pitch_groups
 from .elm import render_lights, sample_lights
 from .evaluate_families import add_arguments as add_family_arguments
 from .evaluate_families import evaluate_families, families_markdown
@@ -130,9 +134,6 @@ class Networks:
         elm_hb: np.ndarray | None = None,
         noninv: bool = False,
     ) -> np.ndarray:
-        from ssn_engine.hemisphere import network_elm
-        from ssn_engine.methods.onnx_ssn import apply_floor
-
         n = masks.shape[-1]
         m = torch.from_numpy(resample_frames(masks, self.r)[:, None])
         a = torch.from_numpy(resample_frames(ao, self.r)[:, None])
@@ -146,10 +147,6 @@ class Networks:
 
 
 def evaluate(args: argparse.Namespace, store=None) -> dict:
-    from ssn_engine.methods.geometric import GeometricCard
-
-    from .data.store import ViewStore
-
     torch.set_num_threads(args.threads)
     store = store if store is not None else ViewStore(args.data)
     n_px, rows_hb = store.meta["res"], store.meta["elm_rows"]

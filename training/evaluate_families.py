@@ -19,8 +19,13 @@ from pathlib import Path
 
 import numpy as np
 
-from .data.views import pitch_groups
+from ssn_engine.hemisphere import render_light_map
+from ssn_engine.light_map import GaussianLight, LightMap
+from ssn_engine.methods import GeometricCard, OnnxSSN
+
 from .batches import camera_input
+from .data.store import ViewStore
+from .data.views import pitch_groups
 from .elm import FAMILIES, render_lights, sample_family
 from .metrics import NAMES, all_metrics, mean_metrics, sun_geometry
 from .plots import image_grid
@@ -54,13 +59,6 @@ def add_arguments(p: argparse.ArgumentParser) -> None:
         help="--families: also evaluate NAME (a --model name or 'geometric') with the true camera",
     )
     p.add_argument(
-        "--proxy-of",
-        action="append",
-        default=[],
-        metavar="NAME",
-        help="--families: also evaluate model NAME's height proxy alone (its hard shadows summed, as the card's are)",
-    )
-    p.add_argument(
         "--with-gt-ao",
         action="append",
         default=[],
@@ -86,9 +84,7 @@ class Row:
 
 
 def build_rows(args: argparse.Namespace, n: int) -> list[Row]:
-    from ssn_engine.methods import GeometricCard, OnnxSSN
-    from ssn_engine.methods.height_proxy import HeightProxy
-
+    """The evaluated rows: the geometric card, each --model, and those given the camera or the ground-truth AO."""
     methods = {"geometric": GeometricCard(resolution=n)}
     for spec in args.model:
         name, _, folder = spec.partition("=")
@@ -97,11 +93,6 @@ def build_rows(args: argparse.Namespace, n: int) -> list[Row]:
         methods[name] = OnnxSSN(folder)
         if methods[name].resolution != n:
             raise SystemExit(f"{folder} renders {methods[name].resolution}-pixel frames; the data has N = {n}")
-    for name in args.proxy_of:
-        proxy = getattr(methods[name], "card", None)
-        if not isinstance(proxy, HeightProxy):
-            raise SystemExit(f"--proxy-of {name}: that model has no height graph")
-        methods[f"{name} proxy"] = proxy
     rows = [Row(name, m) for name, m in methods.items()]
     for name in args.with_camera:
         rows.append(Row(f"{name} + camera", methods[name], camera=True))
@@ -117,8 +108,6 @@ def family_lights(seed: int, view: int, family: str, count: int, rows_hb: int) -
 
 
 def evaluate_families(args: argparse.Namespace, store=None) -> dict:
-    from .data.store import ViewStore
-
     families = [f for f in args.families.split(",") if f]
     unknown = set(families) - set(FAMILIES)
     if unknown:
@@ -249,9 +238,6 @@ def families_markdown(results: dict) -> str:
 
 def sun_grid(store, ids: list[int], rows: list[Row], path: Path, rows_hb: int, views: int = 3) -> None:
     """A picture grid: a few views under one sun at several elevations; ground truth, then every row."""
-    from ssn_engine.hemisphere import render_light_map
-    from ssn_engine.light_map import GaussianLight, LightMap
-
     pictures = []
     for i in [ids[int(j)] for j in np.linspace(0, len(ids) - 1, views).round()] if ids else []:
         v = store.load(i)

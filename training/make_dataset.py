@@ -19,10 +19,14 @@ import traceback
 from pathlib import Path
 
 from training.data import writer
-from training.data.views import CAMERA_TEXT, CAMERAS, FOV_RANGE, PITCH_RANGE, PITCHES, VIEWS, YAW_RANGE, YAWS
-from training.progress import Progress
+from training.data.card import write_card
+from training.data.contact_sheet import write_contact_sheet
+from training.data.generate import render_item
+from training.data.render_bases import set_threads
 from training.data.sources import SOURCES, all_items
 from training.data.store import DATASET_JSON
+from training.data.views import CAMERA_TEXT, CAMERAS, FOV_RANGE, PITCH_RANGE, PITCHES, VIEWS, YAW_RANGE, YAWS
+from training.progress import Progress
 
 FORMAT_VERSION = 1
 
@@ -54,14 +58,10 @@ def parse_args(argv: list[str] | None = None) -> argparse.Namespace:
 
 
 def _init_worker(threads: int) -> None:
-    from training.data.render_bases import set_threads
-
     set_threads(threads)
 
 
 def _run_item(job: tuple) -> dict:
-    from training.data.generate import render_item
-
     item, root, res, elm_rows, samples, seed, cameras = job
     try:
         return render_item(item, root, res, elm_rows, samples, seed, cameras)
@@ -163,9 +163,6 @@ def main(argv: list[str] | None = None) -> int:
                 + "\n"
             )
     if not args.no_card:
-        from training.data.card import write_card
-        from training.data.contact_sheet import write_contact_sheet
-
         write_card(root)
         write_contact_sheet(root)
     return 0
