@@ -82,6 +82,9 @@ class CameraNet(nn.Module):
     """Five convolution blocks (64 -> 2 pixels; the mask and a row coordinate in), two dense layers out: logits
     over the horizon bins and the standardised focal length."""
 
+    rows: torch.Tensor  # (1, 1, INPUT, INPUT) row coordinates in [-1, 1], a second input channel
+    edges: torch.Tensor  # the horizon bins' edges, over N
+
     def __init__(self, width: int = 32) -> None:
         super().__init__()
         w = width

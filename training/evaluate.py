@@ -52,7 +52,7 @@ PAPER = {
 
 
 def parse_args(argv: list[str] | None = None) -> argparse.Namespace:
-    p = argparse.ArgumentParser(prog="python -m training.evaluate", description=__doc__.split("\n")[0])
+    p = argparse.ArgumentParser(prog="python -m training.evaluate", description=(__doc__ or "").split("\n")[0])
     p.add_argument("--data", default="data/ssn128")
     p.add_argument("--split", default="test")
     p.add_argument(
@@ -138,8 +138,11 @@ class Networks:
         m = torch.from_numpy(resample_frames(masks, self.r)[:, None])
         a = torch.from_numpy(resample_frames(ao, self.r)[:, None])
         e = torch.from_numpy(network_elm(elm16))
-        out = (self.noninv if noninv else self.sr)(m, a, e)[:, 0].numpy()
-        if noninv:
+        net = self.noninv if noninv else self.sr
+        if net is None or (noninv and elm_hb is None):
+            raise ValueError("a Non-inv-SSN render needs its checkpoint (--noninv) and the basis-grid light maps")
+        out = net(m, a, e)[:, 0].numpy()
+        if elm_hb is not None and noninv:
             out = irradiance_to_shadow(resample_frames(out, n), elm_hb, elm16)
         else:
             out = resample_frames(np.clip(out, 0, 1), n)

@@ -85,7 +85,7 @@ class Row:
 
 def build_rows(args: argparse.Namespace, n: int) -> list[Row]:
     """The evaluated rows: the geometric card, each --model, and those given the camera or the ground-truth AO."""
-    methods = {"geometric": GeometricCard(resolution=n)}
+    methods: dict[str, GeometricCard | OnnxSSN] = {"geometric": GeometricCard(resolution=n)}
     for spec in args.model:
         name, _, folder = spec.partition("=")
         if not folder:

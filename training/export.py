@@ -23,12 +23,12 @@ import argparse
 import sys
 from pathlib import Path
 
-from .model_export import ExportError, ExportOptions, export_model
+from .model_export import ExportError, ExportOptions, export_model, reuses_aop_graph
 from .onnx_graphs import TOL
 
 
 def parse_args(argv: list[str] | None = None) -> argparse.Namespace:
-    p = argparse.ArgumentParser(prog="python -m training.export", description=__doc__.split("\n")[0])
+    p = argparse.ArgumentParser(prog="python -m training.export", description=(__doc__ or "").split("\n")[0])
     p.add_argument(
         "--aop",
         nargs="+",
@@ -101,7 +101,12 @@ def parse_args(argv: list[str] | None = None) -> argparse.Namespace:
         help="the reproducing command recorded in the card",
     )
     p.add_argument("--trained-on", default="", help="the machine the SR was trained on, for the card")
-    return p.parse_args(argv)
+    args = p.parse_args(argv)
+    try:
+        reuses_aop_graph(args.aop, args.aop_without_mirror)
+    except ExportError as exc:
+        p.error(str(exc))
+    return args
 
 
 def main(argv: list[str] | None = None) -> int:

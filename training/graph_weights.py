@@ -20,11 +20,11 @@ from onnx import numpy_helper
 
 from ssn_engine.model_config import ModelConfig, ModelConfigError
 
-from .model_card import MIX_RECORD
-from .onnx_graphs import TOL, export_graph, mirror_concat, parity, session
-from .model import UNetConfig, build
+from .model import AOPNet, SRNet, UNetConfig, build
 from .model.ensemble import Ensemble
 from .model.mirror import MirrorAverage
+from .model_card import MIX_RECORD
+from .onnx_graphs import TOL, export_graph, mirror_concat, parity, session
 
 HEAD = re.compile(r"((?:net\.)+)(?:nets\.(\d+)\.)?unet\.encoder\.0\.0\.0\.weight")  # a U-Net's first weight
 
@@ -126,19 +126,20 @@ def _model_json(path: Path, module: str) -> dict:
 
 def graph_network(
     path: Path, groups: int = 8, tol: float = TOL
-) -> tuple[str, list[torch.nn.Module], torch.nn.Module, float]:
+) -> tuple[str, list[AOPNet | SRNet], torch.nn.Module, float]:
     """The module, the networks (one, or an ensemble's members) and the whole function of an exported graph (the
     members' :class:`~training.model.Ensemble`, inside a :class:`~training.model.MirrorAverage` where the graph
     averages its input's mirror image), checked against the graph on random inputs: the largest difference, at most
     ``tol``."""
     model = onnx.load(str(path))
     count = _heads(model)[1]
-    nets = []
+    nets: list[AOPNet | SRNet] = []
     for k in range(count) if count else [None]:
         module, config = graph_config(model, groups, k)
         net = build(module, config)
         net.load_state_dict(state_dict_from_graph(model, net, k))
-        nets.append(net.eval())
+        net.eval()
+        nets.append(net)
     whole = Ensemble(nets).eval() if count else nets[0]
     if mirror_concat(model) is not None:  # its network runs on the input and its mirror
         whole = MirrorAverage(whole).eval()
@@ -202,7 +203,7 @@ def reexport(path: Path, out: Path, groups: int = 8, tol: float = TOL) -> float:
     old, new = session(path), session(out)
     x = random_inputs(nets[0].config.resolution)
     feeds = {i.name: x[i.name] for i in old.get_inputs()}
-    diff = float(np.abs(new.run(None, feeds)[0] - old.run(None, feeds)[0]).max())
+    diff = float(np.abs(np.asarray(new.run(None, feeds)[0]) - np.asarray(old.run(None, feeds)[0])).max())
     if diff > tol:
         raise ValueError(f"the re-exported graph is {diff:.2e} off the graph (tolerance {tol:g})")
     return diff

@@ -15,7 +15,7 @@ from .data.views import CAMERAS
 
 
 def parse_args(argv: list[str] | None = None) -> argparse.Namespace:
-    p = argparse.ArgumentParser(prog="python -m training.heights", description=__doc__.split("\n")[0])
+    p = argparse.ArgumentParser(prog="python -m training.heights", description=(__doc__ or "").split("\n")[0])
     sub = p.add_subparsers(dest="command", required=True)
     m = sub.add_parser("make", help="masks and camera inputs of a split's views, and the camera estimator's inputs")
     m.add_argument("--split", required=True, choices=("train", "val", "test"))

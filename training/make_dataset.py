@@ -32,7 +32,7 @@ FORMAT_VERSION = 1
 
 
 def parse_args(argv: list[str] | None = None) -> argparse.Namespace:
-    p = argparse.ArgumentParser(prog="python -m training.make_dataset", description=__doc__.splitlines()[0])
+    p = argparse.ArgumentParser(prog="python -m training.make_dataset", description=(__doc__ or "").split("\n")[0])
     p.add_argument("--out", required=True, type=Path, help="dataset directory")
     p.add_argument("--res", type=int, default=256, help="frame size N")
     p.add_argument("--workers", type=int, default=2, help="processes (one mesh at a time each)")

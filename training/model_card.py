@@ -138,6 +138,9 @@ def model_card(config: ModelConfig, attribution: list[dict], command: str) -> st
     lines += [
         "## Reproduce",
         "",
+        "Every stage that made this model, from the meshes to a model folder, in order (docs/training.md says why "
+        "each stage is as it is):",
+        "",
         "```",
         command,
         "```",

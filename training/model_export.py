@@ -35,7 +35,7 @@ from .onnx_graphs import (
     without_mirror_average,
 )
 
-__all__ = ["ExportOptions", "ExportError", "export_model", "reuse_aop", "sample_inputs", "time_sr"]
+__all__ = ["ExportError", "ExportOptions", "export_model", "reuse_aop", "reuses_aop_graph", "sample_inputs", "time_sr"]
 
 MODEL_FILES = ("aop.onnx", "sr.onnx", "aop_camera.onnx", "model.json", "MODEL_CARD.md")
 
@@ -98,7 +98,8 @@ def time_sr(path: Path, resolution: int, repeats: int = 30) -> dict[str, float]:
 
     def engine_path():
         m = resample_frames(frame, resolution)[:, None]
-        out = s.run(None, {"mask": m, "ao": m, "elm": feeds["elm"], **({"card": m} if card else {})})[0][:, 0]
+        run_feeds = {"mask": m, "ao": m, "elm": feeds["elm"], **({"card": m} if card else {})}
+        out = np.asarray(s.run(None, run_feeds)[0])[:, 0]
         return resample_frames(out, 256)
 
     out = {}
@@ -193,6 +194,15 @@ def _export_one(name: str, module: str, ck_paths: list[str], x: dict, opt: Expor
     return r
 
 
+def reuses_aop_graph(aop: list[str], without_mirror: bool) -> bool:
+    """Whether ``--aop`` names an installed graph to reuse rather than checkpoints; ExportError where
+    ``without_mirror`` (--aop-without-mirror) asks to rewrite a graph that is not given."""
+    reused = len(aop) == 1 and aop[0].endswith(".onnx")
+    if without_mirror and not reused:
+        raise ExportError("--aop-without-mirror rewrites an installed aop.onnx: give one as --aop")
+    return reused
+
+
 def export_model(opt: ExportOptions) -> ModelConfig:
     """Write the model ``opt`` describes into ``opt.out`` (and ``opt.install``); returns its configuration.
 
@@ -201,9 +211,7 @@ def export_model(opt: ExportOptions) -> ModelConfig:
     ExportError
         A checkpoint is of the wrong kind, or a graph is further than ``opt.tol`` from its network.
     """
-    reused = len(opt.aop) == 1 and opt.aop[0].endswith(".onnx")
-    if opt.aop_without_mirror and not reused:
-        raise ExportError("--aop-without-mirror rewrites an installed aop.onnx: give one as --aop")
+    reused = reuses_aop_graph(opt.aop, opt.aop_without_mirror)
     out = opt.out
     out.mkdir(parents=True, exist_ok=True)
     report: dict = {}

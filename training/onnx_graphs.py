@@ -21,6 +21,8 @@ import torch
 from onnx import TensorProto, helper, numpy_helper
 from torch import nn
 
+from .model import AOPNet, Ensemble, MirrorAverage, SRNet, UNetConfig
+
 __all__ = [
     "TOL",
     "Clamped",
@@ -162,10 +164,12 @@ def fill_norm_constants(path: Path) -> None:
     onnx.save(model, str(path))
 
 
-def _config(net: nn.Module):
+def _config(net: nn.Module) -> UNetConfig:
     """The UNetConfig of a network, possibly wrapped in MirrorAverage / Ensemble."""
-    while not hasattr(net, "config"):
-        net = net.net if hasattr(net, "net") else net.nets[0]
+    while isinstance(net, (MirrorAverage, Ensemble)):
+        net = net.net if isinstance(net, MirrorAverage) else net.nets[0]
+    if not isinstance(net, (AOPNet, SRNet)):
+        raise TypeError(f"expected an AOP or SR network, got {type(net).__name__}")
     return net.config
 
 

@@ -25,7 +25,7 @@ from .onnx_graphs import TOL
 
 
 def main(argv: list[str] | None = None) -> int:
-    p = argparse.ArgumentParser(prog="python -m training.onnx_weights", description=__doc__.splitlines()[0])
+    p = argparse.ArgumentParser(prog="python -m training.onnx_weights", description=(__doc__ or "").split("\n")[0])
     p.add_argument("graph", type=Path, help="aop.onnx or sr.onnx")
     to = p.add_mutually_exclusive_group(required=True)
     to.add_argument("--out", type=Path, help="checkpoint to write")

@@ -23,7 +23,7 @@ from .trainer import run
 
 
 def parse_args(argv: list[str] | None = None) -> argparse.Namespace:
-    p = argparse.ArgumentParser(prog="python -m training.train", description=__doc__.split("\n")[0])
+    p = argparse.ArgumentParser(prog="python -m training.train", description=(__doc__ or "").split("\n")[0])
     p.add_argument("--module", choices=["aop", "sr"], required=True)
     p.add_argument(
         "--target",

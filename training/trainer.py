@@ -358,6 +358,9 @@ class RunLog:
         return row
 
     def write(self, row: dict) -> None:
+        """Append ``row`` to log.csv (rank 0 only: the other ranks keep no log)."""
+        if self.writer is None or self.file is None:
+            raise RuntimeError("only rank 0 writes the run's log")
         self.writer.writerow(row)
         self.file.flush()
 
@@ -597,6 +600,8 @@ def validate_and_keep_best(
     args: argparse.Namespace, run: Path, net: Network, data: TrainData, objective: Objective
 ) -> float:
     """The validation loss; writes ``samples_latest.png``, and ``best.pt`` at the lowest loss so far."""
+    if data.val is None:
+        raise RuntimeError("only rank 0 validates")
     v, pred = validate(net.model, args.module, data.val, objective)
     write_samples(run / "samples_latest.png", args.module, data.val, pred)
     if v < net.best:

@@ -9,6 +9,7 @@ training.heights make`` writes a split's views to one npz file (:func:`make`); :
 from __future__ import annotations
 
 from pathlib import Path
+from typing import Any
 
 import numpy as np
 
@@ -81,7 +82,8 @@ def make(
             prog.update(c * len(items) + q + 1, item.id)
     prog.close()
     out.parent.mkdir(parents=True, exist_ok=True)
-    np.savez_compressed(out, **{k: np.asarray(v) for k, v in rec.items()}, cameras=np.array(cameras))
+    arrays: dict[str, Any] = {k: np.asarray(v) for k, v in rec.items()}
+    np.savez_compressed(out, **arrays, cameras=np.array(cameras))
 
 
 def load(paths: list[Path]) -> dict[str, np.ndarray]:

@@ -165,20 +165,22 @@ class SRNet(nn.Module):
     ) -> torch.Tensor:
         if not self.config.card:
             return self.unet(torch.cat([mask, ao], dim=1), elm.flatten(1))
+        assert card is not None, "this SR takes the card's shadow"
         return card + self.unet(torch.cat([mask, ao, card], dim=1), elm.flatten(1))
 
 
-def build(module: str, config: UNetConfig, head_bias: float | None = None) -> nn.Module:
+def build(module: str, config: UNetConfig, head_bias: float | None = None) -> AOPNet | SRNet:
     """AOPNet or SRNet for ``module`` in {"aop", "sr"}; ``head_bias`` sets the output's initial offset
     (the typical target value: 1 for AO, 0 for s), so the linear head does not spend its first
     thousand Adam steps moving a bias."""
     if module == "aop":
-        net: nn.Module = AOPNet(config)
+        net: AOPNet | SRNet = AOPNet(config)
     elif module == "sr":
         net = SRNet(config)
     else:
         raise ValueError(f"module must be 'aop' or 'sr', got {module!r}")
-    if head_bias is not None:
+    bias = net.unet.head.bias
+    if head_bias is not None and bias is not None:
         with torch.no_grad():
-            net.unet.head.bias.fill_(head_bias)
+            bias.fill_(head_bias)
     return net
