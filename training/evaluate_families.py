@@ -1,4 +1,4 @@
-"""Evaluation by light family: ``python -m training.evaluate --families [--model NAME=DIR ...]``.
+"""Evaluation by light family (``python -m training.evaluate --families [--model NAME=DIR ...]``).
 
 Every test view is lit by ``--per-view`` light maps of each family of :mod:`training.elm` (``sun``: one small
 light, ``two``: two small lights, ``sky``: 3 to 8 broad lights, ``table1``: the paper's sampling), drawn from a
@@ -34,37 +34,6 @@ from .progress import Progress
 KINDS = ("object", "human", "animal")
 SUN_ELEVATIONS = (10.0, 25.0, 45.0, 70.0)  # the picture grid's suns, degrees
 SUN_AZIMUTH_U = 0.8  # the grid's sun: right of the camera's forward direction, casting towards the viewer's left
-
-
-def add_arguments(p: argparse.ArgumentParser) -> None:
-    p.add_argument(
-        "--families",
-        nargs="?",
-        const=",".join(FAMILIES),
-        default=None,
-        help=f"evaluate by light family (comma list of {', '.join(FAMILIES)}; default all)",
-    )
-    p.add_argument(
-        "--model",
-        action="append",
-        default=[],
-        metavar="NAME=DIR",
-        help="--families: an installed model folder to evaluate (repeat for several)",
-    )
-    p.add_argument(
-        "--with-camera",
-        action="append",
-        default=[],
-        metavar="NAME",
-        help="--families: also evaluate NAME (a --model name or 'geometric') with the true camera",
-    )
-    p.add_argument(
-        "--with-gt-ao",
-        action="append",
-        default=[],
-        metavar="NAME",
-        help="--families: also evaluate model NAME with the ground-truth AO",
-    )
 
 
 class Row:

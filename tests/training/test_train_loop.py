@@ -73,7 +73,8 @@ def test_schedule_warms_up_then_decays():
 
 
 def test_evaluate_on_the_standin(tmp_path):
-    from training.evaluate import evaluate, parse_args as eval_args
+    from training.evaluate import parse_args as eval_args
+    from training.evaluation import evaluate
 
     aop = _run(tmp_path, "aop", 2) / "last.pt"
     sr = _run(tmp_path, "sr", 2) / "last.pt"
@@ -133,7 +134,8 @@ def test_evaluate_on_the_standin(tmp_path):
 
 
 def test_geometric_cache_reproduces_the_baseline(tmp_path):
-    from training.evaluate import evaluate, parse_args as eval_args
+    from training.evaluate import parse_args as eval_args
+    from training.evaluation import evaluate
 
     argv = [
         "--n-elms",
