@@ -19,7 +19,6 @@ from .light_map import ASPECT, LightMap
 from .model_config import NETWORK_SHAPE
 
 
-
 def texel_edges(h: int) -> tuple[np.ndarray, np.ndarray]:
     """Elevation edges (h + 1, descending from pi/2) and azimuth edges (2h + 1), radians."""
     elevation = np.pi / 2 * (1.0 - np.arange(h + 1) / h)

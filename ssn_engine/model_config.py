@@ -147,10 +147,10 @@ def _check(config: ModelConfig) -> None:
     r = config.resolution
     if not isinstance(r, int) or isinstance(r, bool) or r < 16 or r % 16:
         raise ModelConfigError(f"resolution must be a multiple of 16, got {r!r}")
-    for name in ("output_floor", "output_floor_small_lights"):
-        value = getattr(config, name)
-        if value is None and name == "output_floor_small_lights":
-            continue
+    for name, value in (
+        ("output_floor", config.output_floor),
+        ("output_floor_small_lights", config.small_lights_floor),
+    ):
         if not _number(value) or not 0.0 <= value < 0.5:
             raise ModelConfigError(f"{name} must be a number in [0, 0.5), got {value!r}")
     if not _number(config.shadow_reach) or not 0.0 <= config.shadow_reach <= FRAME:

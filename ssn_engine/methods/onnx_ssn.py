@@ -200,9 +200,7 @@ class OnnxSSN:
             if self._camera is not None:  # (an empty frame would not reach the graph)
                 _run(self._camera, "camera", {"mask": np.zeros((1, 1, INPUT, INPUT), np.float32)})
         except Exception as exc:
-            raise ModelError(
-                f"model in {self.config.aop} / {self.config.sr} failed a test run: {exc}"
-            ) from None
+            raise ModelError(f"model in {self.config.aop} / {self.config.sr} failed a test run: {exc}") from None
         if s.shape != mask.shape:
             raise ModelError(f"sr output has shape {s.shape}, expected {mask.shape}")
 
