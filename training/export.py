@@ -10,9 +10,7 @@ ssn_engine/methods/onnx_ssn.py):
   a geometry-guided SR (train --card) also takes "card" [batch, 1, R, R], the geometric card's shadow
 ``--aop`` may name an installed aop.onnx instead of checkpoints: that graph is reused as it is (its record is read
 from the model.json beside it), so a new SR can ship with the AOP of an earlier release.
-Weights are stored as float32 unless float16 keeps the parity bound: the float16 graph (exported from the
-torch model with float16-rounded weights, cast back to float32 inside the graph) must stay within ``--tol``
-of that model and within ``--max-shift`` (default: ``--tol`` as well) of the checkpoint itself.
+Weights are stored as float32; each graph must stay within ``--tol`` of its torch network.
 ``--install DIR`` copies the model and a model card there (the engine's default is ssn_engine/models).
 The work is :func:`training.model_export.export_model`'s.
 """
@@ -45,13 +43,6 @@ def parse_args(argv: list[str] | None = None) -> argparse.Namespace:
     p.add_argument("--out", default="runs/export")
     p.add_argument("--data", default="data/ssn128", help="dataset for test inputs and the card's attribution")
     p.add_argument("--tol", type=float, default=TOL, help="the largest difference a graph may have to its network")
-    p.add_argument("--fp32", action="store_true", help="do not try float16 weights")
-    p.add_argument(
-        "--max-shift",
-        type=float,
-        default=None,
-        help="largest output change that rounding the weights to float16 may cause (default: --tol)",
-    )
     p.add_argument(
         "--floor",
         type=float,

@@ -1,8 +1,8 @@
 """Write a model folder from training checkpoints: the ONNX graphs, model.json and the model card.
 
 :func:`export_model` does what ``python -m training.export`` asks (:mod:`training.export` lists the options):
-each graph exported and checked against its torch network (:mod:`training.onnx_graphs`), float16 weights where
-they keep the parity bound, the SR's latency timed, :class:`ssn_engine.model_config.ModelConfig` filled in and
+each graph exported (float32 weights) and checked against its torch network (:mod:`training.onnx_graphs`), the
+SR's latency timed, :class:`ssn_engine.model_config.ModelConfig` filled in and
 written, the card beside it (:mod:`training.model_card`), and optionally installed.
 """
 
@@ -28,10 +28,8 @@ from .onnx_graphs import (
     TOL,
     export_graph,
     parity,
-    rounded_to_fp16,
     session,
     takes_camera,
-    to_fp16_weights,
     without_mirror_average,
 )
 
@@ -54,8 +52,6 @@ class ExportOptions:
     aop_camera: list[str] | None = None
     data: str = "data/ssn128"
     tol: float = TOL
-    fp32: bool = False
-    max_shift: float | None = None
     floor: float = 0.0
     floor_small_lights: float | None = None
     shadow_reach: float = 0.0
@@ -152,34 +148,16 @@ def _export_one(name: str, module: str, ck_paths: list[str], x: dict, opt: Expor
     net = MirrorAverage(net).eval() if mirrored else net
     r = cks[0]["unet"]["resolution"]
     out = opt.out
-    fp32 = out / f"{name}.fp32.onnx"
-    export_graph(net, module, r, fp32)
-    diff32 = parity(fp32, net, module, x)
-    final, diff, dtype = fp32, diff32, "float32"
-    if not opt.fp32:
-        # The float16 model is the checkpoint with its weights rounded to float16: exported from that torch model,
-        # checked against it (parity), and against the unrounded checkpoint (the rounding's effect).
-        net16 = rounded_to_fp16(net)
-        src16, fp16 = out / f"{name}.r16.onnx", out / f"{name}.fp16.onnx"
-        export_graph(net16, module, r, src16)
-        to_fp16_weights(src16, fp16)
-        src16.unlink()
-        diff16 = parity(fp16, net16, module, x)
-        shift = parity(fp16, net, module, x)
-        report[f"{name}_parity_fp16"] = diff16
-        report[f"{name}_fp16_vs_fp32_checkpoint"] = shift
-        max_shift = opt.tol if opt.max_shift is None else opt.max_shift
-        if diff16 <= opt.tol and shift <= max_shift:
-            final, diff, dtype = fp16, diff16, "float16"
-    shutil.copy(final, out / f"{name}.onnx")
-    report[f"{name}_parity_fp32"] = diff32
+    export_graph(net, module, r, out / f"{name}.onnx")
+    diff = parity(out / f"{name}.onnx", net, module, x)
+    report[f"{name}_parity_fp32"] = diff
     report[name] = {
         "checkpoints": [str(p) for p in ck_paths],
         "steps": [ck["step"] for ck in cks],
         "samples": [ck["samples"] for ck in cks],
         "widths": [ck["unet"]["widths"] for ck in cks],
         "rebuilt_from": [ck.get("rebuilt_from") for ck in cks],  # training.onnx_weights: a graph's network
-        "weights": dtype,
+        "weights": "float32",
         "mirror_average": mirrored,
         "max_abs_diff": diff,
         "bytes": (out / f"{name}.onnx").stat().st_size,
@@ -187,8 +165,7 @@ def _export_one(name: str, module: str, ck_paths: list[str], x: dict, opt: Expor
     if diff > opt.tol:
         raise ExportError(f"{name}: parity FAILED: max abs diff {diff:.2e} > {opt.tol:.0e}")
     print(
-        f"{name}: {dtype} weights, max abs diff to torch {diff:.2e} (fp32 graph {diff32:.2e}), "
-        f"{report[name]['bytes'] / 1e6:.2f} MB",
+        f"{name}: float32 weights, max abs diff to torch {diff:.2e}, {report[name]['bytes'] / 1e6:.2f} MB",
         flush=True,
     )
     return r

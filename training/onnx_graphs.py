@@ -3,7 +3,6 @@
 - :func:`export_graph`: ``torch.onnx.export`` of an AOP or SR with the engine's input and output names
   (ssn_engine/methods/onnx_ssn.py), each GroupNorm as two fused kernels (:class:`FixedGroupNorm`), the output
   clamped to [0, 1], a dynamic batch axis.
-- :func:`to_fp16_weights`: a graph's weights stored as float16, computed in float32.
 - :func:`without_mirror_average`: a mirror-averaged graph rewritten to run its network once.
 - :func:`parity`: the largest difference between a graph and its torch network.
 """
@@ -18,7 +17,7 @@ import onnx
 import onnx.utils
 import onnxruntime as ort
 import torch
-from onnx import TensorProto, helper, numpy_helper
+from onnx import helper, numpy_helper
 from torch import nn
 
 from .model import AOPNet, Ensemble, MirrorAverage, SRNet, UNetConfig
@@ -32,11 +31,9 @@ __all__ = [
     "for_export",
     "mirror_concat",
     "parity",
-    "rounded_to_fp16",
     "session",
     "takes_camera",
     "takes_card",
-    "to_fp16_weights",
     "without_mirror_average",
 ]
 
@@ -183,28 +180,6 @@ def takes_camera(net: nn.Module) -> bool:
     return bool(_config(net).camera)
 
 
-def to_fp16_weights(src: Path, dst: Path) -> None:
-    """Store every float32 initializer as float16 followed by a Cast back to float32 (compute stays float32)."""
-    model = onnx.load(str(src))
-    g = model.graph
-    new_inits, casts = [], []
-    for init in g.initializer:
-        arr = numpy_helper.to_array(init)
-        if arr.dtype == np.float32 and arr.size > 16:
-            half = numpy_helper.from_array(arr.astype(np.float16), init.name + "__fp16")
-            new_inits.append(half)
-            casts.append(helper.make_node("Cast", [half.name], [init.name], to=TensorProto.FLOAT))
-        else:
-            new_inits.append(init)
-    del g.initializer[:]
-    g.initializer.extend(new_inits)
-    nodes = list(g.node)
-    del g.node[:]
-    g.node.extend(casts + nodes)
-    onnx.checker.check_model(model)
-    onnx.save(model, str(dst))
-
-
 def mirror_concat(model: onnx.ModelProto) -> onnx.NodeProto | None:
     """The node of a graph exported from :class:`training.model.MirrorAverage` that doubles its batch: the one
     Concat of the first input and a Slice of it (its mirror image); None if the graph has no such node."""
@@ -246,15 +221,6 @@ def without_mirror_average(src: Path, dst: Path) -> None:
     onnx.utils.extract_model(str(rewired), str(dst), [source], [output])  # drops the now unused mirror nodes
     rewired.unlink()
     onnx.checker.check_model(onnx.load(str(dst)))
-
-
-def rounded_to_fp16(net: nn.Module) -> nn.Module:
-    """A copy of ``net`` whose parameters are rounded to float16 (kept as float32 tensors)."""
-    out = copy.deepcopy(net)
-    with torch.no_grad():
-        for p in out.parameters():
-            p.copy_(p.half().float())
-    return out.eval()
 
 
 def session(path: Path, threads: int = 0) -> ort.InferenceSession:

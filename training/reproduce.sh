@@ -70,8 +70,8 @@ run python -m training.camera_estimator --data "$DATA/heights128" --out "$RUNS/c
 # 6. The export. The shipped AOP graph is the first release's mirror-averaged graph of the two networks, rewritten
 # to run each network once (export --aop-without-mirror); the SR and the camera AOP are exported from their runs.
 run python -m training.export --aop $AOP --sr "$RUNS/sr_zncc2/last.pt" --mirror-average --out "$RUNS/m_aop" \
-    --data "$DATA/ssn256c" --fp32
+    --data "$DATA/ssn256c"
 run python -m training.export --aop "$RUNS/m_aop/aop.onnx" --aop-without-mirror \
     --aop-camera "$RUNS/aop_cam0/last.pt" "$RUNS/aop_cam1/last.pt" --sr "$RUNS/sr_zncc2/last.pt" --mirror-average \
-    --out "$OUT" --data "$DATA/ssn256c" --floor 0.004 --floor-small-lights 0.02 --shadow-reach 16 --ao-gamma 0.6 --fp32
+    --out "$OUT" --data "$DATA/ssn256c" --floor 0.004 --floor-small-lights 0.02 --shadow-reach 16 --ao-gamma 0.6
 run python -m training.camera_estimator --out "$RUNS/camera" --minutes 0 --install "$OUT"
