@@ -53,7 +53,7 @@ class ModelConfig:
         The predicted AO map is raised to this power.
     card_blur
         Gaussian blur of the card's shadow in model pixels before the SR (0: off).
-    mirror_average, card_input, sr_training, lights, training_data, camera_training, export, metrics
+    mirror_average, card_input, sr_training, lights, training_data, camera_training, export
         Informational records for people (the engine reads the graphs, not these).
     """
 
@@ -75,7 +75,6 @@ class ModelConfig:
     training_data: str | None = None
     camera: str | None = None
     camera_training: str | None = None
-    metrics: dict[str, Any] | None = None
 
     def __post_init__(self) -> None:
         _check(self)

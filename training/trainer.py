@@ -4,15 +4,10 @@ checkpoints of one run (resumable; DistributedDataParallel under torchrun). :fun
 from __future__ import annotations
 
 import argparse
-import contextlib
-import csv
 import dataclasses
 import json
 import os
-import queue
 import signal
-import threading
-import time
 from dataclasses import dataclass
 from pathlib import Path
 from typing import Any
@@ -34,13 +29,11 @@ from .losses import Objective, target_of
 from .model import UNetConfig, build
 from .model.complexity import describe
 from .perturb import perturb_ao
-from .plots import image_grid, loss_curve
-from .progress import Progress
+from .plots import image_grid
+from .prefetch import BatchStream
+from .run_log import Interval, RunLog, plot_log
 
 __all__ = ["lr_at", "mix_predicted_ao", "run", "with_new_inputs"]
-
-
-LOG_FIELDS = ["step", "samples", "lr", "train_loss", "val_loss", "seconds", "samples_per_s"]
 
 
 def lr_at(step: int, args: argparse.Namespace) -> float:
@@ -64,42 +57,6 @@ def setup_distributed() -> tuple[int, int, torch.device]:
     if world > 1:
         torch.distributed.init_process_group("nccl" if device.type == "cuda" else "gloo")
     return rank, world, device
-
-
-class Prefetcher:
-    """Builds batches in a background thread (numpy releases the GIL) while the model trains."""
-
-    def __init__(self, make, rng: np.random.Generator, depth: int = 2):
-        self.make, self.rng = make, rng
-        self.q: queue.Queue = queue.Queue(maxsize=depth)
-        self.stop = False
-        self.thread = threading.Thread(target=self._run, daemon=True)
-        self.thread.start()
-
-    def _run(self) -> None:
-        while not self.stop:
-            try:
-                item = self.make(self.rng)
-            except Exception as exc:  # hand the error to the consumer
-                item = exc
-            self.q.put(item)
-            if isinstance(item, Exception):
-                return
-
-    def next(self):
-        item = self.q.get()
-        if isinstance(item, Exception):
-            raise item
-        return item
-
-    def close(self) -> None:
-        """Stop and join the thread: left running in native code at interpreter exit, it can abort the process
-        ("terminate called without an active exception"), and a restarted stream must not share the sampler."""
-        self.stop = True
-        while self.thread.is_alive():
-            with contextlib.suppress(queue.Empty):
-                self.q.get(timeout=0.05)  # frees a put the thread may be blocked on
-        self.thread.join()
 
 
 def to_tensors(batch, device: torch.device, card_blur: float = 0.0, camera: bool = False) -> dict[str, torch.Tensor]:
@@ -220,20 +177,6 @@ def write_samples(path: Path, module: str, val: dict[str, torch.Tensor], pred: t
     image_grid(rows, path, labels, cell=112)
 
 
-def read_log(path: Path) -> list[dict]:
-    if not path.is_file():
-        return []
-    with path.open() as f:
-        return list(csv.DictReader(f))
-
-
-def plot_log(run: Path, title: str) -> None:
-    rows = read_log(run / "log.csv")
-    train = [(float(r["step"]), float(r["train_loss"])) for r in rows if r["train_loss"]]
-    val = [(float(r["step"]), float(r["val_loss"])) for r in rows if r["val_loss"]]
-    loss_curve({"train": train, "val": val}, run / "loss.png", title)
-
-
 # The output conv's bias starts at the typical target (docs/training.md, "Network").
 HEAD_BIAS = {"ao": 1.0, "shadow": 0.0, "irradiance": 1.0}
 
@@ -277,96 +220,6 @@ class TrainData:
     elm_rows: int
     val: dict[str, torch.Tensor] | None
     refreshable: bool  # the store is re-opened every --refresh-minutes (not a store handed to main, nor a packed file)
-
-
-class BatchStream:
-    """This process's train batches, built ahead in a thread, and the generator of the AO augmentation.
-
-    Both are seeded from --seed, the rank and the step, so a resumed run is reproducible given where it stopped.
-    """
-
-    def __init__(self, sampler: BatchSampler, seed: int, rank: int, step: int):
-        self.sampler, self.seed, self.rank = sampler, seed, rank
-        self.gen = torch.Generator().manual_seed(seed * 1000 + rank + step)
-        self.start(step)
-
-    def start(self, step: int) -> None:
-        """(Re)start the prefetcher on a batch stream seeded from ``step``."""
-        self.pre = Prefetcher(self.sampler, np.random.default_rng([self.seed, self.rank, step]))
-
-    def next(self):
-        return self.pre.next()
-
-    def close(self) -> None:
-        self.pre.close()
-
-
-class Interval:
-    """A clock that is due every ``minutes`` after its last restart."""
-
-    def __init__(self, minutes: float):
-        self.seconds = minutes * 60
-        self.restart()
-
-    def restart(self) -> None:
-        self.t0 = time.perf_counter()
-
-    def due(self) -> bool:
-        return time.perf_counter() - self.t0 > self.seconds
-
-
-class RunLog:
-    """``log.csv`` (rank 0; appended on resume, its seconds counted on from the last row), the progress bar and
-    the running mean of the train loss between two rows."""
-
-    def __init__(self, run: Path, is_main: bool, steps: int, step: int, every: int, samples_per_step: int):
-        path = run / "log.csv"
-        new = not path.is_file()
-        self.is_main, self.samples_per_step = is_main, samples_per_step
-        self.file = path.open("a", newline="") if is_main else None
-        self.writer = csv.DictWriter(self.file, LOG_FIELDS) if self.file else None
-        if self.writer and new:
-            self.writer.writeheader()
-        self.t_start = time.perf_counter()
-        old_rows = read_log(path) if is_main and not new else []
-        self.prior_seconds = float(old_rows[-1]["seconds"]) if old_rows else 0.0
-        self.progress = Progress(steps, start=step, every=every)
-        self.running, self.n_running, self.t_log = 0.0, 0, time.perf_counter()
-
-    def elapsed(self) -> float:
-        """Seconds since this chunk of the run started."""
-        return time.perf_counter() - self.t_start
-
-    def add(self, step: int, loss: float, lr: float) -> None:
-        self.running += loss
-        self.n_running += 1
-        if self.is_main:
-            self.progress.update(step, f"loss {self.running / self.n_running:.5f} lr {lr:.2e}")
-
-    def row(self, step: int, samples: int, lr: float) -> dict:
-        """The next row (no validation loss yet); restarts the running mean."""
-        row = {
-            "step": step,
-            "samples": samples,
-            "lr": f"{lr:.3e}",
-            "train_loss": f"{self.running / self.n_running:.6f}",
-            "val_loss": "",
-            "seconds": f"{self.prior_seconds + self.elapsed():.1f}",
-            "samples_per_s": f"{self.n_running * self.samples_per_step / (time.perf_counter() - self.t_log):.2f}",
-        }
-        self.running, self.n_running, self.t_log = 0.0, 0, time.perf_counter()
-        return row
-
-    def write(self, row: dict) -> None:
-        """Append ``row`` to log.csv (rank 0 only: the other ranks keep no log)."""
-        if self.writer is None or self.file is None:
-            raise RuntimeError("only rank 0 writes the run's log")
-        self.writer.writerow(row)
-        self.file.flush()
-
-    def close(self) -> None:
-        if self.file:
-            self.file.close()
 
 
 def start_process(args: argparse.Namespace) -> Process:
