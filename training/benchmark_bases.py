@@ -101,8 +101,8 @@ def embree_seconds_per_view(mesh, n: int, hb: int, samples: int, texels: int = 3
     return seconds * len(dirs) / used
 
 
-def main(argv: list[str] | None = None) -> None:
-    p = argparse.ArgumentParser(description=(__doc__ or "").split("\n")[0])
+def parse_args(argv: list[str] | None = None) -> argparse.Namespace:
+    p = argparse.ArgumentParser(prog="python -m training.benchmark_bases", description=(__doc__ or "").split("\n")[0])
     p.add_argument("--res", type=int, nargs="+", default=[256, 128])
     p.add_argument("--meshes", type=int, default=8)
     p.add_argument("--views", type=int, default=3)
@@ -110,7 +110,11 @@ def main(argv: list[str] | None = None) -> None:
     p.add_argument("--samples", type=int, default=16)
     p.add_argument("--threads", type=int, default=1)
     p.add_argument("--embree", action="store_true", help="also time Embree ray casting (needs mitsuba)")
-    args = p.parse_args(argv)
+    return p.parse_args(argv)
+
+
+def main(argv: list[str] | None = None) -> None:
+    args = parse_args(argv)
     rb.set_threads(args.threads)
     items = pick_items(args.meshes)
     built = [(it, sources.build_mesh(it)) for it in items]

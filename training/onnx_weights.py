@@ -24,7 +24,7 @@ from .graph_weights import rebuild, reexport
 from .onnx_graphs import TOL
 
 
-def main(argv: list[str] | None = None) -> int:
+def parse_args(argv: list[str] | None = None) -> argparse.Namespace:
     p = argparse.ArgumentParser(prog="python -m training.onnx_weights", description=(__doc__ or "").split("\n")[0])
     p.add_argument("graph", type=Path, help="aop.onnx or sr.onnx")
     to = p.add_mutually_exclusive_group(required=True)
@@ -33,7 +33,11 @@ def main(argv: list[str] | None = None) -> int:
     p.add_argument("--groups", type=int, default=8, help="GroupNorm groups of the trained network")
     p.add_argument("--tol", type=float, default=TOL, help="largest difference allowed from the graph")
     p.add_argument("--member", type=int, help="of a graph that is the mean of several networks (the AOP): which one")
-    args = p.parse_args(argv)
+    return p.parse_args(argv)
+
+
+def main(argv: list[str] | None = None) -> int:
+    args = parse_args(argv)
     try:
         if args.reexport:
             diff = reexport(args.graph, args.reexport, args.groups, args.tol)
