@@ -86,7 +86,7 @@ def moved_cameras(cameras: np.ndarray, n: int, error: tuple[float, float], rng: 
 def card_bases(
     card: GeometricCard, mask: np.ndarray, camera: tuple[float, float] | None, resolution: int
 ) -> np.ndarray:
-    """The shadow bases of a frame mask's card (or proxy) on the full R x R grid, (2, T, R*R) uint8 (x 255): every
+    """The shadow bases of a frame mask's card on the full R x R grid, (2, T, R*R) uint8 (x 255): every
     texel's shadow along its centre direction and over its area (:func:`card_shadow` picks one per texel, as the
     engine does); a card traced on a coarser grid is resampled as the engine resamples its shadows (the resampling
     is linear, so the bases' weighted sum is the engine's resampled shadow)."""
@@ -134,7 +134,7 @@ def load_view(
     predict_ao_camera=None,
 ) -> CachedView:
     """Load view ``i`` of ``store`` and bring it to ``resolution`` (``with_occ`` False: no bases, for AOP;
-    ``card``: the bases of this card method (the geometric card, or the height proxy) for the blind camera
+    ``card``: the bases of this card method (the geometric card) for the blind camera
     (:func:`blind_camera` of ``camera_error``, drawn with ``rng``) and the true camera; ``predict_ao``: a
     function of masks (B, R, R) -> AO maps whose prediction the view keeps; ``predict_ao_camera``: one of masks and
     camera inputs (B, 2) in frames, given the view's true camera)."""
@@ -330,8 +330,9 @@ def make_batch(
     by_view: dict[int, list[int]] = {}
     for b, v in enumerate(views):
         by_view.setdefault(id(v), []).append(b)
-    for idx in by_view.values() if target is not None else []:
-        out[idx] = targets_for(views[idx[0]].occ, elm_hb[idx], peak[idx], weights, target)
+    if target is not None:
+        for idx in by_view.values():
+            out[idx] = targets_for(views[idx[0]].occ, elm_hb[idx], peak[idx], weights, target)
     card = None
     if views[0].cards is not None:
         true_camera = np.zeros(len(views), bool) if true_camera is None else true_camera
@@ -341,7 +342,9 @@ def make_batch(
         for b, v in enumerate(views):  # one conversion of the uint8 bases per view and camera
             groups.setdefault((id(v), bool(true_camera[b])), []).append(b)
         for (_, true), idx in groups.items():
-            card[idx] = card_shadow(views[idx[0]].cards[int(true)], elm16[idx], w16)
+            cards = views[idx[0]].cards
+            assert cards is not None  # every view of a batch has its cards when the first has
+            card[idx] = card_shadow(cards[int(true)], elm16[idx], w16)
         card = card.reshape(len(views), r, r)
     return Batch(
         mask=np.stack([v.mask for v in views]),
@@ -363,9 +366,12 @@ def predicted_ao(views: list[CachedView], true_camera: np.ndarray | None) -> np.
     if views[0].ao_pred is None:
         return None
     given = np.zeros(len(views), bool) if true_camera is None else true_camera
-    maps = [
-        v.ao_pred_camera if g and v.ao_pred_camera is not None else v.ao_pred for v, g in zip(views, given, strict=True)
-    ]
+    maps = []
+    for v, g in zip(views, given, strict=True):
+        ao = v.ao_pred_camera if g and v.ao_pred_camera is not None else v.ao_pred
+        if ao is None:
+            raise ValueError(f"view {v.key} has no predicted AO where the batch's first view has one")
+        maps.append(ao)
     return np.stack(maps)
 
 

@@ -27,7 +27,7 @@ def pick_items(count: int) -> list[sources.Item]:
     items.sort(key=lambda it: rows[it.id])
     idx = np.linspace(0, len(items) - 1, count).round().astype(int)
     picked = [items[i] for i in idx]
-    try:
+    try:  # anny (the people) is optional here: without it the benchmark runs on the meshes alone
         import anny  # noqa: F401
 
         from training.data.humans import human_items
@@ -52,7 +52,7 @@ def stages(mesh, topo, yaw, pitch, fov, n, hb, samples, rng) -> dict[str, float]
     times = []
     for stage in (1, 2, 3):
         t0 = time.perf_counter()
-        counts = rb.occlusion_counts(*args, stage)
+        counts = rb.occlusion_counts(*args, stage=stage)
         times.append(time.perf_counter() - t0)
     t["per texel: classify faces and edges"] = times[0]
     t["per direction: visit edges, project vertices"] = max(times[1] - times[0], 0.0)
@@ -73,7 +73,7 @@ def stages(mesh, topo, yaw, pitch, fov, n, hb, samples, rng) -> dict[str, float]
 def embree_seconds_per_view(mesh, n: int, hb: int, samples: int, texels: int = 32) -> float:
     """Seconds per view of brute-force shadow rays in Embree (Mitsuba 3 llvm_ad_rgb, one thread),
     extrapolated from ``texels`` texels: the alternative this renderer was chosen against."""
-    import drjit as dr
+    import drjit as dr  # the reference extra, needed only for this comparison
     import mitsuba as mi
 
     mi.set_variant("llvm_ad_rgb")
@@ -81,7 +81,7 @@ def embree_seconds_per_view(mesh, n: int, hb: int, samples: int, texels: int = 3
     m = mi.Mesh("m", vertex_count=len(mesh.vertices), face_count=len(mesh.faces))
     params = mi.traverse(m)
     params["vertex_positions"] = dr.ravel(mi.TensorXf(mesh.vertices.astype(np.float32)))
-    params["faces"] = dr.ravel(mi.TensorXu(mesh.faces.astype(np.uint32)))
+    params["faces"] = dr.ravel(mi.TensorXu(mesh.faces.astype(np.uint32)))  # pyright: ignore[reportCallIssue]
     params.update()
     scene = mi.load_dict({"type": "scene", "m": m})
     cam = rb.view_camera(mesh.vertices, n, 45.0, 15.0)
@@ -101,8 +101,8 @@ def embree_seconds_per_view(mesh, n: int, hb: int, samples: int, texels: int = 3
     return seconds * len(dirs) / used
 
 
-def main(argv: list[str] | None = None) -> None:
-    p = argparse.ArgumentParser(description=__doc__.splitlines()[0])
+def parse_args(argv: list[str] | None = None) -> argparse.Namespace:
+    p = argparse.ArgumentParser(prog="python -m training.benchmark_bases", description=(__doc__ or "").split("\n")[0])
     p.add_argument("--res", type=int, nargs="+", default=[256, 128])
     p.add_argument("--meshes", type=int, default=8)
     p.add_argument("--views", type=int, default=3)
@@ -110,7 +110,11 @@ def main(argv: list[str] | None = None) -> None:
     p.add_argument("--samples", type=int, default=16)
     p.add_argument("--threads", type=int, default=1)
     p.add_argument("--embree", action="store_true", help="also time Embree ray casting (needs mitsuba)")
-    args = p.parse_args(argv)
+    return p.parse_args(argv)
+
+
+def main(argv: list[str] | None = None) -> None:
+    args = parse_args(argv)
     rb.set_threads(args.threads)
     items = pick_items(args.meshes)
     built = [(it, sources.build_mesh(it)) for it in items]
@@ -139,9 +143,9 @@ def main(argv: list[str] | None = None) -> None:
                 size.append(s.nbytes + d.nbytes + 2 * 2 * n * n)
             all_t += per
             print(f"{it.id:34s} {len(mesh.faces):6d} {np.mean(per):7.2f} {np.mean(size) / 2**20:8.2f}")
-            for key, val in stages(
-                mesh, topo, *specs[pick[len(pick) // 2]], 45.0, n, args.elm_rows, args.samples, np.random.default_rng(1)
-            ).items():
+            yaw, pitch = specs[pick[len(pick) // 2]]
+            rng = np.random.default_rng(1)
+            for key, val in stages(mesh, topo, yaw, pitch, 45.0, n, args.elm_rows, args.samples, rng).items():
                 total[key] = total.get(key, 0.0) + val
         print(f"{'mean':34s} {'':6s} {np.mean(all_t):7.2f}")
         if args.embree:

@@ -9,6 +9,8 @@ from typing import Any
 
 import torch
 
+from .model import Ensemble, UNetConfig, build
+
 LAST = "last.pt"
 BEST = "best.pt"
 
@@ -34,8 +36,6 @@ def resume_path(run_dir: str | Path) -> Path | None:
 
 def load_model(path: str | Path):
     """Rebuild the network of a checkpoint (eval mode); returns (model, checkpoint dict)."""
-    from .model import UNetConfig, build
-
     ckpt = load(path)
     model = build(ckpt["module"], UNetConfig.from_dict(ckpt["unet"]))
     model.load_state_dict(ckpt["model"])
@@ -46,8 +46,6 @@ def load_model(path: str | Path):
 def load_models(paths: Sequence[str | Path]):
     """Rebuild one network, or the :class:`~training.model.Ensemble` of several (same module and resolution);
     returns (model, checkpoint dicts)."""
-    from .model import Ensemble
-
     loaded = [load_model(p) for p in paths]
     if not loaded:
         raise ValueError("no checkpoint given")

@@ -1,4 +1,4 @@
-"""Evaluation by light family: ``python -m training.evaluate --families [--model NAME=DIR ...]``.
+"""Evaluation by light family (``python -m training.evaluate --families [--model NAME=DIR ...]``).
 
 Every test view is lit by ``--per-view`` light maps of each family of :mod:`training.elm` (``sun``: one small
 light, ``two``: two small lights, ``sky``: 3 to 8 broad lights, ``table1``: the paper's sampling), drawn from a
@@ -19,8 +19,13 @@ from pathlib import Path
 
 import numpy as np
 
-from .data.views import pitch_groups
+from ssn_engine.hemisphere import render_light_map
+from ssn_engine.host_kit.light_map import GaussianLight, LightMap
+from ssn_engine.methods import GeometricCard, OnnxSSN
+
 from .batches import camera_input
+from .data.store import ViewStore
+from .data.views import pitch_groups
 from .elm import FAMILIES, render_lights, sample_family
 from .metrics import NAMES, all_metrics, mean_metrics, sun_geometry
 from .plots import image_grid
@@ -29,44 +34,6 @@ from .progress import Progress
 KINDS = ("object", "human", "animal")
 SUN_ELEVATIONS = (10.0, 25.0, 45.0, 70.0)  # the picture grid's suns, degrees
 SUN_AZIMUTH_U = 0.8  # the grid's sun: right of the camera's forward direction, casting towards the viewer's left
-
-
-def add_arguments(p: argparse.ArgumentParser) -> None:
-    p.add_argument(
-        "--families",
-        nargs="?",
-        const=",".join(FAMILIES),
-        default=None,
-        help=f"evaluate by light family (comma list of {', '.join(FAMILIES)}; default all)",
-    )
-    p.add_argument(
-        "--model",
-        action="append",
-        default=[],
-        metavar="NAME=DIR",
-        help="--families: an installed model folder to evaluate (repeat for several)",
-    )
-    p.add_argument(
-        "--with-camera",
-        action="append",
-        default=[],
-        metavar="NAME",
-        help="--families: also evaluate NAME (a --model name or 'geometric') with the true camera",
-    )
-    p.add_argument(
-        "--proxy-of",
-        action="append",
-        default=[],
-        metavar="NAME",
-        help="--families: also evaluate model NAME's height proxy alone (its hard shadows summed, as the card's are)",
-    )
-    p.add_argument(
-        "--with-gt-ao",
-        action="append",
-        default=[],
-        metavar="NAME",
-        help="--families: also evaluate model NAME with the ground-truth AO",
-    )
 
 
 class Row:
@@ -86,10 +53,8 @@ class Row:
 
 
 def build_rows(args: argparse.Namespace, n: int) -> list[Row]:
-    from ssn_engine.methods import GeometricCard, OnnxSSN
-    from ssn_engine.methods.height_proxy import HeightProxy
-
-    methods = {"geometric": GeometricCard(resolution=n)}
+    """The evaluated rows: the geometric card, each --model, and those given the camera or the ground-truth AO."""
+    methods: dict[str, GeometricCard | OnnxSSN] = {"geometric": GeometricCard(resolution=n)}
     for spec in args.model:
         name, _, folder = spec.partition("=")
         if not folder:
@@ -97,11 +62,6 @@ def build_rows(args: argparse.Namespace, n: int) -> list[Row]:
         methods[name] = OnnxSSN(folder)
         if methods[name].resolution != n:
             raise SystemExit(f"{folder} renders {methods[name].resolution}-pixel frames; the data has N = {n}")
-    for name in args.proxy_of:
-        proxy = getattr(methods[name], "card", None)
-        if not isinstance(proxy, HeightProxy):
-            raise SystemExit(f"--proxy-of {name}: that model has no height graph")
-        methods[f"{name} proxy"] = proxy
     rows = [Row(name, m) for name, m in methods.items()]
     for name in args.with_camera:
         rows.append(Row(f"{name} + camera", methods[name], camera=True))
@@ -117,8 +77,6 @@ def family_lights(seed: int, view: int, family: str, count: int, rows_hb: int) -
 
 
 def evaluate_families(args: argparse.Namespace, store=None) -> dict:
-    from .data.store import ViewStore
-
     families = [f for f in args.families.split(",") if f]
     unknown = set(families) - set(FAMILIES)
     if unknown:
@@ -249,9 +207,6 @@ def families_markdown(results: dict) -> str:
 
 def sun_grid(store, ids: list[int], rows: list[Row], path: Path, rows_hb: int, views: int = 3) -> None:
     """A picture grid: a few views under one sun at several elevations; ground truth, then every row."""
-    from ssn_engine.hemisphere import render_light_map
-    from ssn_engine.host_kit.light_map import GaussianLight, LightMap
-
     pictures = []
     for i in [ids[int(j)] for j in np.linspace(0, len(ids) - 1, views).round()] if ids else []:
         v = store.load(i)

@@ -19,16 +19,20 @@ import traceback
 from pathlib import Path
 
 from training.data import writer
-from training.data.views import CAMERA_TEXT, CAMERAS, FOV_RANGE, PITCH_RANGE, PITCHES, VIEWS, YAW_RANGE, YAWS
-from training.progress import Progress
+from training.data.card import write_card
+from training.data.contact_sheet import write_contact_sheet
+from training.data.generate import render_item
+from training.data.render_bases import set_threads
 from training.data.sources import SOURCES, all_items
 from training.data.store import DATASET_JSON
+from training.data.views import CAMERA_TEXT, CAMERAS, FOV_RANGE, PITCH_RANGE, PITCHES, VIEWS, YAW_RANGE, YAWS
+from training.progress import Progress
 
 FORMAT_VERSION = 1
 
 
 def parse_args(argv: list[str] | None = None) -> argparse.Namespace:
-    p = argparse.ArgumentParser(prog="python -m training.make_dataset", description=__doc__.splitlines()[0])
+    p = argparse.ArgumentParser(prog="python -m training.make_dataset", description=(__doc__ or "").split("\n")[0])
     p.add_argument("--out", required=True, type=Path, help="dataset directory")
     p.add_argument("--res", type=int, default=256, help="frame size N")
     p.add_argument("--workers", type=int, default=2, help="processes (one mesh at a time each)")
@@ -49,19 +53,14 @@ def parse_args(argv: list[str] | None = None) -> argparse.Namespace:
         help=f"the 15 views of each shape: paper ({CAMERA_TEXT['paper']}) or continuous ({CAMERA_TEXT['continuous']})",
     )
     p.add_argument("--no-card", action="store_true", help="skip the dataset card and contact sheet")
-    p.add_argument("--card-only", action="store_true", help="only rewrite the card and contact sheet")
     return p.parse_args(argv)
 
 
 def _init_worker(threads: int) -> None:
-    from training.data.render_bases import set_threads
-
     set_threads(threads)
 
 
 def _run_item(job: tuple) -> dict:
-    from training.data.generate import render_item
-
     item, root, res, elm_rows, samples, seed, cameras = job
     try:
         return render_item(item, root, res, elm_rows, samples, seed, cameras)
@@ -105,67 +104,63 @@ def main(argv: list[str] | None = None) -> int:
     root: Path = args.out
     meta = _dataset_meta(args)
     _check_meta(root, meta)
-    if not args.card_only:
-        shard, shards = (int(x) for x in args.shard.split("/"))
-        sources = tuple(s for s in args.sources.split(",") if s)
-        items = all_items(sources, args.procedural, args.humans, args.seed)
-        if args.only:
-            wanted = set(args.only.split(","))
-            items = [it for it in items if it.id in wanted]
-        if args.limit:
-            items = items[: args.limit]
-        items = items[shard::shards]
-        writer.remove_stale(root) if shards == 1 else None
-        todo = [it for it in items if not writer.is_done(root, it.id)]
-        print(
-            f"{len(items)} items in shard {args.shard}, {len(items) - len(todo)} already done, "
-            f"{len(todo)} to render at N={args.res}, grid {args.elm_rows}x{2 * args.elm_rows}, "
-            f"{args.samples} directions per texel, {args.workers} workers",
-            file=sys.stderr,
-            flush=True,
-        )
-        jobs = [(it, root, args.res, args.elm_rows, args.samples, args.seed, args.cameras) for it in todo]
-        threads = args.threads or max(1, (os.cpu_count() or 1) // max(args.workers, 1))
-        start = time.time()
-        progress, done, views = Progress(len(jobs), every=1), 0, 0
-        failures = []
-        if args.workers <= 1:
-            _init_worker(threads)
-            results = map(_run_item, jobs)
-            pool = None
-        else:
-            pool = mp.get_context("spawn").Pool(args.workers, _init_worker, (threads,))
-            results = pool.imap_unordered(_run_item, jobs)
-        for r in results:
-            if "error" in r:
-                failures.append(r)
-                print(f"FAILED {r['id']}:\n{r['error']}", file=sys.stderr, flush=True)
-            done, views = done + 1, views + r.get("views", 0)
-            progress.update(done, f"meshes, {views} views, {r['id']}")
-        progress.close()
-        if pool is not None:
-            pool.close()
-            pool.join()
-        with open(root / "runs.jsonl", "a") as fh:
-            fh.write(
-                json.dumps(
-                    {
-                        "shard": args.shard,
-                        "items": len(items),
-                        "rendered": len(jobs) - len(failures),
-                        "failed": [f["id"] for f in failures],
-                        "wall_seconds": time.time() - start,
-                        "workers": args.workers,
-                        "threads": threads,
-                        "argv": sys.argv[1:],
-                    }
-                )
-                + "\n"
+    shard, shards = (int(x) for x in args.shard.split("/"))
+    sources = tuple(s for s in args.sources.split(",") if s)
+    items = all_items(sources, args.procedural, args.humans, args.seed)
+    if args.only:
+        wanted = set(args.only.split(","))
+        items = [it for it in items if it.id in wanted]
+    if args.limit:
+        items = items[: args.limit]
+    items = items[shard::shards]
+    writer.remove_stale(root) if shards == 1 else None
+    todo = [it for it in items if not writer.is_done(root, it.id)]
+    print(
+        f"{len(items)} items in shard {args.shard}, {len(items) - len(todo)} already done, "
+        f"{len(todo)} to render at N={args.res}, grid {args.elm_rows}x{2 * args.elm_rows}, "
+        f"{args.samples} directions per texel, {args.workers} workers",
+        file=sys.stderr,
+        flush=True,
+    )
+    jobs = [(it, root, args.res, args.elm_rows, args.samples, args.seed, args.cameras) for it in todo]
+    threads = args.threads or max(1, (os.cpu_count() or 1) // max(args.workers, 1))
+    start = time.time()
+    progress, done, views = Progress(len(jobs), every=1), 0, 0
+    failures = []
+    if args.workers <= 1:
+        _init_worker(threads)
+        results = map(_run_item, jobs)
+        pool = None
+    else:
+        pool = mp.get_context("spawn").Pool(args.workers, _init_worker, (threads,))
+        results = pool.imap_unordered(_run_item, jobs)
+    for r in results:
+        if "error" in r:
+            failures.append(r)
+            print(f"FAILED {r['id']}:\n{r['error']}", file=sys.stderr, flush=True)
+        done, views = done + 1, views + r.get("views", 0)
+        progress.update(done, f"meshes, {views} views, {r['id']}")
+    progress.close()
+    if pool is not None:
+        pool.close()
+        pool.join()
+    with open(root / "runs.jsonl", "a") as fh:
+        fh.write(
+            json.dumps(
+                {
+                    "shard": args.shard,
+                    "items": len(items),
+                    "rendered": len(jobs) - len(failures),
+                    "failed": [f["id"] for f in failures],
+                    "wall_seconds": time.time() - start,
+                    "workers": args.workers,
+                    "threads": threads,
+                    "argv": sys.argv[1:],
+                }
             )
+            + "\n"
+        )
     if not args.no_card:
-        from training.data.card import write_card
-        from training.data.contact_sheet import write_contact_sheet
-
         write_card(root)
         write_contact_sheet(root)
     return 0

@@ -37,7 +37,7 @@ def zncc(p: np.ndarray, g: np.ndarray) -> float:
 def dssim(p: np.ndarray, g: np.ndarray) -> float:
     """(1 - SSIM(p, g)) / 2 with skimage's structural_similarity, data_range = 1."""
     s = structural_similarity(np.asarray(p, np.float64), np.asarray(g, np.float64), data_range=1.0)
-    return float((1.0 - s) / 2.0)
+    return (1.0 - float(s)) / 2.0  # pyright: ignore[reportArgumentType]  (a float unless asked for gradients)
 
 
 def all_metrics(p: np.ndarray, g: np.ndarray) -> dict[str, float]:

@@ -1,6 +1,7 @@
 #!/usr/bin/env bash
-# The CPU training sequence of docs/training.md: two AOPs (the shipped AO map is their mean), then SSN (shadow
-# target) and Non-inv-SSN (irradiance target) side by side with one thread each (same budget, a fair ablation).
+# The first release's CPU training and the paper's ablation (docs/training.md, "The CPU run here"): two AOPs (the
+# shipped AO map is still their mean), then SSN (shadow target) and Non-inv-SSN (irradiance target) side by side with
+# one thread each (same budget, a fair ablation). The shipped model's whole recipe is training/reproduce.sh.
 # Every stage resumes from its run's last.pt, so re-running this script continues where a stopped run left off.
 # Usage: training/pipeline.sh [DATA] [RUNS]
 #   (env: AOP_STEPS, AOP2_STEPS, SR_STEPS, AOP_MIN, SR_MIN (0: no limit), BATCH)

@@ -2,7 +2,9 @@
 
 from __future__ import annotations
 
+import csv
 import math
+import sys
 from pathlib import Path
 
 import numpy as np
@@ -96,8 +98,6 @@ def image_grid(
 
 def runs_figure(runs: list[str], path: str | Path, title: str = "training loss (per-pixel L2)") -> None:
     """One loss-curve PNG for several runs: train and validation loss of each against samples seen."""
-    import csv
-
     series: dict[str, list[tuple[float, float]]] = {}
     for run in runs:
         rows = list(csv.DictReader((Path(run) / "log.csv").open()))
@@ -108,6 +108,4 @@ def runs_figure(runs: list[str], path: str | Path, title: str = "training loss (
 
 
 if __name__ == "__main__":
-    import sys
-
     runs_figure(sys.argv[2:], sys.argv[1])

@@ -1,6 +1,7 @@
 """The SSN network as two ONNX graphs: AOP (mask -> AO) and SR (mask, AO, ELM -> shadow).
 
-A model folder holds ``model.json`` and the two graphs (docs/engine.md, "Model files"):
+A model folder holds ``model.json`` (:class:`ssn_engine.model_config.ModelConfig`) and the graphs it names
+(docs/engine.md, "Model files"):
 - aop.onnx: "mask" [b, 1, R, R] -> "ao" [b, 1, R, R]
 - aop_camera.onnx (optional, named by ``aop_camera``): "mask" [b, 1, R, R], "camera" [b, 2] (horizon row and
   focal length in frames, pixels / N) -> "ao" [b, 1, R, R]; the AOP of calls that give the camera input: which
@@ -9,9 +10,6 @@ A model folder holds ``model.json`` and the two graphs (docs/engine.md, "Model f
 - sr.onnx: "mask" [b, 1, R, R], "ao" [b, 1, R, R], "elm" [b, 16, 32] -> "shadow" [b, 1, R, R]; a
   geometry-guided SR also takes "card" [b, 1, R, R], the geometric card's shadow for the same ELM
   (:meth:`ssn_engine.methods.geometric.GeometricCard.card_shadows`, traced with the camera input when given)
-- height.onnx (optional, named by ``height``): "mask" [b, 1, R, R] -> "heights" [b, 4, R, R]; with it the SR's
-  "card" is the shadow of the height proxy instead (:class:`ssn_engine.methods.height_proxy.HeightProxy`,
-  traced on a ``proxy_internal`` grid)
 - camera.onnx (optional, with a geometry-guided SR; named by ``camera``): "mask" [b, 1, 64, 64] -> "camera"
   [b, 2], the camera input read from the mask (:mod:`ssn_engine.methods.camera_estimate`), used when a call
   gives none
@@ -35,7 +33,6 @@ Frames are N x N (N = 256); a model trained at another R is fed resampled frames
 
 from __future__ import annotations
 
-import json
 from pathlib import Path
 from typing import TYPE_CHECKING
 
@@ -45,17 +42,14 @@ from scipy import ndimage
 from ..frames import frame_key, resample_frames
 from ..hemisphere import light_concentration, network_elm
 from ..host_kit.sky_map import NETWORK_SHAPE
+from ..model_config import FRAME, ModelConfig, ModelConfigError
 from .base import check_batch
 from .camera_estimate import INPUT, estimate_cameras
 from .geometric import GeometricCard, camera_at
-from .height_proxy import HeightProxy
 
 if TYPE_CHECKING:  # imported where a model loads: the engine runs without onnxruntime until then
     import onnxruntime as ort
 
-MODEL_FORMAT = "ssn-shadow-model"
-MODEL_VERSION = 1
-FRAME = 256
 KEPT_ESTIMATES = 4  # masks whose estimated camera input is kept (a session needs one; a batch past it reads again)
 
 
@@ -67,7 +61,6 @@ _EXPECTED = {
     "aop": [({"mask": 4}, {"ao": 4})],
     "aop_camera": [({"mask": 4, "camera": 2}, {"ao": 4})],
     "sr": [({"mask": 4, "ao": 4, "elm": 3}, {"shadow": 4}), ({"mask": 4, "ao": 4, "elm": 3, "card": 4}, {"shadow": 4})],
-    "height": [({"mask": 4}, {"heights": 4})],
     "camera": [({"mask": 4}, {"camera": 2})],
 }
 
@@ -93,9 +86,6 @@ def reach_weights(card: np.ndarray, masks: np.ndarray, reach: float) -> np.ndarr
         grown = ndimage.binary_dilation(support, iterations=steps).astype(np.float32)
         out[b] = np.minimum(ndimage.gaussian_filter(grown, steps / 2) * 2, 1.0)
     return out
-
-
-MAX_CARD_BLUR = 4.0  # model pixels
 
 
 def blur_frames(frames: np.ndarray, sigma: float) -> np.ndarray:
@@ -165,50 +155,20 @@ class OnnxSSN:
         model_dir = Path(model_dir)
         card = model_dir / "model.json"
         try:
-            meta = json.loads(card.read_text())
+            config = ModelConfig.from_json(card.read_text())
         except FileNotFoundError:
             raise ModelError(f"model card missing: {card}") from None
-        except (OSError, json.JSONDecodeError) as exc:
+        except (OSError, ModelConfigError) as exc:
             raise ModelError(f"cannot read {card}: {exc}") from None
-        if meta.get("format") != MODEL_FORMAT or meta.get("version") != MODEL_VERSION:
-            raise ModelError(f"{card}: expected format {MODEL_FORMAT!r} version {MODEL_VERSION}")
-        if list(meta.get("elm_shape", [])) != list(NETWORK_SHAPE):
-            raise ModelError(f"{card}: elm_shape must be {list(NETWORK_SHAPE)}")
-        r = meta.get("resolution")
-        if not isinstance(r, int) or r < 16 or r % 16:
-            raise ModelError(f"{card}: resolution must be a multiple of 16, got {r!r}")
-        floors = {
-            key: meta.get(key, meta.get("output_floor", 0.0)) for key in ("output_floor", "output_floor_small_lights")
-        }
-        for key, floor in floors.items():
-            if isinstance(floor, bool) or not isinstance(floor, (int, float)) or not 0.0 <= floor < 0.5:
-                raise ModelError(f"{card}: {key} must be a number in [0, 0.5), got {floor!r}")
-        reach = meta.get("shadow_reach", 0.0)
-        if isinstance(reach, bool) or not isinstance(reach, (int, float)) or not 0.0 <= reach <= FRAME:
-            raise ModelError(f"{card}: shadow_reach must be a number of pixels in [0, {FRAME}], got {reach!r}")
-        self.shadow_reach = float(reach)
-        gamma = meta.get("ao_gamma", 1.0)
-        if isinstance(gamma, bool) or not isinstance(gamma, (int, float)) or not 0.1 <= gamma <= 10.0:
-            raise ModelError(f"{card}: ao_gamma must be a number in [0.1, 10], got {gamma!r}")
-        self.ao_gamma = float(gamma)
-        blur = meta.get("card_blur", 0.0)
-        if isinstance(blur, bool) or not isinstance(blur, (int, float)) or not 0.0 <= blur <= MAX_CARD_BLUR:
-            raise ModelError(f"{card}: card_blur must be a number of pixels in [0, {MAX_CARD_BLUR}], got {blur!r}")
-        self.card_blur = float(blur)
-        self.meta, self.model_resolution = meta, r
-        self.output_floor, self.output_floor_small_lights = (float(floors[k]) for k in floors)
-        self._aop = _session(model_dir / meta.get("aop", "aop.onnx"), "aop")
-        self._aop_camera = _session(model_dir / meta["aop_camera"], "aop_camera") if meta.get("aop_camera") else None
-        self._sr = _session(model_dir / meta.get("sr", "sr.onnx"), "sr")
+        self.config, self.model_resolution = config, config.resolution
+        self.output_floor, self.output_floor_small_lights = config.output_floor, config.small_lights_floor
+        self.shadow_reach, self.ao_gamma, self.card_blur = config.shadow_reach, config.ao_gamma, config.card_blur
+        self._aop = _session(model_dir / config.aop, "aop")
+        self._aop_camera = _session(model_dir / config.aop_camera, "aop_camera") if config.aop_camera else None
+        self._sr = _session(model_dir / config.sr, "sr")
         takes_card = "card" in {i.name for i in self._sr.get_inputs()}
-        self.card: GeometricCard | None = GeometricCard(FRAME, internal=r) if takes_card else None
-        if takes_card and meta.get("height"):
-            internal = meta.get("proxy_internal", 64)
-            if not isinstance(internal, int) or isinstance(internal, bool) or not 16 <= internal <= r:
-                raise ModelError(f"{card}: proxy_internal must be whole pixels in [16, {r}], got {internal!r}")
-            height = _session(model_dir / meta["height"], "height")
-            self.card = HeightProxy(lambda m: _run(height, "heights", {"mask": m}), r, FRAME, internal)
-        self._camera = _session(model_dir / meta["camera"], "camera") if takes_card and meta.get("camera") else None
+        self.card: GeometricCard | None = GeometricCard(FRAME, internal=config.resolution) if takes_card else None
+        self._camera = _session(model_dir / config.camera, "camera") if takes_card and config.camera else None
         self._estimates: dict[bytes, np.ndarray] = {}  # mask digest -> its estimated camera input
         self._check_run()
 
@@ -238,14 +198,10 @@ class OnnxSSN:
             if self.card is not None:
                 feeds["card"] = mask
             s = _run(self._sr, "shadow", feeds)
-            if isinstance(self.card, HeightProxy):
-                self.card.predict(mask)
             if self._camera is not None:  # (an empty frame would not reach the graph)
                 _run(self._camera, "camera", {"mask": np.zeros((1, 1, INPUT, INPUT), np.float32)})
         except Exception as exc:
-            raise ModelError(
-                f"model in {self.meta.get('aop')} / {self.meta.get('sr')} failed a test run: {exc}"
-            ) from None
+            raise ModelError(f"model in {self.config.aop} / {self.config.sr} failed a test run: {exc}") from None
         if s.shape != mask.shape:
             raise ModelError(f"sr output has shape {s.shape}, expected {mask.shape}")
 

@@ -11,7 +11,7 @@ import pytest
 
 from training.data import meshes
 from training.data.procedural import box
-from training.heights import view_heights
+from training.data.camera_views import view_record
 
 torch = pytest.importorskip("torch")
 
@@ -21,7 +21,7 @@ ROOT = Path(__file__).resolve().parents[2]
 def test_the_graph_reads_the_median_of_its_horizon_distribution(monkeypatch):
     """Bins 3 and 4 share the mass 1 : 3, so the median lies a third of the way into bin 4; the focal length
     comes back de-standardised."""
-    from training.camera_estimator import EDGES, FOCAL_MEAN, FOCAL_STD, CameraNet
+    from training.camera_net import EDGES, FOCAL_MEAN, FOCAL_STD, CameraNet
 
     net = CameraNet(width=8).eval()
     logits = torch.full((1, len(EDGES)), -1e4)
@@ -36,11 +36,11 @@ def test_the_graph_reads_the_median_of_its_horizon_distribution(monkeypatch):
 
 def _box_views(tmp_path: Path, sharp: bool = False) -> None:
     """A box seen from a few cameras, as `training.heights make` writes views, for both splits (``sharp``: with the
-    estimator's inputs made from the masks at N = 256, as `make` writes them since session 28)."""
+    estimator's inputs made from the masks at N = 256, as `make` writes them)."""
     mesh = meshes.normalise(box((0.5, 0.35, 0.3), (0.0, 0.175, 0.0)))
     topo = meshes.topology(mesh)
-    views = [view_heights(mesh, topo, yaw, pitch, 45.0) for yaw, pitch in ((0.0, 0.0), (60.0, 15.0), (120.0, 30.0))]
-    data = {key: np.stack([v[key] for v in views]).astype(np.float16) for key in ("mask", "front", "back")}
+    views = [view_record(mesh, topo, yaw, pitch, 45.0) for yaw, pitch in ((0.0, 0.0), (60.0, 15.0), (120.0, 30.0))]
+    data = {"mask": np.stack([v["mask"] for v in views]).astype(np.float16)}
     data |= {"camera": np.array([v["camera"] for v in views]), "kind": np.zeros(3, int), "pitch": np.array([0, 15, 30])}
     if sharp:
         data["estimator"] = np.stack([np.round(v["estimator"] * 255).astype(np.uint8) for v in views])
@@ -53,7 +53,8 @@ def test_the_estimator_trains_exports_and_installs_into_a_model(tmp_path):
     """A short run exports a graph that matches the network; installed into a copy of the shipped model, a blind
     call reads its camera from the mask and renders what a call given that camera renders."""
     from ssn_engine.methods import OnnxSSN
-    from training.camera_estimator import CameraNet, examples, main, weights_from_graph
+    from training.camera_estimator import main
+    from training.camera_net import CameraNet, examples, weights_from_graph
 
     _box_views(tmp_path)
     run = tmp_path / "run"
@@ -91,7 +92,7 @@ def test_the_estimator_trains_exports_and_installs_into_a_model(tmp_path):
 
 def test_kind_weights_draw_a_kind_more_often():
     """``--kind-weights 1 1 3``: among views of which a quarter are animals, half the draws are animals."""
-    from training.camera_estimator import sampling_weights
+    from training.camera_net import sampling_weights
 
     kinds = np.array([0, 0, 1, 2] * 500)
     weights = sampling_weights(kinds, (1.0, 1.0, 3.0))
@@ -102,10 +103,11 @@ def test_kind_weights_draw_a_kind_more_often():
 def test_other_views_of_the_same_items(tmp_path, monkeypatch):
     """`training.heights make --view-seed`: the same items seen from other cameras (continuous ones drawn anew)."""
     from training import heights
+    from training.data import camera_views
     from training.data.sources import all_items
 
     item = next(it for it in all_items(("procedural",), 36, 0, 0) if it.split == "val")
-    monkeypatch.setattr(heights, "all_items", lambda *a: [item])
+    monkeypatch.setattr(camera_views, "all_items", lambda *a: [item])
     for seed in (None, 1):
         heights.main(
             ["make", "--split", "val", "--out", str(tmp_path / f"{seed}.npz")] + (["--view-seed", "1"] if seed else [])
@@ -125,7 +127,8 @@ def test_a_missing_split_is_named(tmp_path):
 def test_examples_written_once_train_without_the_views(tmp_path):
     """``--write-examples`` packs both splits' inputs into one small file (for a GPU machine, where the views do
     not travel); a run given it with ``--examples`` reads the same inputs, to 8 bits, and the same targets."""
-    from training.camera_estimator import examples, main
+    from training.camera_estimator import main
+    from training.camera_net import examples
 
     (tmp_path / "views").mkdir()
     _box_views(tmp_path / "views")
@@ -148,8 +151,8 @@ def test_the_estimator_learns_from_inputs_as_sharp_as_the_engines(tmp_path):
     """``make`` writes the estimator's input from the mask at the engine's N = 256, as the engine makes it from a
     cutout; with ``--sharp-input`` the estimator trains on it instead of the 128-pixel mask scaled up: the same views
     and targets (within the bounding box's rounding), the silhouette's edge as crisp as in use."""
-    from training.camera_estimator import examples
-    from training.heights import ESTIMATOR_KEYS, load
+    from training.camera_net import examples
+    from training.data.camera_views import ESTIMATOR_KEYS, load
 
     (tmp_path / "old").mkdir()
     (tmp_path / "sharp").mkdir()

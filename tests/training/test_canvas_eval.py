@@ -14,7 +14,7 @@ from PIL import Image
 from scipy import ndimage
 
 from ssn_engine.hemisphere import direction
-from ssn_engine.light_map import LightMap
+from ssn_engine.host_kit.light_map import LightMap
 from training.canvas_eval import cases, disk, metrics, render, score, sheet
 from training.canvas_eval.render_set import render_set
 from training.data import meshes, procedural

@@ -12,7 +12,8 @@ torch = pytest.importorskip("torch")
 from test_train_standin import FakeStore, tiny_run_args  # noqa: E402
 
 from training import checkpoint  # noqa: E402
-from training.train import lr_at, main, parse_args  # noqa: E402
+from training.train import main, parse_args  # noqa: E402
+from training.trainer import lr_at  # noqa: E402
 
 TINY = tiny_run_args(16, 2, "--log-every", "1", "--elms-per-view", "2")
 
@@ -72,7 +73,8 @@ def test_schedule_warms_up_then_decays():
 
 
 def test_evaluate_on_the_standin(tmp_path):
-    from training.evaluate import evaluate, parse_args as eval_args
+    from training.evaluate import parse_args as eval_args
+    from training.evaluation import evaluate
 
     aop = _run(tmp_path, "aop", 2) / "last.pt"
     sr = _run(tmp_path, "sr", 2) / "last.pt"
@@ -132,7 +134,8 @@ def test_evaluate_on_the_standin(tmp_path):
 
 
 def test_geometric_cache_reproduces_the_baseline(tmp_path):
-    from training.evaluate import evaluate, parse_args as eval_args
+    from training.evaluate import parse_args as eval_args
+    from training.evaluation import evaluate
 
     argv = [
         "--n-elms",
@@ -155,7 +158,7 @@ def test_geometric_cache_reproduces_the_baseline(tmp_path):
 
 
 def test_predicted_ao_replaces_the_chosen_samples():
-    from training.train import mix_predicted_ao
+    from training.trainer import mix_predicted_ao
 
     x = {"mask": torch.rand(64, 1, 8, 8), "ao_pred": torch.full((64, 1, 8, 8), 0.25)}
     ao = torch.ones(64, 1, 8, 8)
@@ -242,47 +245,11 @@ def test_inexact_cameras_miss_the_true_ones_by_the_given_scales():
     assert abs(np.median(np.abs(np.log(moved[:, 1] / 1.2))) - 0.05 * np.log(2)) < 0.005
 
 
-def test_aop_through_sr_adds_the_shadow_error_of_the_predicted_ao():
-    from training.train import Objective
-
-    class InverseSR(torch.nn.Module):  # the shadow is 1 - AO, so the shadow error follows the AO error
-        def forward(self, mask, ao, elm):
-            return 1.0 - ao
-
-    full = lambda v: torch.full((2, 1, 4, 4), v)  # noqa: E731
-    x = {"mask": full(1.0), "ao": full(0.5), "elm": torch.zeros(2, 512), "target": full(0.2)}
-    pred = full(0.7).requires_grad_(True)
-    assert Objective("aop")(pred, x).item() == pytest.approx(0.04)  # (0.7 - 0.5)^2
-    loss = Objective("aop", InverseSR(), shadow_weight=2.0)(pred, x)
-    assert loss.item() == pytest.approx(0.04 + 2.0 * 0.01)  # + 2 x ((1 - 0.7) - 0.2)^2
-    loss.backward()
-    assert float(pred.grad.abs().min()) > 0
-
-
-def test_ssim_term_is_the_benchmark_dssim_and_punishes_faint_haze():
-    import numpy as np
-
-    from training.metrics import dssim
-    from training.train import Objective, dssim_loss
-
-    rng = np.random.default_rng(0)
-    truth = np.zeros((32, 32), np.float32)
-    truth[20:28, 4:28] = 0.8  # a dark cast shadow on lit ground
-    haze = truth + 0.03 * rng.random(truth.shape).astype(np.float32)  # plus a faint noisy haze
-    t = lambda a: torch.tensor(a)[None, None]  # noqa: E731
-    # the metric in float64, the loss in float32
-    assert dssim_loss(t(haze), t(truth)).item() == pytest.approx(dssim(haze, truth), abs=1e-5)
-    x = {"target": t(truth)}
-    plain, weighted = Objective("sr")(t(haze), x).item(), Objective("sr", ssim_weight=0.1)(t(haze), x).item()
-    # the haze costs almost nothing in L2 (under 0.001) but a large share of the SSIM of the lit ground
-    assert plain < 1e-3 and weighted - plain > 20 * plain
-
-
 def test_zncc_term_is_the_benchmark_zncc_and_counts_a_small_shadow_like_a_large_one():
     import numpy as np
 
     from training.metrics import zncc
-    from training.train import Objective, zncc_loss
+    from training.losses import Objective, zncc_loss
 
     rng = np.random.default_rng(1)
     large = np.zeros((32, 32), np.float32)
@@ -300,21 +267,6 @@ def test_zncc_term_is_the_benchmark_zncc_and_counts_a_small_shadow_like_a_large_
     assert l2[1] < 0.5 * l2[0] and cost[1] > cost[0]
     weighted = Objective("sr", zncc_weight=0.1)(t([moved[1]]), {"target": t([small])}).item()
     assert weighted == pytest.approx(l2[1] + 0.1 * cost[1], rel=1e-5)
-
-
-def test_aop_trains_through_a_frozen_sr(tmp_path):
-    from training.train import frozen_sr
-
-    sr = _run(tmp_path / "s", "sr", 2) / "last.pt"
-    run = _run(tmp_path, "aop", 3, ["--through-sr", str(sr), "--shadow-weight", "3"])
-    ck = checkpoint.load(run / "last.pt")
-    assert ck["module"] == "aop" and ck["step"] == 3 and ck["args"]["through_sr"] == str(sr)
-    assert not any(w.requires_grad for w in frozen_sr(str(sr), torch.device("cpu")).parameters())
-    with pytest.raises(SystemExit):  # it needs an SR with the shadow target
-        _run(tmp_path / "bad", "aop", 1, ["--through-sr", str(run / "last.pt")])
-    with pytest.raises(SystemExit):  # and trains AOPs only
-        _run(tmp_path / "bad2", "sr", 1, ["--through-sr", str(sr)])
-    assert not (tmp_path / "bad").exists() and not (tmp_path / "bad2").exists()  # refused before any file
 
 
 def test_evaluation_by_light_family_on_the_standin(tmp_path):

@@ -13,36 +13,33 @@ import argparse
 import sys
 from pathlib import Path
 
+from training.data import render_bases
+
+from .mitsuba_check import compare
+from .render_set import render_set
+from .score import run_scoring
+from .sheet import write_sheet
+
 DEFAULT_DATA = Path("data/canvas_test")
 
 
 def _render(args: argparse.Namespace) -> int:
-    from training.data import render_bases
-
-    from .render_set import render_set
-
     render_bases.set_threads(args.threads)
     render_set(args.out, args.width, args.height, args.shapes, args.lights, args.seed)
     return 0
 
 
 def _score(args: argparse.Namespace) -> int:
-    from .score import run_scoring
-
     run_scoring(args.data, args.out, args.repo, args.python, args.modes, args.engine_args, args.jobs, args.max_groups)
     return 0
 
 
 def _sheet(args: argparse.Namespace) -> int:
-    from .sheet import write_sheet
-
     write_sheet(args.data, args.predictions, args.out, args.groups, args.mode)
     return 0
 
 
 def _mitsuba(args: argparse.Namespace) -> int:
-    from .mitsuba_check import compare
-
     compare(args.data, args.groups, args.samples, args.stride)
     return 0
 

@@ -14,7 +14,7 @@ import math
 import numpy as np
 
 from ssn_engine.hemisphere import direction
-from ssn_engine.light_map import FORMAT, SOFTNESS_RANGE, VERSION
+from ssn_engine.host_kit.light_map import FORMAT, SOFTNESS_RANGE, VERSION
 
 SUN, HAZY, SOFTBOX = 0.53, 3.0, 12.0  # the evaluation's three light sizes (degrees)
 SAMPLES = {SUN: 16, HAZY: 64, SOFTBOX: 256}  # stratified directions per size: a smooth penumbra at 1024 x 768

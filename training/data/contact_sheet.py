@@ -31,7 +31,7 @@ def sheet_elms(hb: int) -> list[np.ndarray]:
 
 def pick_views(store: ViewStore, count: int) -> list[int]:
     """Up to ``count`` views of different meshes, in turn from each (source, kind) group (hash order)."""
-    groups: dict[tuple[str, str], list[int]] = {}
+    groups: dict[tuple[str, str], list[tuple[int, int]]] = {}
     first = 0
     for mesh in store.meshes:
         key = (mesh["mesh"]["source"], mesh["mesh"]["kind"])
@@ -58,7 +58,7 @@ def write_contact_sheet(root: Path, count: int = 8, tile: int = 128, path: Path 
         v = store.load(i)
         tiles = [1.0 - v.mask, v.ao] + [1.0 - store.shadow(v.occlusion, e) * (1 - 0.5 * v.mask) for e in elms]
         imgs = [
-            Image.fromarray((np.clip(t, 0, 1) * 255).astype(np.uint8)).resize((tile, tile), Image.BILINEAR)
+            Image.fromarray((np.clip(t, 0, 1) * 255).astype(np.uint8)).resize((tile, tile), Image.Resampling.BILINEAR)
             for t in tiles
         ]
         rows.append(np.concatenate([np.pad(np.asarray(im), 1, constant_values=128) for im in imgs], axis=1))

@@ -120,7 +120,7 @@ _MODEL = None
 
 def _model():
     global _MODEL
-    if _MODEL is None:
+    if _MODEL is None:  # anny (and torch under it) load only when a person is built: other sources need neither
         import anny
         import torch
 
@@ -131,7 +131,7 @@ def _model():
 
 
 def _rotation(axes: list[tuple[str, float]]):
-    import roma
+    import roma  # as anny: only when a person is built
     import torch
 
     r = torch.eye(3, dtype=torch.float64)
@@ -146,7 +146,7 @@ def _rotation(axes: list[tuple[str, float]]):
 
 def build(params: dict) -> Mesh:
     """Pose anny with the recorded parameters; returns the mesh in y-up world axes."""
-    import torch
+    import torch  # as anny: only when a person is built
 
     model, faces = _model()
     a = params["angles"]

@@ -19,7 +19,7 @@ import numpy as np
 
 from ssn_engine.frames import resample_frames
 
-from .store import View
+from .store import View, ViewStore
 
 SCALED = ("focal", "shift")  # a view's camera entries in frame pixels
 
@@ -81,9 +81,7 @@ def pack(store, res: int, out: Path) -> int:
 
 
 def main(argv: list[str] | None = None) -> None:
-    from .store import ViewStore
-
-    p = argparse.ArgumentParser(prog="python -m training.data.packed", description=__doc__.splitlines()[0])
+    p = argparse.ArgumentParser(prog="python -m training.data.packed", description=(__doc__ or "").split("\n")[0])
     p.add_argument("--data", nargs="+", required=True, help="dataset roots, read as one store")
     p.add_argument("--res", type=int, default=128, help="the packed frames' size (the AOP's training resolution)")
     p.add_argument("--out", type=Path, required=True, help="the .npz file to write")

@@ -539,7 +539,8 @@ def render_view(
 
 def set_threads(k: int) -> None:
     """Threads numba may use in the parallel kernels."""
-    numba.set_num_threads(max(1, min(k, numba.config.NUMBA_NUM_THREADS)))
+    most = numba.config.NUMBA_NUM_THREADS  # pyright: ignore[reportPrivateImportUsage, reportAttributeAccessIssue]
+    numba.set_num_threads(max(1, min(k, most)))
 
 
 __all__ = [

@@ -18,7 +18,7 @@ def quantise_counts(counts: np.ndarray, samples: int) -> np.ndarray:
 
 def pack(occ: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
     """(T, N, N) uint8 -> spans (T, N, 2) uint16, data (K,) uint8 (numba when available)."""
-    try:
+    try:  # numba is optional: the numpy packer gives the same spans, slower
         from numba import njit
     except ImportError:
         return pack_numpy(occ)

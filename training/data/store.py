@@ -75,7 +75,7 @@ class ViewStore:
     def __len__(self) -> int:
         return len(self._views)
 
-    def view_ids(self, split: str = "train", kind: str | None = None) -> list[int]:
+    def view_ids(self, split: str | None = "train", kind: str | None = None) -> list[int]:
         """Ids of the views of ``split`` ("train", "val", "test"; None for all), optionally of one kind."""
         out = []
         for i, (m, _) in enumerate(self._views):

@@ -6,6 +6,8 @@ object (docs/training.md, "AOP ensemble"), and the mean is close to the better o
 
 from __future__ import annotations
 
+from collections.abc import Sequence
+
 import torch
 from torch import nn
 
@@ -13,7 +15,7 @@ from torch import nn
 class Ensemble(nn.Module):
     """``mean_k net_k(x)`` over the member networks (all of the same module and resolution)."""
 
-    def __init__(self, nets: list[nn.Module]):
+    def __init__(self, nets: Sequence[nn.Module]):
         super().__init__()
         if not nets:
             raise ValueError("an ensemble needs at least one network")

@@ -91,7 +91,7 @@ class Up(nn.Module):
 class UNet(nn.Module):
     """Encoder-decoder with skip links; ``bottleneck_extra`` channels are concatenated at the bottleneck."""
 
-    def __init__(self, in_channels: int, config: UNetConfig, bottleneck_extra: int = 0, out_channels: int = 1):
+    def __init__(self, in_channels: int, config: UNetConfig, bottleneck_extra: int = 0):
         super().__init__()
         w, g = config.widths, config.groups
         self.config = config
@@ -100,7 +100,7 @@ class UNet(nn.Module):
         )
         self.inject = ConvNormReLU(w[-1] + bottleneck_extra, w[-1], g) if bottleneck_extra else None
         self.decoder = nn.ModuleList([Up(w[i], w[i - 1], g) for i in range(len(w) - 1, 0, -1)])
-        self.head = nn.Conv2d(w[0], out_channels, 1)
+        self.head = nn.Conv2d(w[0], 1, 1)
 
     def forward(self, x: torch.Tensor, code: torch.Tensor | None = None) -> torch.Tensor:
         skips = []
@@ -165,44 +165,22 @@ class SRNet(nn.Module):
     ) -> torch.Tensor:
         if not self.config.card:
             return self.unet(torch.cat([mask, ao], dim=1), elm.flatten(1))
+        assert card is not None, "this SR takes the card's shadow"
         return card + self.unet(torch.cat([mask, ao, card], dim=1), elm.flatten(1))
 
 
-HEIGHT_OUTPUTS = ("front", "back", "horizon", "focal")  # channels of HeightNet's output, each in units of R
-
-
-class HeightNet(nn.Module):
-    """Pixel heights and camera from a mask: mask (B, 1, R, R) -> (B, 4, R, R), linear output, in units of R.
-
-    Channels (``HEIGHT_OUTPUTS``): the pixel height of the nearest and of the farthest surface point on each
-    pixel's ray (rows down to the image of the point's foot on the ground; meaningful where the mask covers
-    the pixel), and the camera input (horizon row, focal length) as a map whose mean over the mask is the
-    estimate. A row-coordinate channel goes in with the mask: pixel heights and the horizon depend on where in
-    the frame a silhouette lies, which a convolution alone only sees through its padding.
-    """
-
-    def __init__(self, config: UNetConfig):
-        super().__init__()
-        self.config = config
-        self.unet = UNet(2, config, out_channels=len(HEIGHT_OUTPUTS))
-
-    def forward(self, mask: torch.Tensor) -> torch.Tensor:
-        b, _, r, _ = mask.shape
-        rows = (torch.arange(r, dtype=mask.dtype, device=mask.device) + 0.5) / r
-        return self.unet(torch.cat([mask, rows[None, None, :, None].expand(b, 1, r, r)], dim=1))
-
-
-def build(module: str, config: UNetConfig, head_bias: float | None = None) -> nn.Module:
+def build(module: str, config: UNetConfig, head_bias: float | None = None) -> AOPNet | SRNet:
     """AOPNet or SRNet for ``module`` in {"aop", "sr"}; ``head_bias`` sets the output's initial offset
     (the typical target value: 1 for AO, 0 for s), so the linear head does not spend its first
     thousand Adam steps moving a bias."""
     if module == "aop":
-        net: nn.Module = AOPNet(config)
+        net: AOPNet | SRNet = AOPNet(config)
     elif module == "sr":
         net = SRNet(config)
     else:
         raise ValueError(f"module must be 'aop' or 'sr', got {module!r}")
-    if head_bias is not None:
+    bias = net.unet.head.bias
+    if head_bias is not None and bias is not None:
         with torch.no_grad():
-            net.unet.head.bias.fill_(head_bias)
+            bias.fill_(head_bias)
     return net
