@@ -70,10 +70,11 @@ def test_the_elm_shape_is_checked_once():
 
 def test_the_ao_strength_op_is_last_and_absent_at_one():
     assert strength_edits(1.0) == [] and strength_edits(0) == [{"op": "strength", "value": 0.0}]
-    edits = AoEdits(strength=2.5)
+    edits = AoEdits()
     edits.grow(3)
-    assert edits.to_list() == [{"op": "grow", "pixels": 3}, {"op": "strength", "value": 2.5}]
+    assert edits.to_list(2.5) == [{"op": "grow", "pixels": 3}, {"op": "strength", "value": 2.5}]
+    assert edits.to_list() == [{"op": "grow", "pixels": 3}]
     with pytest.raises(ValueError, match="AO strength"):
-        AoEdits(strength=MAX_AO_STRENGTH + 0.5)
+        edits.to_list(MAX_AO_STRENGTH + 0.5)
     with pytest.raises(ValueError, match="AO strength"):
         strength_edits(-0.1)
