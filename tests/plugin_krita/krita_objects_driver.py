@@ -47,9 +47,12 @@ def main(*args):
         host.active_document = lambda: doc
         controller = ShadowController(engine, host)
         messages = out["messages"] = []
-        controller.status.connect(lambda level, text: messages.append([level, text]))
-        controller.light_map = lm.preset("low-sun-left")
-        controller.set_camera(dict(CAMERA))
+        controller.model.status_changed.connect(lambda status: messages.append(list(status)))
+        controller.live = False  # set as a user would before pressing Generate
+        model = controller.model
+        model.light_map = lm.preset("low-sun-left")
+        model.horizon, model.fov, model.use_horizon = CAMERA["horizon"], CAMERA["fov"], True
+        controller.live = True
         for name in layers:
             activate(doc, doc.nodeByName(name))
             controller.generate()
