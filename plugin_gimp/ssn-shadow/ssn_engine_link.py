@@ -12,64 +12,16 @@ from __future__ import annotations
 from pathlib import Path
 from typing import TYPE_CHECKING
 
-if TYPE_CHECKING:  # the copies are these modules
-    from ssn_engine.host_kit import (
-        ao_edits,
-        camera_rules,
-        client,
-        defaults,
-        engine_config,
-        light_editor,
-        light_map,
-        light_map_picture,
-        protocol,
-        shadow_notes,
-        sky_map,
-    )
+if TYPE_CHECKING:  # the copy is this package
+    from ssn_engine.host_kit import *  # noqa: F403
+    from ssn_engine.host_kit import client, engine_config
 else:
     try:  # installed: the copy made by `ssn-shadow install-plugin`
-        from host_kit import (
-            ao_edits,
-            camera_rules,
-            client,
-            defaults,
-            engine_config,
-            light_editor,
-            light_map,
-            light_map_picture,
-            protocol,
-            shadow_notes,
-            sky_map,
-        )
+        from host_kit import *  # noqa: F403
+        from host_kit import client, engine_config
     except ImportError:  # running from the repository (tests)
-        from ssn_engine.host_kit import (
-            ao_edits,
-            camera_rules,
-            client,
-            defaults,
-            engine_config,
-            light_editor,
-            light_map,
-            light_map_picture,
-            protocol,
-            shadow_notes,
-            sky_map,
-        )
-
-__all__ = [
-    "ao_edits",
-    "camera_rules",
-    "client",
-    "defaults",
-    "engine_config",
-    "light_editor",
-    "light_map",
-    "light_map_picture",
-    "protocol",
-    "shadow_notes",
-    "sky_map",
-    "connect",
-]
+        from ssn_engine.host_kit import *  # noqa: F403
+        from ssn_engine.host_kit import client, engine_config
 
 PLUGIN_DIR = Path(__file__).resolve().parent
 WORKER_STATE = "worker.json"  # the shared worker's address and token (this user only)

@@ -6,3 +6,33 @@ the engine must agree on is defined here once: the worker protocol and its
 client, the light map, its editor and picture, the camera rules, the AO edit
 list, the shared defaults and wording.
 """
+
+from __future__ import annotations
+
+from . import (
+    ao_edits,
+    camera_rules,
+    client,
+    defaults,
+    engine_config,
+    light_editor,
+    light_map,
+    light_map_picture,
+    protocol,
+    shadow_notes,
+    sky_map,
+)
+
+__all__ = [
+    "ao_edits",
+    "camera_rules",
+    "client",
+    "defaults",
+    "engine_config",
+    "light_editor",
+    "light_map",
+    "light_map_picture",
+    "protocol",
+    "shadow_notes",
+    "sky_map",
+]
