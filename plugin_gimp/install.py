@@ -67,7 +67,9 @@ def _clear(dest: Path) -> None:
             else:
                 child.unlink()
     shared = dest / KIT_PACKAGE
-    if shared.is_dir() and not shared.is_symlink():
+    if shared.is_symlink():
+        shared.unlink()
+    elif shared.is_dir():
         shutil.rmtree(shared)
 
 
@@ -119,7 +121,7 @@ def install(
             shutil.copy2(source, target)
             if source.name == f"{PLUGIN_NAME}.py":
                 target.chmod(0o755)
-    copy_host_kit(dest)
+    copy_host_kit(dest, link)
     if address is not None:
         write_address_config(dest, *address, token)
     else:

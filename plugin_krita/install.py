@@ -65,7 +65,7 @@ def install(dest: Path | None = None, python: str | None = None, link: bool = Fa
     else:
         shutil.copytree(PACKAGE, target, ignore=shutil.ignore_patterns(*_GENERATED))
         shutil.copy2(DESKTOP, desktop)
-    copy_host_kit(target)
+    copy_host_kit(target, link)
     write_engine_config(target, _resolve_python(python))
     return target
 

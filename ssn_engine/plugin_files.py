@@ -20,12 +20,19 @@ KIT_MODULES = tuple(sorted(p.name for p in KIT_DIR.glob("*.py")))
 CONFIG_NAME = "engine.json"
 
 
-def copy_host_kit(plugin_dir: Path) -> Path:
-    """Copy the host kit's modules into ``plugin_dir/host_kit`` (replacing an older copy); returns that folder."""
+def copy_host_kit(plugin_dir: Path, link: bool = False) -> Path:
+    """Copy the host kit's modules into ``plugin_dir/host_kit`` (replacing an older copy), or with ``link`` (a
+    development install) link that folder to the kit itself, so that it never falls behind the engine's; returns
+    that folder."""
     dest = Path(plugin_dir) / KIT_PACKAGE
-    if dest.is_dir() and not dest.is_symlink():
+    if dest.is_symlink():
+        dest.unlink()
+    elif dest.is_dir():
         shutil.rmtree(dest)
-    dest.mkdir(parents=True, exist_ok=True)
+    if link:
+        dest.symlink_to(KIT_DIR, target_is_directory=True)
+        return dest
+    dest.mkdir(parents=True)
     for name in KIT_MODULES:
         shutil.copy2(KIT_DIR / name, dest / name)
     return dest

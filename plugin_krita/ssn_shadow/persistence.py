@@ -31,7 +31,7 @@ import math
 from typing import Any
 
 from .model import Settings, ShadowModel
-from .shared import ao_edits, camera_rules, defaults
+from .shared import ao_edits, camera_rules, defaults, protocol
 from .shared import light_map as lm
 
 __all__ = ["ANNOTATION", "DocumentModels", "SettingsError", "dump", "restore"]
@@ -59,15 +59,10 @@ def restore(model: ShadowModel, data: bytes) -> None:
     """Set ``model``'s settings from the annotation's bytes: all of them, or (on :class:`SettingsError`) none.
     The widgets show them; it is no edit (nothing is rendered or saved)."""
     try:
-        settings = json.loads(data.decode("utf-8"))
-    except (UnicodeDecodeError, json.JSONDecodeError) as exc:
+        settings = protocol.loads(data)
+    except (UnicodeDecodeError, ValueError) as exc:  # not JSON, or nested past what a reader takes
         raise SettingsError(f"not JSON ({exc})") from None
-    if not isinstance(settings, dict):
-        raise SettingsError(f"expected a JSON object, got {type(settings).__name__}")
-    if settings.get("format") != FORMAT:
-        raise SettingsError(f"format: expected {FORMAT!r}, got {settings.get('format')!r}")
-    if settings.get("version") != VERSION:
-        raise SettingsError(f"version: this Soft Shadow reads version {VERSION}, got {settings.get('version')!r}")
+    protocol.versioned(settings, FORMAT, VERSION, "this Soft Shadow", SettingsError)
     current = _settings(settings)
     shadows = settings.get("shadows", {})
     if not isinstance(shadows, dict):

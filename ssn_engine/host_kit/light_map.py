@@ -23,7 +23,7 @@ from collections.abc import Callable, Iterator
 from dataclasses import dataclass, field, replace
 from typing import Any
 
-from .protocol import NestingError, loads
+from .protocol import NestingError, loads, versioned
 
 FORMAT = "ssn-shadow-elm"
 VERSION = 1
@@ -158,10 +158,7 @@ class LightMap:
         """Parse the versioned JSON structure; errors name the field."""
         if not isinstance(data, dict):
             raise LightMapError(f"light map: expected a JSON object, got {type(data).__name__}")
-        if data.get("format") != FORMAT:
-            raise LightMapError(f"format: expected {FORMAT!r}, got {data.get('format')!r}")
-        if data.get("version") != VERSION:
-            raise LightMapError(f"version: this ssn-shadow reads version {VERSION}, got {data.get('version')!r}")
+        versioned(data, FORMAT, VERSION, "this ssn-shadow", LightMapError)
         lights = data.get("lights")
         if not isinstance(lights, list):
             raise LightMapError("lights: expected a list")

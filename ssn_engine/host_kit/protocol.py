@@ -47,6 +47,18 @@ def loads(text: str | bytes) -> Any:
     return value
 
 
+def versioned(data: Any, fmt: str, version: int, reader: str, error: type[Exception]) -> dict:
+    """``data`` checked to be a JSON object of format ``fmt`` and version ``version`` (the files the kit writes:
+    light maps, a host's saved settings); else ``error`` naming the field and what ``reader`` reads."""
+    if not isinstance(data, dict):
+        raise error(f"expected a JSON object, got {type(data).__name__}")
+    if data.get("format") != fmt:
+        raise error(f"format: expected {fmt!r}, got {data.get('format')!r}")
+    if data.get("version") != version:
+        raise error(f"version: {reader} reads version {version}, got {data.get('version')!r}")
+    return data
+
+
 def _depth(value: Any) -> int:
     """How many arrays and objects deep ``value`` nests (iteratively: any depth)."""
     deepest, stack = 0, [(value, 1)]

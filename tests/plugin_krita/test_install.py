@@ -24,6 +24,7 @@ def test_install_copies_or_links(tmp_path, link):
     assert pkg == tmp_path / "ssn_shadow"
     assert (tmp_path / "ssn_shadow.desktop").exists()
     assert pkg.is_symlink() == link
+    assert (pkg / "host_kit").is_symlink() == link  # a development install reads the engine's kit, never a stale copy
     for name in (
         "__init__.py",
         "host_kit/light_map.py",
