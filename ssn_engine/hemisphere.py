@@ -15,7 +15,7 @@ from __future__ import annotations
 import numpy as np
 from scipy.special import erf
 
-from .light_map import ASPECT, LightMap
+from .light_map import ASPECT, GaussianLight, LightMap, disk_samples, disk_texel_means
 
 NETWORK_SHAPE = (16, 32)
 
@@ -90,14 +90,19 @@ def stratified_directions(h: int, samples: int, rng: np.random.Generator | None 
 
 
 def render_light_map(light_map: LightMap, h: int = NETWORK_SHAPE[0]) -> np.ndarray:
-    """Each texel's mean radiance under the Gaussian mixture, shape (h, 2h), float32.
+    """Each texel's mean radiance under the lights, shape (h, 2h), float32.
 
-    Texel means are exact (separable erf integrals, azimuth wrapping), so even
-    a light much smaller than a texel keeps its energy at any resolution.
+    Gaussian texel means are exact (separable erf integrals, azimuth
+    wrapping), so even a light much smaller than a texel keeps its energy at
+    any resolution; a disk light's power is spread over the texels its
+    directions fall in (:func:`ssn_engine.light_map.disk_texel_means`).
     """
     out = np.zeros((h, 2 * h), np.float64)
     edges = np.arange(2 * h + 1) / h  # x and y in map heights; x spans [0, 2)
     for light in light_map:
+        if light.angle is not None:
+            _add_disk(out, light)
+            continue
         s = np.sqrt(2.0 * light.softness)
         norm = np.sqrt(np.pi / 2.0) * np.sqrt(light.softness) * h  # divided by texel size 1/h
         ex = np.zeros(2 * h)
@@ -107,6 +112,20 @@ def render_light_map(light_map: LightMap, h: int = NETWORK_SHAPE[0]) -> np.ndarr
         ey = np.diff(erf((edges[: h + 1] - light.v) / s))
         out += light.intensity * norm**2 * np.outer(ey, ex)
     return out.astype(np.float32)
+
+
+def _add_disk(out: np.ndarray, light: GaussianLight) -> None:
+    """Add a disk light's texel means to the map ``out`` (h, 2h) in place."""
+    h, w = out.shape
+    for (i, j), value in disk_texel_means(light, w, h, disk_samples(light.angle or 0.0, w)).items():
+        out[i, j] += value
+
+
+def light_power(light_map: LightMap, h: int = NETWORK_SHAPE[0]) -> np.ndarray:
+    """Each light's unoccluded irradiance of the ground E0_i = sum_t L_t W_t (conventions, "Shadow value") on
+    the (h, 2h) texel grid, shape (lights,): the shares in which their shadows add up."""
+    weights = texel_weights(h)
+    return np.array([float((render_light_map(LightMap([light]), h) * weights).sum()) for light in light_map])
 
 
 def network_elm(elm: np.ndarray) -> np.ndarray:

@@ -1,4 +1,4 @@
-"""The light map drawn for the editor (stdlib only): the Gaussians tone-mapped, and the light markers.
+"""The light map drawn for the editor (stdlib only): the lights tone-mapped, and the light markers.
 
 Each texel shows its mean radiance under the lights, exactly the light map
 the engine gives the model (:func:`ssn_engine.hemisphere.render_light_map`:
@@ -13,7 +13,7 @@ from __future__ import annotations
 
 import math
 
-from .light_map import ASPECT, LightMap
+from .light_map import ASPECT, LightMap, disk_samples, disk_texel_means
 
 NIGHT = (0.10, 0.13, 0.20)
 LIGHT = (1.0, 0.96, 0.85)
@@ -43,6 +43,10 @@ def map_values(lights: LightMap, width: int, height: int) -> list[list[float]]:
     rows = [[0.0] * width for _ in range(height)]
     for light in lights:
         if light.intensity <= 0:
+            continue
+        if light.angle is not None:
+            for (i, j), value in disk_texel_means(light, width, height, disk_samples(light.angle, width)).items():
+                rows[i][j] += value
             continue
         ex = _texel_means(ASPECT * light.u, light.softness, width, height, (-ASPECT, 0.0, ASPECT))
         cols = [(j, f) for j, f in enumerate(ex) if f >= CUTOFF]

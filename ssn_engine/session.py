@@ -3,6 +3,10 @@
 Moving a light re-runs only the shadow renderer (SR); the AO map, and the
 user's edits of it, are kept. A shadow that reaches the frame's border is
 continued beyond it by the geometric card (:mod:`ssn_engine.long_shadow`).
+Small lights (:func:`ssn_engine.hard_light.split_lights`) are traced at the
+output's resolution instead (:mod:`ssn_engine.hard_light`); the network
+renders the rest, and the parts add up in their shares of the ground's
+unoccluded irradiance E0: s = sum_i (E0_i / E0) s_i.
 """
 
 from __future__ import annotations
@@ -13,8 +17,9 @@ import numpy as np
 
 from . import long_shadow
 from .ao_edit import apply_edits
-from .framing import CanvasShadow, Framing, frame_alpha, shadow_to_canvas
-from .hemisphere import NETWORK_SHAPE, render_light_map
+from .framing import CanvasShadow, Framing, as_unit_float, frame_alpha, shadow_to_canvas
+from .hard_light import CardTracer, split_lights
+from .hemisphere import NETWORK_SHAPE, light_power, render_light_map
 from .light_map import LightMap
 from .methods import GeometricCard, ShadowMethod
 from .methods.geometric import camera_at
@@ -40,6 +45,9 @@ class ShadowSession:
     ) -> None:
         self.method = method
         self.mask, self.framing = frame_alpha(alpha, method.resolution)
+        x0, y0, x1, y1 = self.framing.bbox
+        self._cutout = alpha[y0:y1, x0:x1].copy()  # the cutout at the canvas's resolution, for the tracer
+        self._tracer: CardTracer | None = None
         self.cameras = None
         if horizon is not None:
             args = (horizon,) if fov is None else (horizon, fov)
@@ -73,18 +81,49 @@ class ShadowSession:
         self.edits, self.ao = list(edits), ao
         return ao
 
+    @property
+    def tracer(self) -> CardTracer:
+        """The tracer of this cutout's small lights (made on first use, with the camera the session uses)."""
+        if self._tracer is None:
+            self._tracer = CardTracer(as_unit_float(self._cutout), self.framing, camera_at(self.used_cameras, 0))
+        return self._tracer
+
     def render_frame(self, light_map: LightMap) -> np.ndarray:
-        """The frame shadow (N, N) for a light map."""
-        elm = render_light_map(light_map, NETWORK_SHAPE[0])
+        """The network's frame shadow (N, N) of the light map's broad lights (those not traced; zeros when
+        there are none)."""
+        broad = split_lights(light_map)[1]
+        if broad.is_dark:
+            return np.zeros(self.mask.shape, np.float32)
+        elm = render_light_map(broad, NETWORK_SHAPE[0])
         return self.method.render(self.mask[None], self.ao[None], elm[None], self.cameras)[0]
 
     def to_canvas(
         self, frame: np.ndarray, light_map: LightMap, clip: bool = True, framing: Framing | None = None
     ) -> CanvasShadow:
-        """A frame shadow of ``light_map`` at canvas resolution (or on ``framing``'s canvas: a preview's, from
-        :meth:`Framing.scaled`), cropped to its visible part; a shadow that reaches the frame's border continues
-        beyond it (the geometric card's, :mod:`ssn_engine.long_shadow`)."""
+        """The shadow of ``light_map`` at canvas resolution (or on ``framing``'s canvas: a preview's, from
+        :meth:`Framing.scaled`), cropped to its visible part: the network's frame shadow ``frame`` of its broad
+        lights (:meth:`render_frame`) enlarged, and its small lights traced on the canvas's pixels, added in
+        their shares of E0."""
         framing = framing or self.framing
+        traced, broad = split_lights(light_map)
+        if not traced:
+            return self._network_canvas(frame, broad, clip, framing)
+        power = light_power(LightMap([*traced, *broad.lights]))
+        if power.sum() <= 0:
+            return CanvasShadow(np.zeros((0, 0), np.float32), 0, 0)
+        shares = power / power.sum()
+        parts = [
+            (share, *self.tracer.shadow(light.u, light.v, light.size_degrees, framing, clip))
+            for light, share in zip(traced, shares[: len(traced)], strict=True)
+        ]
+        if not broad.is_dark:
+            net = self._network_canvas(frame, broad, clip, framing)
+            parts.append((float(shares[len(traced) :].sum()), net.values, net.x, net.y))
+        return _add(parts)
+
+    def _network_canvas(self, frame: np.ndarray, light_map: LightMap, clip: bool, framing: Framing) -> CanvasShadow:
+        """The network's frame shadow of ``light_map`` on ``framing``'s canvas, continued beyond the frame's
+        border by the geometric card where it reaches it."""
         if not long_shadow.reaches_border(frame):
             return shadow_to_canvas(frame, framing, clip=clip)
         card = self.method if isinstance(self.method, GeometricCard) else getattr(self.method, "card", None)
@@ -99,13 +138,30 @@ class ShadowSession:
         values, origin = long_shadow.extend(frame, wide, window=window if clip else None)
         return shadow_to_canvas(values, framing, origin, clip)
 
-    def render(self, light_map: LightMap, framing: Framing | None = None) -> CanvasShadow:
+    def render(self, light_map: LightMap, framing: Framing | None = None, clip: bool = True) -> CanvasShadow:
         """The shadow at canvas resolution, or on ``framing``'s canvas (:meth:`render_frame`, then
         :meth:`to_canvas`)."""
-        return self.to_canvas(self.render_frame(light_map), light_map, framing=framing)
+        return self.to_canvas(self.render_frame(light_map), light_map, clip, framing)
 
     def cover(self, framing: Framing) -> np.ndarray:
         """The cutout's alpha (h, w) on ``framing``'s canvas, resampled from the frame: what hides the shadow
         in a small preview when the host sends no alpha of that size."""
         mask = shadow_to_canvas(self.mask, framing, origin=(0.0, 0.0))  # with an origin: no fading at the frame's edges
         return mask.full_canvas(framing.canvas_width, framing.canvas_height)
+
+
+def _add(parts: list[tuple[float, np.ndarray, int, int]]) -> CanvasShadow:
+    """The sum of shadows (share, values (h, w), x, y) weighted by their shares, over the union of their boxes,
+    cropped to where it is visible."""
+    parts = [p for p in parts if p[1].size and p[0] > 0]
+    if not parts:
+        return CanvasShadow(np.zeros((0, 0), np.float32), 0, 0)
+    if len(parts) == 1:
+        share, values, x, y = parts[0]
+        return CanvasShadow(values if share == 1.0 else values * np.float32(share), x, y)
+    x0, y0 = min(p[2] for p in parts), min(p[3] for p in parts)
+    x1, y1 = max(p[2] + p[1].shape[1] for p in parts), max(p[3] + p[1].shape[0] for p in parts)
+    out = np.zeros((y1 - y0, x1 - x0), np.float32)
+    for share, values, x, y in parts:
+        out[y - y0 : y - y0 + values.shape[0], x - x0 : x - x0 + values.shape[1]] += np.float32(share) * values
+    return CanvasShadow(np.clip(out, 0.0, 1.0), x0, y0)
