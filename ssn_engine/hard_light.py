@@ -39,6 +39,7 @@ from PIL import Image, ImageFilter
 
 from .camera import Camera, camera_for_span
 from .framing import Framing
+from .stripes import for_each_stripe
 from .light_map import GaussianLight, LightMap
 MIN_INCIDENCE = 25.0  # degrees: the card turns just enough that a light's horizontal direction meets it at least so
 
@@ -51,6 +52,7 @@ ROWS_ALPHA = 0.05  # rows with alpha above this span the card (as the geometric 
 LEVELS_PER_OCTAVE = 2  # blurred copies of the cutout per doubling of the blur
 MIN_SIGMA = 0.35  # pixels: a blur below this is left sharp
 WIDE_BLUR = 4.0  # pixels: a wider blur is made on a copy reduced this many times fewer than its sigma
+BAND = 16  # output rows resampled at once (each band only over the columns the shadow can reach)
 PAD = 0.25  # share of the cutout's size added above and beside it, where its blurred copies spread
 UNCLIPPED_MARGIN = 0.5  # share of the canvas a layer that may leave the canvas reaches beyond each side
 
@@ -70,6 +72,30 @@ def split_lights(light_map: LightMap) -> tuple[list[GaussianLight], LightMap]:
         [light for light, traced in zip(light_map, small, strict=True) if traced],
         LightMap([light for light, traced in zip(light_map, small, strict=True) if not traced]),
     )
+
+
+@dataclass(frozen=True)
+class _Level:
+    """A blurred copy of a source in 8 bits, kept only over its non-zero part: ``values`` at (x, y)."""
+
+    values: np.ndarray
+    x: int
+    y: int
+
+    @classmethod
+    def of(cls, alpha: np.ndarray) -> _Level:
+        """``alpha`` (float in [0, 1]) in 8 bits, cropped to where it is non-zero."""
+        q = np.round(np.asarray(alpha, np.float32) * 255).astype(np.uint8)
+        rows, cols = np.flatnonzero(q.any(axis=1)), np.flatnonzero(q.any(axis=0))
+        if rows.size == 0:
+            return cls(np.zeros((0, 0), np.uint8), 0, 0)
+        return cls(q[rows[0] : rows[-1] + 1, cols[0] : cols[-1] + 1].copy(), int(cols[0]), int(rows[0]))
+
+    def paste(self, out: np.ndarray, r0: int, r1: int) -> None:
+        """Write this level's rows [r0, r1) (of the source) into ``out`` (zeros there beforehand)."""
+        a, b = max(r0, self.y), min(r1, self.y + self.values.shape[0])
+        if b > a:
+            out[a:b, self.x : self.x + self.values.shape[1]] = self.values[a - self.y : b - self.y]
 
 
 @dataclass(frozen=True)
@@ -118,7 +144,7 @@ class CardTracer:
         alpha = np.pad(alpha, ((pad, 0), (pad, pad)))
         self._full = _Source(alpha, s, framing.offset_x + (x0 - pad) * s, framing.offset_y + (y0 - pad) * s)
         self._sources: dict[float, _Source] = {}
-        self._levels: dict[float, list[np.ndarray]] = {}
+        self._levels: dict[float, list[_Level]] = {}
 
     # -- the cutout at the output's resolution ------------------------------------------------------------------
     def _source(self, out_scale: float) -> _Source:
@@ -138,30 +164,25 @@ class CardTracer:
             self._levels.pop(key, None)
         return self._sources[key]
 
-    def _level(self, source: _Source, k: int) -> np.ndarray:
-        """The source blurred by a Gaussian of sigma ``MIN_SIGMA * 2^(k / LEVELS_PER_OCTAVE)`` pixels (k >= 1;
-        k = 0: unblurred), made once per source."""
-        levels = self._levels.setdefault(source.scale, [source.alpha])
+    def _level(self, source: _Source, k: int) -> _Level:
+        """The source blurred by a Gaussian of sigma ``MIN_SIGMA * 2^((k - 1) / LEVELS_PER_OCTAVE)`` pixels
+        (k = 0: unblurred), made once per source."""
+        if source.scale not in self._levels:
+            self._levels[source.scale] = [_Level.of(source.alpha)]
+        levels = self._levels[source.scale]
         while len(levels) <= k:
-            sigma = MIN_SIGMA * 2.0 ** (len(levels) / LEVELS_PER_OCTAVE)
-            levels.append(_blur(source.alpha, sigma))
+            levels.append(_Level.of(_blur(source.alpha, MIN_SIGMA * 2.0 ** ((len(levels) - 1) / LEVELS_PER_OCTAVE))))
         return levels[k]
 
     def _blurred(self, source: _Source, sigma_rows: np.ndarray) -> np.ndarray:
-        """The source blurred row by row: row i by a Gaussian of sigma ``sigma_rows[i]`` pixels, interpolated
-        between the levels around it."""
-        level = np.log2(np.maximum(sigma_rows, MIN_SIGMA) / MIN_SIGMA) * LEVELS_PER_OCTAVE
-        level = np.where(sigma_rows < MIN_SIGMA, sigma_rows / MIN_SIGMA - 1.0, level)  # -1 .. 0: towards sharp
-        out = np.empty_like(source.alpha)
-        lo = np.floor(level).astype(int)
-        for k in np.unique(lo):
-            rows = np.flatnonzero(lo == k)
-            a = self._level(source, max(int(k), 0))[rows]
-            b = self._level(source, int(k) + 1)[rows]
-            t = (level[rows] - k)[:, None].astype(np.float32)
-            if k < 0:  # between sharp (level -1 reads as level 0) and the first blur
-                b, a = self._level(source, 0)[rows], a
-            out[rows] = a + t * (b - a)
+        """The source (uint8) blurred row by row: row i by a Gaussian of about sigma ``sigma_rows[i]`` pixels (the
+        nearest level's, ``LEVELS_PER_OCTAVE`` a doubling; under ``MIN_SIGMA``: sharp)."""
+        level = np.log2(np.maximum(sigma_rows, 1e-9) / MIN_SIGMA) * LEVELS_PER_OCTAVE + 1.0
+        level = np.where(level < 0.5, 0, np.round(level)).astype(int)
+        out = np.zeros(source.alpha.shape, np.uint8)
+        starts = np.flatnonzero(np.diff(level, prepend=-1))  # sigma grows with the height: bands of rows share a level
+        for a, b in zip(starts, [*starts[1:], len(level)], strict=True):
+            self._level(source, int(level[a])).paste(out, int(a), int(b))
         return out
 
     # -- geometry ---------------------------------------------------------------------------------------------
@@ -286,11 +307,56 @@ class CardTracer:
         card = self._blurred(source, self._sigma_rows(source, w, angle))
         hmat = self._homography(w, framing, source, (x0, y0))
         hmat = hmat / hmat[2, 2]
-        image = Image.fromarray(card, "F")
-        warped = image.transform(
-            (x1 - x0, y1 - y0), Image.Transform.PERSPECTIVE, tuple(hmat.ravel()[:8]), Image.Resampling.BILINEAR
-        )
-        return np.clip(np.asarray(warped), 0.0, 1.0), x0, y0
+        return _warp(card, hmat, (x1 - x0, y1 - y0)), x0, y0
+
+
+def _warp(card: np.ndarray, hmat: np.ndarray, size: tuple[int, int]) -> np.ndarray:
+    """The (height, width) output of the homography ``hmat`` (output to ``card`` coordinates, continuous) of
+    ``card`` (uint8), as float32 in [0, 1]: only the output pixels that can map into the card's non-zero box are
+    resampled, a band of ``BAND`` rows at a time, on the machine's cores."""
+    width, height = size
+    out = np.zeros((height, width), np.float32)
+    rows, cols = np.flatnonzero(card.any(axis=1)), np.flatnonzero(card.any(axis=0))
+    if rows.size == 0:
+        return out
+    corners = np.array(
+        [[cols[0] - 1, rows[0] - 1, 1], [cols[-1] + 2, rows[0] - 1, 1], [cols[-1] + 2, rows[-1] + 2, 1],
+         [cols[0] - 1, rows[-1] + 2, 1]], float
+    )
+    back = corners @ np.linalg.inv(hmat).T
+    if (back[:, 2] <= 0).any() or (back[:, 2] * np.linalg.det(hmat) < 0).any():
+        quad = None  # the card's box reaches beyond the horizon: resample every output pixel
+    else:
+        quad = back[:, :2] / back[:, 2:]
+    image = Image.fromarray(card, "L")
+
+    def band(stripe: slice) -> None:
+        for r0 in range(stripe.start, stripe.stop, BAND):
+            r1 = min(r0 + BAND, stripe.stop)
+            c0, c1 = (0, width) if quad is None else _columns(quad, r0, r1, width)
+            if c1 <= c0:
+                continue
+            shift = np.array([[1.0, 0.0, c0], [0.0, 1.0, r0], [0.0, 0.0, 1.0]])
+            local = hmat @ shift
+            local = local / local[2, 2]
+            part = image.transform((c1 - c0, r1 - r0), Image.Transform.PERSPECTIVE, tuple(local.ravel()[:8]),
+                                   Image.Resampling.BILINEAR)
+            out[r0:r1, c0:c1] = np.asarray(part, np.float32) * np.float32(1 / 255)
+
+    for_each_stripe(band, 0, height, width)
+    return out
+
+
+def _columns(quad: np.ndarray, r0: int, r1: int, width: int) -> tuple[int, int]:
+    """The output columns [c0, c1) that the convex quadrilateral ``quad`` (4, 2) covers in rows [r0, r1)."""
+    xs = [x for x, y in quad if r0 <= y <= r1]
+    for (xa, ya), (xb, yb) in zip(quad, np.roll(quad, -1, axis=0), strict=True):
+        for y in (r0, r1):
+            if (ya - y) * (yb - y) < 0:
+                xs.append(xa + (y - ya) / (yb - ya) * (xb - xa))
+    if not xs:
+        return 0, 0
+    return max(0, math.floor(min(xs)) - 1), min(width, math.ceil(max(xs)) + 2)
 
 
 def _blur(alpha: np.ndarray, sigma: float) -> np.ndarray:
