@@ -8,7 +8,7 @@ from engine_helpers import drawn_alpha, one_light
 
 from ssn_engine import long_shadow
 from ssn_engine.framing import EmptyAlphaError
-from ssn_engine.light_map import preset
+from ssn_engine.light_map import GaussianLight, LightMap, preset
 from ssn_engine.methods import GeometricCard
 from ssn_engine.session import ShadowSession
 
@@ -38,7 +38,7 @@ def test_moving_a_light_reruns_only_render(counting):
     alpha = drawn_alpha(200, 150)
     session = ShadowSession(alpha, counting)
     assert counting.ao_calls == 1
-    light = one_light(0.3, 0.6)
+    light = one_light(0.3, 0.6, softness=0.05)  # a broad light: the network's
     shadows = []
     for u in (0.3, 0.4, 0.6, 0.7):
         light.move(0, u, 0.6)
@@ -51,6 +51,18 @@ def test_moving_a_light_reruns_only_render(counting):
     left = shadows[0].x + shadows[0].values.shape[1] / 2
     right = shadows[-1].x + shadows[-1].values.shape[1] / 2
     assert left > right
+
+
+def test_a_small_light_is_traced_without_the_network(counting):
+    session = ShadowSession(drawn_alpha(200, 150), counting)
+    sun = LightMap([GaussianLight.disk(0.3, 0.6, 0.53, 2.0)])
+    shadow = session.render(sun)
+    assert counting.render_calls == 0 and shadow.values.max() > 0.9
+    sky = LightMap([*sun.lights, GaussianLight(0.5, 0.1, 0.08, 1.0)])
+    both = session.render(sky)
+    assert counting.render_calls == 1  # the broad light only
+    # the sun's part is weighted by its share of the irradiance, so the mix is lighter than the sun alone
+    assert 0.2 < both.values.max() < shadow.values.max()
 
 
 def test_source_alpha_is_unchanged(counting):
