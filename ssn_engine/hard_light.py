@@ -52,6 +52,7 @@ ROWS_ALPHA = 0.05  # rows with alpha above this span the card (as the geometric 
 LEVELS_PER_OCTAVE = 2  # blurred copies of the cutout per doubling of the blur
 MIN_SIGMA = 0.35  # pixels: a blur below this is left sharp
 WIDE_BLUR = 4.0  # pixels: a wider blur is made on a copy reduced this many times fewer than its sigma
+SUPERSAMPLE = 4  # at most this many samples across each output pixel coarser than the cutout's canvas
 BAND = 16  # output rows resampled at once (each band only over the columns the shadow can reach)
 PAD = 0.25  # share of the cutout's size added above and beside it, where its blurred copies spread
 UNCLIPPED_MARGIN = 0.5  # share of the canvas a layer that may leave the canvas reaches beyond each side
@@ -143,26 +144,24 @@ class CardTracer:
         pad = math.ceil(PAD * max(alpha.shape))  # room for the blur above and beside the cutout (not below: ground)
         alpha = np.pad(alpha, ((pad, 0), (pad, pad)))
         self._full = _Source(alpha, s, framing.offset_x + (x0 - pad) * s, framing.offset_y + (y0 - pad) * s)
-        self._sources: dict[float, _Source] = {}
+        self._sources: dict[int, _Source] = {}
         self._levels: dict[float, list[_Level]] = {}
 
     # -- the cutout at the output's resolution ------------------------------------------------------------------
     def _source(self, out_scale: float) -> _Source:
-        """The cutout resampled to about the output's resolution (``out_scale`` frame pixels per output pixel),
-        never finer than the alpha given: the homography then magnifies or shrinks it by little."""
+        """The cutout reduced by a whole factor to about the output's resolution (``out_scale`` frame pixels per
+        output pixel), never below it and never finer than the alpha given: the homography then magnifies or
+        shrinks it by little (Pillow's resampling does not antialias)."""
         full = self._full
-        factor = full.scale / out_scale
-        if factor >= 0.75:
+        k = int(out_scale / full.scale + 1e-6)
+        if k <= 1:
             return full
-        key = round(factor, 4)
-        if key not in self._sources:
+        if k not in self._sources:
             h, w = full.alpha.shape
-            size = (max(1, round(w * factor)), max(1, round(h * factor)))
-            small = np.asarray(Image.fromarray(full.alpha, "F").resize(size, Image.Resampling.BOX))
-            fy, fx = h / size[1], w / size[0]
-            self._sources[key] = _Source(small, full.scale * fx, full.offset_x, full.offset_y)
-            self._levels.pop(key, None)
-        return self._sources[key]
+            padded = np.pad(full.alpha, ((0, -h % k), (0, -w % k)))  # zeros below the foot: ground, and right
+            small = np.asarray(Image.fromarray(padded, "F").reduce(k))
+            self._sources[k] = _Source(small, full.scale * k, full.offset_x, full.offset_y)
+        return self._sources[k]
 
     def _level(self, source: _Source, k: int) -> _Level:
         """The source blurred by a Gaussian of sigma ``MIN_SIGMA * 2^((k - 1) / LEVELS_PER_OCTAVE)`` pixels
@@ -303,11 +302,16 @@ class CardTracer:
         if box is None:
             return empty
         x0, y0, x1, y1 = box
-        source = self._source(framing.scale)
+        # an output coarser than the cutout (a preview) is traced at up to ``SUPERSAMPLE`` times its resolution
+        # and averaged down: Pillow's resampling does not antialias, and a crisp edge would alias
+        fine = max(1, min(SUPERSAMPLE, int(framing.scale / self._full.scale + 1e-6)))
+        source = self._source(framing.scale / fine)
         card = self._blurred(source, self._sigma_rows(source, w, angle))
-        hmat = self._homography(w, framing, source, (x0, y0))
-        hmat = hmat / hmat[2, 2]
-        return _warp(card, hmat, (x1 - x0, y1 - y0)), x0, y0
+        hmat = self._homography(w, framing, source, (x0, y0)) @ np.diag([1.0 / fine, 1.0 / fine, 1.0])
+        values = _warp(card, hmat / hmat[2, 2], ((x1 - x0) * fine, (y1 - y0) * fine))
+        if fine > 1:
+            values = values.reshape(y1 - y0, fine, x1 - x0, fine).mean(axis=(1, 3))
+        return values, x0, y0
 
 
 def _warp(card: np.ndarray, hmat: np.ndarray, size: tuple[int, int]) -> np.ndarray:
