@@ -41,7 +41,7 @@ from .camera import Camera, camera_for_span
 from .framing import Framing
 from .stripes import for_each_stripe
 from .light_map import GaussianLight, LightMap
-MIN_INCIDENCE = 25.0  # degrees: the card turns just enough that a light's horizontal direction meets it at least so
+MIN_INCIDENCE = 45.0  # degrees: the card turns just enough that a light's horizontal direction meets it at least so
 
 __all__ = ["TRACED_MAX_ANGLE", "CardTracer", "light_direction", "split_lights"]
 
