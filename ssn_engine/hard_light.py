@@ -10,7 +10,8 @@ Geometry: the cutout is the geometric method's card
 (:mod:`ssn_engine.methods.geometric`): a flat card standing upright on its
 contact line (the mask's lowest row), facing the camera of the conventions
 (given, or the one the model read); a light from nearly the card's side
-turns it just enough not to cast a line (``MIN_INCIDENCE``). For one light direction, each ground point seen through an output
+turns it just enough not to cast a line (``MIN_INCIDENCE``). For one light
+direction, each ground point seen through an output
 pixel is moved along the light to the card, and the card point projected back
 into the cutout: the three steps (pixel to ground plane, ground plane to card
 plane along a fixed direction, card plane to image) are projective maps, so
@@ -37,10 +38,11 @@ from dataclasses import dataclass
 import numpy as np
 from PIL import Image, ImageFilter
 
-from .camera import Camera, camera_for_span
+from .camera import camera_for_span
 from .framing import Framing
 from .stripes import for_each_stripe
 from .light_map import GaussianLight, LightMap
+
 MIN_INCIDENCE = 45.0  # degrees: the card turns just enough that a light's horizontal direction meets it at least so
 
 __all__ = ["TRACED_MAX_ANGLE", "CardTracer", "light_direction", "split_lights"]
@@ -191,7 +193,9 @@ class CardTracer:
         unless the light comes from nearly its side (it would cast a line): then turned about its vertical
         centre line just enough that the light meets it at ``MIN_INCIDENCE`` degrees."""
         azimuth = math.atan2(w[0], -w[2])
-        facing = azimuth - math.pi if azimuth > math.pi / 2 else azimuth + math.pi if azimuth < -math.pi / 2 else azimuth
+        facing = (
+            azimuth - math.pi if azimuth > math.pi / 2 else azimuth + math.pi if azimuth < -math.pi / 2 else azimuth
+        )
         limit = math.radians(90.0 - MIN_INCIDENCE)
         turn = math.copysign(max(0.0, abs(facing) - limit), facing)
         return math.cos(turn), math.sin(turn)
@@ -202,7 +206,11 @@ class CardTracer:
         frame -> source pixel."""
         cam = self.camera
         n, f, shift = cam.n, float(cam.focal), float(cam.shift)
-        s, ox, oy = framing.scale, framing.offset_x + origin[0] * framing.scale, framing.offset_y + origin[1] * framing.scale
+        s, ox, oy = (
+            framing.scale,
+            framing.offset_x + origin[0] * framing.scale,
+            framing.offset_y + origin[1] * framing.scale,
+        )
         to_frame = np.array([[s, 0, ox], [0, s, oy], [0, 0, 1.0]])
         right, up, view, c = np.array([1.0, 0, 0]), cam.up, cam.view, cam.centre
         ray = np.stack([right / f, -up / f, view - (n / 2) / f * right + (n / 2 + shift) / f * up], axis=1)
@@ -216,7 +224,11 @@ class CardTracer:
         depth, upc = view, up
         project = np.stack([f * right + (n / 2) * depth, -f * upc + (n / 2 + shift) * depth, depth])
         to_source = np.array(
-            [[1 / source.scale, 0, -source.offset_x / source.scale], [0, 1 / source.scale, -source.offset_y / source.scale], [0, 0, 1.0]]
+            [
+                [1 / source.scale, 0, -source.offset_x / source.scale],
+                [0, 1 / source.scale, -source.offset_y / source.scale],
+                [0, 0, 1.0],
+            ]
         )
         return to_source @ project @ rel @ card @ ground @ ray @ to_frame
 
@@ -324,8 +336,13 @@ def _warp(card: np.ndarray, hmat: np.ndarray, size: tuple[int, int]) -> np.ndarr
     if rows.size == 0:
         return out
     corners = np.array(
-        [[cols[0] - 1, rows[0] - 1, 1], [cols[-1] + 2, rows[0] - 1, 1], [cols[-1] + 2, rows[-1] + 2, 1],
-         [cols[0] - 1, rows[-1] + 2, 1]], float
+        [
+            [cols[0] - 1, rows[0] - 1, 1],
+            [cols[-1] + 2, rows[0] - 1, 1],
+            [cols[-1] + 2, rows[-1] + 2, 1],
+            [cols[0] - 1, rows[-1] + 2, 1],
+        ],
+        float,
     )
     back = corners @ np.linalg.inv(hmat).T
     if (back[:, 2] <= 0).any() or (back[:, 2] * np.linalg.det(hmat) < 0).any():
@@ -343,8 +360,9 @@ def _warp(card: np.ndarray, hmat: np.ndarray, size: tuple[int, int]) -> np.ndarr
             shift = np.array([[1.0, 0.0, c0], [0.0, 1.0, r0], [0.0, 0.0, 1.0]])
             local = hmat @ shift
             local = local / local[2, 2]
-            part = image.transform((c1 - c0, r1 - r0), Image.Transform.PERSPECTIVE, tuple(local.ravel()[:8]),
-                                   Image.Resampling.BILINEAR)
+            part = image.transform(
+                (c1 - c0, r1 - r0), Image.Transform.PERSPECTIVE, tuple(local.ravel()[:8]), Image.Resampling.BILINEAR
+            )
             out[r0:r1, c0:c1] = np.asarray(part, np.float32) * np.float32(1 / 255)
 
     for_each_stripe(band, 0, height, width)

@@ -172,7 +172,10 @@ def disk_directions(light: GaussianLight, count: int) -> list[tuple[float, float
         for j in range(cells):
             phi = 2.0 * math.pi * (j + 0.5 * (k % 2)) / cells
             ct, st = math.cos(theta), math.sin(theta)
-            d = [ct * c + st * (math.cos(phi) * x + math.sin(phi) * y) for c, x, y in zip(centre, east, north)]
+            d = [
+                ct * c + st * (math.cos(phi) * x + math.sin(phi) * y)
+                for c, x, y in zip(centre, east, north, strict=True)
+            ]
             if d[1] <= 0.0:
                 continue
             elevation = math.asin(min(1.0, d[1]))

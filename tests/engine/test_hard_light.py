@@ -89,7 +89,8 @@ def test_the_blur_matches_the_mean_of_hard_shadows_over_the_disk(tracer):
 )
 def test_the_shadow_follows_the_light(tracer, u, where):
     """Behind the object (u = 0.5) the shadow comes towards the viewer, below the foot; from behind the camera
-    (u = 0.1: and from its left, so that the post does not hide it) it falls away, above it; a light left of centre casts it right, and vice versa."""
+    (u = 0.1: and from its left, so that the post does not hide it) it falls away, above it; a light left of
+    centre casts it right, and vice versa."""
     s = _canvas(tracer, u, 0.6, 0.53)
     s[FOOT - 300 : FOOT, LEFT:RIGHT] = 0  # the ground hidden by the post
     yy, xx = np.mgrid[0:H, 0:W]
@@ -105,7 +106,8 @@ def test_a_light_from_the_side_casts_a_shadow_not_a_line(tracer):
 
 
 def test_small_lights_are_traced_and_broad_ones_left_to_the_network():
-    sun, haze, sky = GaussianLight.disk(0.3, 0.6, 0.53), GaussianLight(0.5, 0.2, 0.0004), GaussianLight(0.5, 0.2, 0.05)
+    sun, haze = GaussianLight.disk(0.3, 0.6, 0.53), GaussianLight(0.5, 0.2, 0.0004)
+    sky = GaussianLight(0.5, 0.2, 0.05)
     traced, broad = split_lights(LightMap([sun, haze, sky]))
     assert traced == [sun, haze] and broad.lights == [sky]
     assert split_lights(LightMap([GaussianLight.disk(0.3, 0.6, 0.53, 0.0)]))[0] == []  # no light, nothing to trace

@@ -393,7 +393,9 @@ def test_disk_directions_lie_within_the_disk_and_share_its_power():
     assert sum(share for _, _, share in directions) == pytest.approx(1.0)
     for u, v, _ in directions:  # within 5 degrees of the centre (0.4, 0.5): azimuth -36, elevation 45
         e, a = math.radians(90 * (1 - v)), math.radians(360 * u - 180)
-        c = math.cos(math.radians(45)) * math.cos(e) * math.cos(a + math.radians(36)) + math.sin(math.radians(45)) * math.sin(e)
+        c = math.cos(math.radians(45)) * math.cos(e) * math.cos(a + math.radians(36)) + math.sin(
+            math.radians(45)
+        ) * math.sin(e)
         assert math.degrees(math.acos(min(1.0, c))) <= 5.0 + 1e-6
 
 

@@ -166,7 +166,9 @@ def _as_gaussians(lights: LightMap) -> LightMap:
     (softness 0.002)."""
     return LightMap(
         [
-            light if light.angle is None else GaussianLight(light.u, light.v, max(0.002, light.softness), light.intensity)
+            light
+            if light.angle is None
+            else GaussianLight(light.u, light.v, max(0.002, light.softness), light.intensity)
             for light in lights
         ]
     )
