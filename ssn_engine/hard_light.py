@@ -45,9 +45,9 @@ from .light_map import GaussianLight, LightMap
 
 MIN_INCIDENCE = 45.0  # degrees: the card turns just enough that a light's horizontal direction meets it at least so
 
-__all__ = ["TRACED_MAX_ANGLE", "CardTracer", "light_direction", "split_lights"]
+__all__ = ["TRACED_MAX_ANGLE", "CardTracer", "as_gaussians", "light_direction", "split_lights"]
 
-TRACED_MAX_ANGLE = 20.0  # degrees: a light this small or smaller (a disk's angle, a Gaussian's equivalent) is traced
+TRACED_MAX_ANGLE = 10.0  # degrees: a light this small or smaller (a disk's angle, a Gaussian's equivalent) is traced
 
 SOLID = 0.5  # the lowest row with alpha above this is the card's foot: the rows below it repeat it
 ROWS_ALPHA = 0.05  # rows with alpha above this span the card (as the geometric card's)
@@ -75,6 +75,11 @@ def split_lights(light_map: LightMap) -> tuple[list[GaussianLight], LightMap]:
         [light for light, traced in zip(light_map, small, strict=True) if traced],
         LightMap([light for light, traced in zip(light_map, small, strict=True) if not traced]),
     )
+
+
+def as_gaussians(lights: list[GaussianLight]) -> LightMap:
+    """The lights as Gaussians as wide (a disk's :func:`ssn_engine.light_map.angle_softness`), for the network."""
+    return LightMap([GaussianLight(light.u, light.v, light.softness, light.intensity) for light in lights])
 
 
 @dataclass(frozen=True)

@@ -4,9 +4,10 @@ Moving a light re-runs only the shadow renderer (SR); the AO map, and the
 user's edits of it, are kept. A shadow that reaches the frame's border is
 continued beyond it by the geometric card (:mod:`ssn_engine.long_shadow`).
 Small lights (:func:`ssn_engine.hard_light.split_lights`) are traced at the
-output's resolution instead (:mod:`ssn_engine.hard_light`); the network
-renders the rest, and the parts add up in their shares of the ground's
-unoccluded irradiance E0: s = sum_i (E0_i / E0) s_i.
+output's resolution instead (:mod:`ssn_engine.hard_light`), kept no lighter
+than the network's shadow of them as Gaussians; the network renders the rest,
+and the parts add up in their shares of the ground's unoccluded irradiance
+E0: s = sum_i (E0_i / E0) s_i.
 """
 
 from __future__ import annotations
@@ -18,7 +19,7 @@ import numpy as np
 from . import long_shadow
 from .ao_edit import apply_edits
 from .framing import CanvasShadow, Framing, as_unit_float, frame_alpha, shadow_to_canvas
-from .hard_light import CardTracer, split_lights
+from .hard_light import CardTracer, as_gaussians, split_lights
 from .hemisphere import NETWORK_SHAPE, light_power, render_light_map
 from .light_map import LightMap
 from .methods import GeometricCard, ShadowMethod
@@ -89,37 +90,49 @@ class ShadowSession:
         return self._tracer
 
     def render_frame(self, light_map: LightMap) -> np.ndarray:
-        """The network's frame shadow (N, N) of the light map's broad lights (those not traced; zeros when
-        there are none)."""
-        broad = split_lights(light_map)[1]
-        if broad.is_dark:
-            return np.zeros(self.mask.shape, np.float32)
-        elm = render_light_map(broad, NETWORK_SHAPE[0])
-        return self.method.render(self.mask[None], self.ao[None], elm[None], self.cameras)[0]
+        """The network's frame shadows (2, N, N) of the light map: of its broad lights (those not traced), and of
+        its small lights as Gaussians as wide (:func:`ssn_engine.hard_light.as_gaussians`), which give the traced
+        shadow the object's extent and contact (:meth:`to_canvas`); zeros for a part without light."""
+        traced, broad = split_lights(light_map)
+        maps = [broad, as_gaussians(traced)]
+        out = np.zeros((2, *self.mask.shape), np.float32)
+        lit = [i for i, part in enumerate(maps) if not part.is_dark]
+        if lit:
+            elms = np.stack([render_light_map(maps[i], NETWORK_SHAPE[0]) for i in lit])
+            masks, ao = np.repeat(self.mask[None], len(lit), 0), np.repeat(self.ao[None], len(lit), 0)
+            cameras = None if self.cameras is None else np.repeat(self.cameras, len(lit), 0)
+            out[lit] = self.method.render(masks, ao, elms, cameras)
+        return out
 
     def to_canvas(
-        self, frame: np.ndarray, light_map: LightMap, clip: bool = True, framing: Framing | None = None
+        self, frames: np.ndarray, light_map: LightMap, clip: bool = True, framing: Framing | None = None
     ) -> CanvasShadow:
         """The shadow of ``light_map`` at canvas resolution (or on ``framing``'s canvas: a preview's, from
-        :meth:`Framing.scaled`), cropped to its visible part: the network's frame shadow ``frame`` of its broad
-        lights (:meth:`render_frame`) enlarged, and its small lights traced on the canvas's pixels, added in
-        their shares of E0."""
+        :meth:`Framing.scaled`), cropped to its visible part, from the network's frames of :meth:`render_frame`.
+
+        The broad lights' frame is enlarged. The small lights are traced on the canvas's pixels, added in their
+        shares of E0, and where the network's shadow of them as Gaussians is darker (the object's extent in
+        depth, its contact), that is kept: s_small = max(traced, network). The two parts add up in their
+        shares of E0."""
         framing = framing or self.framing
         traced, broad = split_lights(light_map)
         if not traced:
-            return self._network_canvas(frame, broad, clip, framing)
+            return self._network_canvas(frames[0], broad, clip, framing)
         power = light_power(LightMap([*traced, *broad.lights]))
         if power.sum() <= 0:
             return CanvasShadow(np.zeros((0, 0), np.float32), 0, 0)
         shares = power / power.sum()
+        small = float(shares[: len(traced)].sum())
         parts = [
-            (share, *self.tracer.shadow(light.u, light.v, light.size_degrees, framing, clip))
+            (share / small, *self.tracer.shadow(light.u, light.v, light.size_degrees, framing, clip))
             for light, share in zip(traced, shares[: len(traced)], strict=True)
         ]
-        if not broad.is_dark:
-            net = self._network_canvas(frame, broad, clip, framing)
-            parts.append((float(shares[len(traced) :].sum()), net.values, net.x, net.y))
-        return _add(parts)
+        net = self._network_canvas(frames[1], as_gaussians(traced), clip, framing)
+        values, x, y = _combine(parts, (net.values, net.x, net.y))
+        if broad.is_dark:
+            return CanvasShadow(values, x, y)
+        net = self._network_canvas(frames[0], broad, clip, framing)
+        return CanvasShadow(*_combine([(small, values, x, y), (1.0 - small, net.values, net.x, net.y)]))
 
     def _network_canvas(self, frame: np.ndarray, light_map: LightMap, clip: bool, framing: Framing) -> CanvasShadow:
         """The network's frame shadow of ``light_map`` on ``framing``'s canvas, continued beyond the frame's
@@ -150,18 +163,23 @@ class ShadowSession:
         return mask.full_canvas(framing.canvas_width, framing.canvas_height)
 
 
-def _add(parts: list[tuple[float, np.ndarray, int, int]]) -> CanvasShadow:
-    """The sum of shadows (share, values (h, w), x, y) weighted by their shares, over the union of their boxes,
-    cropped to where it is visible."""
-    parts = [p for p in parts if p[1].size and p[0] > 0]
-    if not parts:
-        return CanvasShadow(np.zeros((0, 0), np.float32), 0, 0)
-    if len(parts) == 1:
-        share, values, x, y = parts[0]
-        return CanvasShadow(values if share == 1.0 else values * np.float32(share), x, y)
-    x0, y0 = min(p[2] for p in parts), min(p[3] for p in parts)
-    x1, y1 = max(p[2] + p[1].shape[1] for p in parts), max(p[3] + p[1].shape[0] for p in parts)
+def _combine(
+    parts: list[tuple[float, np.ndarray, int, int]], darker: tuple[np.ndarray, int, int] | None = None
+) -> tuple[np.ndarray, int, int]:
+    """The sum of shadows (share, values (h, w), x, y) weighted by their shares over the union of their boxes,
+    and where ``darker`` (values, x, y) is darker, that: (values, x, y), clipped to [0, 1]."""
+    boxes = [(v, x, y) for _, v, x, y in parts] + ([darker] if darker is not None else [])
+    boxes = [b for b in boxes if b[0].size]
+    if not boxes:
+        return np.zeros((0, 0), np.float32), 0, 0
+    x0, y0 = min(b[1] for b in boxes), min(b[2] for b in boxes)
+    x1, y1 = max(b[1] + b[0].shape[1] for b in boxes), max(b[2] + b[0].shape[0] for b in boxes)
     out = np.zeros((y1 - y0, x1 - x0), np.float32)
     for share, values, x, y in parts:
-        out[y - y0 : y - y0 + values.shape[0], x - x0 : x - x0 + values.shape[1]] += np.float32(share) * values
-    return CanvasShadow(np.clip(out, 0.0, 1.0), x0, y0)
+        if values.size:
+            out[y - y0 : y - y0 + values.shape[0], x - x0 : x - x0 + values.shape[1]] += np.float32(share) * values
+    if darker is not None and darker[0].size:
+        values, x, y = darker
+        window = out[y - y0 : y - y0 + values.shape[0], x - x0 : x - x0 + values.shape[1]]
+        np.maximum(window, values, out=window)
+    return np.clip(out, 0.0, 1.0), x0, y0

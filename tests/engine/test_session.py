@@ -53,14 +53,14 @@ def test_moving_a_light_reruns_only_render(counting):
     assert left > right
 
 
-def test_a_small_light_is_traced_without_the_network(counting):
+def test_a_small_light_is_traced_and_the_broad_light_rendered_in_one_network_pass(counting):
     session = ShadowSession(drawn_alpha(200, 150), counting)
     sun = LightMap([GaussianLight.disk(0.3, 0.6, 0.53, 2.0)])
     shadow = session.render(sun)
-    assert counting.render_calls == 0 and shadow.values.max() > 0.9
+    assert counting.render_calls == 1 and shadow.values.max() > 0.99  # traced: fully dark in its umbra
     sky = LightMap([*sun.lights, GaussianLight(0.5, 0.1, 0.08, 1.0)])
     both = session.render(sky)
-    assert counting.render_calls == 1  # the broad light only
+    assert counting.render_calls == 2  # the sun as a Gaussian and the broad light, in one pass
     # the sun's part is weighted by its share of the irradiance, so the mix is lighter than the sun alone
     assert 0.2 < both.values.max() < shadow.values.max()
 
@@ -97,8 +97,9 @@ def test_bad_edit_keeps_the_previous_state(counting):
 def test_render_frame_and_canvas_shadow(counting):
     alpha = drawn_alpha(200, 150)
     session = ShadowSession(alpha, counting)
-    frame = session.render_frame(one_light(0.5, 0.7))
-    assert frame.shape == (128, 128) and frame.dtype == np.float32
+    frames = session.render_frame(one_light(0.5, 0.7))  # the broad light's, and the small lights' (none)
+    assert frames.shape == (2, 128, 128) and frames.dtype == np.float32
+    assert frames[0].max() > 0.2 and frames[1].max() == 0
     shadow = session.render(one_light(0.5, 0.7))
     full = shadow.full_canvas(200, 150)
     ys, xs = np.nonzero(alpha > 127)
