@@ -38,8 +38,9 @@ from dataclasses import dataclass
 import numpy as np
 from PIL import Image, ImageFilter
 
-from .camera import camera_for_span
+from .camera import FORWARD, RIGHT, UP, camera_for_span
 from .framing import Framing
+from .hemisphere import direction
 from .stripes import for_each_stripe
 from .light_map import GaussianLight, LightMap
 
@@ -62,9 +63,9 @@ UNCLIPPED_MARGIN = 0.5  # share of the canvas a layer that may leave the canvas 
 
 def light_direction(u: float, v: float) -> np.ndarray:
     """The world direction (3,) towards map point (u, v) (conventions: elevation 90 (1 - v), azimuth
-    360 u - 180 degrees from the camera's horizontal forward (0, 0, -1), positive to its right (1, 0, 0))."""
-    e, a = math.pi / 2 * (1.0 - v), 2 * math.pi * u - math.pi
-    return np.array([math.cos(e) * math.sin(a), math.sin(e), -math.cos(e) * math.cos(a)])
+    360 u - 180 degrees from the camera's horizontal forward, positive to its right)."""
+    right, up, forward = direction(np.radians(90.0 * (1.0 - v)), np.radians(360.0 * u - 180.0))
+    return right * RIGHT + up * UP + forward * FORWARD
 
 
 def split_lights(light_map: LightMap) -> tuple[list[GaussianLight], LightMap]:
