@@ -168,7 +168,8 @@ class CanvasShadow:
         return out
 
 
-def _as_unit_float(alpha: np.ndarray) -> np.ndarray:
+def as_unit_float(alpha: np.ndarray) -> np.ndarray:
+    """An alpha of uint8, uint16 or float as float32 in [0, 1] (NaN as 0)."""
     if alpha.dtype == np.uint8:
         return alpha.astype(np.float32) / 255.0
     if alpha.dtype == np.uint16:
@@ -219,7 +220,7 @@ def frame_alpha(alpha: np.ndarray, n: int = 256) -> tuple[np.ndarray, Framing]:
     fw, fh = min(math.ceil(bw * scale), n - col0), min(math.ceil(bh * scale), n - row0)
     pad = math.ceil(1.0 / scale) + 1  # zero margin: the box may reach past the bbox by a frame pixel
     crop = np.zeros((bh + 1 + pad, bw + 1 + pad), np.float32)
-    crop[1 : bh + 1, 1 : bw + 1] = _as_unit_float(alpha[y0:y1, x0:x1])
+    crop[1 : bh + 1, 1 : bw + 1] = as_unit_float(alpha[y0:y1, x0:x1])
     box = (1.0, 1.0, 1.0 + fw / scale, 1.0 + fh / scale)
     resized = Image.fromarray(crop, "F").resize((fw, fh), Image.Resampling.BILINEAR, box=box)
     mask = np.zeros((n, n), np.float32)

@@ -15,7 +15,7 @@ from __future__ import annotations
 import numpy as np
 from scipy.special import erf
 
-from .host_kit.light_map import ASPECT, LightMap
+from .host_kit.light_map import ASPECT, GaussianLight, LightMap, disk_samples, disk_texel_means
 from .host_kit.sky_map import NETWORK_SHAPE
 
 
@@ -107,10 +107,32 @@ def render_light_maps(
 
 
 def render_light_map(light_map: LightMap, h: int = NETWORK_SHAPE[0]) -> np.ndarray:
-    """Each texel's mean radiance under one light map, shape (h, 2h), float32 (:func:`render_light_maps`)."""
-    lights = [(g.u, g.v, g.softness, g.intensity) for g in light_map] or [(0.5, 0.5, 0.01, 0.0)]
-    u, v, softness, intensity = (np.array([column]) for column in zip(*lights, strict=True))
-    return render_light_maps(u, v, softness, intensity, h)[0]
+    """Each texel's mean radiance under one light map, shape (h, 2h), float32: its Gaussians by
+    :func:`render_light_maps`, its disk lights' power spread over the texels their directions fall in
+    (:func:`ssn_engine.host_kit.light_map.disk_texel_means`), as :func:`ssn_engine.host_kit.sky_map.map_values`."""
+    gaussians = [(g.u, g.v, g.softness, g.intensity) for g in light_map if g.angle is None]
+    u, v, softness, intensity = (
+        np.array([column]) for column in zip(*(gaussians or [(0.5, 0.5, 0.01, 0.0)]), strict=True)
+    )
+    out = render_light_maps(u, v, softness, intensity, h)[0]
+    for light in light_map:
+        if light.angle is not None:
+            _add_disk(out, light)
+    return out
+
+
+def _add_disk(out: np.ndarray, light: GaussianLight) -> None:
+    """Add a disk light's texel means to the map ``out`` (h, 2h) in place."""
+    h, w = out.shape
+    for (i, j), value in disk_texel_means(light, w, h, disk_samples(light.angle or 0.0, w)).items():
+        out[i, j] += value
+
+
+def light_power(light_map: LightMap, h: int = NETWORK_SHAPE[0]) -> np.ndarray:
+    """Each light's unoccluded irradiance of the ground E0_i = sum_t L_t W_t (conventions, "Shadow value") on
+    the (h, 2h) texel grid, shape (lights,): the shares in which their shadows add up."""
+    weights = texel_weights(h)
+    return np.array([float((render_light_map(LightMap([light]), h) * weights).sum()) for light in light_map])
 
 
 def network_elm(elm: np.ndarray) -> np.ndarray:

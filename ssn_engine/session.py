@@ -3,6 +3,11 @@
 Moving a light re-runs only the shadow renderer (SR); the AO map, and the
 user's edits of it, are kept. A shadow that reaches the frame's border is
 continued beyond it by the geometric card (:mod:`ssn_engine.long_shadow`).
+Small lights (:func:`ssn_engine.hard_light.split_lights`) are traced at the
+output's resolution instead (:mod:`ssn_engine.hard_light`), kept no lighter
+than the network's shadow of them as Gaussians; the network renders the rest,
+and the parts add up in their shares of the ground's unoccluded irradiance
+E0: s = sum_i (E0_i / E0) s_i.
 """
 
 from __future__ import annotations
@@ -14,8 +19,9 @@ import numpy as np
 
 from . import long_shadow
 from .ao_edit import apply_edits
-from .framing import CanvasShadow, Framing, frame_alpha, shadow_to_canvas
-from .hemisphere import render_light_map
+from .framing import CanvasShadow, Framing, as_unit_float, frame_alpha, shadow_to_canvas
+from .hard_light import CardTracer, as_gaussians, split_lights
+from .hemisphere import light_power, render_light_map
 from .host_kit.camera_rules import DEFAULT_FOV, FOV_RANGE
 from .host_kit.light_map import LightMap
 from .host_kit.shadow_notes import HIDDEN, NO_LIGHT
@@ -63,6 +69,8 @@ class ShadowSession:
     ) -> None:
         self.method = method
         self.mask, self.framing = frame_alpha(alpha, method.resolution)
+        x0, y0, x1, y1 = self.framing.bbox
+        self._cutout = alpha[y0:y1, x0:x1].copy()  # the cutout at the canvas's resolution, for the tracer
         self.edits: list[dict[str, Any]] = []
         self._card: GeometricCard | None = None  # traces long shadows for methods without a card of their own
         self.set_camera(horizon, fov)
@@ -71,6 +79,7 @@ class ShadowSession:
         """Change the camera (as in the constructor; None: the method's reading or default one): the AO is
         predicted again with it and the AO edits are applied to it again. The camera the method uses is resolved
         here, once per camera (``used_cameras``), so that a light change resolves none."""
+        self._tracer: CardTracer | None = None  # made with the camera, on first use
         cameras = None
         if horizon is not None:
             cameras = np.array([camera_input(self.framing, horizon, DEFAULT_FOV if fov is None else fov)])
@@ -102,18 +111,61 @@ class ShadowSession:
         self.edits, self.ao = list(edits), ao
         return ao
 
+    @property
+    def tracer(self) -> CardTracer:
+        """The tracer of this cutout's small lights (made on first use, with the camera the session uses)."""
+        if self._tracer is None:
+            self._tracer = CardTracer(as_unit_float(self._cutout), self.framing, camera_at(self.used_cameras, 0))
+        return self._tracer
+
     def render_frame(self, light_map: LightMap) -> np.ndarray:
-        """The frame shadow (N, N) for a light map."""
-        elm = render_light_map(light_map, NETWORK_SHAPE[0])
-        return self.method.render(self.mask[None], self.ao[None], elm[None], self.used_cameras)[0]
+        """The network's frame shadows (2, N, N) of the light map: of its broad lights (those not traced), and of
+        its small lights as Gaussians as wide (:func:`ssn_engine.hard_light.as_gaussians`), which give the traced
+        shadow the object's extent and contact (:meth:`to_canvas`); zeros for a part without light."""
+        traced, broad = split_lights(light_map)
+        maps = [broad, as_gaussians(traced)]
+        out = np.zeros((2, *self.mask.shape), np.float32)
+        lit = [i for i, part in enumerate(maps) if not part.is_dark]
+        if lit:
+            elms = np.stack([render_light_map(maps[i], NETWORK_SHAPE[0]) for i in lit])
+            masks, ao = np.repeat(self.mask[None], len(lit), 0), np.repeat(self.ao[None], len(lit), 0)
+            cameras = None if self.used_cameras is None else np.repeat(self.used_cameras, len(lit), 0)
+            out[lit] = self.method.render(masks, ao, elms, cameras)
+        return out
 
     def to_canvas(
-        self, frame: np.ndarray, light_map: LightMap, clip: bool = True, framing: Framing | None = None
+        self, frames: np.ndarray, light_map: LightMap, clip: bool = True, framing: Framing | None = None
     ) -> CanvasShadow:
-        """A frame shadow of ``light_map`` at canvas resolution (or on ``framing``'s canvas: a preview's, from
-        :meth:`Framing.scaled`), cropped to its visible part; a shadow that reaches the frame's border continues
-        beyond it (the geometric card's, :mod:`ssn_engine.long_shadow`)."""
+        """The shadow of ``light_map`` at canvas resolution (or on ``framing``'s canvas: a preview's, from
+        :meth:`Framing.scaled`), cropped to its visible part, from the network's frames of :meth:`render_frame`.
+
+        The broad lights' frame is enlarged. The small lights are traced on the canvas's pixels, added in their
+        shares of E0, and where the network's shadow of them as Gaussians is darker (the object's extent in
+        depth, its contact), that is kept: s_small = max(traced, network). The two parts add up in their
+        shares of E0."""
         framing = framing or self.framing
+        traced, broad = split_lights(light_map)
+        if not traced:
+            return self._network_canvas(frames[0], broad, clip, framing)
+        power = light_power(LightMap([*traced, *broad.lights]))
+        if power.sum() <= 0:
+            return CanvasShadow(np.zeros((0, 0), np.float32), 0, 0)
+        shares = power / power.sum()
+        small = float(shares[: len(traced)].sum())
+        parts = [
+            (share / small, *self.tracer.shadow(light.u, light.v, light.size_degrees, framing, clip))
+            for light, share in zip(traced, shares[: len(traced)], strict=True)
+        ]
+        net = self._network_canvas(frames[1], as_gaussians(traced), clip, framing)
+        values, x, y = _combine(parts, (net.values, net.x, net.y))
+        if broad.is_dark:
+            return CanvasShadow(values, x, y)
+        net = self._network_canvas(frames[0], broad, clip, framing)
+        return CanvasShadow(*_combine([(small, values, x, y), (1.0 - small, net.values, net.x, net.y)]))
+
+    def _network_canvas(self, frame: np.ndarray, light_map: LightMap, clip: bool, framing: Framing) -> CanvasShadow:
+        """The network's frame shadow of ``light_map`` on ``framing``'s canvas, continued beyond the frame's
+        border by the geometric card where it reaches it."""
         if not long_shadow.reaches_border(frame):
             return shadow_to_canvas(frame, framing, clip=clip)
         card = self.method if isinstance(self.method, GeometricCard) else getattr(self.method, "card", None)
@@ -128,13 +180,35 @@ class ShadowSession:
         values, origin = long_shadow.extend(frame, wide, window=window if clip else None)
         return shadow_to_canvas(values, framing, origin, clip)
 
-    def render(self, light_map: LightMap, framing: Framing | None = None) -> CanvasShadow:
+    def render(self, light_map: LightMap, framing: Framing | None = None, clip: bool = True) -> CanvasShadow:
         """The shadow at canvas resolution, or on ``framing``'s canvas (:meth:`render_frame`, then
         :meth:`to_canvas`)."""
-        return self.to_canvas(self.render_frame(light_map), light_map, framing=framing)
+        return self.to_canvas(self.render_frame(light_map), light_map, clip, framing)
 
     def cover(self, framing: Framing) -> np.ndarray:
         """The cutout's alpha (h, w) on ``framing``'s canvas, resampled from the frame: what hides the shadow
         in a preview."""
         mask = shadow_to_canvas(self.mask, framing, origin=(0.0, 0.0))  # with an origin: no fading at the frame's edges
         return mask.full_canvas(framing.canvas_width, framing.canvas_height)
+
+
+def _combine(
+    parts: list[tuple[float, np.ndarray, int, int]], darker: tuple[np.ndarray, int, int] | None = None
+) -> tuple[np.ndarray, int, int]:
+    """The sum of shadows (share, values (h, w), x, y) weighted by their shares over the union of their boxes,
+    and where ``darker`` (values, x, y) is darker, that: (values, x, y), clipped to [0, 1]."""
+    boxes = [(v, x, y) for _, v, x, y in parts] + ([darker] if darker is not None else [])
+    boxes = [b for b in boxes if b[0].size]
+    if not boxes:
+        return np.zeros((0, 0), np.float32), 0, 0
+    x0, y0 = min(b[1] for b in boxes), min(b[2] for b in boxes)
+    x1, y1 = max(b[1] + b[0].shape[1] for b in boxes), max(b[2] + b[0].shape[0] for b in boxes)
+    out = np.zeros((y1 - y0, x1 - x0), np.float32)
+    for share, values, x, y in parts:
+        if values.size:
+            out[y - y0 : y - y0 + values.shape[0], x - x0 : x - x0 + values.shape[1]] += np.float32(share) * values
+    if darker is not None and darker[0].size:
+        values, x, y = darker
+        window = out[y - y0 : y - y0 + values.shape[0], x - x0 : x - x0 + values.shape[1]]
+        np.maximum(window, values, out=window)
+    return np.clip(out, 0.0, 1.0), x0, y0

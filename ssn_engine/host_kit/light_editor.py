@@ -3,8 +3,9 @@
 Map coordinates as in :mod:`light_map`: ``u`` across (0.5 = behind the
 object), ``v`` down from the zenith. Gestures: a press on empty sky adds a
 light, a press on a light selects it and dragging moves it (keeping the grab
-offset); the wheel changes the softness (size) of the light under the pointer
-or else of the selected one, with Shift its intensity; right-click or Delete
+offset); the wheel changes the size of the light under the pointer or else of
+the selected one (a Gaussian's softness, a disk light's angle in degrees),
+with Shift its intensity; right-click or Delete
 removes a light.
 
 After every change ``on_change(live, new_stroke)`` is called: ``live`` while
@@ -26,6 +27,7 @@ from . import light_map
 NEW_SOFTNESS = 0.01
 NEW_INTENSITY = 2.0
 SOFTNESS_STEP = 1.25  # per wheel notch, multiplicative
+ANGLE_STEP = 1.25  # a disk light's diameter per wheel notch, multiplicative
 INTENSITY_STEP = 0.1  # per wheel notch with Shift
 STROKE_GAP_S = 0.6  # wheel notches further apart than this start a new undo step
 
@@ -105,8 +107,8 @@ class LightMapEditor:
             self._changed(False, False)
 
     def scroll(self, notches: float, intensity: bool = False, at: tuple[float, float] | None = None) -> None:
-        """Wheel: the softness (or with ``intensity`` the intensity) of the light under ``at``, else the
-        selected one. Notches in quick succession are one undo step."""
+        """Wheel: the size (a Gaussian's softness, a disk light's angle; or with ``intensity`` the intensity) of
+        the light under ``at``, else the selected one. Notches in quick succession are one undo step."""
         target = self.lights.hit_test(*at) if at is not None else None
         target = self.selected if target is None else target
         if target is None or notches == 0:
@@ -115,6 +117,8 @@ class LightMapEditor:
         light = self.lights.lights[target]
         if intensity:
             self.lights.reweight(target, light.intensity + INTENSITY_STEP * notches)
+        elif light.angle is not None:
+            self.lights.set_angle(target, light.angle * ANGLE_STEP**notches)
         else:
             self.lights.resize(target, light.softness * SOFTNESS_STEP**notches)
         now = self._clock()

@@ -1,4 +1,4 @@
-"""The light map drawn for the editor (stdlib only): the Gaussians tone-mapped, and the light markers.
+"""The light map drawn for the editor (stdlib only): the lights tone-mapped, and the light markers.
 
 Each texel shows its mean radiance under the lights, the light map the
 engine gives the model (:func:`.sky_map.map_values`), tone-mapped ``v / (1 + v)``

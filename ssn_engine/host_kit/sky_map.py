@@ -3,9 +3,11 @@ each texel's value.
 
 An ELM (conventions, "Environment light map") is an (H, 2H) grid over the upper hemisphere, row 0 at the
 zenith, u across (the azimuth, wrapping around) and v down. Under a light map (a sum of 2D Gaussians in map
-coordinates) each texel holds its *mean* radiance over its area: per light, the product of two separable erf
-integrals, across over the light and its copies one map width left and right (the azimuth wraps), down over the
-light alone. A light much smaller than a texel so keeps its energy at any resolution.
+coordinates, or uniform disks with an ``angle``) each texel holds its *mean* radiance over its area: per Gaussian,
+the product of two separable erf integrals, across over the light and its copies one map width left and right
+(the azimuth wraps), down over the light alone; a disk's power spread over the texels its directions fall in
+(:func:`ssn_engine.host_kit.light_map.disk_texel_means`). A light much smaller than a texel so keeps its energy
+at any resolution.
 
 :func:`map_values` is the definition, in the standard library for the hosts' pictures of the map;
 :func:`ssn_engine.hemisphere.render_light_maps` is the same formula vectorised over batches with numpy (the
@@ -16,7 +18,7 @@ from __future__ import annotations
 
 import math
 
-from .light_map import ASPECT, LightMap
+from .light_map import ASPECT, LightMap, disk_samples, disk_texel_means
 
 __all__ = ["NETWORK_SHAPE", "check_elm_shape", "map_values", "texel_means"]
 
@@ -44,6 +46,10 @@ def map_values(lights: LightMap, width: int, height: int, cutoff: float = 0.0) -
     rows = [[0.0] * width for _ in range(height)]
     for light in lights:
         if light.intensity <= 0:
+            continue
+        if light.angle is not None:  # a disk: its power spread over the texels its directions fall in
+            for (i, j), value in disk_texel_means(light, width, height, disk_samples(light.angle, width)).items():
+                rows[i][j] += value
             continue
         ex = texel_means(ASPECT * light.u, light.softness, width, height, (-ASPECT, 0.0, ASPECT))
         cols = [(j, f) for j, f in enumerate(ex) if f >= cutoff]

@@ -190,3 +190,22 @@ def test_soft_shadow_full_and_partial_occlusion():
 def test_soft_shadow_shape_mismatch():
     with pytest.raises(ValueError, match="does not match"):
         soft_shadow(np.zeros((8, 16, 3)), np.ones((16, 32)))
+
+
+@pytest.mark.parametrize("angle", [0.53, 3.0, 12.0, 25.0])
+@pytest.mark.parametrize("v", [0.2, 0.55, 0.8])
+def test_a_disk_light_rendered_into_the_map_keeps_its_power(angle, v):
+    """The 16 x 32 map of a disk light holds the power of the reference Gaussian (conventions, "Light size")
+    wherever it is and whatever its size: resizing a light does not make its shadow's share change."""
+    from ssn_engine.host_kit.light_map import REFERENCE_SOFTNESS, GaussianLight, LightMap
+
+    elevation, azimuth = texel_edges(16)
+    solid_angle = (np.sin(elevation[:-1]) - np.sin(elevation[1:]))[:, None] * np.diff(azimuth)[None, :]
+    disk = render_light_map(LightMap([GaussianLight.disk(0.3, v, angle, 2.0)]))
+    gaussian = render_light_map(LightMap([GaussianLight(0.3, v, REFERENCE_SOFTNESS, 2.0)]))
+    assert (disk * solid_angle).sum() == pytest.approx((gaussian * solid_angle).sum(), rel=0.02)
+    # and it lies where the light is: the texel holding most of its power is the one of its centre or next to it
+    if angle > 12.0:  # a large disk high up spans many azimuth texels
+        return
+    i, j = np.unravel_index(np.argmax(disk * solid_angle), disk.shape)
+    assert abs(i - int(v * 16)) <= 1 and abs(j - int(0.3 * 32)) <= 1

@@ -133,3 +133,13 @@ def test_picture_shows_what_the_model_is_given(name):
     tone = elm / (1.0 + elm)
     expected = np.rint(255 * (0.10 + (1.0 - 0.10) * np.round(255 * tone) / 255)).astype(int)  # the red channel
     assert np.abs(picture[..., 0] - expected).max() <= 1
+
+
+def test_the_wheel_resizes_a_disk_light_in_degrees():
+    lights = light_map.LightMap([light_map.GaussianLight.disk(0.5, 0.5, 4.0, 1.0)])
+    ed = LightMapEditor(lights)
+    ed.scroll(1, at=(0.5, 0.5))
+    assert lights.lights[0].angle == pytest.approx(5.0)
+    ed.scroll(-100)
+    assert lights.lights[0].angle == light_map.ANGLE_RANGE[0]
+    assert lights.lights[0].softness == light_map.angle_softness(light_map.ANGLE_RANGE[0])

@@ -319,3 +319,89 @@ assert len(light_map_picture.map_rgb(editor.lights, 8, 4)) == 96
     result = _run_without_numpy(body)
     assert result.returncode == 0, result.stderr
     assert result.stdout.strip() == "ok"
+
+
+# -- disk lights: the `angle` of the light-map file -------------------------------------------------------------
+
+
+def _file(*lights: dict) -> str:
+    return json.dumps({"format": "ssn-shadow-elm", "version": 1, "lights": list(lights)})
+
+
+def test_an_angle_light_is_read_written_and_read_again():
+    lm = LightMap.from_json(_file({"u": 0.3, "v": 0.7, "angle": 0.53, "intensity": 2.0}))
+    (light,) = lm.lights
+    assert light.angle == 0.53 and light.size_degrees == 0.53
+    assert light.softness == lm_mod.SOFTNESS_RANGE[0]  # a reader without angle gets the smallest Gaussian
+    written = json.loads(lm.to_json())["lights"][0]
+    assert written["angle"] == 0.53 and "softness" in written
+    assert LightMap.from_json(lm.to_json()).lights == lm.lights
+
+
+def test_a_light_with_both_is_the_disk_and_keeps_its_softness_for_old_readers():
+    (light,) = LightMap.from_json(_file({"u": 0.3, "v": 0.7, "angle": 12, "softness": 0.004, "intensity": 1})).lights
+    assert light.angle == 12 and light.size_degrees == 12
+    assert json.loads(LightMap([light]).to_json())["lights"][0]["softness"] == 0.004
+
+
+def test_old_softness_files_still_read_as_gaussians():
+    (light,) = LightMap.from_json(_file({"u": 0.3, "v": 0.7, "softness": 0.002, "intensity": 1})).lights
+    assert light.angle is None and light.softness == 0.002
+    assert "angle" not in json.loads(LightMap([light]).to_json())["lights"][0]
+
+
+@pytest.mark.parametrize(
+    "light, message",
+    [
+        ({"u": 0.3, "v": 0.7, "intensity": 1}, r"lights\[0\]\.softness: missing .*softness or angle"),
+        ({"u": 0.3, "v": 0.7, "angle": 0.0, "intensity": 1}, r"lights\[0\]\.angle: expected a number in \[0.1, 40\]"),
+        ({"u": 0.3, "v": 0.7, "angle": 90, "intensity": 1}, r"lights\[0\]\.angle: expected a number in"),
+        ({"u": 0.3, "v": 0.7, "angle": "big", "intensity": 1}, r"lights\[0\]\.angle: expected a number, got 'big'"),
+        ({"u": 0.3, "v": 0.7, "angle": True, "intensity": 1}, r"lights\[0\]\.angle: expected a number"),
+        ({"v": 0.7, "angle": 3, "intensity": 1}, r"lights\[0\]\.u: missing"),
+    ],
+)
+def test_bad_angle_lights_are_refused_naming_the_field(light, message):
+    with pytest.raises(LightMapError, match=message):
+        LightMap.from_json(_file(light))
+
+
+def test_resizing_a_disk_light_keeps_its_power_and_place():
+    lm = LightMap()
+    lm.add(0.3, 0.6, angle=0.53, intensity=2.0)
+    power = lm.lights[0].power
+    lm.set_angle(0, 12.0)
+    light = lm.lights[0]
+    assert (light.u, light.v, light.angle, light.intensity) == (0.3, 0.6, 12.0, 2.0)
+    assert light.power == power
+    lm.set_angle(0, 1000.0)
+    assert lm.lights[0].angle == lm_mod.ANGLE_RANGE[1]
+
+
+def test_a_disk_carries_the_power_of_the_reference_gaussian():
+    """Conventions, "Light size": a disk of intensity I carries the solid-angle integral of radiance of a
+    Gaussian of intensity I and softness 0.01, whatever its size."""
+    for v in (0.2, 0.5, 0.8):
+        gaussian = GaussianLight(0.4, v, lm_mod.REFERENCE_SOFTNESS, 1.5).power
+        for angle in (0.53, 3.0, 12.0, 30.0):
+            assert GaussianLight.disk(0.4, v, angle, 1.5).power == gaussian
+
+
+def test_disk_directions_lie_within_the_disk_and_share_its_power():
+    light = GaussianLight.disk(0.4, 0.5, 10.0)
+    directions = lm_mod.disk_directions(light, 200)
+    assert sum(share for _, _, share in directions) == pytest.approx(1.0)
+    for u, v, _ in directions:  # within 5 degrees of the centre (0.4, 0.5): azimuth -36, elevation 45
+        e, a = math.radians(90 * (1 - v)), math.radians(360 * u - 180)
+        c = math.cos(math.radians(45)) * math.cos(e) * math.cos(a + math.radians(36)) + math.sin(
+            math.radians(45)
+        ) * math.sin(e)
+        assert math.degrees(math.acos(min(1.0, c))) <= 5.0 + 1e-6
+
+
+def test_the_sun_presets_are_disks():
+    assert preset("sun").lights[0].angle == 0.53
+    assert preset("hazy-sun").lights[0].angle == 3.0
+    assert 12 <= preset("softbox").lights[0].angle <= 20
+    for name in ("high-sun", "low-sun-left", "low-sun-right"):
+        assert preset(name).lights[0].angle == 0.53

@@ -8,7 +8,7 @@ from engine_helpers import drawn_alpha, one_light
 
 from ssn_engine import long_shadow
 from ssn_engine.framing import EmptyAlphaError
-from ssn_engine.host_kit.light_map import preset
+from ssn_engine.host_kit.light_map import GaussianLight, LightMap, preset
 from ssn_engine.methods import GeometricCard
 from ssn_engine.session import ShadowSession
 
@@ -38,7 +38,7 @@ def test_moving_a_light_reruns_only_render(counting):
     alpha = drawn_alpha(200, 150)
     session = ShadowSession(alpha, counting)
     assert counting.ao_calls == 1
-    light = one_light(0.3, 0.6)
+    light = one_light(0.3, 0.6, softness=0.05)  # a broad light: the network's
     shadows = []
     for u in (0.3, 0.4, 0.6, 0.7):
         light.move(0, u, 0.6)
@@ -51,6 +51,18 @@ def test_moving_a_light_reruns_only_render(counting):
     left = shadows[0].x + shadows[0].values.shape[1] / 2
     right = shadows[-1].x + shadows[-1].values.shape[1] / 2
     assert left > right
+
+
+def test_a_small_light_is_traced_and_the_broad_light_rendered_in_one_network_pass(counting):
+    session = ShadowSession(drawn_alpha(200, 150), counting)
+    sun = LightMap([GaussianLight.disk(0.3, 0.6, 0.53, 2.0)])
+    shadow = session.render(sun)
+    assert counting.render_calls == 1 and shadow.values.max() > 0.99  # traced: fully dark in its umbra
+    sky = LightMap([*sun.lights, GaussianLight(0.5, 0.1, 0.08, 1.0)])
+    both = session.render(sky)
+    assert counting.render_calls == 2  # the sun as a Gaussian and the broad light, in one pass
+    # the sun's part is weighted by its share of the irradiance, so the mix is lighter than the sun alone
+    assert 0.2 < both.values.max() < shadow.values.max()
 
 
 def test_source_alpha_is_unchanged(counting):
@@ -85,8 +97,9 @@ def test_bad_edit_keeps_the_previous_state(counting):
 def test_render_frame_and_canvas_shadow(counting):
     alpha = drawn_alpha(200, 150)
     session = ShadowSession(alpha, counting)
-    frame = session.render_frame(one_light(0.5, 0.7))
-    assert frame.shape == (128, 128) and frame.dtype == np.float32
+    frames = session.render_frame(one_light(0.5, 0.7))  # the broad light's, and the small lights' (none)
+    assert frames.shape == (2, 128, 128) and frames.dtype == np.float32
+    assert frames[0].max() > 0.2 and frames[1].max() == 0
     shadow = session.render(one_light(0.5, 0.7))
     full = shadow.full_canvas(200, 150)
     ys, xs = np.nonzero(alpha > 127)

@@ -263,7 +263,9 @@ def test_a_preview_of_a_large_canvas_is_its_shadow_scaled_down(client):
     ground = ~alpha.reshape(150, 4, 200, 4).any(axis=(1, 3))
     assert expected[ground].min() < 150  # a real shadow to compare
     assert np.abs(image - expected)[ground].mean() < 0.5
-    assert np.abs(image - expected)[ground].max() < 12  # at edges: the two resample differently
+    # at edges the two differ: a traced sun's crisp edge meets the network's soft shadow of it in a maximum
+    # taken per preview pixel here, per canvas pixel there (a quarter of full darkness at most)
+    assert np.abs(image - expected)[ground].max() < 50
     with pytest.raises(EngineError, match="scaled down with its aspect ratio") as info:
         client.request("preview", {"background": buf(background[:100])}, cutout=key, preset="softbox")
     assert info.value.kind == "BadRequest"

@@ -1,0 +1,406 @@
+"""Shadows of small lights traced at the output's resolution: the cutout as a card, contact-hardened.
+
+The network sees a 256-pixel frame and a 16 x 32 light map, so a sun's shadow
+comes out as a smudge once enlarged onto a canvas. A light of small apparent
+size (a disk light's ``angle``, or a narrow Gaussian's equivalent) is traced
+here instead, on the output's own pixels (the canvas, a preview's scaled
+canvas, or a frame).
+
+Geometry: the cutout is the geometric method's card
+(:mod:`ssn_engine.methods.geometric`): a flat card standing upright on its
+contact line (the mask's lowest row), facing the camera of the conventions
+(given, or the one the model read); a light from nearly the card's side
+turns it just enough not to cast a line (``MIN_INCIDENCE``). For one light
+direction, each ground point seen through an output
+pixel is moved along the light to the card, and the card point projected back
+into the cutout: the three steps (pixel to ground plane, ground plane to card
+plane along a fixed direction, card plane to image) are projective maps, so
+the hard shadow is one homography of the cutout's alpha, resampled by Pillow.
+
+Size: a disk light of apparent diameter ``angle`` seen from a ground point a
+distance D below a card point along the light blurs the card over a circle of
+radius D tan(angle / 2) around it, and D = h / w_y grows with the card
+point's height h above the ground. So the cutout is blurred row by row, by a
+radius that is zero at the contact line and grows with the height, before the
+homography: the shadow is crisp at the contact and softens with distance
+(contact hardening). The varying blur interpolates between Gaussian-blurred
+copies of the cutout (``LEVELS_PER_OCTAVE`` per doubling of the radius, kept
+per source resolution), a Gaussian of sigma r / 2 standing in for the disk of
+radius r. The disk's footprint on the card is taken to be round (it is an
+ellipse where the light strikes the card obliquely).
+"""
+
+from __future__ import annotations
+
+import math
+from dataclasses import dataclass
+
+import numpy as np
+from PIL import Image, ImageFilter
+
+from .camera import FORWARD, RIGHT, UP, camera_for_span
+from .framing import Framing
+from .hemisphere import direction
+from .stripes import for_each_stripe
+from .host_kit.light_map import GaussianLight, LightMap
+
+MIN_INCIDENCE = 45.0  # degrees: the card turns just enough that a light's horizontal direction meets it at least so
+
+__all__ = ["TRACED_MAX_ANGLE", "CardTracer", "as_gaussians", "light_direction", "split_lights"]
+
+TRACED_MAX_ANGLE = 10.0  # degrees: a light this small or smaller (a disk's angle, a Gaussian's equivalent) is traced
+
+SOLID = 0.5  # the lowest row with alpha above this is the card's foot: the rows below it repeat it
+ROWS_ALPHA = 0.05  # rows with alpha above this span the card (as the geometric card's)
+LEVELS_PER_OCTAVE = 2  # blurred copies of the cutout per doubling of the blur
+MIN_SIGMA = 0.35  # pixels: a blur below this is left sharp
+WIDE_BLUR = 4.0  # pixels: a wider blur is made on a copy reduced this many times fewer than its sigma
+SUPERSAMPLE = 4  # at most this many samples across each output pixel coarser than the cutout's canvas
+BAND = 16  # output rows resampled at once (each band only over the columns the shadow can reach)
+PAD = 0.25  # share of the cutout's size added above and beside it, where its blurred copies spread
+UNCLIPPED_MARGIN = 0.5  # share of the canvas a layer that may leave the canvas reaches beyond each side
+
+
+def light_direction(u: float, v: float) -> np.ndarray:
+    """The world direction (3,) towards map point (u, v) (conventions: elevation 90 (1 - v), azimuth
+    360 u - 180 degrees from the camera's horizontal forward, positive to its right)."""
+    right, up, forward = direction(np.radians(90.0 * (1.0 - v)), np.radians(360.0 * u - 180.0))
+    return right * RIGHT + up * UP + forward * FORWARD
+
+
+def split_lights(light_map: LightMap) -> tuple[list[GaussianLight], LightMap]:
+    """The lights to trace (those with intensity whose size, :attr:`GaussianLight.size_degrees`, is at most
+    ``TRACED_MAX_ANGLE``) and the light map of the rest (the network's broad light)."""
+    small = [light.intensity > 0 and light.size_degrees <= TRACED_MAX_ANGLE for light in light_map]
+    return (
+        [light for light, traced in zip(light_map, small, strict=True) if traced],
+        LightMap([light for light, traced in zip(light_map, small, strict=True) if not traced]),
+    )
+
+
+def as_gaussians(lights: list[GaussianLight]) -> LightMap:
+    """The lights as Gaussians as wide (a disk's :func:`ssn_engine.host_kit.light_map.angle_softness`), for the
+    network."""
+    return LightMap([GaussianLight(light.u, light.v, light.softness, light.intensity) for light in lights])
+
+
+@dataclass(frozen=True)
+class _Level:
+    """A blurred copy of a source in 8 bits, kept only over its non-zero part: ``values`` at (x, y)."""
+
+    values: np.ndarray
+    x: int
+    y: int
+
+    @classmethod
+    def of(cls, alpha: np.ndarray) -> _Level:
+        """``alpha`` (float in [0, 1]) in 8 bits, cropped to where it is non-zero."""
+        q = np.round(np.asarray(alpha, np.float32) * 255).astype(np.uint8)
+        rows, cols = np.flatnonzero(q.any(axis=1)), np.flatnonzero(q.any(axis=0))
+        if rows.size == 0:
+            return cls(np.zeros((0, 0), np.uint8), 0, 0)
+        return cls(q[rows[0] : rows[-1] + 1, cols[0] : cols[-1] + 1].copy(), int(cols[0]), int(rows[0]))
+
+    def paste(self, out: np.ndarray, r0: int, r1: int) -> None:
+        """Write this level's rows [r0, r1) (of the source) into ``out`` (zeros there beforehand)."""
+        a, b = max(r0, self.y), min(r1, self.y + self.values.shape[0])
+        if b > a:
+            out[a:b, self.x : self.x + self.values.shape[1]] = self.values[a - self.y : b - self.y]
+
+
+@dataclass(frozen=True)
+class _Source:
+    """The cutout's alpha at one resolution: (h, w) float32 with its foot rows filled, and how its pixels map
+    to frame coordinates: frame = pixel * scale + (offset_x, offset_y)."""
+
+    alpha: np.ndarray
+    scale: float
+    offset_x: float
+    offset_y: float
+
+
+class CardTracer:
+    """Traces disk lights' shadows of one cutout's card at any output resolution.
+
+    Parameters
+    ----------
+    alpha : np.ndarray
+        The cutout's alpha (h, w) in [0, 1] (float) over its bounding box, at the finest resolution it will be
+        traced at (a canvas crop, or a frame).
+    framing : Framing
+        The frame the session works in; ``framing.bbox`` gives where ``alpha`` lies on its canvas.
+    camera : tuple of float or None
+        The frame's camera input (horizon row, focal length in frame pixels), or None: the conventions' default.
+    """
+
+    def __init__(self, alpha: np.ndarray, framing: Framing, camera: tuple[float, float] | None) -> None:
+        alpha = np.clip(np.asarray(alpha, np.float32), 0.0, 1.0)
+        x0, y0 = framing.bbox[:2]
+        s = framing.scale
+        rows = np.flatnonzero((alpha > ROWS_ALPHA).any(axis=1))
+        self.empty = rows.size == 0
+        if self.empty:
+            return
+        top, base = rows[0] * s + framing.offset_y + y0 * s, (rows[-1] + 1) * s + framing.offset_y + y0 * s
+        horizon, focal = camera if camera is not None else (None, None)
+        self.camera, self.height = camera_for_span(framing.n, top, base, horizon, focal)
+        alpha = alpha[: rows[-1] + 1]
+        solid = np.flatnonzero((alpha > SOLID).any(axis=1))
+        if solid.size:  # the card reaches the ground: below its lowest solid row it continues that row
+            alpha[solid[-1] + 1 :] = alpha[solid[-1]]
+        cols = np.flatnonzero((alpha > 0).any(axis=0))
+        self._x_cols = (cols[0] * s + framing.offset_x + x0 * s, (cols[-1] + 1) * s + framing.offset_x + x0 * s)
+        pad = math.ceil(PAD * max(alpha.shape))  # room for the blur above and beside the cutout (not below: ground)
+        alpha = np.pad(alpha, ((pad, 0), (pad, pad)))
+        self._full = _Source(alpha, s, framing.offset_x + (x0 - pad) * s, framing.offset_y + (y0 - pad) * s)
+        self._sources: dict[int, _Source] = {}
+        self._levels: dict[float, list[_Level]] = {}
+
+    # -- the cutout at the output's resolution ------------------------------------------------------------------
+    def _source(self, out_scale: float) -> _Source:
+        """The cutout reduced by a whole factor to about the output's resolution (``out_scale`` frame pixels per
+        output pixel), never below it and never finer than the alpha given: the homography then magnifies or
+        shrinks it by little (Pillow's resampling does not antialias)."""
+        full = self._full
+        k = int(out_scale / full.scale + 1e-6)
+        if k <= 1:
+            return full
+        if k not in self._sources:
+            h, w = full.alpha.shape
+            padded = np.pad(full.alpha, ((0, -h % k), (0, -w % k)))  # zeros below the foot: ground, and right
+            small = np.asarray(Image.fromarray(padded, "F").reduce(k))
+            self._sources[k] = _Source(small, full.scale * k, full.offset_x, full.offset_y)
+        return self._sources[k]
+
+    def _level(self, source: _Source, k: int) -> _Level:
+        """The source blurred by a Gaussian of sigma ``MIN_SIGMA * 2^((k - 1) / LEVELS_PER_OCTAVE)`` pixels
+        (k = 0: unblurred), made once per source."""
+        if source.scale not in self._levels:
+            self._levels[source.scale] = [_Level.of(source.alpha)]
+        levels = self._levels[source.scale]
+        while len(levels) <= k:
+            levels.append(_Level.of(_blur(source.alpha, MIN_SIGMA * 2.0 ** ((len(levels) - 1) / LEVELS_PER_OCTAVE))))
+        return levels[k]
+
+    def _blurred(self, source: _Source, sigma_rows: np.ndarray) -> np.ndarray:
+        """The source (uint8) blurred row by row: row i by a Gaussian of about sigma ``sigma_rows[i]`` pixels (the
+        nearest level's, ``LEVELS_PER_OCTAVE`` a doubling; under ``MIN_SIGMA``: sharp)."""
+        level = np.log2(np.maximum(sigma_rows, 1e-9) / MIN_SIGMA) * LEVELS_PER_OCTAVE + 1.0
+        level = np.where(level < 0.5, 0, np.round(level)).astype(int)
+        out = np.zeros(source.alpha.shape, np.uint8)
+        starts = np.flatnonzero(np.diff(level, prepend=-1))  # sigma grows with the height: bands of rows share a level
+        for a, b in zip(starts, [*starts[1:], len(level)], strict=True):
+            self._level(source, int(level[a])).paste(out, int(a), int(b))
+        return out
+
+    # -- geometry ---------------------------------------------------------------------------------------------
+    @staticmethod
+    def _card_axis(w: np.ndarray) -> tuple[float, float]:
+        """The card's horizontal axis (x, z): facing the camera, so that its foot is the cutout's lowest row,
+        unless the light comes from nearly its side (it would cast a line): then turned about its vertical
+        centre line just enough that the light meets it at ``MIN_INCIDENCE`` degrees."""
+        azimuth = math.atan2(w[0], -w[2])
+        facing = (
+            azimuth - math.pi if azimuth > math.pi / 2 else azimuth + math.pi if azimuth < -math.pi / 2 else azimuth
+        )
+        limit = math.radians(90.0 - MIN_INCIDENCE)
+        turn = math.copysign(max(0.0, abs(facing) - limit), facing)
+        return math.cos(turn), math.sin(turn)
+
+    def _homography(self, w: np.ndarray, framing: Framing, source: _Source, origin: tuple[int, int]) -> np.ndarray:
+        """The 3 x 3 map from continuous output coordinates (relative to ``origin`` on ``framing``'s canvas) to
+        continuous source coordinates: output pixel -> frame -> camera ray -> ground -> card along ``w`` ->
+        frame -> source pixel."""
+        cam = self.camera
+        n, f, shift = cam.n, float(cam.focal), float(cam.shift)
+        s, ox, oy = (
+            framing.scale,
+            framing.offset_x + origin[0] * framing.scale,
+            framing.offset_y + origin[1] * framing.scale,
+        )
+        to_frame = np.array([[s, 0, ox], [0, s, oy], [0, 0, 1.0]])
+        right, up, view, c = np.array([1.0, 0, 0]), cam.up, cam.view, cam.centre
+        ray = np.stack([right / f, -up / f, view - (n / 2) / f * right + (n / 2 + shift) / f * up], axis=1)
+        ground = np.array([[-c[1], c[0], 0.0], [0.0, c[2], -c[1]], [0.0, 1.0, 0.0]])  # ray -> (gx, gz, 1)
+        ax, az = self._card_axis(w)
+        dx, dz = -w[0] / w[1], -w[2] / w[1]
+        det = ax * dz - az * dx
+        det = det if abs(det) > 1e-9 else 1e-9
+        card = np.array([[dz, -dx, 0.0], [-az, ax, 0.0], [0.0, 0.0, det]])  # (gx, gz, 1) -> (x, h, 1)
+        rel = np.array([[1.0, 0, -c[0]], [0, 1.0, -c[1]], [0, 0, -c[2]]])  # (x, h, 1) -> card point - centre
+        depth, upc = view, up
+        project = np.stack([f * right + (n / 2) * depth, -f * upc + (n / 2 + shift) * depth, depth])
+        to_source = np.array(
+            [
+                [1 / source.scale, 0, -source.offset_x / source.scale],
+                [0, 1 / source.scale, -source.offset_y / source.scale],
+                [0, 0, 1.0],
+            ]
+        )
+        return to_source @ project @ rel @ card @ ground @ ray @ to_frame
+
+    def _ground_to_output(self, points: np.ndarray, framing: Framing) -> np.ndarray:
+        """Ground points (k, 3) to continuous output coordinates (k, 2); points behind the camera give nan."""
+        col, row = self.camera.project_xyz(points[:, 0], points[:, 1], points[:, 2])
+        depth = (points - self.camera.centre) @ self.camera.view
+        out = np.stack([(col - framing.offset_x) / framing.scale, (row - framing.offset_y) / framing.scale], axis=1)
+        out[depth <= 1e-6] = np.nan
+        return out
+
+    def _box(self, w: np.ndarray, reach: float, framing: Framing, clip: bool) -> tuple[int, int, int, int] | None:
+        """The output pixels (x0, y0, x1, y1) the shadow of the card along ``w`` can darken, ``reach`` (world units)
+        of penumbra included, below the horizon and on the canvas (or, unclipped, a margin beyond it)."""
+        cam = self.camera
+        half = 0.5 * cam.n
+        depths = [(h - cam.centre[1]) * cam.view[1] - cam.centre[2] * cam.view[2] for h in (0.0, self.height)]
+        xs = [(c - half) * d / float(cam.focal) for c in self._x_cols for d in depths]
+        ax, az = self._card_axis(w)
+        dx, dz = -w[0] / w[1], -w[2] / w[1]
+        corners = []
+        for x in (min(xs), max(xs)):
+            for h in (0.0, self.height):
+                gx, gz = x * ax + h * dx, x * az + h * dz
+                grow = reach * h / self.height
+                for ex, ez in ((0, 0), (grow, 0), (-grow, 0), (0, grow), (0, -grow)):
+                    corners.append((gx + ex, 0.0, gz + ez))
+        uv = self._ground_to_output(np.array(corners), framing)
+        width, height = framing.canvas_width, framing.canvas_height
+        margin = (UNCLIPPED_MARGIN * width, UNCLIPPED_MARGIN * height) if not clip else (0.0, 0.0)
+        lo_x, hi_x = -margin[0], width + margin[0]
+        lo_y, hi_y = -margin[1], height + margin[1]
+        horizon = (cam.horizon - framing.offset_y) / framing.scale
+        lo_y = max(lo_y, math.floor(horizon) + 1.0)
+        if np.isnan(uv).any():  # the shadow reaches behind the camera: it runs out of the bottom of the picture
+            x0, x1, y1 = lo_x, hi_x, hi_y
+            y0 = np.nanmin(uv[:, 1]) if not np.isnan(uv[:, 1]).all() else lo_y
+        else:
+            (x0, y0), (x1, y1) = uv.min(axis=0), uv.max(axis=0)
+        x0, y0 = max(math.floor(x0) - 2, math.floor(lo_x)), max(math.floor(y0) - 2, math.ceil(lo_y))
+        x1, y1 = min(math.ceil(x1) + 2, math.ceil(hi_x)), min(math.ceil(y1) + 2, math.ceil(hi_y))
+        return (x0, y0, x1, y1) if x1 > x0 and y1 > y0 else None
+
+    def _sigma_rows(self, source: _Source, w: np.ndarray, angle: float) -> np.ndarray:
+        """The blur (sigma, source pixels) of each source row for a disk of ``angle`` degrees along ``w``: half
+        the radius D tan(angle / 2) of the disk's footprint on the card, D = h / w_y, in pixels at that height."""
+        cam = self.camera
+        rows = (np.arange(source.alpha.shape[0]) + 0.5) * source.scale + source.offset_y  # frame rows
+        # the card's centre line: the frame row of (0, h, 0) is linear-fractional in h; invert it per row
+        c, v, up, f = cam.centre, cam.view, cam.up, float(cam.focal)
+        k = (rows - 0.5 * cam.n - float(cam.shift)) / f  # row = n/2 + shift - f up / depth
+        # up + k depth = 0 with up, depth linear in h: (up_h + k depth_h) h = -(up_0 + k depth_0)
+        up0, uph = -c[1] * up[1] - c[2] * up[2], up[1]
+        d0, dh = -c[1] * v[1] - c[2] * v[2], v[1]
+        h = np.clip(-(up0 + k * d0) / (uph + k * dh), 0.0, self.height)
+        depth = d0 + dh * h
+        radius_world = h / max(float(w[1]), 1e-3) * math.tan(math.radians(angle) / 2)
+        return 0.5 * radius_world * f / depth / source.scale
+
+    def _mid_depth(self) -> float:
+        """The camera depth of the card's centre line at half its height."""
+        cam = self.camera
+        return float((0.5 * self.height - cam.centre[1]) * cam.view[1] - cam.centre[2] * cam.view[2])
+
+    # -- the shadow -----------------------------------------------------------------------------------------------
+    def shadow(
+        self, u: float, v: float, angle: float, framing: Framing, clip: bool = True
+    ) -> tuple[np.ndarray, int, int]:
+        """The shadow s of a disk light at map point (u, v), ``angle`` degrees across, on ``framing``'s canvas.
+
+        Returns
+        -------
+        values, x, y
+            (h, w) float32 values in [0, 1] whose top-left pixel lies at output pixel (x, y); (0, 0) values
+            when the card casts nothing onto the visible ground.
+        """
+        empty = (np.zeros((0, 0), np.float32), 0, 0)
+        w = light_direction(u, v)
+        if self.empty or w[1] <= 1e-4:
+            return empty
+        reach = self.height / w[1] * math.tan(math.radians(angle) / 2)
+        box = self._box(w, reach, framing, clip)
+        if box is None:
+            return empty
+        x0, y0, x1, y1 = box
+        # an output coarser than the cutout (a preview) is traced at up to ``SUPERSAMPLE`` times its resolution
+        # and averaged down: Pillow's resampling does not antialias, and a crisp edge would alias
+        fine = max(1, min(SUPERSAMPLE, int(framing.scale / self._full.scale + 1e-6)))
+        source = self._source(framing.scale / fine)
+        card = self._blurred(source, self._sigma_rows(source, w, angle))
+        hmat = self._homography(w, framing, source, (x0, y0)) @ np.diag([1.0 / fine, 1.0 / fine, 1.0])
+        values = _warp(card, hmat / hmat[2, 2], ((x1 - x0) * fine, (y1 - y0) * fine))
+        if fine > 1:
+            values = values.reshape(y1 - y0, fine, x1 - x0, fine).mean(axis=(1, 3))
+        return values, x0, y0
+
+
+def _warp(card: np.ndarray, hmat: np.ndarray, size: tuple[int, int]) -> np.ndarray:
+    """The (height, width) output of the homography ``hmat`` (output to ``card`` coordinates, continuous) of
+    ``card`` (uint8), as float32 in [0, 1]: only the output pixels that can map into the card's non-zero box are
+    resampled, a band of ``BAND`` rows at a time, on the machine's cores."""
+    width, height = size
+    out = np.zeros((height, width), np.float32)
+    rows, cols = np.flatnonzero(card.any(axis=1)), np.flatnonzero(card.any(axis=0))
+    if rows.size == 0:
+        return out
+    corners = np.array(
+        [
+            [cols[0] - 1, rows[0] - 1, 1],
+            [cols[-1] + 2, rows[0] - 1, 1],
+            [cols[-1] + 2, rows[-1] + 2, 1],
+            [cols[0] - 1, rows[-1] + 2, 1],
+        ],
+        float,
+    )
+    back = corners @ np.linalg.inv(hmat).T
+    if (back[:, 2] <= 0).any() or (back[:, 2] * np.linalg.det(hmat) < 0).any():
+        quad = None  # the card's box reaches beyond the horizon: resample every output pixel
+    else:
+        quad = back[:, :2] / back[:, 2:]
+    image = Image.fromarray(card, "L")
+
+    def band(stripe: slice) -> None:
+        for r0 in range(stripe.start, stripe.stop, BAND):
+            r1 = min(r0 + BAND, stripe.stop)
+            c0, c1 = (0, width) if quad is None else _columns(quad, r0, r1, width)
+            if c1 <= c0:
+                continue
+            shift = np.array([[1.0, 0.0, c0], [0.0, 1.0, r0], [0.0, 0.0, 1.0]])
+            local = hmat @ shift
+            local = local / local[2, 2]
+            part = image.transform(
+                (c1 - c0, r1 - r0), Image.Transform.PERSPECTIVE, tuple(local.ravel()[:8]), Image.Resampling.BILINEAR
+            )
+            out[r0:r1, c0:c1] = np.asarray(part, np.float32) * np.float32(1 / 255)
+
+    for_each_stripe(band, 0, height, width)
+    return out
+
+
+def _columns(quad: np.ndarray, r0: int, r1: int, width: int) -> tuple[int, int]:
+    """The output columns [c0, c1) that the convex quadrilateral ``quad`` (4, 2) covers in rows [r0, r1)."""
+    xs = [x for x, y in quad if r0 <= y <= r1]
+    for (xa, ya), (xb, yb) in zip(quad, np.roll(quad, -1, axis=0), strict=True):
+        for y in (r0, r1):
+            if (ya - y) * (yb - y) < 0:
+                xs.append(xa + (y - ya) / (yb - ya) * (xb - xa))
+    if not xs:
+        return 0, 0
+    return max(0, math.floor(min(xs)) - 1), min(width, math.ceil(max(xs)) + 2)
+
+
+def _blur(alpha: np.ndarray, sigma: float) -> np.ndarray:
+    """``alpha`` (float32 in [0, 1]) blurred by a Gaussian of ``sigma`` pixels (Pillow's, in 8 bits, on a copy
+    reduced so that the blur spans at most ``WIDE_BLUR`` of its pixels, enlarged back), zeros beyond its edges."""
+    h, w = alpha.shape
+    reduce = max(1, int(sigma // WIDE_BLUR))
+    pad = int(math.ceil(3 * sigma / reduce)) + 1
+    size = (max(1, w // reduce), max(1, h // reduce))
+    image = Image.fromarray(np.round(alpha * 255).astype(np.uint8), "L")
+    if reduce > 1:
+        image = image.resize(size, Image.Resampling.BOX)
+    padded = Image.new("L", (size[0] + 2 * pad, size[1] + 2 * pad), 0)
+    padded.paste(image, (pad, pad))
+    blurred = padded.filter(ImageFilter.GaussianBlur(sigma / reduce)).crop((pad, pad, pad + size[0], pad + size[1]))
+    if reduce > 1:
+        blurred = blurred.resize((w, h), Image.Resampling.BILINEAR)
+    return np.asarray(blurred, np.float32) * np.float32(1 / 255)

@@ -1,0 +1,132 @@
+"""Small lights traced at the canvas's resolution (ssn_engine.hard_light): crisp, contact-hardened, following
+the light, and through the command line."""
+
+from __future__ import annotations
+
+import json
+
+import numpy as np
+import pytest
+from PIL import Image
+
+from ssn_engine.cli import main
+from ssn_engine.framing import Framing, frame_alpha
+from ssn_engine.hard_light import CardTracer, split_lights
+from ssn_engine.host_kit.light_map import GaussianLight, LightMap, disk_directions
+from training.metrics import zncc
+
+W, H = 1024, 768
+FOOT = 600  # the post's lowest row + 1
+LEFT, RIGHT = 497, 527  # the post's columns
+
+
+@pytest.fixture(scope="module")
+def post() -> np.ndarray:
+    """A canvas with an upright post, 30 x 300 pixels, standing on row 600."""
+    alpha = np.zeros((H, W), np.uint8)
+    alpha[FOOT - 300 : FOOT, LEFT:RIGHT] = 255
+    return alpha
+
+
+@pytest.fixture(scope="module")
+def tracer(post) -> tuple[CardTracer, Framing]:
+    """The post's tracer, with the conventions' default camera, and its framing."""
+    _, framing = frame_alpha(post, 256)
+    x0, y0, x1, y1 = framing.bbox
+    return CardTracer(post[y0:y1, x0:x1].astype(np.float32) / 255, framing, None), framing
+
+
+def _canvas(tracer: tuple[CardTracer, Framing], u: float, v: float, angle: float) -> np.ndarray:
+    """The shadow of a disk light on the whole canvas."""
+    values, x, y = tracer[0].shadow(u, v, angle, tracer[1])
+    out = np.zeros((H, W), np.float32)
+    out[y : y + values.shape[0], x : x + values.shape[1]] = values
+    return out
+
+
+def _edge_width(row: np.ndarray) -> float:
+    """Pixels over which a row's profile across the shadow rises from 10 % to 90 % of its peak, on its left
+    edge (the mean over both edges)."""
+    peak = row.max()
+    widths = []
+    for side in (row, row[::-1]):
+        first = np.argmax(side > 0.1 * peak)
+        last = np.argmax(side > 0.9 * peak)
+        widths.append(last - first)
+    return float(np.mean(widths))
+
+
+def test_a_sun_shadow_is_crisp_at_the_canvas_scale_and_a_big_light_soft_far_from_the_contact(tracer):
+    """Light straight behind the post, low: the shadow runs down the canvas towards the viewer. A 0.53 degree
+    sun keeps its edges within a few pixels even at the far end (its penumbra there: 0.53 degrees times the
+    distance to the post's top); a 12 degree light's far edges are
+    several times wider, while at the contact both are crisp (contact hardening)."""
+    sun, big = _canvas(tracer, 0.5, 0.75, 0.53), _canvas(tracer, 0.5, 0.75, 12.0)
+    rows = np.flatnonzero(sun.max(axis=1) > 0.5)
+    assert rows[0] <= FOOT + 1 and rows[-1] > FOOT + 60  # from the foot down the canvas
+    near, far = FOOT + 2, int(rows[0] + 0.9 * (rows[-1] - rows[0]))
+    assert sun[near].max() > 0.99 and sun[far].max() > 0.99  # the umbra: fully dark
+    assert _edge_width(sun[far]) <= 4.0
+    assert _edge_width(big[far]) >= 4 * max(_edge_width(sun[far]), 1.0)
+    assert _edge_width(big[near]) <= 2.0  # no penumbra at the contact
+    assert big[near].max() > 0.99  # and dark there
+
+
+def test_the_blur_matches_the_mean_of_hard_shadows_over_the_disk(tracer):
+    """The contact-hardened blur stands for the mean of the hard shadows along the disk's directions."""
+    light = GaussianLight.disk(0.42, 0.7, 12.0)
+    traced = _canvas(tracer, light.u, light.v, light.angle)
+    mean = np.zeros_like(traced)
+    for u, v, share in disk_directions(light, 150):
+        mean += share * _canvas(tracer, u, v, 0.1)
+    assert zncc(traced, mean) > 0.97
+    assert np.abs(traced - mean).mean() < 0.01
+
+
+@pytest.mark.parametrize(
+    "u, where",
+    [(0.5, "below"), (0.1, "above"), (0.35, "right"), (0.65, "left")],
+)
+def test_the_shadow_follows_the_light(tracer, u, where):
+    """Behind the object (u = 0.5) the shadow comes towards the viewer, below the foot; from behind the camera
+    (u = 0.1: and from its left, so that the post does not hide it) it falls away, above it; a light left of
+    centre casts it right, and vice versa."""
+    s = _canvas(tracer, u, 0.6, 0.53)
+    s[FOOT - 300 : FOOT, LEFT:RIGHT] = 0  # the ground hidden by the post
+    yy, xx = np.mgrid[0:H, 0:W]
+    cy, cx = (s * yy).sum() / s.sum(), (s * xx).sum() / s.sum()
+    centre = 0.5 * (LEFT + RIGHT)
+    expected = {"below": cy > FOOT, "above": cy < FOOT, "right": cx > centre + 20, "left": cx < centre - 20}
+    assert expected[where], (cx, cy)
+
+
+def test_a_light_from_the_side_casts_a_shadow_not_a_line(tracer):
+    s = _canvas(tracer, 0.25, 0.6, 0.53)  # azimuth -90: in the card's plane
+    assert (s > 0.5).sum() > 2000
+
+
+def test_small_lights_are_traced_and_broad_ones_left_to_the_network():
+    sun, haze = GaussianLight.disk(0.3, 0.6, 0.53), GaussianLight(0.5, 0.2, 0.0004)
+    sky = GaussianLight(0.5, 0.2, 0.05)
+    traced, broad = split_lights(LightMap([sun, haze, sky]))
+    assert traced == [sun, haze] and broad.lights == [sky]
+    assert split_lights(LightMap([GaussianLight.disk(0.3, 0.6, 0.53, 0.0)]))[0] == []  # no light, nothing to trace
+
+
+def test_the_command_line_renders_an_angle_light_file_crisply(tmp_path, post):
+    """The conventions' canvas-level entry point with a disk light: a crisp shadow on the canvas (the network's
+    soft shadow of the sun as a Gaussian around it where that is darker: a crisp step remains)."""
+    rgba = np.zeros((H, W, 4), np.uint8)
+    rgba[..., 3] = post
+    cutout, lights, layer = tmp_path / "cutout.png", tmp_path / "sun.json", tmp_path / "layer.png"
+    Image.fromarray(rgba, "RGBA").save(cutout)
+    sun = {"u": 0.5, "v": 0.75, "angle": 0.53, "intensity": 1.0}
+    lights.write_text(json.dumps({"format": "ssn-shadow-elm", "version": 1, "lights": [sun]}))
+    args = ["render", str(cutout), "--light-map", str(lights), "--opacity", "1", "--layer", str(layer)]
+    assert main([*args, "--horizon", "300", "--fov", "40"]) == 0
+    s = np.asarray(Image.open(layer))[..., 3].astype(np.float32) / 255
+    assert s.shape == (H, W)
+    rows = np.flatnonzero(s[FOOT:].max(axis=1) > 0.5) + FOOT
+    assert rows.size > 40 and s[FOOT + 1, LEFT + 5 : RIGHT - 5].min() > 0.95  # dark from the contact
+    far = int(rows[int(0.8 * (rows.size - 1))])
+    assert np.abs(np.diff(s[far])).max() > 0.2  # a crisp edge: a step of a fifth of full darkness in a pixel
