@@ -1,5 +1,5 @@
-"""Make the README's pictures: the demo composite, the cutout under four contrasting lights, every preset, and a
-low sun's long shadow on a wide canvas.
+"""Make the README's pictures: the demo composite, the cutout under four contrasting lights, every preset, a
+horse under the sun and a softbox (its legs in the sun's shadow), and a low sun's long shadow on a wide canvas.
 
 Run: python tools/readme_figures.py [--out docs/img]
 """
@@ -11,10 +11,11 @@ from pathlib import Path
 
 import numpy as np
 from PIL import Image, ImageDraw
+from skimage import data
 
 from ssn_engine.compositing import composite_shadow, over
 from ssn_engine.cli import DEMO_PRESET
-from ssn_engine.host_kit.light_map import PRESETS, GaussianLight, LightMap, preset
+from ssn_engine.host_kit.light_map import PRESETS, SUN, GaussianLight, LightMap, preset
 from ssn_engine.host_kit.light_map_picture import map_rgb
 from ssn_engine.methods import ShadowMethod, load_method
 from ssn_engine.samples import pawn_cutout, studio_background
@@ -48,8 +49,9 @@ def main() -> None:
     sheet(list(tiles.values()), out / "presets.png")
     sheet([tiles[name] for name in CONTRAST], out / "follow_the_light.png")
     long_shadows(cutout, loaded.method).save(out / "long_shadow.png", optimize=True)
+    hard_light(loaded.method).save(out / "hard_light.png", optimize=True)
     print(
-        f"wrote demo.png, presets.png, follow_the_light.png and long_shadow.png in {out} with the "
+        f"wrote demo.png, presets.png, follow_the_light.png, hard_light.png and long_shadow.png in {out} with the "
         f"{loaded.method.name} method"
     )
 
@@ -64,7 +66,7 @@ def long_shadows(cutout: np.ndarray, method: ShadowMethod, elevation: float = 8.
     session = ShadowSession(canvas[..., 3], method)
     rows = []
     for u, side in ((0.25, "left"), (0.75, "right")):
-        light = LightMap([GaussianLight(u, 1.0 - elevation / 90.0, 0.002, 1.0)])
+        light = LightMap([GaussianLight.disk(u, 1.0 - elevation / 90.0, SUN)])
         shadow = session.render(light).full_canvas(3 * w, h)
         row = Image.fromarray(over(composite_shadow(background, shadow, opacity=0.85), canvas)).crop((0, 150, 3 * w, h))
         row = row.resize((row.width * 2 // 5, row.height * 2 // 5))
@@ -73,6 +75,34 @@ def long_shadows(cutout: np.ndarray, method: ShadowMethod, elevation: float = 8.
     page = Image.new("RGB", (rows[0].width, sum(r.height for r in rows)))
     for i, row in enumerate(rows):
         page.paste(row, (0, i * row.height))
+    return page
+
+
+def hard_light(method: ShadowMethod, horizon: float = 100.0, fov: float = 40.0) -> Image.Image:
+    """scikit-image's horse standing on a white ground under the four contrasting lights (a 0.53-degree sun low
+    on the left and on the right, high, and a 16-degree softbox), each with its sky map; seen from a little above
+    (the horizon at canvas row ``horizon``, ``fov`` degrees), as a photograph taken standing would."""
+    horse = ~data.horse()  # True on the horse
+    h, w = 1000, 1500
+    alpha = np.zeros((h, w), np.uint8)
+    y0, x0 = 420, (w - horse.shape[1]) // 2
+    alpha[y0 : y0 + horse.shape[0], x0 : x0 + horse.shape[1]] = horse * 255
+    cutout = np.dstack([np.full((h, w, 3), 90, np.uint8), alpha])
+    background = np.full((h, w, 3), 235, np.uint8)
+    session = ShadowSession(alpha, method, horizon, fov)
+    tiles = []
+    for name in CONTRAST:
+        light = preset(name)
+        shadow = session.render(light).full_canvas(w, h)
+        tile = Image.fromarray(over(composite_shadow(background, shadow, opacity=0.85), cutout)).crop((0, 250, w, h))
+        tile = tile.resize((TILE * 2, tile.height * TILE * 2 // w))
+        sky = Image.frombytes("RGB", (128, 64), map_rgb(light, 128, 64))
+        tile.paste(sky, (tile.width - 128 - 6, 6))
+        ImageDraw.Draw(tile).text((8, 6), name, fill=(20, 20, 20))
+        tiles.append(tile)
+    page = Image.new("RGB", (2 * tiles[0].width, 2 * tiles[0].height), (255, 255, 255))
+    for i, tile in enumerate(tiles):
+        page.paste(tile, ((i % 2) * tile.width, (i // 2) * tile.height))
     return page
 
 
