@@ -158,8 +158,18 @@ class LayerSession:
         it); None for the object's own."""
         if framing is None or framing == self.framing:
             return None
-        scaled = part.framing.scaled(self.framing.scale / framing.scale)
-        return dataclasses.replace(scaled, canvas_width=framing.canvas_width, canvas_height=framing.canvas_height)
+        # ``framing`` maps its canvas onto the layer's frame (a preview scaled, a canvas grown by a margin): the
+        # same canvas mapped onto the part's frame through the layer's canvas
+        layer, own = self.framing, part.framing
+        k = own.scale / layer.scale
+        return dataclasses.replace(
+            own,
+            canvas_width=framing.canvas_width,
+            canvas_height=framing.canvas_height,
+            scale=framing.scale * k,
+            offset_x=(framing.offset_x - layer.offset_x) * k + own.offset_x,
+            offset_y=(framing.offset_y - layer.offset_y) * k + own.offset_y,
+        )
 
     def _layer_ao(self, which: str) -> np.ndarray:
         """The objects' AO maps (``which``: "predicted_ao" or "ao", the edited one) resampled onto the layer's frame

@@ -71,6 +71,10 @@ class ShadowSession:
         self.mask, self.framing = frame_alpha(alpha, method.resolution)
         x0, y0, x1, y1 = self.framing.bbox
         self._cutout = alpha[y0:y1, x0:x1].copy()  # the cutout at the canvas's resolution, for the tracer
+        # A cutout is as opaque as its most opaque pixel: a uniformly faint one lets that share of the light
+        # through, so the network's and the card's shadows (of its mask) are scaled by it; the tracer's, of the
+        # alpha itself, already are.
+        self.opacity = float(as_unit_float(self._cutout).max()) if self._cutout.size else 0.0
         self.edits: list[dict[str, Any]] = []
         self._card: GeometricCard | None = None  # traces long shadows for methods without a card of their own
         self.set_camera(horizon, fov)
@@ -130,7 +134,7 @@ class ShadowSession:
             elms = np.stack([render_light_map(maps[i], NETWORK_SHAPE[0]) for i in lit])
             masks, ao = np.repeat(self.mask[None], len(lit), 0), np.repeat(self.ao[None], len(lit), 0)
             cameras = None if self.used_cameras is None else np.repeat(self.used_cameras, len(lit), 0)
-            out[lit] = self.method.render(masks, ao, elms, cameras)
+            out[lit] = self.method.render(masks, ao, elms, cameras) * np.float32(self.opacity)
         return out
 
     def to_canvas(
@@ -173,7 +177,7 @@ class ShadowSession:
             self._card = self._card or GeometricCard(self.method.resolution)
             card = self._card
         elm = render_light_map(light_map, NETWORK_SHAPE[0])
-        wide = card.extended_shadow(
+        wide = self.opacity * card.extended_shadow(
             self.mask, elm, camera_at(self.used_cameras, 0), long_shadow.MARGIN, long_shadow.CELL
         )
         window = (*framing.to_frame(0, 0), *framing.to_frame(framing.canvas_width, framing.canvas_height))

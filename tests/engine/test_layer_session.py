@@ -158,3 +158,15 @@ def test_a_method_that_reads_no_camera(geometric):
 def test_a_field_of_view_without_a_horizon_is_refused(method):
     with pytest.raises(ValueError, match="horizon"):
         open_session(np.maximum.reduce(pawn_scene(W, H, TWO)), method, None, 40.0)
+
+
+def test_a_canvas_grown_by_a_margin_shows_the_same_shadows(method):
+    """A layer clipped to the canvas grown by a margin (GIMP's layer) holds each object's shadow where the
+    canvas's own holds it."""
+    session = open_session(np.maximum.reduce(pawn_scene(W, H, TWO)), method, *CAMERA)
+    assert isinstance(session, LayerSession)
+    light, margin = preset("low-sun-left"), 60
+    own = session.render(light).full_canvas(W, H)
+    grown = session.render(light, session.framing.padded(margin))
+    on_canvas = grown.full_canvas(W + 2 * margin, H + 2 * margin)[margin:-margin, margin:-margin]
+    np.testing.assert_allclose(on_canvas, own, atol=0.02)

@@ -234,3 +234,18 @@ def test_set_camera_analyses_again_and_keeps_the_ao_edits(counting):
     assert np.array_equal(session.render_frame(preset("softbox")), fresh.render_frame(preset("softbox")))
     session.set_camera(None)
     assert session.cameras is None and session.edits == edits
+
+
+def test_a_faint_cutout_casts_a_faint_shadow():
+    """A uniformly half-opaque cutout lets half the light through: about half the opaque one's shadow; one at 2 %
+    casts none a layer would show."""
+    alpha = np.zeros((300, 400), np.uint8)
+    alpha[60:260, 170:230] = 255
+    sun = preset("low-sun-right")
+    peaks = {}
+    for value in (255, 128, 5):
+        shadow = ShadowSession((alpha // 255 * value).astype(np.uint8), GeometricCard()).render(sun)
+        peaks[value] = 0.0 if shadow.is_empty else float(shadow.values.max())
+    assert peaks[255] > 0.9
+    assert peaks[128] == pytest.approx(peaks[255] * 128 / 255, abs=0.05)
+    assert peaks[5] < 2 / 255
