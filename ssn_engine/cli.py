@@ -595,7 +595,9 @@ def main(argv: Sequence[str] | None = None) -> int:
         return EXIT_INTERRUPTED
     finally:
         if in_main_thread:
-            signal.signal(signal.SIGINT, previous)
+            # As the program itself (``argv`` from the command line) it exits next, and a Ctrl+C while the
+            # interpreter shuts down (onnxruntime's and the stripes' threads end) has nothing left to stop.
+            signal.signal(signal.SIGINT, signal.SIG_IGN if argv is None else previous)
 
 
 def _run(argv: Sequence[str] | None, placed: list[Path]) -> int:

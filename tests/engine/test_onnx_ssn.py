@@ -17,7 +17,7 @@ from onnx import TensorProto, helper  # noqa: E402
 from ssn_engine import api  # noqa: E402
 from ssn_engine.framing import frame_alpha  # noqa: E402
 from ssn_engine.hemisphere import render_light_map  # noqa: E402
-from ssn_engine.host_kit.light_map import preset  # noqa: E402
+from ssn_engine.host_kit.light_map import GaussianLight, LightMap, preset  # noqa: E402
 from ssn_engine.methods import GeometricCard, ModelError, OnnxSSN, load_method  # noqa: E402
 from ssn_engine.methods.onnx_ssn import blur_frames, floor_for, reach_weights, small_lights_share  # noqa: E402
 
@@ -169,7 +169,8 @@ def test_one_small_light_gets_its_own_floor_and_a_broad_sky_the_general_one(tmp_
     assert np.allclose(s[0][background], (0.05 - 0.02) / 0.98, atol=1e-6)  # the sky: the general floor
     assert not s[1][background].any()  # the sun: its faint values removed
     assert np.allclose(s[:, masks[0] == 1], 1.0)  # full shadow stays full
-    floors = floor_for(small_lights_share(np.stack([sky, render_light_map(preset("softbox"), 16), sun])), 0.02, 0.1)
+    softbox = render_light_map(LightMap([GaussianLight(0.38, 0.45, 0.02, 2.0)]), 16)  # a broad Gaussian light
+    floors = floor_for(small_lights_share(np.stack([sky, softbox, sun])), 0.02, 0.1)
     assert floors[0] == 0.02 and 0.02 < floors[1] < 0.1 and floors[2] == pytest.approx(0.1)
     assert (
         OnnxSSN(make_model_dir(tmp_path / "old", 256, _card(256, output_floor=0.03))).output_floor_small_lights == 0.03
