@@ -39,7 +39,8 @@ BUDGET_MS = {
 BUDGET_MIB = 400.0
 
 
-def _time(fn: Callable[[], object], repeats: int, warmup: int = 2) -> np.ndarray:
+def time_calls(fn: Callable[[], object], repeats: int, warmup: int = 2) -> np.ndarray:
+    """Milliseconds of ``repeats`` calls of ``fn`` after ``warmup`` untimed ones."""
     for _ in range(warmup):
         fn()
     times = []
@@ -112,15 +113,15 @@ def run_benchmark(repeats: int = 20, method: str = "auto") -> dict[str, np.ndarr
     )
     camera = np.array([[0.5 * m.resolution, 1.2 * m.resolution]])  # a level camera's horizon, a 45-degree lens
     results = {
-        f"AOP ({m.name}, N={m.resolution})": _time(lambda: m.predict_ao(shifted_masks()), repeats),
-        f"AOP, camera given ({m.name}, N={m.resolution})": _time(
+        f"AOP ({m.name}, N={m.resolution})": time_calls(lambda: m.predict_ao(shifted_masks()), repeats),
+        f"AOP, camera given ({m.name}, N={m.resolution})": time_calls(
             lambda: m.predict_ao(shifted_masks(), camera), repeats
         ),
-        f"SR ({m.name}, N={m.resolution})": _time(lambda: m.render(masks, ao, elm), repeats),
-        f"SR, sun dragged ({m.name}, N={m.resolution})": _time(
+        f"SR ({m.name}, N={m.resolution})": time_calls(lambda: m.render(masks, ao, elm), repeats),
+        f"SR, sun dragged ({m.name}, N={m.resolution})": time_calls(
             lambda: m.render(masks, ao, drag()), min(repeats, DRAG - 2)
         ),
-        "geometric card (render, 2 lights)": _time(lambda: geometric.render(masks, geo_ao, elm), repeats),
+        "geometric card (render, 2 lights)": time_calls(lambda: geometric.render(masks, geo_ao, elm), repeats),
     }
     cutout = big_cutout()
     light = preset("two-lights")
@@ -133,13 +134,13 @@ def run_benchmark(repeats: int = 20, method: str = "auto") -> dict[str, np.ndarr
 
     session = open_session(cutout[..., 3], m)
     e2e_repeats = max(3, repeats // 4)
-    results["end to end 4000x3000 (frame+AO+SR+layer)"] = _time(end_to_end, e2e_repeats, warmup=1)
-    results["light moved 4000x3000 (SR+to canvas+layer)"] = _time(
+    results["end to end 4000x3000 (frame+AO+SR+layer)"] = time_calls(end_to_end, e2e_repeats, warmup=1)
+    results["light moved 4000x3000 (SR+to canvas+layer)"] = time_calls(
         lambda: shadow_layer(session.render(light)), e2e_repeats, warmup=1
     )
     # a 0.53-degree sun dragged across a low sky: every render a new direction, traced at the canvas's resolution
     suns = _alternating([LightMap([GaussianLight.disk(0.2 + 0.6 * k / DRAG, 0.7, SUN, 1.0)]) for k in range(DRAG)])
-    results["sun moved 4000x3000 (traced+layer)"] = _time(
+    results["sun moved 4000x3000 (traced+layer)"] = time_calls(
         lambda: shadow_layer(session.render(suns())), min(repeats, DRAG - 2), warmup=2
     )
     medians = {name: float(np.median(ms)) for name, ms in results.items()}

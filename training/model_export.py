@@ -10,13 +10,13 @@ from __future__ import annotations
 
 import dataclasses
 import shutil
-import time
 from pathlib import Path
 
 import numpy as np
 
 from ssn_engine.frames import resample_frames
 from ssn_engine.hemisphere import network_elm
+from ssn_engine.benchmark import time_calls
 from ssn_engine.model_config import ModelConfig
 
 from .checkpoint import load_models
@@ -100,13 +100,7 @@ def time_sr(path: Path, resolution: int, repeats: int = 30) -> dict[str, float]:
 
     out = {}
     for name, fn in (("sr_at_R_ms", lambda: s.run(None, feeds)), ("sr_engine_256_ms", engine_path)):
-        fn()
-        ts = []
-        for _ in range(repeats):
-            t = time.perf_counter()
-            fn()
-            ts.append(time.perf_counter() - t)
-        out[name] = 1000 * float(np.median(ts))
+        out[name] = float(np.median(time_calls(fn, repeats, warmup=1)))
     return out
 
 

@@ -8,11 +8,10 @@ engine requests.
 
 from __future__ import annotations
 
-import math
 from dataclasses import dataclass
 from typing import Any
 
-from ssn_engine_link import ao_edits, camera_rules, defaults, light_map
+from ssn_engine_link import ao_edits, camera_rules, defaults, light_map, protocol
 
 PROCEDURE_NAME = "plug-in-ssn-shadow"
 MENU_LABEL = "Soft _Shadow (SSN)..."
@@ -132,11 +131,7 @@ def editor_light_map(text: str) -> light_map.LightMap:
 
 
 def _unit(value: Any, name: str, lo: float, hi: float) -> float:
-    if isinstance(value, bool) or not isinstance(value, (int, float)) or not math.isfinite(value):
-        raise SettingsError(f"{name}: expected a number, got {value!r}")
-    if not lo <= value <= hi:
-        raise SettingsError(f"{name}: expected a number in [{lo:g}, {hi:g}], got {value:g}")
-    return float(value)
+    return protocol.checked_number(value, name, lo, hi, SettingsError)
 
 
 @dataclass(frozen=True)

@@ -27,7 +27,6 @@ a layer's unique id in the .kra. A record that cannot be read is dropped
 from __future__ import annotations
 
 import json
-import math
 from typing import Any
 
 from .model import Settings, ShadowModel
@@ -121,11 +120,7 @@ def _object(settings: dict, key: str) -> dict:
 
 
 def _number(value: Any, where: str, lo: float, hi: float) -> float:
-    if isinstance(value, bool) or not isinstance(value, (int, float)) or not math.isfinite(value):
-        raise SettingsError(f"{where}: expected a number, got {value!r}")
-    if not lo <= value <= hi:
-        raise SettingsError(f"{where}: expected a number in [{lo:g}, {hi:g}], got {value!r}")
-    return float(value)
+    return protocol.checked_number(value, where, lo, hi, SettingsError)
 
 
 def _ao_steps(steps: Any) -> list[list[dict]]:

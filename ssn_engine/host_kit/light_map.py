@@ -30,7 +30,7 @@ from collections.abc import Callable, Iterator
 from dataclasses import dataclass, field, replace
 from typing import Any
 
-from .protocol import NestingError, loads, versioned
+from .protocol import NestingError, checked_number, loads, versioned
 
 FORMAT = "ssn-shadow-elm"
 VERSION = 1
@@ -49,12 +49,7 @@ class LightMapError(ValueError):
 
 
 def _number(value: Any, name: str, lo: float, hi: float) -> float:
-    if isinstance(value, bool) or not isinstance(value, (int, float)):
-        raise LightMapError(f"{name}: expected a number, got {value!r}")
-    value = float(value)
-    if not math.isfinite(value) or not lo <= value <= hi:
-        raise LightMapError(f"{name}: expected a number in [{lo:g}, {hi:g}], got {value!r}")
-    return value
+    return checked_number(value, name, lo, hi, LightMapError)
 
 
 def angle_softness(angle: float) -> float:

@@ -10,6 +10,7 @@ See ``docs/protocol.md`` for the commands. The plug-ins import this module
 from __future__ import annotations
 
 import json
+import math
 from typing import IO, Any, NamedTuple
 
 PROTOCOL_VERSION = 2  # 2: set_camera
@@ -45,6 +46,15 @@ def loads(text: str | bytes) -> Any:
     if _depth(value) > MAX_DEPTH:
         raise NestingError(too_deep)
     return value
+
+
+def checked_number(value: Any, name: str, lo: float, hi: float, error: type[Exception]) -> float:
+    """``value`` as a float if it is a finite number (not a bool) in [lo, hi]; else ``error`` naming ``name``."""
+    if isinstance(value, bool) or not isinstance(value, (int, float)) or not math.isfinite(value):
+        raise error(f"{name}: expected a number, got {value!r}")
+    if not lo <= value <= hi:
+        raise error(f"{name}: expected a number in [{lo:g}, {hi:g}], got {value!r}")
+    return float(value)
 
 
 def versioned(data: Any, fmt: str, version: int, reader: str, error: type[Exception]) -> dict:
