@@ -12,19 +12,13 @@ import traceback
 
 from krita import Krita
 from PyQt5.QtCore import Qt
+from krita_driver import pump
 from PyQt5.QtWidgets import QApplication, QDockWidget
 
 RESULT = os.environ.get("SSN_TEST_RESULT", "/tmp/ssn_krita_docker.json")
 W, H = 480, 360
 NARROW = 260  # pixels: a dock column narrower than Krita's default
 out = {"log": []}
-
-
-def pump(seconds):
-    deadline = time.monotonic() + seconds
-    while time.monotonic() < deadline:
-        QApplication.processEvents()
-        time.sleep(0.01)
 
 
 def wait_idle(controller, timeout_s=120.0):
