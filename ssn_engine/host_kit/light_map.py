@@ -234,8 +234,13 @@ class LightMap:
         self.lights[index] = replace(self.lights[index], u=_clamp(u, -1e9, 1e9) % 1.0, v=_clamp(v, 0.0, 1.0))
 
     def resize(self, index: int, softness: float) -> None:
-        """Set a light's softness (sigma^2), clamped to Table 1's range."""
-        self.lights[index] = replace(self.lights[index], softness=_clamp(softness, *SOFTNESS_RANGE))
+        """Set a light's softness (sigma^2), clamped to Table 1's range; a disk light takes the diameter of the
+        Gaussian as wide (:func:`softness_angle`), so a softness control resizes it too."""
+        light = self.lights[index]
+        if light.angle is not None:
+            self.set_angle(index, softness_angle(_clamp(softness, *SOFTNESS_RANGE)))
+            return
+        self.lights[index] = replace(light, softness=_clamp(softness, *SOFTNESS_RANGE))
 
     def set_angle(self, index: int, angle: float) -> None:
         """Set a disk light's diameter in degrees, clamped to ``ANGLE_RANGE`` (its softness follows); a Gaussian

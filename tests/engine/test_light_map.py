@@ -18,6 +18,7 @@ from ssn_engine.host_kit.light_map import (
     GaussianLight,
     LightMap,
     LightMapError,
+    softness_angle,
     preset,
 )
 
@@ -405,3 +406,12 @@ def test_the_sun_presets_are_disks():
     assert 12 <= preset("softbox").lights[0].angle <= 20
     for name in ("high-sun", "low-sun-left", "low-sun-right"):
         assert preset(name).lights[0].angle == 0.53
+
+
+def test_a_softness_control_resizes_a_disk_light():
+    """The hosts' softness slider on a disk light sets its diameter to the Gaussian's as wide, power kept."""
+    lights = LightMap([GaussianLight.disk(0.3, 0.5, 0.53, 2.0)])
+    lights.resize(0, 0.002)
+    light = lights.lights[0]
+    assert light.angle == pytest.approx(softness_angle(0.002)) and light.intensity == 2.0
+    assert light.softness == pytest.approx(0.002)
