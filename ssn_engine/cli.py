@@ -585,19 +585,25 @@ def main(argv: Sequence[str] | None = None) -> int:
     """Run the CLI; returns the exit status. Ctrl+C at any point, the heavy imports included, ends it with
     status 130 and a line saying which files (if any) were written, without a traceback."""
     placed: list[Path] = []  # the outputs put in place so far (:func:`ssn_engine.imageio.atomic_writes`)
-    in_main_thread = threading.current_thread() is threading.main_thread()  # the only one that gets signals
-    previous = signal.signal(signal.SIGINT, CTRL_C) if in_main_thread else None
     try:
-        return _run(argv, placed)
-    except KeyboardInterrupt:
+        return _handling_ctrl_c(argv, placed)
+    except KeyboardInterrupt:  # from the command, or as the handler is put back when it has ended
         what = "wrote " + ", ".join(map(str, placed)) if placed else "nothing written"
         print(f"ssn-shadow: interrupted, {what}", file=sys.stderr)
         return EXIT_INTERRUPTED
+
+
+def _handling_ctrl_c(argv: Sequence[str] | None, placed: list[Path]) -> int:
+    """:func:`_run` with :data:`CTRL_C` as the SIGINT handler (in the main thread, the only one signals reach)."""
+    if threading.current_thread() is not threading.main_thread():
+        return _run(argv, placed)
+    previous = signal.signal(signal.SIGINT, CTRL_C)
+    try:
+        return _run(argv, placed)
     finally:
-        if in_main_thread:
-            # As the program itself (``argv`` from the command line) it exits next, and a Ctrl+C while the
-            # interpreter shuts down (onnxruntime's and the stripes' threads end) has nothing left to stop.
-            signal.signal(signal.SIGINT, signal.SIG_IGN if argv is None else previous)
+        # As the program itself (``argv`` from the command line) it exits next, and a Ctrl+C while the
+        # interpreter shuts down (onnxruntime's and the stripes' threads end) has nothing left to stop.
+        signal.signal(signal.SIGINT, signal.SIG_IGN if argv is None else previous)
 
 
 def _run(argv: Sequence[str] | None, placed: list[Path]) -> int:
