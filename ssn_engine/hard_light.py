@@ -6,16 +6,30 @@ size (a disk light's ``angle``, or a narrow Gaussian's equivalent) is traced
 here instead, on the output's own pixels (the canvas, a preview's scaled
 canvas, or a frame).
 
-Geometry: the cutout is the geometric method's card
-(:mod:`ssn_engine.methods.geometric`): a flat card standing upright on its
-contact line (the mask's lowest row), facing the camera of the conventions
-(given, or the one the model read); a light from nearly the card's side
-turns it just enough not to cast a line (``MIN_INCIDENCE``). For one light
-direction, each ground point seen through an output
-pixel is moved along the light to the card, and the card point projected back
-into the cutout: the three steps (pixel to ground plane, ground plane to card
-plane along a fixed direction, card plane to image) are projective maps, so
-the hard shadow is one homography of the cutout's alpha, resampled by Pillow.
+Geometry: the cutout stands on its *contact line* (:func:`contact_line`), the
+lower convex hull of its lowest solid pixels: a part standing farther back
+(higher in the picture, a shoe's heel, the farther of two toys) stands on
+the ground there, and a gap between legs spans from foot to foot. Along it
+the cutout is cut into bands (:func:`contact_bands`), each the geometric
+method's card (:mod:`ssn_engine.methods.geometric`): a flat card standing
+upright on its band's contact row, facing the camera of the conventions
+(given, or the one the model read), cross-faded into its neighbours. For one
+light direction, each ground point seen through an output pixel is moved
+along the light to the card, and the card point projected back into the
+cutout: the three steps (pixel to ground plane, ground plane to card plane
+along a fixed direction, card plane to image) are projective maps, so a
+card's hard shadow is one homography of the cutout's alpha, resampled by
+Pillow.
+
+Depth: a card alone casts a line under a light from its side, and nothing of
+a body that reaches away from the camera. Each pixel is taken to reach
+behind the card along the camera's ray by a depth (:func:`depth_map`) that
+grows with its distance to the outline (a body about as deep as twice its
+local width, a leg thin, never below the ground); the card is swept through
+that depth before the homography: each pixel repeated along the shift its
+shadow makes as it moves deeper (``THICKNESS_LEVELS`` bands of depth, each a
+segment drawn by doubling). A light from nearly the card's side still turns
+it a little (``MIN_INCIDENCE``), so that no card is seen edge-on.
 
 Size: a disk light of apparent diameter ``angle`` seen from a ground point a
 distance D below a card point along the light blurs the card over a circle of
@@ -23,11 +37,12 @@ radius D tan(angle / 2) around it, and D = h / w_y grows with the card
 point's height h above the ground. So the cutout is blurred row by row, by a
 radius that is zero at the contact line and grows with the height, before the
 homography: the shadow is crisp at the contact and softens with distance
-(contact hardening). The varying blur interpolates between Gaussian-blurred
-copies of the cutout (``LEVELS_PER_OCTAVE`` per doubling of the radius, kept
-per source resolution), a Gaussian of sigma r / 2 standing in for the disk of
-radius r. The disk's footprint on the card is taken to be round (it is an
-ellipse where the light strikes the card obliquely).
+(contact hardening); the sweep through the depth comes after the blur. The
+varying blur interpolates between Gaussian-blurred copies of the cutout
+(``LEVELS_PER_OCTAVE`` per doubling of the radius, kept per source
+resolution), a Gaussian of sigma r / 2 standing in for the disk of radius r.
+The disk's footprint on the card is taken to be round (it is an ellipse where
+the light strikes the card obliquely).
 """
 
 from __future__ import annotations
@@ -37,6 +52,7 @@ from dataclasses import dataclass
 
 import numpy as np
 from PIL import Image, ImageFilter
+from scipy import ndimage
 
 from .camera import FORWARD, RIGHT, UP, camera_for_span
 from .framing import Framing
@@ -44,11 +60,23 @@ from .hemisphere import direction
 from .stripes import for_each_stripe
 from .host_kit.light_map import GaussianLight, LightMap
 
-MIN_INCIDENCE = 45.0  # degrees: the card turns just enough that a light's horizontal direction meets it at least so
+THICKNESS = 4.0  # an object's depth behind its card, per pixel of distance to its outline
+THICKNESS_LEVELS = 6  # bands of depth an object's thickness is swept in
+MIN_INCIDENCE = 10.0  # degrees: the card turns just enough that a light's horizontal direction meets it at least so
 
-__all__ = ["TRACED_MAX_ANGLE", "CardTracer", "as_gaussians", "light_direction", "split_lights"]
+__all__ = [
+    "TRACED_MAX_ANGLE",
+    "CardTracer",
+    "ContactTracer",
+    "as_gaussians",
+    "contact_bands",
+    "contact_line",
+    "depth_map",
+    "light_direction",
+    "split_lights",
+]
 
-TRACED_MAX_ANGLE = 10.0  # degrees: a light this small or smaller (a disk's angle, a Gaussian's equivalent) is traced
+TRACED_MAX_ANGLE = 15.0  # degrees: a light this small or smaller (a disk's angle, a Gaussian's equivalent) is traced
 
 SOLID = 0.5  # the lowest row with alpha above this is the card's foot: the rows below it repeat it
 ROWS_ALPHA = 0.05  # rows with alpha above this span the card (as the geometric card's)
@@ -131,27 +159,48 @@ class CardTracer:
         The frame the session works in; ``framing.bbox`` gives where ``alpha`` lies on its canvas.
     camera : tuple of float or None
         The frame's camera input (horizon row, focal length in frame pixels), or None: the conventions' default.
+    origin : tuple of int or None
+        Where ``alpha``'s top-left pixel lies on the canvas (default: ``framing.bbox``'s corner).
+    foot : int or None
+        The row of ``alpha`` (one past it) on which the card stands, at or below its lowest row (default: that).
+    thickness : np.ndarray or None
+        (h, w) how deep (pixels) each pixel reaches behind the card (:func:`depth_map`); None: a flat card.
     """
 
-    def __init__(self, alpha: np.ndarray, framing: Framing, camera: tuple[float, float] | None) -> None:
+    def __init__(
+        self,
+        alpha: np.ndarray,
+        framing: Framing,
+        camera: tuple[float, float] | None,
+        origin: tuple[int, int] | None = None,
+        foot: int | None = None,
+        thickness: np.ndarray | None = None,
+    ) -> None:
         alpha = np.clip(np.asarray(alpha, np.float32), 0.0, 1.0)
-        x0, y0 = framing.bbox[:2]
+        x0, y0 = origin if origin is not None else framing.bbox[:2]
         s = framing.scale
         rows = np.flatnonzero((alpha > ROWS_ALPHA).any(axis=1))
         self.empty = rows.size == 0
         if self.empty:
             return
-        top, base = rows[0] * s + framing.offset_y + y0 * s, (rows[-1] + 1) * s + framing.offset_y + y0 * s
+        foot = int(rows[-1]) + 1 if foot is None else max(int(foot), int(rows[-1]) + 1)
+        top, base = rows[0] * s + framing.offset_y + y0 * s, foot * s + framing.offset_y + y0 * s
         horizon, focal = camera if camera is not None else (None, None)
         self.camera, self.height = camera_for_span(framing.n, top, base, horizon, focal)
+        self._world_per_pixel = s * self._mid_depth() / float(self.camera.focal)  # at the card, per alpha pixel
+        thick = np.zeros(alpha.shape, np.float32) if thickness is None else np.asarray(thickness, np.float32)
+        thick = np.pad(thick[: rows[-1] + 1], ((0, foot - rows[-1] - 1), (0, 0)))
+        self.depth = float(thick.max()) * self._world_per_pixel  # world units the object reaches behind the card
         alpha = alpha[: rows[-1] + 1]
         solid = np.flatnonzero((alpha > SOLID).any(axis=1))
         if solid.size:  # the card reaches the ground: below its lowest solid row it continues that row
             alpha[solid[-1] + 1 :] = alpha[solid[-1]]
+        alpha = np.pad(alpha, ((0, foot - alpha.shape[0]), (0, 0)))  # a card standing behind its lowest row
         cols = np.flatnonzero((alpha > 0).any(axis=0))
         self._x_cols = (cols[0] * s + framing.offset_x + x0 * s, (cols[-1] + 1) * s + framing.offset_x + x0 * s)
         pad = math.ceil(PAD * max(alpha.shape))  # room for the blur above and beside the cutout (not below: ground)
         alpha = np.pad(alpha, ((pad, 0), (pad, pad)))
+        self._thickness = {1: np.pad(thick, ((pad, 0), (pad, pad)))}  # per reduction: depth behind, in its pixels
         self._full = _Source(alpha, s, framing.offset_x + (x0 - pad) * s, framing.offset_y + (y0 - pad) * s)
         self._sources: dict[int, _Source] = {}
         self._levels: dict[float, list[_Level]] = {}
@@ -170,6 +219,8 @@ class CardTracer:
             padded = np.pad(full.alpha, ((0, -h % k), (0, -w % k)))  # zeros below the foot: ground, and right
             small = np.asarray(Image.fromarray(padded, "F").reduce(k))
             self._sources[k] = _Source(small, full.scale * k, full.offset_x, full.offset_y)
+            thick = np.pad(self._thickness[1], ((0, -h % k), (0, -w % k)))
+            self._thickness[k] = thick.reshape(h // k + (h % k > 0), k, -1, k).max(axis=(1, 3)) / k
         return self._sources[k]
 
     def _level(self, source: _Source, k: int) -> _Level:
@@ -262,7 +313,7 @@ class CardTracer:
                 gx, gz = x * ax + h * dx, x * az + h * dz
                 grow = reach * h / self.height
                 for ex, ez in ((0, 0), (grow, 0), (-grow, 0), (0, grow), (0, -grow)):
-                    corners.append((gx + ex, 0.0, gz + ez))
+                    corners += [(gx + ex, 0.0, gz + ez), (gx + ex, 0.0, gz + ez - self.depth)]
         uv = self._ground_to_output(np.array(corners), framing)
         width, height = framing.canvas_width, framing.canvas_height
         margin = (UNCLIPPED_MARGIN * width, UNCLIPPED_MARGIN * height) if not clip else (0.0, 0.0)
@@ -279,9 +330,19 @@ class CardTracer:
         x1, y1 = min(math.ceil(x1) + 2, math.ceil(hi_x)), min(math.ceil(y1) + 2, math.ceil(hi_y))
         return (x0, y0, x1, y1) if x1 > x0 and y1 > y0 else None
 
+    def _row_heights(self, source: _Source) -> np.ndarray:
+        """The world height above the ground of each source row on the card's centre line."""
+        return self._row_geometry(source)[0]
+
     def _sigma_rows(self, source: _Source, w: np.ndarray, angle: float) -> np.ndarray:
         """The blur (sigma, source pixels) of each source row for a disk of ``angle`` degrees along ``w``: half
         the radius D tan(angle / 2) of the disk's footprint on the card, D = h / w_y, in pixels at that height."""
+        h, depth = self._row_geometry(source)
+        radius_world = h / max(float(w[1]), 1e-3) * math.tan(math.radians(angle) / 2)
+        return 0.5 * radius_world * float(self.camera.focal) / depth / source.scale
+
+    def _row_geometry(self, source: _Source) -> tuple[np.ndarray, np.ndarray]:
+        """Per source row: the height above the ground and the camera depth of the card's centre line there."""
         cam = self.camera
         rows = (np.arange(source.alpha.shape[0]) + 0.5) * source.scale + source.offset_y  # frame rows
         # the card's centre line: the frame row of (0, h, 0) is linear-fractional in h; invert it per row
@@ -291,9 +352,53 @@ class CardTracer:
         up0, uph = -c[1] * up[1] - c[2] * up[2], up[1]
         d0, dh = -c[1] * v[1] - c[2] * v[2], v[1]
         h = np.clip(-(up0 + k * d0) / (uph + k * dh), 0.0, self.height)
-        depth = d0 + dh * h
-        radius_world = h / max(float(w[1]), 1e-3) * math.tan(math.radians(angle) / 2)
-        return 0.5 * radius_world * f / depth / source.scale
+        return h, d0 + dh * h
+
+    def _depth_ray(self) -> np.ndarray:
+        """The camera's ray through the card's centre, scaled to a unit horizontal length: a point this much
+        farther along it lies one world unit deeper behind the card (and, looking down, lower)."""
+        ray = np.array([0.0, 0.5 * self.height, 0.0]) - self.camera.centre
+        return ray / math.hypot(ray[0], ray[2])
+
+    def _depth_step(self, source: _Source, w: np.ndarray) -> np.ndarray:
+        """How far (source pixels, (x, y)) the card's shadow moves when what a source pixel shows lies one
+        source pixel's worth of world units deeper along the camera's ray, through the card's homography at
+        its centre."""
+        ax, az = self._card_axis(w)
+        dx, dz = -w[0] / w[1], -w[2] / w[1]
+        det = ax * dz - az * dx
+        det = det if abs(det) > 1e-9 else 1e-9
+        b = self._world_per_pixel * source.scale / self._full.scale  # world units per pixel of this source
+        r = self._depth_ray()
+        gx, gz = b * (r[0] + r[1] * dx), b * (r[2] + r[1] * dz)  # the ground shift of the deeper point's shadow
+        x, h = -(dz * gx - dx * gz) / det, -(-az * gx + ax * gz) / det  # on the card, where that content lands
+        points = np.array([[0.0, 0.5 * self.height, 0.0], [x, 0.5 * self.height + h, 0.0]])
+        col, row = self.camera.project_xyz(points[:, 0], points[:, 1], points[:, 2])
+        return np.array([col[1] - col[0], row[1] - row[0]]) / source.scale
+
+    def _swept(self, card: np.ndarray, source: _Source, w: np.ndarray) -> tuple[np.ndarray, tuple[int, int]]:
+        """The card (uint8) swept through the object's depth: each pixel repeated along the shift
+        (:meth:`_depth_step`) of every depth from 0 to its thickness (``THICKNESS_LEVELS`` bands of depth), and
+        the (x, y) by which the result's pixels are offset from the card's."""
+        thick = self._thickness[round(source.scale / self._full.scale)]
+        step = self._depth_step(source, w)
+        top = float(thick.max())
+        reach = -step * top  # the swept copy of a pixel lies up to this far from it
+        lo = np.floor(np.minimum(reach, 0)).astype(int)
+        hi = np.ceil(np.maximum(reach, 0)).astype(int)
+        h, wd = card.shape
+        out = np.zeros((h + hi[1] - lo[1], wd + hi[0] - lo[0]), np.uint8)
+        out[-lo[1] : -lo[1] + h, -lo[0] : -lo[0] + wd] = card
+        edges = np.linspace(0.0, top, THICKNESS_LEVELS + 1)
+        # looking down, a deeper point along the ray is lower: none below the ground
+        drop = max(0.0, -self._depth_ray()[1]) * self._world_per_pixel * source.scale / self._full.scale
+        above = self._row_heights(source)[:, None] / max(drop, 1e-9)  # source pixels of depth each row allows
+        for a, b in zip(edges[:-1], edges[1:], strict=True):
+            part = np.where((thick >= b) & (above >= b), card, 0).astype(np.uint8)
+            if not part.any():
+                break
+            _sweep_into(out, part, -lo, -step * a, -step * (b - a))
+        return out, (int(-lo[0]), int(-lo[1]))
 
     def _mid_depth(self) -> float:
         """The camera depth of the card's centre line at half its height."""
@@ -326,11 +431,41 @@ class CardTracer:
         fine = max(1, min(SUPERSAMPLE, int(framing.scale / self._full.scale + 1e-6)))
         source = self._source(framing.scale / fine)
         card = self._blurred(source, self._sigma_rows(source, w, angle))
-        hmat = self._homography(w, framing, source, (x0, y0)) @ np.diag([1.0 / fine, 1.0 / fine, 1.0])
+        hmat = self._homography(w, framing, source, (x0, y0))
+        if self.depth > 0:
+            card, shift = self._swept(card, source, w)
+            hmat = np.array([[1.0, 0, shift[0]], [0, 1.0, shift[1]], [0, 0, 1.0]]) @ hmat
+        hmat = hmat @ np.diag([1.0 / fine, 1.0 / fine, 1.0])
         values = _warp(card, hmat / hmat[2, 2], ((x1 - x0) * fine, (y1 - y0) * fine))
         if fine > 1:
             values = values.reshape(y1 - y0, fine, x1 - x0, fine).mean(axis=(1, 3))
         return values, x0, y0
+
+
+def _sweep_into(out: np.ndarray, part: np.ndarray, origin: np.ndarray, start: np.ndarray, span: np.ndarray) -> None:
+    """``out`` = max(``out``, ``part`` placed at ``origin`` + ``start`` + t ``span`` for t in [0, 1]), the segment
+    made by doubling (log2 of its length in pixels copies)."""
+    length = float(np.hypot(*span))
+    n = max(1, math.ceil(length))
+    unit = span / n if length > 0 else np.zeros(2)
+    cur, off = part, np.zeros(2, int)  # cur: the max of part over offsets 0 .. covered-1 steps, its origin ``off``
+    covered = 1
+    while covered < n:
+        add = min(covered, n - covered)
+        d = np.round(unit * add).astype(int)
+        lo, hi = np.minimum(d, 0), np.maximum(d, 0)
+        h, w = cur.shape
+        grown = np.zeros((h + hi[1] - lo[1], w + hi[0] - lo[0]), np.uint8)
+        grown[-lo[1] : -lo[1] + h, -lo[0] : -lo[0] + w] = cur
+        view = grown[d[1] - lo[1] : d[1] - lo[1] + h, d[0] - lo[0] : d[0] - lo[0] + w]
+        np.maximum(view, cur, out=view)
+        cur, off, covered = grown, off + lo, covered + add
+    at = origin + np.round(start).astype(int) + off
+    y0, x0 = max(0, at[1]), max(0, at[0])
+    y1, x1 = min(out.shape[0], at[1] + cur.shape[0]), min(out.shape[1], at[0] + cur.shape[1])
+    if y1 > y0 and x1 > x0:
+        view = out[y0:y1, x0:x1]
+        np.maximum(view, cur[y0 - at[1] : y1 - at[1], x0 - at[0] : x1 - at[0]], out=view)
 
 
 def _warp(card: np.ndarray, hmat: np.ndarray, size: tuple[int, int]) -> np.ndarray:
@@ -404,3 +539,123 @@ def _blur(alpha: np.ndarray, sigma: float) -> np.ndarray:
     if reduce > 1:
         blurred = blurred.resize((w, h), Image.Resampling.BILINEAR)
     return np.asarray(blurred, np.float32) * np.float32(1 / 255)
+
+
+BAND_RISE = 0.03  # share of the cutout's height the contact line may rise within one card
+MAX_BANDS = 12
+MAX_CONTACT_SLOPE = 1.0  # rows per column: a steeper contact line is no ground
+RAMP = 0.5  # share of the narrower band over which two neighbouring cards cross-fade
+
+
+def contact_line(alpha: np.ndarray) -> np.ndarray:
+    """The ground contact row of each column (float, nan where the cutout has no column): the lower convex hull
+    of the cutout's lowest solid pixels, so that parts standing farther back (higher in the picture) stand on
+    the ground there, and a gap between legs spans from foot to foot."""
+    solid = alpha > SOLID
+    cols = np.flatnonzero(solid.any(axis=0))
+    if cols.size == 0:
+        return np.full(alpha.shape[1], np.nan)
+    bottoms = alpha.shape[0] - np.argmax(solid[::-1, cols], axis=0)  # one past the lowest solid row
+    hull: list[tuple[float, float]] = []
+    for x, y in zip(cols.astype(float), bottoms.astype(float), strict=True):
+        while len(hull) >= 2:
+            (xa, ya), (xb, yb) = hull[-2], hull[-1]
+            if (xb - xa) * (y - ya) - (yb - ya) * (x - xa) >= 0:  # b lies above the chord a-(x, y): not on the hull
+                hull.pop()
+            else:
+                break
+        hull.append((x, y))
+    hx, hy = np.array(hull).T
+    # from the lowest point outwards, a hull steeper than ``MAX_CONTACT_SLOPE`` is no ground (a tail, a sphere's
+    # side): the line stays level beyond
+    low = int(np.argmax(hy))
+    for step in (1, -1):
+        k = low
+        while 0 <= k + step < hx.size and abs(hy[k + step] - hy[k]) <= MAX_CONTACT_SLOPE * abs(hx[k + step] - hx[k]):
+            k += step
+        end = slice(k + 1, None) if step == 1 else slice(None, k)
+        hy[end] = hy[k]
+    line = np.full(alpha.shape[1], np.nan)
+    line[cols[0] : cols[-1] + 1] = np.interp(np.arange(cols[0], cols[-1] + 1), hx, hy)
+    return line
+
+
+def contact_bands(alpha: np.ndarray) -> list[tuple[int, int, int]]:
+    """Column bands (c0, c1, foot) of the cutout over which its contact line (:func:`contact_line`) rises by at
+    most ``BAND_RISE`` of its height (at most ``MAX_BANDS`` bands); ``foot`` is the band's lowest contact row."""
+    line = contact_line(alpha)
+    cols = np.flatnonzero(np.isfinite(line))
+    if cols.size == 0:
+        return []
+    rows = np.flatnonzero((alpha > ROWS_ALPHA).any(axis=1))
+    span = np.nanmax(line) - np.nanmin(line)
+    tol = max(2.0, BAND_RISE * (rows[-1] + 1 - rows[0]), span / MAX_BANDS)
+    bands, start = [], int(cols[0])
+    lo = hi = line[start]
+    for c in range(start + 1, int(cols[-1]) + 1):
+        lo, hi = min(lo, line[c]), max(hi, line[c])
+        if hi - lo > tol:
+            bands.append((start, c, int(math.ceil(np.max(line[start:c])))))
+            start, lo, hi = c, line[c], line[c]
+    bands.append((start, int(cols[-1]) + 1, int(math.ceil(np.max(line[start : int(cols[-1]) + 1])))))
+    return bands
+
+
+def depth_map(alpha: np.ndarray) -> np.ndarray:
+    """How deep (pixels) the object reaches behind its card at each pixel: ``THICKNESS`` times the distance to
+    its outline (a body as deep as about twice its local width, thinning to its edges); pixels of the
+    antialiased fringe take their nearest solid pixel's depth."""
+    solid = np.pad(alpha > SOLID, 1)  # the outline continues beyond the array's edges
+    if not solid.any():
+        return np.zeros(alpha.shape, np.float32)
+    depth = np.float32(THICKNESS) * np.asarray(ndimage.distance_transform_edt(solid), np.float32)
+    _, (iy, ix) = ndimage.distance_transform_edt(~solid, return_distances=True, return_indices=True)  # type: ignore[misc]
+    return depth[iy, ix][1:-1, 1:-1]
+
+
+class ContactTracer:
+    """The cutout as cards standing on its contact line: one :class:`CardTracer` per band of
+    :func:`contact_bands`, cross-faded where two meet, their shadows added."""
+
+    def __init__(self, alpha: np.ndarray, framing: Framing, camera: tuple[float, float] | None) -> None:
+        alpha = np.clip(np.asarray(alpha, np.float32), 0.0, 1.0)
+        bands = contact_bands(alpha)
+        x0, y0 = framing.bbox[:2]
+        self.cards: list[CardTracer] = []
+        width = alpha.shape[1]
+        thickness = depth_map(alpha)
+        for i, (c0, c1, foot) in enumerate(bands):
+            weight = np.zeros(width, np.float32)
+            weight[c0:c1] = 1.0
+            if i > 0:
+                r = max(1, int(RAMP * min(c1 - c0, bands[i - 1][1] - bands[i - 1][0])))
+                ramp = (np.arange(-r, r) + 0.5) / (2 * r)
+                weight[c0 - r : c0 + r] = ramp
+            if i + 1 < len(bands):
+                n0, n1 = bands[i + 1][:2]
+                r = max(1, int(RAMP * min(c1 - c0, n1 - n0)))
+                weight[c1 - r : c1 + r] = 1.0 - (np.arange(-r, r) + 0.5) / (2 * r)
+            used = np.flatnonzero(weight > 0)
+            a, b = int(used[0]), int(used[-1]) + 1
+            part = alpha[:, a:b] * weight[a:b]
+            card = CardTracer(part, framing, camera, origin=(x0 + a, y0), foot=foot, thickness=thickness[:, a:b])
+            if not card.empty:
+                self.cards.append(card)
+        self.empty = not self.cards
+
+    def shadow(
+        self, u: float, v: float, angle: float, framing: Framing, clip: bool = True
+    ) -> tuple[np.ndarray, int, int]:
+        """As :meth:`CardTracer.shadow`, the cards' shadows added (clipped to 1)."""
+        parts = [c.shadow(u, v, angle, framing, clip) for c in self.cards]
+        parts = [p for p in parts if p[0].size]
+        if not parts:
+            return np.zeros((0, 0), np.float32), 0, 0
+        x0, y0 = min(p[1] for p in parts), min(p[2] for p in parts)
+        x1 = max(p[1] + p[0].shape[1] for p in parts)
+        y1 = max(p[2] + p[0].shape[0] for p in parts)
+        out = np.zeros((y1 - y0, x1 - x0), np.float32)
+        for values, x, y in parts:
+            win = out[y - y0 : y - y0 + values.shape[0], x - x0 : x - x0 + values.shape[1]]
+            win += values
+        return np.minimum(out, 1.0, out=out), x0, y0

@@ -20,7 +20,7 @@ import numpy as np
 from . import long_shadow
 from .ao_edit import apply_edits
 from .framing import CanvasShadow, Framing, as_unit_float, frame_alpha, shadow_to_canvas
-from .hard_light import CardTracer, as_gaussians, split_lights
+from .hard_light import ContactTracer, as_gaussians, split_lights
 from .hemisphere import light_power, render_light_map
 from .host_kit.camera_rules import DEFAULT_FOV, FOV_RANGE
 from .host_kit.light_map import LightMap
@@ -83,7 +83,7 @@ class ShadowSession:
         """Change the camera (as in the constructor; None: the method's reading or default one): the AO is
         predicted again with it and the AO edits are applied to it again. The camera the method uses is resolved
         here, once per camera (``used_cameras``), so that a light change resolves none."""
-        self._tracer: CardTracer | None = None  # made with the camera, on first use
+        self._tracer: ContactTracer | None = None  # made with the camera, on first use
         cameras = None
         if horizon is not None:
             cameras = np.array([camera_input(self.framing, horizon, DEFAULT_FOV if fov is None else fov)])
@@ -116,10 +116,10 @@ class ShadowSession:
         return ao
 
     @property
-    def tracer(self) -> CardTracer:
+    def tracer(self) -> ContactTracer:
         """The tracer of this cutout's small lights (made on first use, with the camera the session uses)."""
         if self._tracer is None:
-            self._tracer = CardTracer(as_unit_float(self._cutout), self.framing, camera_at(self.used_cameras, 0))
+            self._tracer = ContactTracer(as_unit_float(self._cutout), self.framing, camera_at(self.used_cameras, 0))
         return self._tracer
 
     def render_frame(self, light_map: LightMap) -> np.ndarray:
