@@ -6,7 +6,8 @@ first argument), ``set_cutout`` (its alpha read and dropped), ``set_camera``,
 ``edit_ao`` and ``release``; any other command (``render``, ``preview``)
 never gets an answer: the worker sleeps, as a worker stuck in a computation
 would. It writes its process id to PID_FILE first, so a test can tell whether
-it was stopped. Over stdio by default; with ``--port 0`` (what
+it was stopped, and the frozen command's name to PID_FILE.frozen when it
+freezes. Over stdio by default; with ``--port 0`` (what
 :func:`ssn_engine.host_kit.client.shared_client` appends) it listens on
 loopback, prints ``listening HOST:PORT token=TOKEN`` and, as the real
 worker does, authenticates every connection at once but serves one at a time.
@@ -35,6 +36,8 @@ def serve(reader, writer) -> None:
             reader.read(entry["nbytes"])
         cmd = header.get("cmd")
         if cmd not in ANSWERED:
+            with open(sys.argv[2] + ".frozen", "w") as f:
+                f.write(str(cmd))
             time.sleep(3600)  # frozen: no answer
         reply = {"id": header.get("id"), "ok": True}
         if cmd == "hello":

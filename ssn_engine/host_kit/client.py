@@ -415,9 +415,7 @@ def _write_state(path: Path, state: dict) -> None:
         pass  # not recorded: the next call starts its own worker, nothing worse
 
 
-def _start_detached(
-    command: Sequence[str], idle_timeout: float, env: dict[str, str]
-) -> tuple[str, int, str, int]:
+def _start_detached(command: Sequence[str], idle_timeout: float, env: dict[str, str]) -> tuple[str, int, str, int]:
     """Start ``command --port 0 --idle-timeout S`` in its own session and read its ``listening`` line: its host,
     port, token and process id."""
     args = [*command, "--port", "0", "--idle-timeout", f"{idle_timeout:g}"]
