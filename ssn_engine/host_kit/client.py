@@ -365,26 +365,56 @@ def shared_client(
     recorded in ``state_path`` while it answers, else a new one started detached with ``--port 0
     --idle-timeout`` and recorded there (readable by this user only). A plug-in that runs once per call (GIMP)
     then pays the engine's start-up on its first call only; the worker exits after ``idle_timeout`` idle
-    seconds. The client stops that worker (by the process id recorded with it) when its user cancels a wait
-    (``on_wait``) or a reply is late; a recorded worker that is busy (another call's) is left alone, and a new one
-    started."""
+    seconds.
+
+    The record names the worker's process and the process of the call that last took it (this one's). The client
+    stops that worker (by its process id) when its user cancels a wait (``on_wait``) or a reply is late. A
+    recorded worker that does not answer is busy with that call's request: it is left alone (and a new one
+    started) while that call's process runs, and stopped when that process has gone (GIMP's own Cancel kills the
+    plug-in while the worker works for it: the next call stops the worker that nobody waits for)."""
     state = _read_state(state_path, command)
     if state is not None:
-        address = (state["host"], state["port"])
-        reuse = EngineClient(address=address, timeout=timeout, token=state["token"], on_wait=on_wait)
+        pid = state.get("pid") if isinstance(state.get("pid"), int) else None
+        orphaned = pid is not None and not _process_runs(state.get("client"))
+        reuse = EngineClient(
+            address=(state["host"], state["port"]),
+            timeout=timeout,
+            token=state["token"],
+            on_wait=on_wait,
+            worker_pid=pid if orphaned else None,  # stopped if it does not answer in time
+        )
         try:
-            reuse.request("hello", timeout=10.0)
+            reuse.request("hello", timeout=ORPHAN_TIMEOUT if orphaned else BUSY_TIMEOUT)
         except Cancelled:
             raise
         except EngineError:
             reuse.close()
         else:
-            pid = state.get("pid")
-            reuse.worker_pid = pid if isinstance(pid, int) else None
+            reuse.worker_pid = pid
+            _write_state(state_path, {**state, "client": os.getpid()})
             return reuse
     host, port, token, pid = _start_detached(command, idle_timeout, env or {})
-    _write_state(state_path, {"command": list(command), "host": host, "port": port, "token": token, "pid": pid})
+    state = {"command": list(command), "host": host, "port": port, "token": token, "pid": pid, "client": os.getpid()}
+    _write_state(state_path, state)
     return EngineClient(address=(host, port), timeout=timeout, token=token, on_wait=on_wait, worker_pid=pid)
+
+
+BUSY_TIMEOUT = 10.0  # seconds a new call waits for a recorded worker that another running call may be using
+ORPHAN_TIMEOUT = 2.0  # ... for one whose last call's process has gone, before it is stopped
+
+
+def _process_runs(pid: Any) -> bool:
+    """Whether process ``pid`` runs; True where that cannot be told (no POSIX signals, not a process id): a worker
+    is only stopped where its last client is known to be gone."""
+    if os.name != "posix" or not isinstance(pid, int) or isinstance(pid, bool) or pid <= 0:
+        return True
+    try:
+        os.kill(pid, 0)
+    except ProcessLookupError:
+        return False
+    except OSError:  # another user's process: it runs
+        return True
+    return True
 
 
 def _read_state(path: Path, command: Sequence[str]) -> dict | None:

@@ -8,6 +8,8 @@ host's progress and Cancel button.
 
 from __future__ import annotations
 
+import json
+import subprocess
 import sys
 import threading
 import time
@@ -174,3 +176,39 @@ def test_a_busy_shared_worker_is_left_alone(tmp_path):
     finally:
         other._stop_worker()
         busy._stop_worker()
+
+
+def test_a_worker_whose_caller_was_killed_is_stopped_by_the_next_call(tmp_path):
+    """GIMP's own Cancel (its progress bar's) kills the plug-in while the shared worker works for it: nobody
+    waits for that worker any more. The next call stops it (its hello is not answered and the call that took it
+    is gone) and starts a fresh one, in seconds, not the 10 s it grants a worker another running call uses."""
+    pid_file = tmp_path / "pid"
+    command = hung_command(pid_file)
+    state = tmp_path / "worker.json"
+    caller = (
+        "import sys; from pathlib import Path; from ssn_engine.host_kit import client; "
+        "from ssn_engine.host_kit.engine_config import EngineConfig; "
+        f"c = client.connect(EngineConfig(command=tuple({command!r}), shared=True), Path({str(state)!r})); "
+        "c.request('render')"
+    )
+    plugin = subprocess.Popen([sys.executable, "-c", caller])
+    try:
+        frozen = Path(f"{pid_file}.frozen")
+        deadline = time.monotonic() + 30
+        while not frozen.exists() and time.monotonic() < deadline:
+            time.sleep(0.05)
+        assert frozen.read_text() == "render"
+        first = int(pid_file.read_text())
+        assert json.loads(state.read_text())["client"] == plugin.pid
+    finally:
+        plugin.kill()  # as GIMP does
+        plugin.wait()
+    config = EngineConfig(command=tuple(command), shared=True)
+    start = time.monotonic()
+    again = client.connect(config, state, timeout=120)
+    try:
+        again.request("hello")
+        assert time.monotonic() - start < client.BUSY_TIMEOUT
+        assert int(pid_file.read_text()) != first and gone_within(first, 1.0)
+    finally:
+        again._stop_worker()
