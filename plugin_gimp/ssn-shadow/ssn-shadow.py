@@ -23,7 +23,9 @@ from gi.repository import Babl, Gegl, Gimp, GLib, GObject  # noqa: E402
 
 from ssn_core import ShadowError, make_shadow  # noqa: E402
 from ssn_gimp_host import GimpHost, config_values  # noqa: E402
+from ssn_engine_link import client as engine_client  # noqa: E402
 from ssn_engine_link import connect, engine_config  # noqa: E402
+from ssn_progress import EngineWait  # noqa: E402
 from ssn_settings import (  # noqa: E402
     ARGUMENTS,
     IMAGE_TYPES,
@@ -88,6 +90,8 @@ class SoftShadow(Gimp.PlugIn):
     def run(self, procedure, run_mode, image, drawables, config, data):
         try:
             return self._run(procedure, run_mode, image, drawables, config)
+        except engine_client.Cancelled:
+            return procedure.new_return_values(Gimp.PDBStatusType.CANCEL, GLib.Error())
         except (ShadowError, engine_config.EngineConfigError) as exc:
             return failure(procedure, str(exc))
         except Exception:  # noqa: BLE001 - never crash GIMP; report the bug instead
@@ -97,13 +101,17 @@ class SoftShadow(Gimp.PlugIn):
         if len(drawables) != 1:
             raise ShadowError("Soft Shadow works on one layer: select exactly one layer.")
         host = GimpHost(image, drawables[0])
-        engine = connect()
+        wait = EngineWait()  # GIMP's progress while the engine works; its Cancel stops this plug-in
+        engine = connect(on_wait=wait)
         try:
             if run_mode == Gimp.RunMode.INTERACTIVE:
                 import ssn_dialog
 
                 if not ssn_dialog.run_dialog(procedure, config, host, engine):
                     return procedure.new_return_values(Gimp.PDBStatusType.CANCEL, GLib.Error())
+                if not engine.running:  # OK pressed while a preview waited: its worker was stopped
+                    engine.close()
+                    engine = connect(on_wait=wait)
             layer = make_shadow(host, engine, config_values(config))
         finally:
             engine.close()

@@ -71,6 +71,9 @@ class Host(Protocol):
 class Engine(Protocol):
     """The host kit's client (:class:`ssn_engine.host_kit.client.EngineClient`), or a stand-in."""
 
+    @property
+    def running(self) -> bool: ...
+
     def request(self, cmd: str, buffers: dict | None = None, *, timeout: float | None = None, **params: Any) -> Any: ...
 
 
@@ -79,8 +82,12 @@ def shadow_layer_name(source_name: str) -> str:
 
 
 def engine_call(engine: Engine, cmd: str, buffers: dict | None = None, **params: Any) -> tuple[dict, dict]:
+    """``engine.request``, its failures as :class:`ShadowError`; the user's Cancel passes as it is
+    (:class:`~ssn_engine.host_kit.client.Cancelled`: no error to show)."""
     try:
         return engine.request(cmd, buffers, **params)
+    except engine_client.Cancelled:
+        raise
     except engine_client.EngineError as exc:
         raise ShadowError(str(exc)) from None
     except (OSError, protocol.ProtocolError) as exc:
@@ -134,7 +141,10 @@ def render_shadow(
 
 
 def release(engine: Engine, cutout_id: str) -> None:
-    """Free the worker's cutout; best effort (the worker may be gone)."""
+    """Free the worker's cutout; best effort (the worker may be gone). A stopped worker (a Cancel, a crash) took
+    its cutouts with it: no fresh one is started to free nothing."""
+    if not engine.running:
+        return
     try:
         engine.request("release", cutout=cutout_id)
     except Exception:  # noqa: BLE001 - cleanup must never hide the real outcome

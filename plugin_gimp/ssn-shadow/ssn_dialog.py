@@ -25,6 +25,7 @@ from ssn_engine_link import client as engine_client  # noqa: E402
 from ssn_gimp_host import config_values  # noqa: E402
 from ssn_light_area import LightMapArea  # noqa: E402
 from ssn_preview import PREVIEW_SIZE, render_preview  # noqa: E402
+from ssn_progress import EngineWait  # noqa: E402
 from ssn_settings import PROCEDURE_NAME, SettingsError, editor_light_map  # noqa: E402
 
 CUSTOM = "(custom)"
@@ -48,6 +49,7 @@ class ShadowPreview:
         self.camera_read: dict | None = None  # the model's reading (image rows), or None
         self._values = None
         self._timer = False
+        self.busy = False  # a render waits on the engine (the dialog's events are handled meanwhile)
         width, height = host.image.get_width(), host.image.get_height()
         self.image_height = height
         tw, th, _ = camera_rules.preview_size(width, height, PREVIEW_SIZE)
@@ -72,6 +74,8 @@ class ShadowPreview:
         self._timer = True
 
         def fire() -> bool:
+            if self.busy:
+                return True  # the render before is still waiting on the engine: try again after it
             self._timer = False
             if self._values is not None:
                 self.render(self._values())
@@ -80,16 +84,29 @@ class ShadowPreview:
         GLib.timeout_add(PREVIEW_DELAY_MS, fire)
 
     def render(self, values: dict) -> None:
-        if self.cutout_id is None:
+        if self.cutout_id is None or self.busy:
             return
+        self.busy = True
+        try:
+            self._render(self.cutout_id, values)
+        finally:
+            self.busy = False
+            if isinstance(self.engine.on_wait, EngineWait):
+                self.engine.on_wait.reset()
+
+    def _render(self, cutout_id: str, values: dict) -> None:
         try:
             settings = settings_from_arguments(values)
             camera = settings.camera()
             if camera != self.camera:  # a new horizon: the worker analyses the cutout again
-                self._analysed(set_camera(self.engine, self.cutout_id, camera))
+                self._analysed(set_camera(self.engine, cutout_id, camera))
                 self.camera = camera
             horizon = camera_rules.scaled_camera(camera, self.scale)["horizon"] if camera is not None else None
-            rgb, no_shadow = render_preview(self.engine, self.cutout_id, settings, self.thumbnail, horizon)
+            rgb, no_shadow = render_preview(self.engine, cutout_id, settings, self.thumbnail, horizon)
+        except engine_client.Cancelled as exc:  # the dialog closed while the engine worked: it was stopped
+            self.cutout_id = None
+            self.status.set_text(str(exc))
+            return
         except (ShadowError, SettingsError) as exc:
             self.status.set_text(str(exc))
             return
@@ -218,6 +235,10 @@ def run_dialog(procedure: Gimp.Procedure, config: Gimp.ProcedureConfig, host, en
     content.reorder_child(box, 0)  # the light map, the main control, above colour, opacity, AO and camera
     config.connect("notify", lambda *_: preview.schedule(values))
     box.show_all()
+    waiting = engine.on_wait if isinstance(engine.on_wait, EngineWait) else None
+    if waiting is not None:  # a frozen worker leaves the dialog working, and closing it stops the wait
+        waiting.handle_events = _handle_events
+        dialog.connect("response", lambda *_: waiting.cancel() if preview.busy else None)
     preview.schedule(values)
 
     if os.environ.get(SELFTEST_ENV):
@@ -229,8 +250,16 @@ def run_dialog(procedure: Gimp.Procedure, config: Gimp.ProcedureConfig, host, en
             config.set_property("light-map", name if name in light_map.PRESETS else editor.to_json())
         return ok
     finally:
+        if waiting is not None:
+            waiting.handle_events = None
         preview.close()
         dialog.destroy()
+
+
+def _handle_events() -> None:
+    """Handle the dialog's pending events (while a preview waits on the engine)."""
+    while Gtk.events_pending():
+        Gtk.main_iteration_do(False)
 
 
 def _axes(area: Gtk.Widget) -> Gtk.Widget:

@@ -27,9 +27,12 @@ PLUGIN_DIR = Path(__file__).resolve().parent
 WORKER_STATE = "worker.json"  # the shared worker's address and token (this user only)
 
 
-def connect(timeout: float = 120.0, plugin_dir: Path = PLUGIN_DIR) -> client.EngineClient:
+def connect(
+    timeout: float = 120.0, plugin_dir: Path = PLUGIN_DIR, on_wait: client.OnWait | None = None
+) -> client.EngineClient:
     """A client of the engine configured for this plug-in (:func:`engine_config.load_engine_config`). A command
     configuration reuses one worker across filter calls (recorded in ``worker.json`` beside the plug-in; it exits
-    after 15 idle minutes) unless it says ``"shared": false``."""
+    after 15 idle minutes) unless it says ``"shared": false``. ``on_wait`` is asked while a reply is awaited
+    whether the user has given up (:class:`client.EngineClient`)."""
     config = engine_config.load_engine_config(plugin_dir, "gimp")
-    return client.connect(config, Path(plugin_dir) / WORKER_STATE, timeout)
+    return client.connect(config, Path(plugin_dir) / WORKER_STATE, timeout, on_wait)

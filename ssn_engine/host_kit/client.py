@@ -13,6 +13,12 @@ loopback port), checks its protocol with ``hello``, sends requests and
 returns replies. A worker that is missing, crashes, hangs or speaks another
 protocol raises :class:`WorkerUnavailable` with a message for the user; the
 next request starts a fresh worker.
+
+While a reply is awaited the client asks its ``on_wait`` hook, about every
+:data:`WAIT_STEP` seconds, whether the user has given up (a host shows its
+progress and handles its events there): then the worker is stopped (a shared
+one it started, by its process id) and :class:`Cancelled` raised, within
+one step (:func:`wait_for`).
 """
 
 from __future__ import annotations
@@ -21,10 +27,12 @@ import collections
 import itertools
 import json
 import os
+import signal
 import socket
 import subprocess
 import threading
-from collections.abc import Sequence
+import time
+from collections.abc import Callable, Sequence
 from pathlib import Path
 from typing import IO, Any
 
@@ -32,6 +40,7 @@ from .engine_config import EngineConfig, worker_environment
 from .protocol import PROTOCOL_VERSION, Buffer, ProtocolError, encode_header, read_message, write_message
 
 __all__ = [
+    "Cancelled",
     "EngineClient",
     "EngineError",
     "Requests",
@@ -40,6 +49,7 @@ __all__ = [
     "connect",
     "reply_error",
     "shared_client",
+    "wait_for",
 ]
 
 
@@ -56,6 +66,51 @@ class WorkerUnavailable(EngineError):
 
     def __init__(self, message: str) -> None:
         super().__init__("WorkerUnavailable", message)
+
+
+class Cancelled(EngineError):
+    """The user stopped waiting for the worker, which was stopped; the next request starts a fresh one."""
+
+    def __init__(self, cmd: str) -> None:
+        super().__init__(
+            "Cancelled", f"Cancelled while the shadow engine worked on '{cmd}'; it starts again with the next request."
+        )
+
+
+OnWait = Callable[[], bool]  # asked while a reply is awaited: True when the user has given up
+WAIT_STEP = 0.05  # seconds between two questions to the on_wait hook
+
+
+def wait_for(done: threading.Event, limit: float, on_wait: OnWait | None = None, step: float = WAIT_STEP) -> str:
+    """Wait for ``done``, at most ``limit`` seconds, asking ``on_wait()`` about every ``step`` seconds whether to
+    give up.
+
+    Parameters
+    ----------
+    done
+        Set when the awaited thing has happened.
+    limit
+        The deadline, in seconds from now.
+    on_wait
+        Called between steps (it may show progress or handle a host's events); True cancels the wait. None
+        waits without asking.
+    step
+        Seconds between two calls of ``on_wait``.
+
+    Returns
+    -------
+    str
+        ``"done"``, ``"late"`` (``limit`` passed first) or ``"cancelled"``.
+    """
+    deadline = time.monotonic() + limit
+    while True:
+        left = deadline - time.monotonic()
+        if done.wait(max(0.0, min(step, left)) if on_wait is not None else max(0.0, left)):
+            return "done"
+        if time.monotonic() >= deadline:
+            return "late"
+        if on_wait is not None and on_wait():
+            return "cancelled"
 
 
 def reply_error(reply: dict) -> EngineError | None:
@@ -95,7 +150,9 @@ class Requests:
 
 class EngineClient:
     """Talk to one worker: a spawned process (``command``) or a loopback ``address`` with the ``token`` that
-    worker printed when it started (``listening HOST:PORT token=TOKEN``)."""
+    worker printed when it started (``listening HOST:PORT token=TOKEN``). ``on_wait`` is asked while a reply is
+    awaited whether the user has given up (:func:`wait_for`); ``worker_pid``, the process of a loopback worker
+    this user's plug-in started (:func:`shared_client`), is stopped with it when a wait is cancelled or late."""
 
     def __init__(
         self,
@@ -104,11 +161,14 @@ class EngineClient:
         timeout: float = 120.0,
         token: str | None = None,
         env: dict[str, str] | None = None,
+        on_wait: OnWait | None = None,
+        worker_pid: int | None = None,
     ) -> None:
         if (command is None) == (address is None):
             raise ValueError("give exactly one of command or address")
         self.command, self.address, self.timeout, self.token = command, address, timeout, token
         self.env = env or {}
+        self.on_wait, self.worker_pid = on_wait, worker_pid
         self._proc: subprocess.Popen[bytes] | None = None
         self._sock: socket.socket | None = None
         self._reader: IO[bytes] | None = None
@@ -186,10 +246,23 @@ class EngineClient:
                 pass
         if self._sock is not None:
             try:
+                self._sock.shutdown(socket.SHUT_RDWR)  # wakes a thread blocked reading it (close alone may not)
                 self._sock.close()
             except OSError:
                 pass
         self._proc = self._sock = self._reader = self._writer = None
+
+    def _stop_worker(self) -> None:
+        """Stop a worker that is working on a request nobody waits for any more: a spawned one by :meth:`close`,
+        a loopback one this user started (``worker_pid``) by its process id too. Its connection is still open and
+        authenticated, so that process is alive and is the worker this client talks to."""
+        pid, self.worker_pid = self.worker_pid, None
+        if pid is not None and self._sock is not None:
+            try:
+                os.kill(pid, getattr(signal, "SIGKILL", signal.SIGTERM))
+            except OSError:
+                pass
+        self.close()
 
     def _died(self, what: str) -> WorkerUnavailable:
         tail = "\n".join(list(self._stderr)[-8:])
@@ -228,10 +301,11 @@ class EngineClient:
     def _exchange(
         self, cmd: str, buffers: dict[str, Buffer] | None, timeout: float | None, params: dict[str, Any]
     ) -> tuple[dict, dict[str, Buffer]]:
-        """One request and its reply, within ``timeout`` (None: the client's); a worker that fails to answer is
-        stopped (WorkerUnavailable)."""
+        """One request and its reply, within ``timeout`` (None: the client's); a worker that fails to answer, or
+        whose answer the user stops waiting for (``on_wait``), is stopped (WorkerUnavailable, Cancelled)."""
         _, chunks = self._requests.encode(cmd, buffers, **params)
         result: list = []
+        done = threading.Event()
 
         def exchange() -> None:
             reader, writer = self._reader, self._writer
@@ -242,12 +316,20 @@ class EngineClient:
                 result.append(read_message(reader))
             except (OSError, EOFError, ProtocolError, ValueError) as exc:
                 result.append(exc)
+            done.set()
 
         limit = self.timeout if timeout is None else timeout
-        worker = threading.Thread(target=exchange, daemon=True)
-        worker.start()
-        worker.join(limit)
-        if worker.is_alive():
+        threading.Thread(target=exchange, daemon=True).start()
+        try:
+            outcome = wait_for(done, limit, self.on_wait)
+        except BaseException:  # the hook failed: the reply would come to nobody
+            self._stop_worker()
+            raise
+        if outcome == "cancelled":
+            self._stop_worker()
+            raise Cancelled(cmd)
+        if outcome == "late":
+            self._stop_worker()
             raise self._died(f"did not answer '{cmd}' within {limit:g} s")
         if isinstance(result[0], BaseException):
             raise self._died(f"stopped unexpectedly during '{cmd}' ({result[0]})")
@@ -258,15 +340,17 @@ IDLE_TIMEOUT = 900.0  # seconds a shared worker waits for the next call before i
 START_TIMEOUT = 120.0  # seconds a new shared worker may take to announce its port
 
 
-def connect(config: EngineConfig, state_path: Path, timeout: float = 120.0) -> EngineClient:
+def connect(
+    config: EngineConfig, state_path: Path, timeout: float = 120.0, on_wait: OnWait | None = None
+) -> EngineClient:
     """A client for an :class:`~engine_config.EngineConfig`: the worker at its address, the shared worker its
     command starts (recorded in ``state_path``, see :func:`shared_client`), or, without ``shared``, a worker of
-    this client's own (started with the first request)."""
+    this client's own (started with the first request); ``on_wait`` as in :class:`EngineClient`."""
     if config.address is not None:
-        return EngineClient(address=config.address, timeout=timeout, token=config.token)
+        return EngineClient(address=config.address, timeout=timeout, token=config.token, on_wait=on_wait)
     if config.shared:
-        return shared_client(config.command, state_path, timeout, env=dict(config.env))
-    return EngineClient(command=list(config.command), timeout=timeout, env=dict(config.env))
+        return shared_client(config.command, state_path, timeout, env=dict(config.env), on_wait=on_wait)
+    return EngineClient(command=list(config.command), timeout=timeout, env=dict(config.env), on_wait=on_wait)
 
 
 def shared_client(
@@ -275,23 +359,62 @@ def shared_client(
     timeout: float = 120.0,
     idle_timeout: float = IDLE_TIMEOUT,
     env: dict[str, str] | None = None,
+    on_wait: OnWait | None = None,
 ) -> EngineClient:
     """A client of a long-lived loopback worker started from ``command`` (``... ssn-shadow serve``): the one
     recorded in ``state_path`` while it answers, else a new one started detached with ``--port 0
     --idle-timeout`` and recorded there (readable by this user only). A plug-in that runs once per call (GIMP)
     then pays the engine's start-up on its first call only; the worker exits after ``idle_timeout`` idle
-    seconds."""
+    seconds.
+
+    The record names the worker's process and the process of the call that last took it (this one's). The client
+    stops that worker (by its process id) when its user cancels a wait (``on_wait``) or a reply is late. A
+    recorded worker that does not answer is busy with that call's request: it is left alone (and a new one
+    started) while that call's process runs, and stopped when that process has gone (GIMP's own Cancel kills the
+    plug-in while the worker works for it: the next call stops the worker that nobody waits for)."""
     state = _read_state(state_path, command)
     if state is not None:
-        reuse = EngineClient(address=(state["host"], state["port"]), timeout=timeout, token=state["token"])
+        pid = state.get("pid") if isinstance(state.get("pid"), int) else None
+        orphaned = pid is not None and not _process_runs(state.get("client"))
+        reuse = EngineClient(
+            address=(state["host"], state["port"]),
+            timeout=timeout,
+            token=state["token"],
+            on_wait=on_wait,
+            worker_pid=pid if orphaned else None,  # stopped if it does not answer in time
+        )
         try:
-            reuse.request("hello", timeout=10.0)
-            return reuse
+            reuse.request("hello", timeout=ORPHAN_TIMEOUT if orphaned else BUSY_TIMEOUT)
+        except Cancelled:
+            raise
         except EngineError:
             reuse.close()
-    host, port, token = _start_detached(command, idle_timeout, env or {})
-    _write_state(state_path, {"command": list(command), "host": host, "port": port, "token": token})
-    return EngineClient(address=(host, port), timeout=timeout, token=token)
+        else:
+            reuse.worker_pid = pid
+            _write_state(state_path, {**state, "client": os.getpid()})
+            return reuse
+    host, port, token, pid = _start_detached(command, idle_timeout, env or {})
+    state = {"command": list(command), "host": host, "port": port, "token": token, "pid": pid, "client": os.getpid()}
+    _write_state(state_path, state)
+    return EngineClient(address=(host, port), timeout=timeout, token=token, on_wait=on_wait, worker_pid=pid)
+
+
+BUSY_TIMEOUT = 10.0  # seconds a new call waits for a recorded worker that another running call may be using
+ORPHAN_TIMEOUT = 2.0  # ... for one whose last call's process has gone, before it is stopped
+
+
+def _process_runs(pid: Any) -> bool:
+    """Whether process ``pid`` runs; True where that cannot be told (no POSIX signals, not a process id): a worker
+    is only stopped where its last client is known to be gone."""
+    if os.name != "posix" or not isinstance(pid, int) or isinstance(pid, bool) or pid <= 0:
+        return True
+    try:
+        os.kill(pid, 0)
+    except ProcessLookupError:
+        return False
+    except OSError:  # another user's process: it runs
+        return True
+    return True
 
 
 def _read_state(path: Path, command: Sequence[str]) -> dict | None:
@@ -322,8 +445,9 @@ def _write_state(path: Path, state: dict) -> None:
         pass  # not recorded: the next call starts its own worker, nothing worse
 
 
-def _start_detached(command: Sequence[str], idle_timeout: float, env: dict[str, str]) -> tuple[str, int, str]:
-    """Start ``command --port 0 --idle-timeout S`` in its own session and read its ``listening`` line."""
+def _start_detached(command: Sequence[str], idle_timeout: float, env: dict[str, str]) -> tuple[str, int, str, int]:
+    """Start ``command --port 0 --idle-timeout S`` in its own session and read its ``listening`` line: its host,
+    port, token and process id."""
     args = [*command, "--port", "0", "--idle-timeout", f"{idle_timeout:g}"]
     posix = os.name == "posix"  # POSIX: a new session; Windows: a detached process without a console
     flags = 0 if posix else getattr(subprocess, "DETACHED_PROCESS", 0) | getattr(subprocess, "CREATE_NO_WINDOW", 0)
@@ -352,4 +476,4 @@ def _start_detached(command: Sequence[str], idle_timeout: float, env: dict[str, 
         raise WorkerUnavailable(f"the shadow engine ({' '.join(args)}) did not start: {said}")
     stdout.close()  # the worker never writes to it again
     host, _, port = words[1].rpartition(":")
-    return host, int(port), words[2].removeprefix("token=")
+    return host, int(port), words[2].removeprefix("token="), proc.pid

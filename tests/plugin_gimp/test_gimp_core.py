@@ -17,7 +17,7 @@ from ssn_core import (
 from ssn_pixels import max_alpha, plan_for_precision
 
 from ssn_engine.host_kit import camera_rules
-from ssn_engine.host_kit.client import EngineClient, EngineError, WorkerUnavailable
+from ssn_engine.host_kit.client import Cancelled, EngineClient, EngineError, WorkerUnavailable
 from ssn_engine.host_kit.protocol import Buffer
 from ssn_engine.host_kit.shadow_notes import HIDDEN
 
@@ -72,10 +72,13 @@ class FakeEngine:
     def __init__(self, fail_on=None, error=None, size=(10, 5), bad_layer=False):
         self.fail_on, self.error, self.size, self.bad_layer = fail_on, error, size, bad_layer
         self.requests = []
+        self.running = True
 
     def request(self, cmd, buffers=None, timeout=None, **params):
         self.requests.append((cmd, params, buffers))
         if cmd == self.fail_on:
+            if isinstance(self.error, (WorkerUnavailable, Cancelled)):
+                self.running = False  # the client stops a worker it gave up on
             raise self.error
         if cmd == "set_cutout":
             return {"ok": True, "cutout": "c1", "bbox": [0, 0, 1, 1]}, {}
@@ -144,6 +147,16 @@ def test_failures_leave_the_image_untouched(engine, fragment):
     assert "undo_group_start" not in host.calls and not host.layers
     if any(r[0] == "set_cutout" for r in engine.requests) and engine.fail_on != "set_cutout":
         assert engine.requests[-1][0] == "release"
+
+
+def test_a_cancel_leaves_the_image_untouched_and_starts_no_worker():
+    """The user stops waiting for a frozen render (the client has stopped the worker): no layer, no error to show
+    (the procedure answers Cancel), and no fresh worker started just to free the cutout the old one took along."""
+    host, engine = FakeHost(), FakeEngine("render", Cancelled("render"))
+    with pytest.raises(Cancelled):
+        make_shadow(host, engine, ARGS)
+    assert "undo_group_start" not in host.calls and not host.layers
+    assert [r[0] for r in engine.requests] == ["set_cutout", "render"]
 
 
 def test_no_cutout_and_blank_alpha_never_reach_the_engine():
