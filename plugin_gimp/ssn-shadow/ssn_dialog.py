@@ -54,7 +54,7 @@ class ShadowPreview:
         self.clickable.set_tooltip_text("Click to put the image's horizon on that row")
         self.clickable.connect("button-press-event", self._on_press)
         self.status = _wrap(Gtk.Label(xalign=0.0))
-        self.scale: float | None = None  # thumbnail pixels per image pixel
+        self.scale = 1.0  # thumbnail pixels per image pixel
         self.cutout_id: str | None = None
         self.camera_read: dict | None = None  # the model's reading (image rows), or None
         self._values = None
@@ -116,7 +116,7 @@ class ShadowPreview:
             self.on_camera_read(camera_rules.camera_read_settings(camera_read))
 
     def _on_press(self, _widget, event) -> bool:
-        if event.button != 1 or event.type != Gdk.EventType.BUTTON_PRESS or self.scale is None:
+        if event.button != 1 or event.type != Gdk.EventType.BUTTON_PRESS or self.cutout_id is None:
             return False
         if self.on_row_clicked is not None:
             self.on_row_clicked(camera_rules.row_from_preview(event.y, self.scale))

@@ -94,7 +94,12 @@ def test_reset_restores_every_control(session):
     assert factory["map"] == preset("softbox").to_dict(), factory["map"]
     assert factory["label"] == "softbox"
     assert _shows_the_camera_read(factory), factory
-    assert session[1][0] == {"run": "reset", "status": "cancel", "layers": ["Pawn", "Background"], "camera_record": None}
+    assert session[1][0] == {
+        "run": "reset",
+        "status": "cancel",
+        "layers": ["Pawn", "Background"],
+        "camera_record": None,
+    }
 
 
 def test_the_dialog_fits_a_1366_x_768_screen_and_wraps_long_messages(session):
