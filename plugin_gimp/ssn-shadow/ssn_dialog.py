@@ -274,7 +274,7 @@ def run_dialog(procedure: Gimp.Procedure, config: Gimp.ProcedureConfig, host, en
 
     guide.connect("clicked", on_guide)
     title = Gtk.Box(spacing=6)
-    title.pack_start(Gtk.Label(label="Preview (click: the horizon is there)", xalign=0.0), True, True, 0)
+    title.pack_start(Gtk.Label(label="Preview: click to set the horizon", xalign=0.0), True, True, 0)
     title.pack_end(guide, False, False, 0)
     preview_box = Gtk.Box(orientation=Gtk.Orientation.VERTICAL, spacing=6)
     preview_box.pack_start(_wrap(Gtk.Label(label=host.target_note(), xalign=0.0)), False, False, 0)
