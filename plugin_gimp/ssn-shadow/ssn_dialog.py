@@ -262,15 +262,16 @@ def run_dialog(procedure: Gimp.Procedure, config: Gimp.ProcedureConfig, host, en
         False,
         0,
     )
+    lights_box.pack_start(fields, False, False, 0)
     guide = Gtk.Button.new_with_mnemonic("From _guide")
     guide.set_tooltip_text("Put the image's horizon on its first horizontal guide")
 
     def on_guide(_button) -> None:
-        row = camera_rules.horizon_from_guides(host.horizontal_guides())
-        if row is None:
+        guide_row = camera_rules.horizon_from_guides(host.horizontal_guides())
+        if guide_row is None:
             preview.status.set_text(camera_rules.NO_GUIDE)
         else:
-            give_horizon(row)
+            give_horizon(guide_row)
 
     guide.connect("clicked", on_guide)
     title = Gtk.Box(spacing=6)
@@ -281,7 +282,6 @@ def run_dialog(procedure: Gimp.Procedure, config: Gimp.ProcedureConfig, host, en
     preview_box.pack_start(title, False, False, 0)
     preview_box.pack_start(preview.clickable, False, False, 0)
     preview_box.pack_start(preview.status, False, False, 0)
-    lights_box.pack_start(fields, False, False, 0)
     box = Gtk.Box(spacing=12)
     box.pack_start(lights_box, False, False, 0)
     box.pack_start(preview_box, True, True, 0)
