@@ -10,6 +10,8 @@ from __future__ import annotations
 
 import os
 import sys
+from contextlib import contextmanager
+from types import SimpleNamespace
 
 import gi
 
@@ -17,19 +19,20 @@ gi.require_version("Gimp", "3.0")
 gi.require_version("GimpUi", "3.0")
 gi.require_version("Gtk", "3.0")
 gi.require_version("GdkPixbuf", "2.0")
-from gi.repository import GdkPixbuf, Gimp, GimpUi, GLib, Gtk  # noqa: E402
+gi.require_version("Pango", "1.0")
+from gi.repository import Gdk, GdkPixbuf, Gimp, GimpUi, GLib, Gtk, Pango  # noqa: E402
 
 from ssn_core import ShadowError, release, set_camera, settings_from_arguments, upload_cutout  # noqa: E402
 from ssn_engine_link import camera_rules, light_editor, light_map, shadow_notes  # noqa: E402
 from ssn_engine_link import client as engine_client  # noqa: E402
 from ssn_gimp_host import config_values  # noqa: E402
 from ssn_light_area import LightMapArea  # noqa: E402
-from ssn_preview import PREVIEW_SIZE, render_preview  # noqa: E402
+from ssn_preview import PREVIEW_HEIGHT, PREVIEW_SIZE, render_preview  # noqa: E402
 from ssn_progress import EngineWait  # noqa: E402
 from ssn_settings import PROCEDURE_NAME, SettingsError, editor_light_map  # noqa: E402
 
 CUSTOM = "(custom)"
-SELFTEST_ENV = "SSN_SHADOW_DIALOG_SELFTEST"
+SELFTEST_ENV = "SSN_SHADOW_DIALOG_SELFTEST"  # "1": the built-in self-test; a path to a .py: a test's script
 SCREEN_SCREENSHOT_ENV = "SSN_SHADOW_SCREEN_SCREENSHOT"  # the selftest grabs the whole screen
 PREVIEW_DELAY_MS = 150
 
@@ -37,14 +40,22 @@ PREVIEW_DELAY_MS = 150
 class ShadowPreview:
     """A thumbnail of the image with the shadow multiplied on, re-rendered while the light moves."""
 
-    def __init__(self, host, engine, on_camera_read=None) -> None:
+    def __init__(self, host, engine, on_camera_read=None, on_row_clicked=None) -> None:
         """``on_camera_read`` gets the editor's settings (:func:`camera_rules.camera_read_settings`) of each camera
         the model reads from the outline (the first analysis, and each one after the image's horizon is turned
-        off). The image's cutout is uploaded once; a camera change sends the camera alone."""
+        off); ``on_row_clicked`` the canvas row of a click on the preview. The image's cutout is uploaded once; a
+        camera change sends the camera alone."""
         self.host, self.engine, self.on_camera_read = host, engine, on_camera_read
+        self.on_row_clicked = on_row_clicked
         self.widget = Gtk.Image()
-        self.status = Gtk.Label(xalign=0.0)
-        self.status.set_line_wrap(True)
+        self.clickable = Gtk.EventBox()  # exactly the picture's size, so event rows are thumbnail rows
+        self.clickable.add(self.widget)
+        self.clickable.set_halign(Gtk.Align.START)
+        self.clickable.set_valign(Gtk.Align.START)
+        self.clickable.set_tooltip_text("Click to put the image's horizon on that row")
+        self.clickable.connect("button-press-event", self._on_press)
+        self.status = _wrap(Gtk.Label(xalign=0.0))
+        self.scale = 1.0  # thumbnail pixels per image pixel
         self.cutout_id: str | None = None
         self.camera_read: dict | None = None  # the model's reading (image rows), or None
         self._values = None
@@ -52,7 +63,7 @@ class ShadowPreview:
         self.busy = False  # a render waits on the engine (the dialog's events are handled meanwhile)
         width, height = host.image.get_width(), host.image.get_height()
         self.image_height = height
-        tw, th, _ = camera_rules.preview_size(width, height, PREVIEW_SIZE)
+        tw, th, _ = camera_rules.preview_size(width, height, PREVIEW_SIZE, PREVIEW_HEIGHT)
         try:
             self.thumbnail = host.thumbnail(tw, th)
             self.scale = self.thumbnail.width / width
@@ -121,6 +132,13 @@ class ShadowPreview:
         if camera_read is not None and self.on_camera_read is not None:
             self.on_camera_read(camera_rules.camera_read_settings(camera_read))
 
+    def _on_press(self, _widget, event) -> bool:
+        if event.button != 1 or event.type != Gdk.EventType.BUTTON_PRESS or self.cutout_id is None:
+            return False
+        if self.on_row_clicked is not None:
+            self.on_row_clicked(camera_rules.row_from_preview(event.y, self.scale))
+        return True
+
     def _camera_note(self) -> str:
         return "" if self.camera_read is None else camera_rules.camera_read_note(self.camera_read, self.image_height)
 
@@ -135,7 +153,11 @@ def run_dialog(procedure: Gimp.Procedure, config: Gimp.ProcedureConfig, host, en
     dialog = GimpUi.ProcedureDialog(procedure=procedure, config=config, title="Soft Shadow (SSN)")
     for name in ("opacity", "ao-strength", "fov"):  # GIMP's slider-with-entry widgets, not bare spin buttons
         dialog.get_spin_scale(name, 1.0)
-    dialog.fill(["shadow-color", "opacity", "ao-strength", "use-horizon", "horizon", "fov", "keep-whole-shadow"])
+    fields = dialog.fill_box(  # packed under the light map below
+        "ssn-fields", ["shadow-color", "opacity", "ao-strength", "use-horizon", "horizon", "fov", "keep-whole-shadow"]
+    )
+    for name in ("horizon", "fov"):  # they do nothing while the image's horizon is not given
+        dialog.set_sensitive(name, True, config, "use-horizon", False)
 
     def values() -> dict:
         out = config_values(config)
@@ -147,20 +169,36 @@ def run_dialog(procedure: Gimp.Procedure, config: Gimp.ProcedureConfig, host, en
     except SettingsError:
         lights = light_map.preset(light_map.DEFAULT_PRESET)
 
-    def on_camera_read(read: dict) -> None:
-        # The horizon option, turned on, starts from the model's reading of the camera.
-        if not config.get_property("use-horizon"):
-            for name, value in read.items():
+    def show_camera_read(read: dict | None) -> None:
+        # While the image's horizon is not given, the camera fields show the camera the model read (the note under
+        # the preview names it), also after a Reset; ticking the box starts from that reading.
+        if read is None or config.get_property("use-horizon"):
+            return
+        for name, value in read.items():
+            if config.get_property(name) != value:
                 config.set_property(name, value)
 
-    preview = ShadowPreview(host, engine, on_camera_read)
+    def give_horizon(row: float) -> None:
+        config.set_property("use-horizon", True)  # first: unticked, the fields keep the camera read
+        config.set_property("horizon", row)
+
+    preview = ShadowPreview(host, engine, show_camera_read, give_horizon)
     area: LightMapArea | None = None
+
+    def keep_camera_read(*_) -> None:
+        read = preview.camera_read
+        show_camera_read(camera_rules.camera_read_settings(read) if read is not None else None)
+
+    for name in ("use-horizon", "horizon", "fov"):
+        config.connect(f"notify::{name}", keep_camera_read)
 
     def on_change(live: bool, new_stroke: bool) -> None:
         if area is not None:
             area.refresh()
-        if not live and presets.get_active_text() != CUSTOM and not loading[0]:
-            presets.set_active(len(light_map.PRESETS))
+        if not live and not syncing[0]:
+            if presets.get_active_text() != CUSTOM:
+                presets.set_active(len(light_map.PRESETS))
+            store_light_map()
         preview.schedule(values)
 
     def on_select(index: int | None) -> None:
@@ -168,7 +206,25 @@ def run_dialog(procedure: Gimp.Procedure, config: Gimp.ProcedureConfig, host, en
             area.refresh()
 
     editor = light_editor.LightMapEditor(lights, on_change, on_select)
-    loading = [False]
+    syncing = [False]  # the editor, the preset box and the light-map setting are being made to agree
+
+    @contextmanager
+    def in_sync():
+        before, syncing[0] = syncing[0], True
+        try:
+            yield
+        finally:
+            syncing[0] = before
+
+    def light_map_argument() -> str:
+        name = presets.get_active_text()
+        return name if name in light_map.PRESETS else editor.to_json()
+
+    def store_light_map() -> None:
+        # The setting follows every complete edit, so that Reset (to initial values or to factory defaults) finds
+        # a setting to change back and the map follows it (on_light_map_setting).
+        with in_sync():
+            config.set_property("light-map", light_map_argument())
 
     presets = Gtk.ComboBoxText()
     for name in light_map.PRESETS:
@@ -180,30 +236,31 @@ def run_dialog(procedure: Gimp.Procedure, config: Gimp.ProcedureConfig, host, en
 
     def on_preset(combo) -> None:
         name = combo.get_active_text()
-        if name in light_map.PRESETS:
-            loading[0] = True
-            editor.load(light_map.preset(name))
-            loading[0] = False
+        if name in light_map.PRESETS and not syncing[0]:
+            with in_sync():
+                editor.load(light_map.preset(name))
+            store_light_map()
 
     presets.connect("changed", on_preset)
 
     def on_light_map_setting(*_) -> None:
-        # Reset to Factory Defaults, Load Saved Settings (or a script) set the argument: show that light map.
+        # Reset, Load Saved Settings (or a script) set the argument: show that light map, and its preset's name.
+        if syncing[0]:
+            return
         text = config.get_property("light-map").strip()
         try:
             loaded = editor_light_map(text)
         except SettingsError:
             return
-        loading[0] = True
-        presets.set_active(names.index(text) if text in names else len(names))
-        editor.load(loaded)
-        loading[0] = False
+        with in_sync():
+            presets.set_active(names.index(text) if text in names else len(names))
+            editor.load(loaded)
 
     config.connect("notify::light-map", on_light_map_setting)
     area = LightMapArea(editor)
 
-    # The light map (the main control) and the preview side by side, above colour, opacity, AO and camera: the
-    # dialog then fits a 1366 x 768 screen (stacked, it was 814 px tall).
+    # The light map (the main control) above colour, opacity, AO and camera, beside the preview: the dialog then
+    # fits a 1366 x 768 screen (stacked, it was 814 px tall; with the fields under both, 774 for a portrait image).
     lights_box = Gtk.Box(orientation=Gtk.Orientation.VERTICAL, spacing=6)
     row = Gtk.Box(spacing=6)
     row.pack_start(Gtk.Label(label="Preset:"), False, False, 0)
@@ -222,17 +279,32 @@ def run_dialog(procedure: Gimp.Procedure, config: Gimp.ProcedureConfig, host, en
         False,
         0,
     )
+    lights_box.pack_start(fields, False, False, 0)
+    guide = Gtk.Button.new_with_mnemonic("From _guide")
+    guide.set_tooltip_text("Put the image's horizon on its first horizontal guide")
+
+    def on_guide(_button) -> None:
+        guide_row = camera_rules.horizon_from_guides(host.horizontal_guides())
+        if guide_row is None:
+            preview.status.set_text(camera_rules.NO_GUIDE)
+        else:
+            give_horizon(guide_row)
+
+    guide.connect("clicked", on_guide)
+    title = Gtk.Box(spacing=6)
+    title.pack_start(Gtk.Label(label="Preview: click to set the horizon", xalign=0.0), True, True, 0)
+    title.pack_end(guide, False, False, 0)
     preview_box = Gtk.Box(orientation=Gtk.Orientation.VERTICAL, spacing=6)
     preview_box.pack_start(_wrap(Gtk.Label(label=host.target_note(), xalign=0.0)), False, False, 0)
-    preview_box.pack_start(Gtk.Label(label="Preview", xalign=0.0), False, False, 0)
-    preview_box.pack_start(preview.widget, False, False, 0)
+    preview_box.pack_start(title, False, False, 0)
+    preview_box.pack_start(preview.clickable, False, False, 0)
     preview_box.pack_start(preview.status, False, False, 0)
     box = Gtk.Box(spacing=12)
     box.pack_start(lights_box, False, False, 0)
     box.pack_start(preview_box, True, True, 0)
     content = dialog.get_content_area()
     content.pack_start(box, True, True, 6)
-    content.reorder_child(box, 0)  # the light map, the main control, above colour, opacity, AO and camera
+    content.reorder_child(box, 0)  # above GIMP's Load Saved Settings and Save Settings
     config.connect("notify", lambda *_: preview.schedule(values))
     box.show_all()
     waiting = engine.on_wait if isinstance(engine.on_wait, EngineWait) else None
@@ -241,13 +313,16 @@ def run_dialog(procedure: Gimp.Procedure, config: Gimp.ProcedureConfig, host, en
         dialog.connect("response", lambda *_: waiting.cancel() if preview.busy else None)
     preview.schedule(values)
 
-    if os.environ.get(SELFTEST_ENV):
+    selftest = os.environ.get(SELFTEST_ENV, "")
+    if selftest == "1":
         GLib.timeout_add(300, _selftest, dialog, area, preview, values, config)
+    elif selftest.endswith(".py"):
+        parts = SimpleNamespace(dialog=dialog, config=config, host=host, preview=preview, area=area, presets=presets)
+        GLib.timeout_add(300, _run_test_script, selftest, parts)
     try:
         ok = dialog.run()
         if ok:
-            name = presets.get_active_text()
-            config.set_property("light-map", name if name in light_map.PRESETS else editor.to_json())
+            store_light_map()
         return ok
     finally:
         if waiting is not None:
@@ -292,10 +367,19 @@ def _axes(area: Gtk.Widget) -> Gtk.Widget:
 
 
 def _wrap(label: Gtk.Label) -> Gtk.Label:
-    """``label``, wrapping its lines instead of widening the dialog."""
+    """``label``, wrapping its lines (a long word too) instead of widening the dialog."""
     label.set_line_wrap(True)
+    label.set_line_wrap_mode(Pango.WrapMode.WORD_CHAR)
     label.set_max_width_chars(48)
     return label
+
+
+def _run_test_script(path: str, parts: SimpleNamespace) -> bool:
+    """For the integration tests (SSN_SHADOW_DIALOG_SELFTEST=<script.py>): run the test's script with the dialog's
+    parts (``parts``: dialog, config, host, preview, area, presets); the script presses OK or Cancel itself."""
+    with open(path, encoding="utf-8") as script:
+        exec(compile(script.read(), path, "exec"), {"__file__": path, "parts": parts})  # noqa: S102 - a test's own
+    return False
 
 
 def _selftest(dialog, area: LightMapArea, preview: ShadowPreview, values, config) -> bool:

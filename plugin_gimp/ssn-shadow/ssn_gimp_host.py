@@ -19,9 +19,10 @@ from gi.repository import Babl, Gegl, Gimp  # noqa: E402
 from ssn_core import Cutout, ShadowError, ShadowLayerData  # noqa: E402
 from ssn_pixels import PixelFormatError, PixelPlan, layer_image_type, plan_for_precision  # noqa: E402
 from ssn_preview import Thumbnail  # noqa: E402
-from ssn_settings import ARGUMENTS, LAYER_PREFIX  # noqa: E402
+from ssn_settings import ARGUMENTS, LAYER_PREFIX, image_camera_arguments, image_camera_record  # noqa: E402
 
 SOURCE_PARASITE = "ssn-shadow-source"  # on a shadow layer: the tattoo of the layer it was cast from
+CAMERA_PARASITE = "ssn-shadow-camera"  # on an image: its camera settings (ssn_engine_link.image_camera)
 
 
 def config_values(config: Gimp.ProcedureConfig) -> dict:
@@ -123,6 +124,29 @@ class GimpHost:
         if self.replacing is not None:
             note += f', replacing "{self.replacing.get_name()}"'
         return note + "."
+
+    def horizontal_guides(self) -> list[float]:
+        """The image's horizontal guides (canvas rows), in GIMP's order."""
+        rows, guide = [], self.image.find_next_guide(0)
+        while guide:
+            if self.image.get_guide_orientation(guide) == Gimp.OrientationType.HORIZONTAL:
+                rows.append(float(self.image.get_guide_position(guide)))
+            guide = self.image.find_next_guide(guide)
+        return rows
+
+    def image_camera(self) -> dict[str, Any]:
+        """The camera arguments this image had when the filter last ran on it interactively (scaled with the image
+        since), or the horizon not given: never another image's (GIMP's last values are global)."""
+        parasite = self.image.get_parasite(CAMERA_PARASITE)
+        record = bytes(parasite.get_data()).decode("utf-8", "replace") if parasite is not None else None
+        return image_camera_arguments(record, self.image.get_height())
+
+    def remember_camera(self, values: dict[str, Any]) -> None:
+        """Keep the camera arguments in ``values`` with the image (saved in the XCF; no undo step)."""
+        record = image_camera_record(values, self.image.get_height())
+        self.image.attach_parasite(
+            Gimp.Parasite.new(CAMERA_PARASITE, Gimp.PARASITE_PERSISTENT, list(record.encode("ascii")))
+        )
 
     def hidden_reason(self) -> str | None:
         """Why the source layer shows nothing (hidden, or at opacity 0), or None; a selection casts regardless."""

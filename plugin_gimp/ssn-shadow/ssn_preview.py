@@ -15,7 +15,8 @@ from ssn_core import Engine, ShadowError, engine_call
 from ssn_engine_link import protocol
 from ssn_settings import ShadowSettings
 
-PREVIEW_SIZE = 384
+PREVIEW_SIZE = 384  # the thumbnail's longer side at most
+PREVIEW_HEIGHT = 288  # and its height at most: the dialog of a portrait image fits a 1366 x 768 screen
 
 
 @dataclass(frozen=True)

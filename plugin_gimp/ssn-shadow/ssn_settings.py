@@ -11,7 +11,7 @@ from __future__ import annotations
 from dataclasses import dataclass
 from typing import Any
 
-from ssn_engine_link import ao_edits, camera_rules, defaults, light_map, protocol
+from ssn_engine_link import ao_edits, camera_rules, defaults, image_camera, light_map, protocol
 
 PROCEDURE_NAME = "plug-in-ssn-shadow"
 MENU_LABEL = "Soft _Shadow (SSN)..."
@@ -94,6 +94,19 @@ ARGUMENTS: tuple[ArgSpec, ...] = (
     ),
 )
 ARG_BY_NAME = {a.name: a for a in ARGUMENTS}
+
+
+def image_camera_arguments(record: str | None, image_height: int) -> dict[str, Any]:
+    """The camera arguments ("use-horizon", "horizon", "fov") an image's camera record gives it
+    (:func:`image_camera.recalled_camera`; no record: the horizon not given), so that an image never takes
+    another's."""
+    camera = image_camera.recalled_camera(record, image_height)
+    return {"use-horizon": camera["given"], "horizon": camera["horizon"], "fov": camera["fov"]}
+
+
+def image_camera_record(values: dict[str, Any], image_height: int) -> str:
+    """The camera record of an image from the camera arguments in ``values`` (:func:`image_camera.camera_record`)."""
+    return image_camera.camera_record(values["use-horizon"], values["horizon"], values["fov"], image_height)
 
 
 class SettingsError(ValueError):

@@ -41,11 +41,10 @@ from .engine import EngineError
 from .model import Settings, ShadowModel
 from .properties import Property
 from .scheduling import Drag, LatestWins, RenderJob, RenderQueue
-from .shared import shadow_notes
+from .shared import camera_rules, shadow_notes
 
 PREVIEW_SIDE = 320  # pixels: the longer side of the docker's live preview
 PAUSE_MS = 300  # a drag that rests this long writes the layer
-NO_GUIDE = "Add a horizontal guide on the horizon first (drag one down from the top ruler), then press From guide."
 
 
 class ShadowController(QObject):
@@ -125,7 +124,7 @@ class ShadowController(QObject):
     def horizon_from_guide(self) -> None:
         """Give the model's horizon on the active document's first horizontal guide (or say how to add one)."""
         if not self.model.horizon_from_guides(self.host.horizontal_guides(self.host.active_document())):
-            self.model.report_status("warning", NO_GUIDE)
+            self.model.report_status("warning", camera_rules.NO_GUIDE)
 
     def cancel(self) -> None:
         """Stop waiting for the engine (a hung or slow analysis): the worker is stopped and restarts with the

@@ -171,10 +171,12 @@ class ShadowModel(QObject):
         self._set_ao_edits(AoEdits(), True)
 
     def horizon_from_guides(self, guides: list[float]) -> bool:
-        """Give the horizon on the first horizontal guide (canvas row); False when there is no guide."""
-        if not guides:
+        """Give the horizon on the guide :func:`camera_rules.horizon_from_guides` takes (canvas rows); False when
+        there is no guide."""
+        row = camera_rules.horizon_from_guides(guides)
+        if row is None:
             return False
-        self.horizon = float(round(guides[0]))
+        self.horizon = row
         self.use_horizon = True
         return True
 

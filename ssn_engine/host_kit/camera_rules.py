@@ -24,17 +24,22 @@ __all__ = [
     "EDITOR_FOV_RANGE",
     "EDITOR_HORIZON_RANGE",
     "FOV_RANGE",
+    "NO_GUIDE",
     "camera_read_note",
     "camera_read_settings",
     "check_fov",
+    "horizon_from_guides",
     "preview_size",
+    "row_from_preview",
     "scaled_camera",
+    "within",
 ]
 
 DEFAULT_FOV = 45.0  # degrees: the conventions' default camera, and the editors' starting value
 FOV_RANGE = (1.0, 170.0)  # degrees: the fields of view the engine accepts
 EDITOR_FOV_RANGE = (10.0, 120.0)  # degrees: the fields of view the hosts' editors offer
 EDITOR_HORIZON_RANGE = (-100000.0, 100000.0)  # canvas rows the hosts' editors offer for the horizon
+NO_GUIDE = "Add a horizontal guide on the horizon first (drag one down from the top ruler), then press From guide."
 
 
 def check_fov(fov: object, name: str = "field of view") -> float:
@@ -46,12 +51,26 @@ def check_fov(fov: object, name: str = "field of view") -> float:
     return float(fov)
 
 
-def preview_size(width: int, height: int, limit: int) -> tuple[int, int, float]:
+def preview_size(width: int, height: int, limit: int, height_limit: int | None = None) -> tuple[int, int, float]:
     """The size of a preview's background (a ``preview`` request's thumbnail) for a ``width`` x ``height``
-    canvas, and its scale: the longer side at most ``limit``, the aspect kept as the worker expects (each side
-    rounded)."""
+    canvas, and its scale: the longer side at most ``limit`` (and the height at most ``height_limit``, when
+    given), the aspect kept as the worker expects (each side rounded)."""
     scale = min(1.0, limit / max(width, height, 1))
+    if height_limit is not None:
+        scale = min(scale, height_limit / max(height, 1))
     return max(1, round(width * scale)), max(1, round(height * scale)), scale
+
+
+def row_from_preview(y: float, scale: float) -> float:
+    """The canvas row (a whole row) shown at row ``y`` of a preview drawn at ``scale`` (a click on the preview
+    that puts the horizon there)."""
+    return within(round(y / scale), EDITOR_HORIZON_RANGE)
+
+
+def horizon_from_guides(rows: list[float]) -> float | None:
+    """The horizon row a host takes from the image's horizontal guides (canvas rows, in the host's order): the
+    first one, a whole row; None without a guide (say :data:`NO_GUIDE`)."""
+    return within(round(rows[0]), EDITOR_HORIZON_RANGE) if rows else None
 
 
 def scaled_camera(camera: dict[str, float], scale: float) -> dict[str, float]:
@@ -60,7 +79,8 @@ def scaled_camera(camera: dict[str, float], scale: float) -> dict[str, float]:
     return {**camera, "horizon": camera["horizon"] * scale}
 
 
-def _within(value: float, bounds: tuple[float, float]) -> float:
+def within(value: float, bounds: tuple[float, float]) -> float:
+    """``value`` as a float clamped to ``bounds`` (lo, hi)."""
     return float(min(max(value, bounds[0]), bounds[1]))
 
 
@@ -68,8 +88,8 @@ def camera_read_settings(read: dict[str, float]) -> dict[str, float]:
     """The editor's ``horizon`` and ``fov`` for a camera the model read from an outline (``camera_read``, canvas
     rows): whole rows and degrees within the editors' bounds, where the horizon option starts when turned on."""
     return {
-        "horizon": _within(round(read["horizon"]), EDITOR_HORIZON_RANGE),
-        "fov": _within(round(read["fov"]), EDITOR_FOV_RANGE),
+        "horizon": within(round(read["horizon"]), EDITOR_HORIZON_RANGE),
+        "fov": within(round(read["fov"]), EDITOR_FOV_RANGE),
     }
 
 

@@ -43,6 +43,26 @@ def test_a_camera_read_becomes_the_editors_settings_and_note():
     assert camera_rules.scaled_camera({"horizon": 300.0, "fov": 50.0}, 0.25) == {"horizon": 75.0, "fov": 50.0}
 
 
+def test_a_preview_fits_its_box_and_a_click_on_it_names_a_canvas_row():
+    """A portrait image's preview is as tall as a landscape one's, not taller (the dialog fits the screen); a
+    click on the preview's row ``y`` names the canvas row it shows."""
+    size = camera_rules.preview_size
+    assert size(640, 480, 384, 288) == (384, 288, 0.6)
+    assert size(480, 640, 384, 288) == (216, 288, 0.45)
+    assert size(1000, 100, 384, 288) == (384, 38, 0.384)
+    assert size(200, 150, 384, 288) == (200, 150, 1.0)
+    assert size(480, 640, 384) == (288, 384, 0.6)  # no height limit: the longer side only
+    assert camera_rules.row_from_preview(100, 0.6) == 167.0
+    assert camera_rules.row_from_preview(0, 0.45) == 0.0
+    assert camera_rules.row_from_preview(50, 1e-6) == camera_rules.EDITOR_HORIZON_RANGE[1]
+
+
+def test_the_horizon_from_guides_is_the_first_horizontal_guide():
+    assert camera_rules.horizon_from_guides([300.4, 120.0]) == 300.0
+    assert camera_rules.horizon_from_guides([]) is None
+    assert "horizontal guide" in camera_rules.NO_GUIDE and "From guide" in camera_rules.NO_GUIDE
+
+
 def test_the_stdlib_sky_map_is_the_engine_s():
     """The kit's definition (what the editors draw) and the engine's numpy form give the same ELM, a light at the
     azimuth's seam and a light far smaller than a texel included."""

@@ -31,7 +31,7 @@ def test_arguments_cover_every_setting():
 
 
 def test_mnemonics_do_not_clash_with_ok_and_cancel():
-    taken = {"o", "c"}  # _OK, _Cancel
+    taken = {"o", "c", "r", "g"}  # _OK, _Cancel, _Reset, From _guide
     keys = [spec.label[spec.label.index("_") + 1].lower() for spec in s.ARGUMENTS if spec.name != "light-map"]
     assert not taken & set(keys) and len(set(keys)) == len(keys)
 
@@ -119,3 +119,17 @@ def test_camera_only_with_a_horizon_and_scaled_for_the_preview():
     assert camera_rules.scaled_camera(st.camera(), 0.25) == {"horizon": 75.0, "fov": 50.0}
     with pytest.raises(SettingsError, match="fov"):
         ShadowSettings(horizon=10.0, fov=5.0)
+
+
+def test_an_image_s_camera_arguments_are_its_own():
+    """The camera arguments come from the image's record (scaled with the image), or are the horizon not given:
+    never the last image's values, which GIMP keeps for every image."""
+    values = {"use-horizon": True, "horizon": 380.0, "fov": 40.0, "opacity": 0.5}
+    record = s.image_camera_record(values, 480)
+    assert s.image_camera_arguments(record, 3000) == {"use-horizon": True, "horizon": 2375.0, "fov": 40.0}
+    assert s.image_camera_arguments(None, 3000) == {
+        "use-horizon": False,
+        "horizon": s.ARG_BY_NAME["horizon"].default,
+        "fov": s.ARG_BY_NAME["fov"].default,
+    }
+    assert set(s.image_camera_arguments(None, 10)) <= set(s.ARG_BY_NAME)

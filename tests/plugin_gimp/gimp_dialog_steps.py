@@ -1,0 +1,243 @@
+"""Runs INSIDE the filter's own process (GIMP's Python, under Xvfb) for test_gimp_dialog_controls.py.
+
+The plug-in, started with SSN_SHADOW_DIALOG_SELFTEST=<this file>, runs it once its dialog shows, with ``parts``
+(dialog, config, host, preview, area, presets). It reads the run to do from ``steps.json`` beside it (written by
+gimp_dialog_controls_check.py), works the dialog as a user would, with real pointer events (xdotool on the Xvfb
+display: drags on the light map, clicks on the preview, the From guide button, the horizon box, Reset and its
+popover's items), appends what it saw to ``out/steps.jsonl`` and presses OK or Cancel.
+"""
+
+import json
+import os
+import re
+import subprocess
+import traceback
+
+import gi
+
+gi.require_version("Gtk", "3.0")
+from gi.repository import GLib, GObject, Gtk  # noqa: E402
+
+parts = globals()["parts"]
+HERE = os.path.dirname(os.path.abspath(__file__))
+TASK = json.load(open(os.path.join(HERE, "steps.json")))
+RESET = 1  # GimpProcedureDialog's response id of its Reset button
+NOTE = re.compile(r"horizon at row (-?\d+) \([^)]*\), (\d+)° field of view")
+record = {"run": TASK["run"]}
+
+
+def widget(name):
+    return parts.dialog.get_widget(name, GObject.TYPE_NONE)
+
+
+def snapshot():
+    """What the user sees: the preset box, the map, the camera fields (and whether they take input), the note."""
+    config, status = parts.config, parts.preview.status
+    note = NOTE.search(status.get_text())
+    window = parts.dialog.get_window()
+    return {
+        "label": parts.presets.get_active_text(),
+        "map": parts.area.editor.lights.to_dict(),
+        "use": config.get_property("use-horizon"),
+        "horizon": config.get_property("horizon"),
+        "fov": config.get_property("fov"),
+        "note": status.get_text(),
+        "note_camera": [int(note[1]), int(note[2])] if note else None,
+        "note_lines": status.get_layout().get_line_count(),
+        "row_sensitive": widget("horizon").is_sensitive(),
+        "fov_sensitive": widget("fov").is_sensitive(),
+        "size": [window.get_width(), window.get_height()],
+        "preview": [parts.preview.widget.get_allocated_width(), parts.preview.widget.get_allocated_height()],
+    }
+
+
+def on_screen(w, x=None, y=None):
+    """The screen point of ``w``'s point (x, y) (default: its centre)."""
+    alloc = w.get_allocation()
+    x = alloc.width / 2 if x is None else x
+    y = alloc.height / 2 if y is None else y
+    top = w.get_toplevel()
+    tx, ty = w.translate_coordinates(top, int(x), int(y))
+    _, ox, oy = top.get_window().get_origin()
+    return str(ox + tx), str(oy + ty)
+
+
+def xdotool(*args):
+    subprocess.run(["xdotool", *args], check=True, capture_output=True, timeout=20)
+
+
+def click(w, x=None, y=None):
+    xdotool("mousemove", *on_screen(w, x, y), "click", "1")
+
+
+def drag(w, start, end):
+    xdotool("mousemove", *on_screen(w, *start), "mousedown", "1")
+    xdotool("mousemove", *on_screen(w, (start[0] + end[0]) / 2, (start[1] + end[1]) / 2))
+    xdotool("mousemove", *on_screen(w, *end), "mouseup", "1")
+
+
+def popover_button(text):
+    """The button of the Reset popover whose label holds ``text`` (GTK keeps popovers among the window's
+    internal children)."""
+    found = []
+
+    def walk(w):
+        if isinstance(w, Gtk.Button) and text in (w.get_label() or ""):
+            found.append(w)
+        if isinstance(w, Gtk.Container):
+            w.forall(walk)
+
+    walk(parts.dialog)
+    assert found, f"no '{text}' in the Reset popover"
+    return found[0]
+
+
+def settled():
+    """Steps that wait for the pointer events to arrive and for the preview to render what they changed."""
+    yield 400
+    yield lambda: not parts.preview._timer
+    yield 300
+
+
+def reset():
+    """Issue #41, defect 10: Reset restores every control."""
+    area, editor = parts.area, parts.area.editor
+    yield from settled()
+    record["initial"] = snapshot()
+    light = editor.lights.lights[0]
+    start = (light.u * area.width, light.v * area.height)
+    drag(area, start, (start[0] + 60, start[1] + 20))
+    yield from settled()
+    record["dragged"] = snapshot()
+    click(parts.dialog.get_widget_for_response(RESET))
+    yield 500
+    click(popover_button("Initial"))
+    yield from settled()
+    yield from settled()  # the camera read again where the horizon box changed
+    record["after_initial"] = snapshot()
+    parts.presets.set_active([row[0] for row in parts.presets.get_model()].index("high-sun"))
+    yield from settled()
+    light = editor.lights.lights[0]
+    start = (light.u * area.width, light.v * area.height)
+    drag(area, start, (start[0] - 50, start[1] + 10))
+    click(widget("use-horizon"))
+    yield from settled()
+    click(parts.preview.widget, y=40)
+    yield from settled()
+    record["edited"] = snapshot()
+    click(parts.dialog.get_widget_for_response(RESET))
+    yield 500
+    click(popover_button("Factory"))
+    yield from settled()
+    yield from settled()
+    record["after_factory"] = snapshot()
+    done(Gtk.ResponseType.CANCEL)
+
+
+def layout():
+    """Issue #41, defect 11: the dialog fits 1366 x 768, long messages wrap."""
+    yield from settled()
+    yield 500
+    record["shown"] = snapshot()
+    done(Gtk.ResponseType.CANCEL)
+
+
+def horizon_first():
+    """Issue #41, defect 12: the fields take input only while the box is ticked; From guide; a click on the
+    preview; then OK (the image keeps its camera)."""
+    yield from settled()
+    record["initial"] = snapshot()
+    guide = next(w for w in _buttons() if "guide" in (w.get_label() or ""))
+    click(guide)
+    yield from settled()
+    record["from_guide"] = snapshot()
+    record["scale"] = parts.preview.scale
+    click(parts.preview.widget, y=100)
+    yield from settled()
+    record["clicked"] = snapshot()
+    click(widget("use-horizon"))
+    yield from settled()
+    yield from settled()
+    record["unticked"] = snapshot()
+    click(parts.preview.widget, y=228)
+    yield from settled()
+    record["clicked_again"] = snapshot()
+    done(Gtk.ResponseType.OK)
+
+
+def horizon_second():
+    """Another image: nothing of the first image's horizon; From guide without a guide says how to add one."""
+    yield from settled()
+    record["initial"] = snapshot()
+    guide = next(w for w in _buttons() if "guide" in (w.get_label() or ""))
+    click(guide)
+    yield 600
+    record["from_guide"] = snapshot()
+    done(Gtk.ResponseType.CANCEL)
+
+
+def horizon_again():
+    """The first image again, scaled by 2 since: its horizon, scaled with it."""
+    yield from settled()
+    record["initial"] = snapshot()
+    done(Gtk.ResponseType.CANCEL)
+
+
+def _buttons():
+    found = []
+
+    def walk(w):
+        if isinstance(w, Gtk.Button):
+            found.append(w)
+        if isinstance(w, Gtk.Container):
+            w.forall(walk)
+
+    walk(parts.dialog)
+    return found
+
+
+def done(response):
+    with open(os.path.join(HERE, "out", "steps.jsonl"), "a") as f:
+        f.write(json.dumps(record) + "\n")
+    parts.dialog.response(response)
+
+
+def drive(steps):
+    """Run the generator ``steps`` on GTK's main loop: it yields a delay in ms or a condition to wait for."""
+
+    def step(*_):
+        try:
+            wait = next(steps)
+        except StopIteration:
+            return False
+        except Exception:  # noqa: BLE001 - report it and close the dialog, never hang GIMP
+            record["error"] = traceback.format_exc()
+            done(Gtk.ResponseType.CANCEL)
+            return False
+        if callable(wait):
+            poll(wait, 100)
+        else:
+            GLib.timeout_add(wait, step)
+        return False
+
+    def poll(condition, left):  # every 100 ms, at most ``left`` times
+        def check():
+            if condition() or left <= 1:
+                step()
+            else:
+                poll(condition, left - 1)
+            return False
+
+        GLib.timeout_add(100, check)
+
+    GLib.idle_add(step)
+
+
+RUNS = {
+    "reset": reset,
+    "layout": layout,
+    "horizon-first": horizon_first,
+    "horizon-second": horizon_second,
+    "horizon-again": horizon_again,
+}
+drive(RUNS[TASK["run"]]())

@@ -1,0 +1,142 @@
+"""Real GIMP 3: the filter's dialog worked as a user would (issue #41, GIMP defects 10, 11 and 12).
+
+One gimp-console session under Xvfb on a 1366 x 768 screen opens the dialog several times
+(gimp_dialog_controls_check.py); inside the plug-in, gimp_dialog_steps.py (run by the
+SSN_SHADOW_DIALOG_SELFTEST hook) drags lights, clicks the preview, the From guide button, the horizon box,
+Reset and its popover's items with real pointer events (xdotool), and reports what the dialog showed.
+"""
+
+from __future__ import annotations
+
+import json
+import shutil
+import tempfile
+from pathlib import Path
+
+import pytest
+from test_gimp_integration import chroot, run_gimp, worker  # noqa: F401 - the fixtures, shared
+
+from plugin_gimp.install import install
+from ssn_engine.host_kit.camera_rules import NO_GUIDE, row_from_preview
+from ssn_engine.host_kit.light_map import preset
+
+pytestmark = pytest.mark.gimp
+
+HERE = Path(__file__).resolve().parent
+SCREEN = (1366, 768)
+MAX_HEIGHT = 700  # the dialog, with a title bar, a panel and room to spare, on a 1366 x 768 screen
+
+
+@pytest.fixture(scope="module")
+def session(chroot, worker):  # noqa: F811 - the fixtures above
+    """Run the GIMP session once: (the dialog's reports by run, GIMP's outcome of each run, the log)."""
+    port, token = worker
+    work = Path(tempfile.mkdtemp(prefix="ssn-gimp-controls-", dir=chroot / "tmp"))
+    inner = "/tmp/" + work.name
+    try:
+        install(work / "profile" / "plug-ins" / "ssn-shadow", address=("127.0.0.1", port), token=token)
+        (work / "out").mkdir()
+        shutil.copy(HERE / "gimp_dialog_controls_check.py", work / "check.py")
+        shutil.copy(HERE / "gimp_dialog_steps.py", work / "steps.py")
+        run, seconds = run_gimp(
+            inner,
+            f'SCRIPT_PATH = "{inner}/check.py"; exec(open(SCRIPT_PATH).read())',
+            SSN_GIMP_XVFB="1",
+            SSN_GIMP_SCREEN=f"{SCREEN[0]}x{SCREEN[1]}x24",
+            SSN_SHADOW_DIALOG_SELFTEST=f"{inner}/steps.py",
+        )
+        log = run.stdout + run.stderr
+        print(f"\ngimp-console dialog-controls session: {seconds:.1f} s")
+        steps_path, runs_path = work / "out" / "steps.jsonl", work / "out" / "runs.jsonl"
+        assert steps_path.exists() and runs_path.exists(), log[-6000:]
+        steps = [json.loads(line) for line in steps_path.read_text().splitlines()]
+        runs = [json.loads(line) for line in runs_path.read_text().splitlines()]
+        for outcome in runs:
+            assert "exception" not in outcome, outcome["exception"]
+        return steps, runs, log
+    finally:
+        shutil.rmtree(work, ignore_errors=True)
+
+
+def _run(steps: list[dict], name: str, index: int = 0) -> dict:
+    """What the dialog showed in the ``index``-th run called ``name``; a run that stopped fails here."""
+    run = [step for step in steps if step["run"] == name][index]
+    assert "error" not in run, run["error"]
+    return run
+
+
+def _shows_the_camera_read(shown: dict) -> bool:
+    """The horizon box unticked and its two fields holding the camera the note under the preview names."""
+    return not shown["use"] and shown["note_camera"] == [round(shown["horizon"]), round(shown["fov"])]
+
+
+def _fields_disabled(shown: dict) -> bool:
+    """The row and field of view take no input."""
+    return not shown["row_sensitive"] and not shown["fov_sensitive"]
+
+
+def test_reset_restores_every_control(session):
+    """Defect 10: a light dragged on the map, then Reset > Reset to Initial Values: the map, the preset box and the
+    camera fields are back as the dialog opened (the fields agreeing with the camera note); then another preset, a
+    drag, the horizon box ticked and a row clicked, then Reset > Reset to Factory Defaults: the default preset, by
+    name, and the horizon not given, its fields showing the camera read."""
+    run = _run(session[0], "reset")
+    initial, dragged, after = run["initial"], run["dragged"], run["after_initial"]
+    assert initial["label"] == "softbox" and initial["map"] == preset("softbox").to_dict()
+    assert _shows_the_camera_read(initial), initial
+    assert dragged["map"] != initial["map"] and dragged["label"] == "(custom)"  # the drag reached the map
+    assert after["map"] == initial["map"], after["map"]
+    assert after["label"] == "softbox"
+    assert _shows_the_camera_read(after), after
+    edited, factory = run["edited"], run["after_factory"]
+    assert edited["label"] == "(custom)" and edited["map"] != initial["map"]
+    assert edited["use"] and edited["horizon"] == 40.0  # the preview at scale 1: row 40
+    assert factory["map"] == preset("softbox").to_dict(), factory["map"]
+    assert factory["label"] == "softbox"
+    assert _shows_the_camera_read(factory), factory
+    assert session[1][0] == {
+        "run": "reset",
+        "status": "cancel",
+        "layers": ["Pawn", "Background"],
+        "camera_record": None,
+    }
+
+
+def test_the_dialog_fits_a_1366_x_768_screen_and_wraps_long_messages(session):
+    """Defect 11: a portrait (480 x 640) and a landscape (640 x 480) image give a dialog at most 700 pixels tall
+    with its buttons on the screen; a layer with a 160-character name that casts nothing gives a long error, which
+    wraps instead of widening the dialog past the landscape image's."""
+    portrait, landscape, faint = (_run(session[0], "layout", i)["shown"] for i in range(3))
+    for shown in (portrait, landscape, faint):
+        width, height = shown["size"]
+        assert width <= SCREEN[0] and height <= MAX_HEIGHT, shown["size"]
+    assert "is fully transparent" in faint["note"] and faint["note_lines"] >= 5, faint
+    assert faint["size"][0] <= landscape["size"][0], (faint["size"], landscape["size"])
+    assert portrait["preview"][1] <= 288 and landscape["preview"] == [384, 288]  # at most 384 x 288
+
+
+def test_the_horizon_is_each_image_s_own_from_a_guide_or_a_click(session):
+    """Defect 12: the row and field of view take input only while the box is ticked; From guide puts the horizon
+    on the image's horizontal guide, a click on the preview on the clicked row; OK keeps it with the image. Another
+    image opens with the horizon not given (the fields show its own camera read, not the first image's row), and
+    From guide there, without a guide, says how to add one. The first image, scaled by 2, opens with its row
+    scaled."""
+    first = _run(session[0], "horizon-first")
+    assert _shows_the_camera_read(first["initial"]) and _fields_disabled(first["initial"]), first["initial"]
+    guide = first["from_guide"]
+    assert guide["use"] and guide["horizon"] == 300.0 and guide["row_sensitive"] and guide["fov_sensitive"]
+    assert first["clicked"]["use"] and first["clicked"]["horizon"] == row_from_preview(100, first["scale"])
+    unticked = first["unticked"]
+    assert _shows_the_camera_read(unticked) and _fields_disabled(unticked), unticked
+    again = first["clicked_again"]
+    assert again["use"] and again["horizon"] == row_from_preview(228, first["scale"]) == 380.0
+    runs = {outcome["run"]: outcome for outcome in session[1]}
+    assert runs["horizon-first"]["status"] == "success"
+    record = json.loads(runs["horizon-first"]["camera_record"])
+    assert record["given"] and record["horizon"] == 380.0 and record["height"] == 480
+    second = _run(session[0], "horizon-second")
+    assert _shows_the_camera_read(second["initial"]) and second["initial"]["horizon"] != 380.0, second["initial"]
+    assert _fields_disabled(second["initial"])
+    assert second["from_guide"]["note"] == NO_GUIDE and not second["from_guide"]["use"]
+    scaled = _run(session[0], "horizon-again")["initial"]
+    assert scaled["use"] and scaled["horizon"] == 760.0 and scaled["row_sensitive"], scaled
