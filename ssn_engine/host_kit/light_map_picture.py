@@ -89,7 +89,7 @@ def marker(light: GaussianLight, width: int, height: int) -> Marker:
         ring = _circle(cx, cy, light.size_degrees / 2.0 / 90.0 * height, RIM_POINTS)
     true_size = max(math.hypot(x - cx, y - cy) for x, y in ring) >= MIN_MARKER
     if not true_size:
-        ring = _circle(cx, cy, MIN_MARKER)
+        ring = _circle(cx, cy, MIN_MARKER, 24)
     outline: list[list[Point]] = [[]]
     for point in [*ring, ring[0]]:  # closed; broken where the rim runs over the zenith to the far side
         if outline[-1] and abs(point[0] - outline[-1][-1][0]) > width / 4:
@@ -113,7 +113,7 @@ GLYPHS = {
     "9": ("111", "101", "111", "001", "111"),
     ".": ("0", "0", "0", "0", "1"),
     "\N{DEGREE SIGN}": ("010", "101", "010", "000", "000"),
-    "\N{ALMOST EQUAL TO}": ("0000", "0101", "1010", "0101", "1010"),
+    "\N{ALMOST EQUAL TO}": ("01100", "10011", "00000", "01100", "10011"),
 }
 
 
@@ -150,12 +150,16 @@ def _put(rgb: bytearray, width: int, height: int, x: int, y: int, colour: tuple[
         rgb[i : i + 3] = bytes(colour)
 
 
-def _line(rgb: bytearray, width: int, height: int, a: Point, b: Point, colour, dotted: bool) -> None:
-    steps = max(1, math.ceil(max(abs(b[0] - a[0]), abs(b[1] - a[1]))))
-    for k in range(steps):
-        x, y = round(a[0] + (b[0] - a[0]) * k / steps), round(a[1] + (b[1] - a[1]) * k / steps)
-        if not dotted or (x + y) % 3 == 0:
-            _put(rgb, width, height, x, y, colour)
+def _polyline(rgb: bytearray, width: int, height: int, line: list[Point], colour, dotted: bool) -> None:
+    """Draw ``line`` one pixel wide; ``dotted``: two pixels of each three."""
+    k = 0
+    for a, b in zip(line, line[1:], strict=False):
+        steps = max(1, math.ceil(max(abs(b[0] - a[0]), abs(b[1] - a[1]))))
+        for i in range(steps):
+            if not dotted or k % 3 != 2:
+                x, y = round(a[0] + (b[0] - a[0]) * i / steps), round(a[1] + (b[1] - a[1]) * i / steps)
+                _put(rgb, width, height, x, y, colour)
+            k += 1
 
 
 def overlay_markers(rgb: bytearray, width: int, height: int, lights: LightMap, selected: int | None) -> bytearray:
@@ -173,8 +177,7 @@ def overlay_markers(rgb: bytearray, width: int, height: int, lights: LightMap, s
         colour = SELECTED_MARKER if index == selected else MARKER
         m = marker(light, width, height)
         for line in m.outline:
-            for a, b in zip(line, line[1:], strict=False):
-                _line(rgb, width, height, a, b, colour, not m.true_size)
+            _polyline(rgb, width, height, line, colour, not m.true_size)
         cx, cy = round(m.centre[0]), round(m.centre[1])
         for d in (-1, 0, 1):  # centre cross
             _put(rgb, width, height, cx + d, cy, colour)

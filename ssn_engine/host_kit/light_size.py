@@ -25,8 +25,10 @@ __all__ = [
     "UNIT",
     "WHEEL_STEP",
     "clamp_size",
+    "SIZE_HINT",
     "increments",
     "shown_size",
+    "size_prefix",
     "size_text",
     "wheel_size",
 ]
@@ -36,6 +38,10 @@ DECIMALS = 2
 UNIT = "\N{DEGREE SIGN}"
 ABOUT = "\N{ALMOST EQUAL TO}"  # a Gaussian's size: the disk as wide
 WHEEL_STEP = 1.25  # one wheel notch scales a disk light's diameter by this
+SIZE_HINT = (
+    "The selected light's apparent diameter in degrees: the sun 0.53, a hazy sun about 3, a softbox 10 to 30. "
+    "The smaller the light, the crisper its shadow; its power stays the same."
+)
 
 
 def clamp_size(angle: float) -> float:
@@ -63,6 +69,11 @@ def wheel_size(angle: float, notches: float) -> float:
 
 def _number(angle: float, decimals: int) -> str:
     return f"{angle:.{decimals}f}".rstrip("0").rstrip(".")
+
+
+def size_prefix(light: GaussianLight) -> str:
+    """What the spin box shows before the size: "≈" for a Gaussian light (it has no edge), else nothing."""
+    return "" if light.angle is not None else ABOUT
 
 
 def size_text(light: GaussianLight) -> str:
