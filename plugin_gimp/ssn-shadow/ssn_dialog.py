@@ -191,9 +191,9 @@ def run_dialog(procedure: Gimp.Procedure, config: Gimp.ProcedureConfig, host, en
     row = Gtk.Box(spacing=6)
     row.pack_start(Gtk.Label(label="Preset:"), False, False, 0)
     row.pack_start(presets, True, True, 0)
+    row.pack_start(area.size_box, False, False, 0)  # the selected light's size, beside the preset: no taller
     lights_box.pack_start(row, False, False, 0)
     lights_box.pack_start(_axes(area), False, False, 0)
-    lights_box.pack_start(area.size_box, False, False, 0)
     lights_box.pack_start(
         _wrap(
             Gtk.Label(
