@@ -360,15 +360,14 @@ def _selftest(dialog, area: LightMapArea, preview: ShadowPreview, values, config
 def _size_selftest(area: LightMapArea, preview: ShadowPreview, values) -> None:
     """For the integration test: set the selected light's size in the Size box to 12 and then 0.53 degrees,
     render the preview at each and print the light's angle and how crisp its shadow is alone (:func:`_crispness`)."""
-    crisp = {}
+    editor, crisp = area.editor, {}
+    assert editor.selected is not None and preview.cutout_id is not None
     for degrees in (12.0, 0.53):
         area.size_box.spin.set_value(degrees)
         preview.render(values())
-        alone = dict(
-            values(), **{"light-map": light_map.LightMap([area.editor.lights.lights[area.editor.selected]]).to_json()}
-        )
-        crisp[degrees] = _crispness(preview, alone)
-    light = area.editor.lights.lights[area.editor.selected]
+        alone = dict(values(), **{"light-map": light_map.LightMap([editor.lights.lights[editor.selected]]).to_json()})
+        crisp[degrees] = _crispness(preview, preview.cutout_id, alone)
+    light = editor.lights.lights[editor.selected]
     print(
         f"ssn-shadow dialog selftest: size box {area.size_box.spin.get_value():.2f}, light angle {light.angle}, "
         f"shadow crispness at 12 degrees {crisp[12.0]:.4f}, at 0.53 degrees {crisp[0.53]:.4f}",
@@ -377,14 +376,14 @@ def _size_selftest(area: LightMapArea, preview: ShadowPreview, values) -> None:
     )
 
 
-def _crispness(preview: ShadowPreview, values: dict) -> float:
+def _crispness(preview: ShadowPreview, cutout_id: str, values: dict) -> float:
     """The shadow's gradient energy per unit of darkness in a preview of ``values`` (no horizon line drawn): the
     sum of squared steps between neighbouring pixels of its darkness (the thumbnail's red channel less the
     preview's) over the darkness's sum."""
     thumb = preview.thumbnail
     w, h = thumb.width, thumb.height
     settings = settings_from_arguments(values)
-    shown, _ = render_preview(preview.engine, preview.cutout_id, settings, thumb, horizon=-float(h))  # off the image
+    shown, _ = render_preview(preview.engine, cutout_id, settings, thumb, horizon=-float(h))  # off the image
     dark = [[thumb.data[(y * w + x) * thumb.channels] - shown[3 * (y * w + x)] for x in range(w)] for y in range(h)]
     energy = sum((row[x + 1] - row[x]) ** 2 for row in dark for x in range(w - 1))
     energy += sum((dark[y + 1][x] - dark[y][x]) ** 2 for y in range(h - 1) for x in range(w))

@@ -19,7 +19,7 @@ from PyQt5.QtWidgets import QDockWidget
 
 RESULT = os.environ.get("SSN_TEST_RESULT", "/tmp/ssn_krita_size.json")
 W, H = 480, 360
-out = {"sizes": {}}
+out: dict = {"sizes": {}}
 
 
 def crispness(alpha):
