@@ -260,7 +260,7 @@ class LightMap:
 
     def resize(self, index: int, softness: float) -> None:
         """Set a light's softness (sigma^2), clamped to Table 1's range; a disk light takes the diameter of the
-        Gaussian as wide (:func:`softness_angle`), so a softness control resizes it too."""
+        Gaussian as wide (:func:`softness_angle`)."""
         light = self.lights[index]
         if light.angle is not None:
             self.set_angle(index, softness_angle(_clamp(softness, *SOFTNESS_RANGE)))
