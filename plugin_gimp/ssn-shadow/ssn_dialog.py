@@ -265,6 +265,7 @@ def run_dialog(procedure: Gimp.Procedure, config: Gimp.ProcedureConfig, host, en
     row = Gtk.Box(spacing=6)
     row.pack_start(Gtk.Label(label="Preset:"), False, False, 0)
     row.pack_start(presets, True, True, 0)
+    row.pack_start(area.size_box, False, False, 0)  # the selected light's size, beside the preset: no taller
     lights_box.pack_start(row, False, False, 0)
     lights_box.pack_start(_axes(area), False, False, 0)
     lights_box.pack_start(
@@ -407,6 +408,7 @@ def _selftest(dialog, area: LightMapArea, preview: ShadowPreview, values, config
     assert editor.selected is not None
     light = editor.lights.lights[editor.selected]
     print(f"ssn-shadow dialog selftest: light at u={light.u:.3f} v={light.v:.3f}", file=sys.stderr, flush=True)
+    _size_selftest(area, preview, values)
     preview.render(values())
     pixbuf = preview.widget.get_pixbuf()
     size = f"{pixbuf.get_width()}x{pixbuf.get_height()}" if pixbuf is not None else "none"
@@ -466,6 +468,39 @@ def _selftest(dialog, area: LightMapArea, preview: ShadowPreview, values, config
 
     GLib.timeout_add(400, finish)
     return False
+
+
+def _size_selftest(area: LightMapArea, preview: ShadowPreview, values) -> None:
+    """For the integration test: set the selected light's size in the Size box to 12 and then 0.53 degrees,
+    render the preview at each and print the light's angle and how crisp its shadow is alone (:func:`_crispness`)."""
+    editor, crisp = area.editor, {}
+    assert editor.selected is not None and preview.cutout_id is not None
+    for degrees in (12.0, 0.53):
+        area.size_box.spin.set_value(degrees)
+        preview.render(values())
+        alone = dict(values(), **{"light-map": light_map.LightMap([editor.lights.lights[editor.selected]]).to_json()})
+        crisp[degrees] = _crispness(preview, preview.cutout_id, alone)
+    light = editor.lights.lights[editor.selected]
+    print(
+        f"ssn-shadow dialog selftest: size box {area.size_box.spin.get_value():.2f}, light angle {light.angle}, "
+        f"shadow crispness at 12 degrees {crisp[12.0]:.4f}, at 0.53 degrees {crisp[0.53]:.4f}",
+        file=sys.stderr,
+        flush=True,
+    )
+
+
+def _crispness(preview: ShadowPreview, cutout_id: str, values: dict) -> float:
+    """The shadow's gradient energy per unit of darkness in a preview of ``values`` (no horizon line drawn): the
+    sum of squared steps between neighbouring pixels of its darkness (the thumbnail's red channel less the
+    preview's) over the darkness's sum."""
+    thumb = preview.thumbnail
+    w, h = thumb.width, thumb.height
+    settings = settings_from_arguments(values)
+    shown, _ = render_preview(preview.engine, cutout_id, settings, thumb, horizon=-float(h))  # off the image
+    dark = [[thumb.data[(y * w + x) * thumb.channels] - shown[3 * (y * w + x)] for x in range(w)] for y in range(h)]
+    energy = sum((row[x + 1] - row[x]) ** 2 for row in dark for x in range(w - 1))
+    energy += sum((dark[y + 1][x] - dark[y][x]) ** 2 for y in range(h - 1) for x in range(w))
+    return energy / max(1, sum(max(0, d) for row in dark for d in row))
 
 
 def _show_horizon(preview: ShadowPreview, values, config) -> None:

@@ -1,8 +1,9 @@
 """The light-map editor widget (GTK 3): shows the map and forwards pointer gestures to LightMapEditor.
 
-The editor, the map picture and the light rings are the host kit's (the same
-as Krita's); the widget is a Gtk.Image in a Gtk.EventBox, so it needs no
-pycairo (GIMP's Python does not ship it).
+The editor, the map picture and the light markers are the host kit's (the
+same as Krita's); the widget is a Gtk.Image in a Gtk.EventBox, so it needs no
+pycairo (GIMP's Python does not ship it). Its Size box (:class:`LightSizeBox`)
+shows and sets the selected light's size in degrees.
 """
 
 from __future__ import annotations
@@ -14,7 +15,7 @@ gi.require_version("Gdk", "3.0")
 gi.require_version("GdkPixbuf", "2.0")
 from gi.repository import Gdk, GdkPixbuf, GLib, Gtk  # noqa: E402
 
-from ssn_engine_link import light_editor, light_map_picture  # noqa: E402
+from ssn_engine_link import light_editor, light_map_picture, light_size  # noqa: E402
 
 MAP_WIDTH = 384  # the map is 2:1
 
@@ -28,6 +29,7 @@ class LightMapArea(Gtk.EventBox):
         self.width, self.height = MAP_WIDTH, MAP_WIDTH // 2
         self.image = Gtk.Image()
         self.add(self.image)
+        self.size_box = LightSizeBox(editor)
         # exactly the picture's size, so event coordinates are picture coordinates
         self.set_halign(Gtk.Align.CENTER)
         self.set_valign(Gtk.Align.CENTER)
@@ -75,6 +77,7 @@ class LightMapArea(Gtk.EventBox):
             GLib.Bytes.new(bytes(rgb)), GdkPixbuf.Colorspace.RGB, False, 8, self.width, self.height, 3 * self.width
         )
         self.image.set_from_pixbuf(pixbuf)
+        self.size_box.show_selected()
 
     def _on_press(self, _widget, event) -> bool:
         self.grab_focus()
@@ -115,3 +118,44 @@ class LightMapArea(Gtk.EventBox):
             self.editor.remove_selected()
             return True
         return False
+
+
+class LightSizeBox(Gtk.Box):
+    """ "Size" and a spin button in degrees: the selected light's size (the host kit's rule, :mod:`light_size`);
+    setting it resizes the light, keeping its power. A Gaussian light's size shows "≈" before it."""
+
+    def __init__(self, editor: light_editor.LightMapEditor) -> None:
+        super().__init__(spacing=4)
+        self.editor = editor
+        lo, hi = light_size.SIZE_RANGE
+        self.spin = Gtk.SpinButton.new(Gtk.Adjustment.new(lo, lo, hi, 0.1, 1.0, 0.0), 1.0, light_size.DECIMALS)
+        self.spin.set_numeric(True)
+        self.spin.set_tooltip_text(light_size.SIZE_HINT)
+        self.about = Gtk.Label(label="")
+        self.pack_start(Gtk.Label(label="Size:"), False, False, 0)
+        self.pack_start(self.about, False, False, 0)
+        self.pack_start(self.spin, False, False, 0)
+        self.pack_start(Gtk.Label(label=light_size.UNIT), False, False, 0)
+        self._showing = False
+        self.spin.connect("value-changed", self._on_value)
+        self.show_selected()
+
+    def show_selected(self) -> None:
+        """Show the selected light's size (insensitive when no light is selected)."""
+        index = self.editor.selected
+        lights = self.editor.lights.lights
+        light = lights[index] if index is not None and index < len(lights) else None
+        self.set_sensitive(light is not None)
+        if light is None:
+            return
+        self._showing = True
+        try:
+            self.about.set_text(light_size.size_prefix(light))
+            self.spin.set_value(light_size.shown_size(light))
+            self.spin.set_increments(*light_size.increments(self.spin.get_value()))
+        finally:
+            self._showing = False
+
+    def _on_value(self, spin: Gtk.SpinButton) -> None:
+        if not self._showing:  # the editor's change redraws the map, which shows the new size here
+            self.editor.set_size(spin.get_value())

@@ -3,7 +3,7 @@
 Standard library only: the plug-ins run in the host's own Python and carry a
 copy of this package (:mod:`ssn_engine.plugin_files`). Each rule a host and
 the engine must agree on is defined here once: the worker protocol and its
-client, the light map, its editor and picture, the camera rules, the AO edit
+client, the light map, its editor and picture, a light's size in degrees, the camera rules, the AO edit
 list, the shared defaults and wording.
 """
 
@@ -19,6 +19,7 @@ from . import (
     light_editor,
     light_map,
     light_map_picture,
+    light_size,
     protocol,
     shadow_notes,
     sky_map,
@@ -34,6 +35,7 @@ __all__ = [
     "light_editor",
     "light_map",
     "light_map_picture",
+    "light_size",
     "protocol",
     "shadow_notes",
     "sky_map",

@@ -4,14 +4,14 @@ Map coordinates as in :mod:`light_map`: ``u`` across (0.5 = behind the
 object), ``v`` down from the zenith. Gestures: a press on empty sky adds a
 light, a press on a light selects it and dragging moves it (keeping the grab
 offset); the wheel changes the size of the light under the pointer or else of
-the selected one (a Gaussian's softness, a disk light's angle in degrees),
-with Shift its intensity; right-click or Delete
-removes a light.
+the selected one (a Gaussian's softness, a disk light's angle in degrees, as
+:mod:`light_size` steps it), with Shift its intensity; right-click or Delete
+removes a light. A Size box sets the selected light's diameter in degrees.
 
 After every change ``on_change(live, new_stroke)`` is called: ``live`` while
 a light is being dragged or a slider moved (redraw, preview at once), not
 when an edit is complete (a press that added a light, a release after a drag,
-a wheel notch, a removal, a new map); ``new_stroke`` when the change starts a
+a wheel notch, a size set, a removal, a new map); ``new_stroke`` when the change starts a
 new undo step. ``on_select(index)`` follows a change of the selected light
 (None: no light selected).
 """
@@ -22,14 +22,13 @@ import json
 import time
 from collections.abc import Callable
 
-from . import light_map
+from . import light_map, light_size
 
 NEW_SOFTNESS = 0.01
 NEW_INTENSITY = 2.0
 SOFTNESS_STEP = 1.25  # per wheel notch, multiplicative
-ANGLE_STEP = 1.25  # a disk light's diameter per wheel notch, multiplicative
 INTENSITY_STEP = 0.1  # per wheel notch with Shift
-STROKE_GAP_S = 0.6  # wheel notches further apart than this start a new undo step
+STROKE_GAP_S = 0.6  # wheel notches (or size steps) further apart than this start a new undo step
 
 OnChange = Callable[[bool, bool], None]
 OnSelect = Callable[[int | None], None]
@@ -118,9 +117,13 @@ class LightMapEditor:
         if intensity:
             self.lights.reweight(target, light.intensity + INTENSITY_STEP * notches)
         elif light.angle is not None:
-            self.lights.set_angle(target, light.angle * ANGLE_STEP**notches)
+            self.lights.set_angle(target, light_size.wheel_size(light.angle, notches))
         else:
             self.lights.resize(target, light.softness * SOFTNESS_STEP**notches)
+        self._step_done()
+
+    def _step_done(self) -> None:
+        """A wheel notch or size step is a complete edit; steps in quick succession are one undo step."""
         now = self._clock()
         new_stroke, self._last_wheel = now - self._last_wheel > STROKE_GAP_S, now
         self._changed(False, new_stroke)
@@ -141,12 +144,19 @@ class LightMapEditor:
         self.select(None)
         self._changed(False, True)
 
-    # -- sliders -----------------------------------------------------------------
-    def set_softness(self, softness: float, new_stroke: bool) -> None:
-        """The selected light's softness (a slider moved); ``new_stroke`` on a slider's first move."""
-        if self.selected is not None:
-            self.lights.resize(self.selected, softness)
-            self._changed(True, new_stroke)
+    # -- controls ----------------------------------------------------------------
+    def set_size(self, degrees: float) -> None:
+        """The selected light's diameter in degrees (the Size box), to the decimals it shows; its power is kept
+        (a Gaussian light becomes a disk). Nothing happens if the light already has that size, so a box that
+        shows a light's size does not edit it. Steps in quick succession are one undo step."""
+        if self.selected is None:
+            return
+        light = self.lights.lights[self.selected]
+        angle = light_size.clamp_size(degrees)
+        if light.angle == angle:
+            return
+        self.lights.set_angle(self.selected, angle)
+        self._step_done()
 
     def set_intensity(self, intensity: float, new_stroke: bool) -> None:
         """The selected light's intensity (a slider moved)."""

@@ -147,6 +147,30 @@ def gaussian_power(v: float, softness: float) -> float:
     return across * down * math.pi * math.pi / 2.0
 
 
+def _disk_frame(light: GaussianLight) -> tuple[tuple[float, ...], tuple[float, ...], tuple[float, ...]]:
+    """A disk light's centre direction and two unit vectors across it (horizontal, and up the sky), as (x, y, z)
+    with y up."""
+    e, a = math.pi / 2.0 * (1.0 - light.v), 2.0 * math.pi * light.u - math.pi
+    centre = (math.cos(e) * math.sin(a), math.sin(e), math.cos(e) * math.cos(a))
+    east = (math.cos(a), 0.0, -math.sin(a))
+    north = (-math.sin(e) * math.sin(a), math.cos(e), -math.sin(e) * math.cos(a))
+    return centre, east, north
+
+
+def _off_centre(light: GaussianLight, theta: float, phi: float) -> list[float]:
+    """The direction ``theta`` radians from a disk light's centre, at ``phi`` around it."""
+    centre, east, north = _disk_frame(light)
+    ct, st = math.cos(theta), math.sin(theta)
+    return [ct * c + st * (math.cos(phi) * x + math.sin(phi) * y) for c, x, y in zip(centre, east, north, strict=True)]
+
+
+def _map_point(d: list[float]) -> tuple[float, float]:
+    """Map coordinates (u in [0, 1), v) of a direction; below the horizon v exceeds 1."""
+    elevation = math.asin(max(-1.0, min(1.0, d[1])))
+    azimuth = math.atan2(d[0], d[2])
+    return (azimuth + math.pi) / (2.0 * math.pi) % 1.0, 1.0 - elevation / (math.pi / 2.0)
+
+
 def disk_directions(light: GaussianLight, count: int) -> list[tuple[float, float, float]]:
     """About ``count`` directions spread evenly over a disk light's solid angle, as (u, v, share): map
     coordinates and the share of the disk's power each carries (the shares sum to the part of the disk above
@@ -154,12 +178,7 @@ def disk_directions(light: GaussianLight, count: int) -> list[tuple[float, float
     if light.angle is None:
         raise LightMapError("disk_directions: the light has no angle")
     rings = max(1, round(math.sqrt(count / 3.0)))
-    e, a = math.pi / 2.0 * (1.0 - light.v), 2.0 * math.pi * light.u - math.pi
-    centre = (math.cos(e) * math.sin(a), math.sin(e), math.cos(e) * math.cos(a))
-    east = (math.cos(a), 0.0, -math.sin(a))  # horizontal, across the disk
-    north = (-math.sin(e) * math.sin(a), math.cos(e), -math.sin(e) * math.cos(a))  # up the sky
-    half = math.radians(light.angle) / 2.0
-    cap = 1.0 - math.cos(half)
+    cap = 1.0 - math.cos(math.radians(light.angle) / 2.0)
     total = 3 * rings * rings  # cells: ring k (0-based) holds 6 k + 3 of them, all of equal solid angle
     out = []
     for k in range(rings):
@@ -167,17 +186,23 @@ def disk_directions(light: GaussianLight, count: int) -> list[tuple[float, float
         # the ring's middle, by solid angle: 1 - cos(theta) halfway between its edges' values
         theta = math.acos(1.0 - cap * (k * k + (k + 1) ** 2) / 2.0 / (rings * rings))
         for j in range(cells):
-            phi = 2.0 * math.pi * (j + 0.5 * (k % 2)) / cells
-            ct, st = math.cos(theta), math.sin(theta)
-            d = [
-                ct * c + st * (math.cos(phi) * x + math.sin(phi) * y)
-                for c, x, y in zip(centre, east, north, strict=True)
-            ]
-            if d[1] <= 0.0:
-                continue
-            elevation = math.asin(min(1.0, d[1]))
-            azimuth = math.atan2(d[0], d[2])
-            out.append(((azimuth + math.pi) / (2.0 * math.pi) % 1.0, 1.0 - elevation / (math.pi / 2.0), 1.0 / total))
+            d = _off_centre(light, theta, 2.0 * math.pi * (j + 0.5 * (k % 2)) / cells)
+            if d[1] > 0.0:
+                out.append((*_map_point(d), 1.0 / total))
+    return out
+
+
+def disk_rim(light: GaussianLight, count: int) -> list[tuple[float, float]]:
+    """``count`` points (u, v) around a disk light's edge, its true outline on the map: wider across than down
+    where it is high in the sky (a degree of azimuth is narrower there). ``u`` runs on from the light's own
+    (it may leave [0, 1]: the map wraps), ``v`` exceeds 1 below the horizon."""
+    if light.angle is None:
+        raise LightMapError("disk_rim: the light has no angle")
+    half = math.radians(light.angle) / 2.0
+    out = []
+    for k in range(count):
+        u, v = _map_point(_off_centre(light, half, 2.0 * math.pi * k / count))
+        out.append((light.u + (u - light.u + 0.5) % 1.0 - 0.5, v))
     return out
 
 
@@ -235,7 +260,7 @@ class LightMap:
 
     def resize(self, index: int, softness: float) -> None:
         """Set a light's softness (sigma^2), clamped to Table 1's range; a disk light takes the diameter of the
-        Gaussian as wide (:func:`softness_angle`), so a softness control resizes it too."""
+        Gaussian as wide (:func:`softness_angle`)."""
         light = self.lights[index]
         if light.angle is not None:
             self.set_angle(index, softness_angle(_clamp(softness, *SOFTNESS_RANGE)))
@@ -243,10 +268,15 @@ class LightMap:
         self.lights[index] = replace(light, softness=_clamp(softness, *SOFTNESS_RANGE))
 
     def set_angle(self, index: int, angle: float) -> None:
-        """Set a disk light's diameter in degrees, clamped to ``ANGLE_RANGE`` (its softness follows); a Gaussian
-        light becomes a disk. Its power stays the same."""
+        """Set a disk light's diameter in degrees, clamped to ``ANGLE_RANGE`` (its softness follows). Its power
+        stays the same: a disk keeps its intensity; a Gaussian light becomes a disk of the intensity that carries
+        its power (conventions, "Light size"), as far as ``INTENSITY_RANGE`` allows."""
         light = self.lights[index]
-        self.lights[index] = GaussianLight.disk(light.u, light.v, _clamp(angle, *ANGLE_RANGE), light.intensity)
+        intensity = light.intensity
+        if light.angle is None:
+            share = gaussian_power(light.v, light.softness) / gaussian_power(light.v, REFERENCE_SOFTNESS)
+            intensity = _clamp(intensity * share, *INTENSITY_RANGE)
+        self.lights[index] = GaussianLight.disk(light.u, light.v, _clamp(angle, *ANGLE_RANGE), intensity)
 
     def reweight(self, index: int, intensity: float) -> None:
         """Set a light's peak intensity, clamped to Table 1's range."""

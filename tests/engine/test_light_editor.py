@@ -93,12 +93,12 @@ def test_too_many_lights_is_a_message_not_an_error():
     assert len(ed.lights) == 50 and "at most 50" in ed.message and ed.selected is None
 
 
-def test_sliders_and_loading_a_map():
+def test_controls_and_loading_a_map():
     ed, changes = editor()
-    ed.set_softness(0.05, True)
-    ed.set_intensity(2.5, False)
-    assert (ed.lights.lights[0].softness, ed.lights.lights[0].intensity) == (0.05, 2.5)
-    assert changes == [(True, True), (True, False)]
+    ed.set_intensity(2.5, True)
+    ed.set_size(12.0)
+    assert (ed.lights.lights[0].angle, ed.lights.lights[0].softness) == (12.0, light_map.angle_softness(12.0))
+    assert changes == [(True, True), (False, True)]
     ed.press(0.8, 0.7)
     assert light_map.LightMap.from_json(ed.to_json()) == ed.lights and len(ed.lights) == 2
     ed.load(light_map.preset("overcast"))

@@ -10,7 +10,7 @@ from ssn_engine.host_kit.ao_edits import AoEdits
 from plugin_krita.ssn_shadow.controller import ShadowController
 from plugin_krita.ssn_shadow.persistence import ANNOTATION, DocumentModels
 from plugin_krita.ssn_shadow.shared import light_map as lm
-from plugin_krita.ssn_shadow.ui.light_map_widget import LightMapWidget, slider_to_softness, softness_to_slider
+from plugin_krita.ssn_shadow.ui.light_map_widget import LightMapWidget
 from plugin_krita.ssn_shadow.ui.panel import ShadowPanel
 
 
@@ -59,11 +59,9 @@ def test_click_adds_drag_moves_right_click_deletes(qapp):
     assert len(w.light_map) == 0
 
 
-def test_wheel_softness_and_delete_key(qapp):
-    w, events = widget(qapp, lm.preset("softbox"))
-    before = w.light_map.lights[0].softness
-    centre = QPointF(pos(w, w.light_map.lights[0].u, w.light_map.lights[0].v))
-    ev = QWheelEvent(
+def wheel(w, u, v):
+    centre = QPointF(pos(w, u, v))
+    return QWheelEvent(
         centre,
         w.mapToGlobal(centre.toPoint()),
         QPoint(),
@@ -73,16 +71,47 @@ def test_wheel_softness_and_delete_key(qapp):
         Qt.NoScrollPhase,
         False,
     )
-    QApplication.sendEvent(w, ev)
-    assert w.light_map.lights[0].softness > before
+
+
+def test_wheel_size_and_delete_key(qapp):
+    w, events = widget(qapp, lm.preset("softbox"))
+    before = w.light_map.lights[0].angle
+    QApplication.sendEvent(w, wheel(w, w.light_map.lights[0].u, w.light_map.lights[0].v))
+    assert w.light_map.lights[0].angle == before * 1.25
     w.setFocus()
     QTest.keyClick(w, Qt.Key_Delete)
     assert len(w.light_map) == 0
 
 
-def test_softness_slider_round_trip():
-    for s in (1e-4, 0.002, 0.01, 0.1):
-        assert abs(slider_to_softness(softness_to_slider(s)) / s - 1) < 0.05
+def test_the_size_box_shows_and_sets_the_selected_lights_size_in_degrees(qapp):
+    c = ShadowController(NoEngine(), FakeHost())
+    panel = ShadowPanel(c)
+    panel.show()
+    box, m = panel.size_box, c.model
+    assert (box.minimum(), box.maximum(), box.decimals(), box.suffix()) == (0.1, 40.0, 2, "\N{DEGREE SIGN}")
+    assert box.value() == 16.0 and box.singleStep() == 1.0  # the softbox preset
+    power = m.light_map.lights[0].power
+    box.setValue(0.53)  # as typed
+    light = m.light_map.lights[0]
+    assert light.angle == 0.53 and light.power == power  # the model's lights: the next shadow's
+    assert panel.presets.currentText() == "Custom" and box.singleStep() == 0.01
+    box.stepBy(1)  # an arrow click
+    assert m.light_map.lights[0].angle == 0.54
+    # the wheel on the map changes the size, and the box follows
+    w = panel.map_widget
+    QApplication.sendEvent(w, wheel(w, light.u, light.v))
+    assert m.light_map.lights[0].angle == 0.68 and box.value() == 0.68  # 0.54 * 1.25, to two decimals
+    # a preset: the box shows its light; an old file's Gaussian light shows the disk as wide, "about"
+    panel.presets.setCurrentIndex(panel.presets.findData("sun"))
+    panel.presets.activated.emit(panel.presets.currentIndex())
+    assert box.value() == 0.53 and box.prefix() == ""
+    m.light_map = lm.preset("two-lights")
+    assert box.prefix() == "\N{ALMOST EQUAL TO}" and box.value() == round(m.light_map.lights[0].size_degrees, 2)
+    assert m.light_map.lights[0].angle is None  # showing it edits nothing
+    box.setValue(3.0)
+    assert m.light_map.lights[0].angle == 3.0 and box.prefix() == ""
+    m.light_map = lm.LightMap()
+    assert not box.isEnabled()
 
 
 def test_ao_edits_list():

@@ -1,6 +1,6 @@
 """The light map editor widget: the upper hemisphere drawn 2:1, the camera's forward direction in the middle.
 
-Click to add a light, drag to move it, wheel for softness (Shift: intensity),
+Click to add a light, drag to move it, wheel for its size (Shift: intensity),
 right-click or Delete to remove. The gestures are the host kit's
 ``LightMapEditor`` (the same as GIMP's); this widget draws the map and turns
 Qt's mouse events into the editor's calls.
@@ -8,10 +8,8 @@ Qt's mouse events into the editor's calls.
 
 from __future__ import annotations
 
-import math
-
 from PyQt5.QtCore import QPointF, QRectF, QSize, Qt, pyqtSignal
-from PyQt5.QtGui import QColor, QImage, QPainter, QPen
+from PyQt5.QtGui import QColor, QImage, QPainter, QPen, QPolygonF
 from PyQt5.QtWidgets import QSizePolicy, QWidget
 
 from ..shared import light_editor
@@ -36,7 +34,7 @@ class LightMapWidget(QWidget):
         policy.setHeightForWidth(True)
         self.setSizePolicy(policy)
         self.setToolTip(
-            "Click: add a light · drag: move · wheel: softness · Shift+wheel: intensity · right-click or Del: remove"
+            "Click: add a light · drag: move · wheel: size · Shift+wheel: intensity · right-click or Del: remove"
         )
 
     @property
@@ -139,27 +137,34 @@ class LightMapWidget(QWidget):
         p.drawText(
             QRectF(r.left(), r.bottom() - 30, r.width(), 14), Qt.AlignmentFlag.AlignHCenter, "horizon (long shadow)"
         )
+        p.setClipRect(r)
         for i, light in enumerate(self.light_map):
-            c = self.from_uv(light.u, light.v)
-            radius = max(4.0, light.radius * r.height())
-            selected = i == self.selected
-            p.setPen(QPen(QColor(255, 200, 40) if selected else QColor(40, 40, 40), 2 if selected else 1))
-            p.setBrush(QColor(255, 255, 255, 40))
-            p.drawEllipse(c, radius, radius)
-            p.setBrush(QColor(255, 200, 40) if selected else QColor(255, 255, 255))
-            p.drawEllipse(c, 3.0, 3.0)
+            self._draw_marker(p, r, light, i == self.selected)
+        p.setClipping(False)
         p.setPen(QColor(90, 90, 90))
         p.setBrush(Qt.BrushStyle.NoBrush)
         p.drawRect(r)
         p.end()
 
-
-def softness_to_slider(softness: float) -> int:
-    """Log-scale slider position 0..100 for softness in Table 1's range."""
-    lo, hi = lm.SOFTNESS_RANGE
-    return round(100 * math.log(softness / lo) / math.log(hi / lo))
-
-
-def slider_to_softness(position: int) -> float:
-    lo, hi = lm.SOFTNESS_RANGE
-    return lo * (hi / lo) ** (position / 100.0)
+    def _draw_marker(self, p: QPainter, r: QRectF, light: lm.GaussianLight, selected: bool) -> None:
+        """A light's marker (the host kit's, as GIMP draws it): its true extent, or a dotted ring where it is
+        smaller than that; its centre; its size beside it."""
+        m = light_map_picture.marker(light, round(r.width()), round(r.height()))
+        colour = QColor(255, 200, 40) if selected else QColor(255, 255, 255)
+        pen = QPen(colour, 2 if selected else 1, Qt.PenStyle.SolidLine if m.true_size else Qt.PenStyle.DotLine)
+        p.setPen(pen)
+        p.setBrush(Qt.BrushStyle.NoBrush)
+        for shift in (-r.width(), 0.0, r.width()):  # the map wraps around in azimuth
+            for line in m.outline:
+                p.drawPolyline(QPolygonF([QPointF(r.left() + x + shift, r.top() + y) for x, y in line]))
+        centre = QPointF(r.left() + m.centre[0], r.top() + m.centre[1])
+        p.setPen(QPen(QColor(40, 40, 40), 1))
+        p.setBrush(colour)
+        p.drawEllipse(centre, 3.0, 3.0)
+        wide = p.fontMetrics().horizontalAdvance(m.label)
+        x = m.label_x if m.label_x + wide <= r.width() else m.label_x_left - wide
+        box = QRectF(r.left() + x, centre.y() - 8, wide + 2, 16)
+        p.setPen(QColor(20, 20, 30))  # a shade under the text, for the bright sky behind it
+        p.drawText(box.translated(1, 1), Qt.AlignmentFlag.AlignLeft | Qt.AlignmentFlag.AlignVCenter, m.label)
+        p.setPen(colour)
+        p.drawText(box, Qt.AlignmentFlag.AlignLeft | Qt.AlignmentFlag.AlignVCenter, m.label)

@@ -39,9 +39,10 @@ from ..model import ShadowModel
 from ..properties import Binding, bind
 from ..shared import camera_rules, defaults
 from ..shared import light_map as lm
+from ..shared import light_size
 
 from .ao_preview import AOPreview
-from .light_map_widget import LightMapWidget, slider_to_softness, softness_to_slider
+from .light_map_widget import LightMapWidget
 from .shadow_preview import ShadowPreview
 
 LEVEL_COLOURS = {"info": "", "warning": "color: #d08000;", "error": "color: #d03030;"}
@@ -129,6 +130,17 @@ def _slider(lo: int, hi: int, value: int) -> QSlider:
     return s
 
 
+def _size_box() -> QDoubleSpinBox:
+    """The selected light's size in degrees (the host kit's rule: :mod:`light_size`)."""
+    box = QDoubleSpinBox()
+    box.setRange(*light_size.SIZE_RANGE)
+    box.setDecimals(light_size.DECIMALS)
+    box.setSuffix(light_size.UNIT)
+    box.setKeyboardTracking(False)  # typing "0.53" sets 0.53, not 0.5 first
+    box.setToolTip(light_size.SIZE_HINT)
+    return box
+
+
 def _form(parent: QWidget | None = None) -> QFormLayout:
     """A form whose fields go below their labels where the dock is too narrow for both on one line."""
     form = QFormLayout(parent) if parent is not None else QFormLayout()
@@ -182,14 +194,14 @@ class ShadowPanel(QWidget):
         self.map_widget = LightMapWidget(lm.LightMap())
         lv.addWidget(self.map_widget)
         form = _form()
-        self.softness = _slider(0, 100, 50)
+        self.size_box = _size_box()
         self.intensity = _slider(0, 300, 100)
-        form.addRow("Softness", self.softness)
+        form.addRow("Size", self.size_box)
         form.addRow("Intensity", self.intensity)
         lv.addLayout(form)
         hint = QLabel(
             "A light casts its shadow the opposite way: right of centre, to the left; low, long. "
-            "Click: add · drag: move · wheel: softness · Shift+wheel: intensity · right-click / Del: remove"
+            "Click: add · drag: move · wheel: size · Shift+wheel: intensity · right-click / Del: remove"
         )
         hint.setWordWrap(True)
         hint.setSizePolicy(QSizePolicy.Policy.Ignored, QSizePolicy.Policy.Preferred)
@@ -325,7 +337,7 @@ class ShadowPanel(QWidget):
         self.presets.activated.connect(guard(self._choose_preset))
         self.map_widget.lightsChanged.connect(guard(self._lights_changed))
         self.map_widget.selectionChanged.connect(guard(lambda _: self._sync_light_controls()))
-        self.softness.valueChanged.connect(guard(self._softness_moved))
+        self.size_box.valueChanged.connect(guard(self._size_set))
         self.intensity.valueChanged.connect(guard(self._intensity_moved))
         self.ao_preview.brushed.connect(guard(self._brush))
         self.brush_size.valueChanged.connect(guard(self._brush_size))
@@ -334,7 +346,7 @@ class ShadowPanel(QWidget):
         self.ao_undo.clicked.connect(guard(lambda *_: self.model.undo_ao()))
         self.ao_reset.clicked.connect(guard(lambda *_: self.model.reset_ao()))
         self.color_button.clicked.connect(guard(lambda *_: self._pick_colour()))
-        for slider in (self.softness, self.intensity, self.ao_strength, self.opacity):  # a drag: one undo step
+        for slider in (self.intensity, self.ao_strength, self.opacity):  # a drag: one undo step
             slider.sliderPressed.connect(guard(lambda: self.model.begin_stroke()))
             slider.sliderReleased.connect(guard(lambda: self.model.end_stroke()))
         bind(c, "live", self.live.setChecked, self.live.toggled, guard(lambda on: setattr(c, "live", on)))
@@ -451,17 +463,19 @@ class ShadowPanel(QWidget):
     def _sync_light_controls(self) -> None:
         i = self.map_widget.selected
         light = self.map_widget.light_map.lights[i] if i is not None and i < len(self.map_widget.light_map) else None
-        self.softness.setEnabled(light is not None)
+        self.size_box.setEnabled(light is not None)
         self.intensity.setEnabled(light is not None)
         if light is not None:
             self._syncing = True
-            self.softness.setValue(softness_to_slider(light.softness))
+            self.size_box.setPrefix(light_size.size_prefix(light))
+            self.size_box.setValue(light_size.shown_size(light))
+            self.size_box.setSingleStep(light_size.increments(self.size_box.value())[0])  # Page Up/Down: ten steps
             self.intensity.setValue(round(100 * light.intensity))
             self._syncing = False
 
-    def _softness_moved(self, value: int) -> None:
+    def _size_set(self, degrees: float) -> None:
         if not self._syncing:  # the widget's lightsChanged edits the model
-            self.map_widget.editor.set_softness(slider_to_softness(value), self.model.take_step())
+            self.map_widget.editor.set_size(degrees)
 
     def _intensity_moved(self, value: int) -> None:
         if not self._syncing:
