@@ -48,7 +48,7 @@ the light strikes the card obliquely).
 from __future__ import annotations
 
 import math
-from dataclasses import dataclass
+from dataclasses import dataclass, replace
 
 import numpy as np
 from PIL import Image, ImageFilter
@@ -65,6 +65,7 @@ THICKNESS_LEVELS = 6  # bands of depth an object's thickness is swept in
 MIN_INCIDENCE = 10.0  # degrees: the card turns just enough that a light's horizontal direction meets it at least so
 
 __all__ = [
+    "TRACED_FULL_ANGLE",
     "TRACED_MAX_ANGLE",
     "CardTracer",
     "ContactTracer",
@@ -74,9 +75,11 @@ __all__ = [
     "depth_map",
     "light_direction",
     "split_lights",
+    "traced_share",
 ]
 
-TRACED_MAX_ANGLE = 15.0  # degrees: a light this small or smaller (a disk's angle, a Gaussian's equivalent) is traced
+TRACED_FULL_ANGLE = 12.0  # degrees: a light this small or smaller (a disk's angle, a Gaussian's equivalent) is traced
+TRACED_MAX_ANGLE = 20.0  # degrees: from this size a light is left to the network; between, cross-faded
 
 SOLID = 0.5  # the lowest row with alpha above this is the card's foot: the rows below it repeat it
 ROWS_ALPHA = 0.05  # rows with alpha above this span the card (as the geometric card's)
@@ -96,14 +99,25 @@ def light_direction(u: float, v: float) -> np.ndarray:
     return right * RIGHT + up * UP + forward * FORWARD
 
 
+def traced_share(angle: float) -> float:
+    """The share of a light of ``angle`` degrees that is traced: all of it up to ``TRACED_FULL_ANGLE``, none
+    from ``TRACED_MAX_ANGLE``, linearly between (the rest goes to the network), so that resizing a light never
+    makes its shadow jump."""
+    return min(1.0, max(0.0, (TRACED_MAX_ANGLE - angle) / (TRACED_MAX_ANGLE - TRACED_FULL_ANGLE)))
+
+
 def split_lights(light_map: LightMap) -> tuple[list[GaussianLight], LightMap]:
-    """The lights to trace (those with intensity whose size, :attr:`GaussianLight.size_degrees`, is at most
-    ``TRACED_MAX_ANGLE``) and the light map of the rest (the network's broad light)."""
-    small = [light.intensity > 0 and light.size_degrees <= TRACED_MAX_ANGLE for light in light_map]
-    return (
-        [light for light, traced in zip(light_map, small, strict=True) if traced],
-        LightMap([light for light, traced in zip(light_map, small, strict=True) if not traced]),
-    )
+    """The lights to trace and the light map of the rest (the network's broad light): each light with
+    intensity split by :func:`traced_share` of its size (:attr:`GaussianLight.size_degrees`), its intensity
+    scaled by each part's share."""
+    traced, broad = [], []
+    for light in light_map:
+        share = traced_share(light.size_degrees) if light.intensity > 0 else 0.0
+        if share > 0:
+            traced.append(light if share == 1 else replace(light, intensity=light.intensity * share))
+        if share < 1:
+            broad.append(light if share == 0 else replace(light, intensity=light.intensity * (1 - share)))
+    return traced, LightMap(broad)
 
 
 def as_gaussians(lights: list[GaussianLight]) -> LightMap:
@@ -203,6 +217,7 @@ class CardTracer:
         self._thickness = {1: np.pad(thick, ((pad, 0), (pad, pad)))}  # per reduction: depth behind, in its pixels
         self._full = _Source(alpha, s, framing.offset_x + (x0 - pad) * s, framing.offset_y + (y0 - pad) * s)
         self._sources: dict[int, _Source] = {}
+        self._allowed: dict[int, np.ndarray] = {}
         self._levels: dict[float, list[_Level]] = {}
 
     # -- the cutout at the output's resolution ------------------------------------------------------------------
@@ -380,25 +395,19 @@ class CardTracer:
         """The card (uint8) swept through the object's depth: each pixel repeated along the shift
         (:meth:`_depth_step`) of every depth from 0 to its thickness (``THICKNESS_LEVELS`` bands of depth), and
         the (x, y) by which the result's pixels are offset from the card's."""
-        thick = self._thickness[round(source.scale / self._full.scale)]
+        allowed = self._allowed_depth(source)
         step = self._depth_step(source, w)
-        top = float(thick.max())
-        reach = -step * top  # the swept copy of a pixel lies up to this far from it
-        lo = np.floor(np.minimum(reach, 0)).astype(int)
-        hi = np.ceil(np.maximum(reach, 0)).astype(int)
-        h, wd = card.shape
-        out = np.zeros((h + hi[1] - lo[1], wd + hi[0] - lo[0]), np.uint8)
-        out[-lo[1] : -lo[1] + h, -lo[0] : -lo[0] + wd] = card
-        edges = np.linspace(0.0, top, THICKNESS_LEVELS + 1)
-        # looking down, a deeper point along the ray is lower: none below the ground
-        drop = max(0.0, -self._depth_ray()[1]) * self._world_per_pixel * source.scale / self._full.scale
-        above = self._row_heights(source)[:, None] / max(drop, 1e-9)  # source pixels of depth each row allows
-        for a, b in zip(edges[:-1], edges[1:], strict=True):
-            part = np.where((thick >= b) & (above >= b), card, 0).astype(np.uint8)
-            if not part.any():
-                break
-            _sweep_into(out, part, -lo, -step * a, -step * (b - a))
-        return out, (int(-lo[0]), int(-lo[1]))
+        return _swept_card(card, allowed, step)
+
+    def _allowed_depth(self, source: _Source) -> np.ndarray:
+        """How deep (pixels of ``source``) each of its pixels reaches behind the card: its thickness, and,
+        looking down, no deeper along the ray than where the ray meets the ground (made once per source)."""
+        k = round(source.scale / self._full.scale)
+        if k not in self._allowed:
+            drop = max(0.0, -self._depth_ray()[1]) * self._world_per_pixel * k  # height lost per pixel of depth
+            above = self._row_heights(source)[:, None] / max(drop, 1e-9)
+            self._allowed[k] = np.minimum(self._thickness[k], above).astype(np.float32)
+        return self._allowed[k]
 
     def _mid_depth(self) -> float:
         """The camera depth of the card's centre line at half its height."""
@@ -440,6 +449,28 @@ class CardTracer:
         if fine > 1:
             values = values.reshape(y1 - y0, fine, x1 - x0, fine).mean(axis=(1, 3))
         return values, x0, y0
+
+
+def _swept_card(card: np.ndarray, allowed: np.ndarray, step: np.ndarray) -> tuple[np.ndarray, tuple[int, int]]:
+    """``card`` (uint8) with each pixel repeated at ``-step * d`` for every depth d from 0 to ``allowed`` there
+    (pixels; ``THICKNESS_LEVELS`` bands of depth), and the (x, y) of the card's pixel (0, 0) in the result."""
+    top = float(allowed.max())
+    reach = -step * top  # the swept copy of a pixel lies up to this far from it
+    lo = np.floor(np.minimum(reach, 0)).astype(int)
+    hi = np.ceil(np.maximum(reach, 0)).astype(int)
+    h, wd = card.shape
+    out = np.zeros((h + hi[1] - lo[1], wd + hi[0] - lo[0]), np.uint8)
+    out[-lo[1] : -lo[1] + h, -lo[0] : -lo[0] + wd] = card
+    edges = np.linspace(0.0, top, THICKNESS_LEVELS + 1)
+    for a, b in zip(edges[:-1], edges[1:], strict=True):
+        deep = allowed >= b
+        rows, cols = np.flatnonzero(deep.any(axis=1)), np.flatnonzero(deep.any(axis=0))
+        if rows.size == 0:
+            break
+        window = np.s_[rows[0] : rows[-1] + 1, cols[0] : cols[-1] + 1]  # the deeper, the smaller the part
+        part = np.where(deep[window], card[window], 0).astype(np.uint8)
+        _sweep_into(out, part, -lo + (cols[0], rows[0]), -step * a, -step * (b - a))
+    return out, (int(-lo[0]), int(-lo[1]))
 
 
 def _sweep_into(out: np.ndarray, part: np.ndarray, origin: np.ndarray, start: np.ndarray, span: np.ndarray) -> None:

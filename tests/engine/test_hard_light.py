@@ -11,7 +11,15 @@ from PIL import Image
 
 from ssn_engine.cli import main
 from ssn_engine.framing import Framing, frame_alpha
-from ssn_engine.hard_light import CardTracer, ContactTracer, contact_bands, contact_line, depth_map, split_lights
+from ssn_engine.hard_light import (
+    CardTracer,
+    ContactTracer,
+    contact_bands,
+    contact_line,
+    depth_map,
+    split_lights,
+    traced_share,
+)
 from ssn_engine.host_kit.light_map import GaussianLight, LightMap, disk_directions
 from training.metrics import zncc
 
@@ -163,6 +171,17 @@ def test_small_lights_are_traced_and_broad_ones_left_to_the_network():
     traced, broad = split_lights(LightMap([sun, haze, sky]))
     assert traced == [sun, haze] and broad.lights == [sky]
     assert split_lights(LightMap([GaussianLight.disk(0.3, 0.6, 0.53, 0.0)]))[0] == []  # no light, nothing to trace
+
+
+def test_a_light_between_small_and_broad_is_shared_so_that_resizing_it_never_jumps():
+    """A 16-degree disk: half traced, half the network's, the power kept; the share falls steadily with size."""
+    softbox = GaussianLight.disk(0.5, 0.3, 16.0, 2.0)
+    (traced,), broad = split_lights(LightMap([softbox]))
+    assert traced.intensity == pytest.approx(1.0) and broad.lights[0].intensity == pytest.approx(1.0)
+    assert traced.angle == broad.lights[0].angle == 16.0
+    shares = [traced_share(a) for a in np.linspace(0.1, 40.0, 400)]
+    assert shares[0] == 1.0 and shares[-1] == 0.0 and np.all(np.diff(shares) <= 0)
+    assert max(abs(np.diff(shares))) < 0.05
 
 
 def test_the_command_line_renders_an_angle_light_file_crisply(tmp_path, post):
