@@ -24,11 +24,12 @@ Pillow.
 Depth: a card alone casts a line under a light from its side, and nothing of
 a body that reaches away from the camera. Each pixel is taken to reach
 behind the card along the camera's ray by a depth (:func:`depth_map`) that
-grows with its distance to the outline (a body about as deep as twice its
-local width, a leg thin, never below the ground); the card is swept through
-that depth before the homography: each pixel repeated along the shift its
-shadow makes as it moves deeper (``THICKNESS_LEVELS`` bands of depth, each a
-segment drawn by doubling). A light from nearly the card's side still turns
+grows with its distance to the outline (a body as deep as it is wide, a
+round cross-section; a leg thin; never below the ground); the card is swept
+through that depth before the homography: each pixel repeated along the
+shift its shadow makes as it moves deeper (``THICKNESS_LEVELS`` bands of
+depth, each a segment drawn by doubling; a card larger than ``SWEEP_SIZE``
+is swept on a reduced copy, the card itself kept crisp). A light from nearly the card's side still turns
 it a little (``MIN_INCIDENCE``), so that no card is seen edge-on.
 
 Size: a disk light of apparent diameter ``angle`` seen from a ground point a
@@ -60,8 +61,9 @@ from .hemisphere import direction
 from .stripes import for_each_stripe
 from .host_kit.light_map import GaussianLight, LightMap
 
-THICKNESS = 4.0  # an object's depth behind its card, per pixel of distance to its outline
-THICKNESS_LEVELS = 6  # bands of depth an object's thickness is swept in
+THICKNESS = 2.0  # an object's depth behind its card per pixel of distance to its outline: a round cross-section
+THICKNESS_LEVELS = 48  # bands of depth an object's thickness is swept in
+SWEEP_SIZE = 400  # pixels: a larger card is swept through its depth on a copy reduced to about this size
 MIN_INCIDENCE = 10.0  # degrees: the card turns just enough that a light's horizontal direction meets it at least so
 
 __all__ = [
@@ -397,7 +399,19 @@ class CardTracer:
         the (x, y) by which the result's pixels are offset from the card's."""
         allowed = self._allowed_depth(source)
         step = self._depth_step(source, w)
-        return _swept_card(card, allowed, step)
+        k = max(1, math.ceil(max(card.shape) / SWEEP_SIZE))
+        if k == 1:
+            return _swept_card(card, allowed, step)
+        # a big card is swept on a copy reduced to about SWEEP_SIZE, enlarged back; the card itself stays crisp
+        h, wd = card.shape
+        small = np.asarray(Image.fromarray(np.pad(card, ((0, -h % k), (0, -wd % k))), "L").reduce(k))
+        swept, (sx, sy) = _swept_card(small, allowed[::k, ::k][: small.shape[0], : small.shape[1]] / k, step)
+        big = Image.fromarray(swept, "L").resize((swept.shape[1] * k, swept.shape[0] * k), Image.Resampling.BILINEAR)
+        out = np.asarray(big).copy()
+        ox, oy = sx * k, sy * k
+        view = out[oy : oy + h, ox : ox + wd]
+        np.maximum(view, card, out=view)
+        return out, (ox, oy)
 
     def _allowed_depth(self, source: _Source) -> np.ndarray:
         """How deep (pixels of ``source``) each of its pixels reaches behind the card: its thickness, and,
@@ -634,8 +648,8 @@ def contact_bands(alpha: np.ndarray) -> list[tuple[int, int, int]]:
 
 def depth_map(alpha: np.ndarray) -> np.ndarray:
     """How deep (pixels) the object reaches behind its card at each pixel: ``THICKNESS`` times the distance to
-    its outline (a body as deep as about twice its local width, thinning to its edges); pixels of the
-    antialiased fringe take their nearest solid pixel's depth."""
+    its outline (a body as deep as it is wide there, as a round cross-section, thinning to its edges); pixels of
+    the antialiased fringe take their nearest solid pixel's depth."""
     solid = np.pad(alpha > SOLID, 1)  # the outline continues beyond the array's edges
     if not solid.any():
         return np.zeros(alpha.shape, np.float32)

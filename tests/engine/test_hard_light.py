@@ -145,13 +145,13 @@ def test_an_object_is_deep_where_it_is_wide_and_thin_at_its_edges():
     alpha = np.zeros((100, 100), np.float32)
     alpha[:, 20:80] = 1.0  # a 60-pixel-wide column touching the array's top and bottom: open there
     depth = depth_map(alpha)
-    assert depth[50, 50] == pytest.approx(4.0 * 30, abs=4.0)  # twice the width at its middle
-    assert depth[50, 20] < 8.0 and depth[50, 10] == depth[50, 20]  # the fringe takes its nearest solid depth
+    assert depth[50, 50] == pytest.approx(60.0, abs=2.0)  # as deep as it is wide at its middle: round
+    assert depth[50, 20] < 4.0 and depth[50, 10] == depth[50, 20]  # the fringe takes its nearest solid depth
 
 
 def test_under_a_light_from_the_side_a_deep_object_shades_a_band_as_deep_as_itself(post):
     """A light from the card's side: the flat card (turned by ``MIN_INCIDENCE``) casts a sliver; the object,
-    reaching behind its card as deep as about twice its width, a band of ground."""
+    reaching behind its card as deep as it is wide, a band of ground."""
     _, framing = frame_alpha(post, 256)
     x0, y0, x1, y1 = framing.bbox
     crop = post[y0:y1, x0:x1].astype(np.float32) / 255
