@@ -394,12 +394,12 @@ class CardTracer:
         return np.array([col[1] - col[0], row[1] - row[0]]) / source.scale
 
     def _swept(
-        self, card: np.ndarray, source: _Source, w: np.ndarray, soft: float
+        self, card: np.ndarray, source: _Source, w: np.ndarray, soft: np.ndarray
     ) -> tuple[np.ndarray, tuple[int, int]]:
         """The card (uint8, blurred) swept through the object's depth: each pixel repeated along the shift
         (:meth:`_depth_step`) of every depth from 0 to its thickness (``THICKNESS_LEVELS`` bands of depth; where
-        the thickness ends, fading over ``soft`` pixels of depth, as blurred as the card), and the (x, y) by which
-        the result's pixels are offset from the card's."""
+        the thickness ends, fading over ``soft`` pixels of depth given per row, as blurred as the card's row), and
+        the (x, y) by which the result's pixels are offset from the card's."""
         allowed = self._allowed_depth(source)
         step = self._depth_step(source, w)
         k = max(1, math.ceil(max(card.shape) / SWEEP_SIZE))
@@ -408,7 +408,8 @@ class CardTracer:
         # a big card is swept on a copy reduced to about SWEEP_SIZE, enlarged back; the card itself stays crisp
         h, wd = card.shape
         small = np.asarray(Image.fromarray(np.pad(card, ((0, -h % k), (0, -wd % k))), "L").reduce(k))
-        swept, (sx, sy) = _swept_card(small, allowed[::k, ::k][: small.shape[0], : small.shape[1]] / k, step, soft / k)
+        reduced = allowed[::k, ::k][: small.shape[0], : small.shape[1]] / k
+        swept, (sx, sy) = _swept_card(small, reduced, step, soft[::k][: small.shape[0]] / k)
         big = Image.fromarray(swept, "L").resize((swept.shape[1] * k, swept.shape[0] * k), Image.Resampling.BILINEAR)
         out = np.asarray(big).copy()
         ox, oy = sx * k, sy * k
@@ -460,7 +461,7 @@ class CardTracer:
         card = self._blurred(source, sigma_rows)
         hmat = self._homography(w, framing, source, (x0, y0))
         if self.depth > 0:
-            card, shift = self._swept(card, source, w, 2.0 * float(sigma_rows.max()))
+            card, shift = self._swept(card, source, w, 2.0 * sigma_rows)
             hmat = np.array([[1.0, 0, shift[0]], [0, 1.0, shift[1]], [0, 0, 1.0]]) @ hmat
         hmat = hmat @ np.diag([1.0 / fine, 1.0 / fine, 1.0])
         values = _warp(card, hmat / hmat[2, 2], ((x1 - x0) * fine, (y1 - y0) * fine))
@@ -470,11 +471,12 @@ class CardTracer:
 
 
 def _swept_card(
-    card: np.ndarray, allowed: np.ndarray, step: np.ndarray, soft: float = 0.0
+    card: np.ndarray, allowed: np.ndarray, step: np.ndarray, soft: np.ndarray
 ) -> tuple[np.ndarray, tuple[int, int]]:
     """``card`` (uint8) with each pixel repeated at ``-step * d`` for every depth d from 0 to ``allowed`` there
     (pixels; ``THICKNESS_LEVELS`` bands of depth; a pixel's copies fade out over its last ``soft`` pixels of
-    depth), and the (x, y) of the card's pixel (0, 0) in the result."""
+    depth, ``soft`` given per row), and the (x, y) of the card's pixel (0, 0) in the result."""
+    soft = np.maximum(np.asarray(soft, np.float32), 1e-3)[:, None]
     top = float(allowed.max())
     reach = -step * top  # the swept copy of a pixel lies up to this far from it
     lo = np.floor(np.minimum(reach, 0)).astype(int)
@@ -489,11 +491,8 @@ def _swept_card(
         if rows.size == 0:
             break
         window = np.s_[rows[0] : rows[-1] + 1, cols[0] : cols[-1] + 1]  # the deeper, the smaller the part
-        if soft > 0:
-            fade = np.clip((allowed[window] - b) / soft + 1.0, 0.0, 1.0)
-            part = (card[window] * fade).astype(np.uint8)
-        else:
-            part = np.where(deep[window], card[window], 0).astype(np.uint8)
+        fade = np.clip((allowed[window] - b) / soft[rows[0] : rows[-1] + 1] + 1.0, 0.0, 1.0)
+        part = (card[window] * fade).astype(np.uint8)
         _sweep_into(out, part, -lo + (cols[0], rows[0]), -step * a, -step * (b - a))
     return out, (int(-lo[0]), int(-lo[1]))
 
