@@ -114,7 +114,7 @@ def spin(controller, timeout_s):
 def live_drag(doc, depth):
     """A light dragged at the mouse's rate: the docker's previews per second, no layer writes until the
     release; then RELEASES short drags, each released: the time from the release to the written layer, and its
-    parts (the worker's render, the host's write)."""
+    parts (the worker's render, the host's write), and what each drag's start costs Krita."""
     c = controller_for(doc)
     messages = out.setdefault("live_messages", {})[depth] = []
     c.model.status_changed.connect(lambda status: messages.append(list(status)) if status[0] != "info" else None)
@@ -132,6 +132,15 @@ def live_drag(doc, depth):
         return result
 
     c.host.write = timed_write
+    begin_drag, start_ms = c.host.begin_drag, []
+
+    def timed_begin_drag(*args):
+        t = time.perf_counter()
+        result = begin_drag(*args)
+        start_ms.append(1e3 * (time.perf_counter() - t))
+        return result
+
+    c.host.begin_drag = timed_begin_drag
     replies = trace_replies(c.engine)
     light = {"i": 0}
     editor = c.model.light_map.copy()
@@ -180,7 +189,8 @@ def live_drag(doc, depth):
         "release_to_layer_ms": _median([r[0] for r in releases]),
         "release_write_ms": _median([r[1] for r in releases]),
         "release_worker_ms": _median([r[2] for r in releases]),
-        "release_undo_steps": all(r[3] for r in releases) and bool(releases),
+        "release_new_layer": any(r[3] for r in releases),
+        "drag_start_ms": _median(start_ms[1:]),  # the releases' drags (their undo step, the preview's background)
         "release_request_after_ms": _median([r[4] for r in releases]),
         "release_reply_transfer_ms": _median([r[5] for r in releases]),
         "release_reply_chunks": _median([r[6] for r in releases]),
