@@ -227,7 +227,13 @@ def projection_thumbnail(document: Document, side: int) -> tuple[int, int, bytes
     from PyQt5.QtGui import QImage
 
     width, height, _ = camera_rules.preview_size(document.width(), document.height(), side)
-    image = document.projection(0, 0, document.width(), document.height())
+    if document.colorDepth() == "U8":
+        image = document.projection(0, 0, document.width(), document.height())
+    else:
+        # Krita 5.1 converts a 16-bit or float projection to an image pixel by pixel (a 2000 x 2000 float one took
+        # 0.6 to 0.9 s); its thumbnail scales the image down first (0.2 to 0.3 s at any depth, slower than the
+        # 8-bit projection's 10 to 60 ms)
+        image = document.thumbnail(width, height)
     small = image.scaled(
         width, height, Qt.AspectRatioMode.IgnoreAspectRatio, Qt.TransformationMode.SmoothTransformation
     ).convertToFormat(QImage.Format.Format_RGBA8888)
