@@ -111,6 +111,12 @@ def spin(controller, timeout_s):
     controller.busy_changed.disconnect(connection)
 
 
+def spin_for(seconds):
+    loop = QEventLoop()
+    QTimer.singleShot(int(seconds * 1000), loop.quit)
+    loop.exec_()
+
+
 def live_drag(doc, depth):
     """A light dragged at the mouse's rate: the docker's previews per second, no layer writes until the
     release; then RELEASES short drags, each released: the time from the release to the written layer, and its
@@ -165,17 +171,26 @@ def live_drag(doc, depth):
     gaps = sorted(b - a for a, b in zip(in_window, in_window[1:], strict=False))
     during = len(writes)
     releases = []
+    ticks: list[float] = []  # the event loop's turns during a release (a 1 ms timer): its longest stall
+    ticker = QTimer()
+    ticker.timeout.connect(lambda: ticks.append(time.perf_counter()))
     for _ in range(RELEASES):
         drag(0.25)  # a short drag: a preview is in flight at the release, as after a real one
+        ticks.clear()
+        ticker.start(1)
         released, start = time.perf_counter(), len(writes)
         c.model.edit_light_map(editor, False)
         spin(c, 30)
+        spin_for(0.03)  # a turn of the event loop after the write
+        ticker.stop()
         if len(writes) > start:
             at, info = writes[start]
             sent, first, done, chunks = replies["render"][-1]
+            turns = [released] + [t for t in ticks if t <= at] + [t for t in ticks if t > at][:1]
+            stall = max((b - a for a, b in zip(turns, turns[1:], strict=False)), default=0.0)
             releases.append(
                 (1e3 * (at - released), write_ms[start], sum(info["timing_ms"].values()), info["created"])
-                + (1e3 * (sent - released), 1e3 * (done - first), chunks)
+                + (1e3 * (sent - released), 1e3 * (done - first), chunks, 1e3 * stall)
             )
     out["live"][depth] = {
         "canvas": "2000x2000",
@@ -194,6 +209,7 @@ def live_drag(doc, depth):
         "release_request_after_ms": _median([r[4] for r in releases]),
         "release_reply_transfer_ms": _median([r[5] for r in releases]),
         "release_reply_chunks": _median([r[6] for r in releases]),
+        "release_longest_stall_ms": _median([r[7] for r in releases]),
         "total_s": round(time.perf_counter() - t0, 2),
     }
     c.engine.shutdown()
