@@ -111,10 +111,16 @@ def spin(controller, timeout_s):
     controller.busy_changed.disconnect(connection)
 
 
+def spin_for(seconds):
+    loop = QEventLoop()
+    QTimer.singleShot(int(seconds * 1000), loop.quit)
+    loop.exec_()
+
+
 def live_drag(doc, depth):
     """A light dragged at the mouse's rate: the docker's previews per second, no layer writes until the
     release; then RELEASES short drags, each released: the time from the release to the written layer, and its
-    parts (the worker's render, the host's write)."""
+    parts (the worker's render, the host's write), and what each drag's start costs Krita."""
     c = controller_for(doc)
     messages = out.setdefault("live_messages", {})[depth] = []
     c.model.status_changed.connect(lambda status: messages.append(list(status)) if status[0] != "info" else None)
@@ -132,6 +138,15 @@ def live_drag(doc, depth):
         return result
 
     c.host.write = timed_write
+    begin_drag, start_ms = c.host.begin_drag, []
+
+    def timed_begin_drag(*args):
+        t = time.perf_counter()
+        result = begin_drag(*args)
+        start_ms.append(1e3 * (time.perf_counter() - t))
+        return result
+
+    c.host.begin_drag = timed_begin_drag
     replies = trace_replies(c.engine)
     light = {"i": 0}
     editor = c.model.light_map.copy()
@@ -156,17 +171,26 @@ def live_drag(doc, depth):
     gaps = sorted(b - a for a, b in zip(in_window, in_window[1:], strict=False))
     during = len(writes)
     releases = []
+    ticks: list[float] = []  # the event loop's turns during a release (a 1 ms timer): its longest stall
+    ticker = QTimer()
+    ticker.timeout.connect(lambda: ticks.append(time.perf_counter()))
     for _ in range(RELEASES):
         drag(0.25)  # a short drag: a preview is in flight at the release, as after a real one
+        ticks.clear()
+        ticker.start(1)
         released, start = time.perf_counter(), len(writes)
         c.model.edit_light_map(editor, False)
         spin(c, 30)
+        spin_for(0.03)  # a turn of the event loop after the write
+        ticker.stop()
         if len(writes) > start:
             at, info = writes[start]
             sent, first, done, chunks = replies["render"][-1]
+            turns = [released] + [t for t in ticks if t <= at] + [t for t in ticks if t > at][:1]
+            stall = max((b - a for a, b in zip(turns, turns[1:], strict=False)), default=0.0)
             releases.append(
                 (1e3 * (at - released), write_ms[start], sum(info["timing_ms"].values()), info["created"])
-                + (1e3 * (sent - released), 1e3 * (done - first), chunks)
+                + (1e3 * (sent - released), 1e3 * (done - first), chunks, 1e3 * stall)
             )
     out["live"][depth] = {
         "canvas": "2000x2000",
@@ -180,10 +204,12 @@ def live_drag(doc, depth):
         "release_to_layer_ms": _median([r[0] for r in releases]),
         "release_write_ms": _median([r[1] for r in releases]),
         "release_worker_ms": _median([r[2] for r in releases]),
-        "release_undo_steps": all(r[3] for r in releases) and bool(releases),
+        "release_new_layer": any(r[3] for r in releases),
+        "drag_start_ms": _median(start_ms[1:]),  # the releases' drags (their undo step, the preview's background)
         "release_request_after_ms": _median([r[4] for r in releases]),
         "release_reply_transfer_ms": _median([r[5] for r in releases]),
         "release_reply_chunks": _median([r[6] for r in releases]),
+        "release_longest_stall_ms": _median([r[7] for r in releases]),
         "total_s": round(time.perf_counter() - t0, 2),
     }
     c.engine.shutdown()

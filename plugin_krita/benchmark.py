@@ -65,7 +65,8 @@ def main() -> None:
     print("a light dragged on a 2000 x 2000 canvas (60 Hz mouse moves): the docker's live preview, then the layer")
     print(
         f"{'depth':6s} {'previews/s':>10s} {'median gap ms':>13s} {'layer writes':>12s} {'release to layer ms':>19s} "
-        f"{'vs U8':>6s} {'queued ms':>9s} {'worker ms':>9s} {'reply ms':>8s} {'reads':>5s} {'write ms':>8s}"
+        f"{'vs U8':>6s} {'queued ms':>9s} {'worker ms':>9s} {'reply ms':>8s} {'reads':>5s} {'write ms':>8s} "
+        f"{'stall ms':>8s} {'drag start ms':>13s}"
     )
     for depth, live in data["live"].items():
         ms = live["release_to_layer_ms"]
@@ -74,13 +75,16 @@ def main() -> None:
             f"{depth:6s} {live['previews_per_s']:10.1f} {live['median_preview_gap_ms']!s:>13s} "
             f"{live['layer_writes_during_drag']:12d} {ms!s:>19s} {ratio:>6s} {live['release_request_after_ms']!s:>9s} "
             f"{live['release_worker_ms']!s:>9s} {live['release_reply_transfer_ms']!s:>8s} "
-            f"{live['release_reply_chunks']!s:>5s} {live['release_write_ms']!s:>8s}"
+            f"{live['release_reply_chunks']!s:>5s} {live['release_write_ms']!s:>8s} "
+            f"{live['release_longest_stall_ms']!s:>8s} {live['drag_start_ms']!s:>13s}"
         )
     print(
         f"release: medians of {data['live'][next(iter(data['live']))]['releases']} releases after short drags; "
         "queued: release to the render request (a preview's reply still due); worker: its render (shadow, canvas, "
-        "layer); reply: the reply's first to last byte in Krita, in that many reads; write: Krita's part (the new "
-        "layer, one undo step)"
+        "layer); reply: the reply's first to last byte in Krita, in that many reads; write: Krita's part (the layer "
+        "written in place); stall: the longest the event loop did not turn from the release to the written layer; "
+        "drag start: Krita's part of a drag's start (its undo step, the shadow layer replaced by a copy of itself, "
+        "and the preview's background)"
     )
     print(
         f"Generate to visible layer, 4000 x 3000 canvas: median {sorted(gen)[len(gen) // 2]:.0f} ms "

@@ -185,7 +185,7 @@ class ShadowController(QObject):
         if not self.live or source is None:
             return
         if self._drag is None:
-            self._drag = Drag(self._take_background(source))
+            self._drag = self._begin_drag(source)
         self._background = self._drag.background
         self._pause.start(PAUSE_MS)
         self._request_preview()
@@ -194,6 +194,26 @@ class ShadowController(QObject):
         if self._drag is not None and self.model.light_map != self._layer_map:
             self._rerender(not self._drag.wrote, preview=False)
             self._drag.wrote = True
+
+    def _begin_drag(self, source: Source) -> Drag:
+        """The drag's undo step at its start, where the host makes one (the shadow layer replaced by a copy of
+        itself, which the drag's writes then fill in place: Krita recomposites the image once for the layer
+        written on release instead of twice), and the preview's background (None: no preview)."""
+        begin = getattr(self.host, "begin_drag", None)
+        if self.cutout is None or begin is None:  # the worker restarted: the layer alone follows
+            return Drag(self._take_background(source))
+        shown = self.host.shadow_layer_id(source)  # its settings are the copy's
+        try:
+            background, replaced = begin(source, PREVIEW_SIDE)
+        except Exception as exc:  # the UI boundary
+            self.model.report_status("warning", f"No live preview: {type(exc).__name__}: {exc}")
+            return Drag(None)
+        if replaced is None:
+            return Drag(background)
+        settings = self.model.shadows.get(shown) if shown is not None else None
+        if settings is not None:
+            self.model.record_shadow(replaced.layer_id, settings)
+        return Drag(background, wrote=True)
 
     # -- preview ------------------------------------------------------------------
     def _take_background(self, source: Source) -> tuple[int, int, bytes] | None:

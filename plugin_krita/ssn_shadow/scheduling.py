@@ -24,7 +24,8 @@ class RenderJob:
 @dataclass
 class Drag:
     """A light drag in progress: the preview's background ((width, height, RGBA), None when there is no
-    preview) and whether the drag has written its layer yet (at a rest)."""
+    preview) and whether the drag has its undo step yet (the shadow layer taken over at its start, or written at
+    a rest): its writes then go in place."""
 
     background: tuple[int, int, bytes] | None
     wrote: bool = False

@@ -117,6 +117,11 @@ def layer_names(doc):
     return [n.name() for n in doc.rootNode().childNodes()]
 
 
+def pixels_of(state):
+    """A shadow state without the layer's unique id: what the canvas shows."""
+    return {k: v for k, v in state.items() if k != "uid"}
+
+
 def shadow_state(doc, depth):
     kids = doc.rootNode().childNodes()
     names = [n.name() for n in kids]
@@ -319,6 +324,14 @@ def run_case(depth, with_window):
     }
     previews, start, said = [], len(renders), len(messages)
     controller.previewed.connect(lambda rgb, w, h: previews.append((rgb, w, h)))
+    sent = []  # the layer's pixels and rect as the docker hands them to Krita
+    host_write = host.write
+
+    def recorded_write(source, pixels, rect, new_step, blend):
+        sent.append((pixels, rect))
+        return host_write(source, pixels, rect, new_step, blend)
+
+    host.write = recorded_write
     editor = controller.model.light_map.copy()
     for i in range(12):  # a mouse drag, faster than the rest delay
         editor.move(0, 0.25 + 0.01 * i, editor.lights[0].v)
@@ -330,7 +343,9 @@ def run_case(depth, with_window):
         preview_size=list(previews[-1][1:]) if previews else None,
         preview_under_shadow_min=min(reds(*previews[-1][:2], previews[-1][1] / W, 3)) if previews else None,
         writes_during=len(renders) - start,
-        canvas_unchanged_during=shadow_state(doc, depth) == before,
+        # the drag's start replaced the shadow layer by a copy of itself (its undo step): a new id, the same pixels
+        canvas_unchanged_during=pixels_of(shadow_state(doc, depth)) == pixels_of(before),
+        replaced_at_start=shadow_state(doc, depth).get("uid") != before["uid"],
         documents_unchanged=len(k.documents()) == documents,
         shadow_visible=all(n.visible() for n in doc.rootNode().childNodes()),
         active=doc.activeNode().name() if doc.activeNode() is not None else None,
@@ -339,8 +354,28 @@ def run_case(depth, with_window):
     wait_for(controller)
     drag["writes_after"] = len(renders) - start
     drag["release_created"] = bool(renders[-1]["created"]) if len(renders) > start else None
-    drag["changed_after"] = shadow_state(doc, depth) != before
+    drag["changed_after"] = pixels_of(shadow_state(doc, depth)) != pixels_of(before)
     drag["messages"] = messages[said:]
+    # Krita holds exactly the pixels the worker rendered for the release, in the document's depth, and nothing
+    # outside their rect
+    shadow = next(n for n in doc.rootNode().childNodes() if n.name() == "Shadow: Person")
+    pixels, (x, y, w, h) = sent[-1]
+    bounds = shadow.bounds()
+    drag["release_pixels_exact"] = bytes(shadow.pixelData(x, y, w, h)) == pixels and len(pixels) > 0
+    drag["release_within_rect"] = (
+        bounds.x() >= x and bounds.y() >= y and bounds.right() < x + w and bounds.bottom() < y + h
+    )
+    host.write = host_write
+    undo = k.action("edit_undo")
+    if undo is not None:  # the drag is one replacement: no shadow after one Ctrl+Z, the one before it after two
+        undo.trigger()
+        doc.waitForDone()
+        pump(0.3)
+        drag["after_one_undo"] = layer_names(doc)
+        undo.trigger()
+        doc.waitForDone()
+        pump(0.3)
+        drag["after_two_undos_is_before"] = shadow_state(doc, depth) == before
 
     # A black shadow's layer is Normal; in Multiply (a coloured shadow's mode) it composites the same
     shadow_node = next(n for n in doc.rootNode().childNodes() if n.name() == "Shadow: Person")

@@ -137,6 +137,7 @@ class FakeHost:
         self.closed: list[FakeDocument] = []
         self.shadow: str | None = None  # the shadow layer's id on the "canvas"
         self.kept_active = 0
+        self.takeovers: list[str] = []  # the shadow layer's ids given by begin_drag
 
     def active_document(self):
         return self.document
@@ -180,6 +181,14 @@ class FakeHost:
 
     def shadow_layer_id(self, source):
         return self.shadow
+
+    def begin_drag(self, source, side):
+        """As Krita's adapter: a shadow layer is replaced by a copy of itself (a new id), the drag's undo step."""
+        if self.shadow is None:
+            return self.preview_background(source, side), None
+        self.shadow = f"shadow-copy-{len(self.takeovers)}"
+        self.takeovers.append(self.shadow)
+        return self.preview_background(source, side), WriteResult("shadow-node", True, "", self.shadow)
 
     def keep_source_active(self, source):
         self.kept_active += 1

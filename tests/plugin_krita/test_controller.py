@@ -83,7 +83,8 @@ def _spin(ms: int) -> None:
 
 def test_a_light_drag_previews_in_the_docker_and_writes_the_layer_once(qapp):
     """While a light moves the docker shows previews and the canvas is left alone (Krita recomposites the whole
-    image per layer update); the layer is written when the drag rests and when it ends: one undo step."""
+    image per layer update); the layer is written when the drag rests and when it ends: one undo step, taken when
+    the drag starts."""
     host = FakeHost(w=800, h=640, alpha=cutout_alpha(800, 640, (320, 160, 480, 560)))
     c, engine, messages, _ = make(host)
     shown = []
@@ -103,20 +104,28 @@ def test_a_light_drag_previews_in_the_docker_and_writes_the_layer_once(qapp):
         assert shown[-1] == (320 * 256 * 3, 320, 256)  # the 800 x 640 image at the preview's size
         c.model.edit_light_map(c.model.light_map, False)  # the release
         assert wait_until(lambda: not c.busy and len(host.writes) == 2)
-        assert host.writes[1][2]  # the drag's one undo step
+        # the drag's one undo step was taken at its start (the shadow layer replaced by a copy of itself, with the
+        # settings of the shadow it shows); the release writes in place into that copy
+        assert host.takeovers == ["shadow-copy-0"] and not host.writes[1][2]
+        assert c.model.shadows["shadow-copy-0"].light_map == c.model.light_map
 
         moved(c, 0.7, 0.5, True, dragging=True)
-        assert wait_until(lambda: len(host.writes) == 3, 5)  # the drag rests: the layer follows, a new step
-        assert host.writes[2][2]
+        assert wait_until(lambda: len(host.writes) == 3, 5)  # the drag rests: the layer follows, in place
+        assert len(host.takeovers) == 2 and not host.writes[2][2]
         moved(c, 0.75, 0.5, False, dragging=True)
         c.model.edit_light_map(c.model.light_map, False)  # it moved on, then the release: in place, the same step
         assert wait_until(lambda: not c.busy and len(host.writes) == 4)
-        assert not host.writes[3][2]
+        assert not host.writes[3][2] and len(host.takeovers) == 2
         moved(c, 0.8, 0.5, True, dragging=True)
-        assert wait_until(lambda: len(host.writes) == 5, 5) and host.writes[4][2]
+        assert wait_until(lambda: len(host.writes) == 5, 5) and not host.writes[4][2]
         c.model.edit_light_map(c.model.light_map, False)  # released where it rested: nothing new
         _spin(200)
-        assert len(host.writes) == 5 and not c.busy
+        assert len(host.writes) == 5 and not c.busy and len(host.takeovers) == 3
+        host.shadow = None  # no shadow layer (the user deleted it): the release adds one, the drag's undo step
+        moved(c, 0.3, 0.5, True, dragging=True)
+        c.model.edit_light_map(c.model.light_map, False)
+        assert wait_until(lambda: not c.busy and len(host.writes) == 6)
+        assert host.writes[5][2] and len(host.takeovers) == 3
         assert not [m for m in messages if m[0] != "info"], messages
     finally:
         engine.shutdown()

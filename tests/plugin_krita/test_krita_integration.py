@@ -110,7 +110,13 @@ def test_generate_in_real_krita(pykrita, tmp_path, depth):
     assert drag["preview_under_shadow_min"] < low - 20, drag  # the new shadow on the thumbnail
     assert drag["writes_during"] == 0 and drag["canvas_unchanged_during"], drag
     assert drag["documents_unchanged"] and drag["shadow_visible"] and drag["active"] == "Person", drag
-    assert drag["writes_after"] == 1 and drag["release_created"] and drag["changed_after"], drag
+    # the drag's undo step is taken at its start (the shadow layer replaced by a copy: the same pixels), so the
+    # release writes in place (one recomposite of the image, not the two of a replacement), exactly the pixels the
+    # worker rendered in the document's depth; Ctrl+Z once: no shadow, twice: the shadow before the drag
+    assert drag["replaced_at_start"] and drag["writes_after"] == 1 and not drag["release_created"], drag
+    assert drag["changed_after"] and drag["release_pixels_exact"] and drag["release_within_rect"], drag
+    assert "Shadow: Person" not in drag["after_one_undo"] and "Person" in drag["after_one_undo"], drag
+    assert drag["after_two_undos_is_before"], drag
     assert all(level == "info" for level, _ in drag["messages"]), drag
     # the black shadow's Normal layer gives the picture a Multiply layer gives (within one 8-bit step), and a
     # coloured shadow is written in Multiply

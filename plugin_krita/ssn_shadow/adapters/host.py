@@ -17,6 +17,7 @@ from .krita_document import (
     horizontal_guides,
     keep_source_active,
     preview_background,
+    projection_thumbnail,
     read_annotation,
     read_source,
     shadow_layer_id,
@@ -52,6 +53,19 @@ class KritaHost:
     def preview_background(self, source: Source, side: int) -> tuple[int, int, bytes]:
         """The image without the source's shadow, at most ``side`` pixels a side: (width, height, RGBA)."""
         return preview_background(source.document, source.node, side)
+
+    def begin_drag(self, source: Source, side: int) -> tuple[tuple[int, int, bytes], WriteResult | None]:
+        """A light drag starts: its undo step (the shadow layer replaced by a copy of itself, which the drag then
+        writes in place; None where there is no shadow layer) and the preview's background, the image without its
+        shadow at most ``side`` pixels a side, taken while the shadow layer is out of the image (no clone)."""
+        shot: list[tuple[int, int, bytes]] = []
+        result = self.writer.take_over(
+            source.document, source.node, lambda: shot.append(projection_thumbnail(source.document, side))
+        )
+        if result is None:
+            return preview_background(source.document, source.node, side), None
+        QTimer.singleShot(0, lambda: source.document.setActiveNode(source.node))  # as after :meth:`write`
+        return shot[0], result
 
     def shadow_layer_id(self, source: Source) -> str | None:
         """The unique id of the source's shadow layer now in the image, or None."""
