@@ -168,6 +168,38 @@ class CanvasShadow:
         return out
 
 
+def union_box(boxes: list[tuple[int, int, int, int]]) -> tuple[int, int, int, int]:
+    """The box (x0, y0, x1, y1) that holds boxes (x, y, width, height) (at least one)."""
+    return (
+        min(b[0] for b in boxes),
+        min(b[1] for b in boxes),
+        max(b[0] + b[2] for b in boxes),
+        max(b[1] + b[3] for b in boxes),
+    )
+
+
+def placed_sum(
+    parts: list[tuple[float, np.ndarray, int, int]], darker: tuple[np.ndarray, int, int] | None = None
+) -> tuple[np.ndarray, int, int]:
+    """Placed values (share, values (h, w), x, y), each array's top-left pixel at (x, y), summed with their
+    shares over the union of their boxes, and where ``darker`` (values, x, y) is darker, that: (values, x, y),
+    clipped to [0, 1]; (0, 0) values when every part is empty."""
+    boxes = [(v, x, y) for _, v, x, y in parts] + ([darker] if darker is not None else [])
+    boxes = [b for b in boxes if b[0].size]
+    if not boxes:
+        return np.zeros((0, 0), np.float32), 0, 0
+    x0, y0, x1, y1 = union_box([(x, y, v.shape[1], v.shape[0]) for v, x, y in boxes])
+    out = np.zeros((y1 - y0, x1 - x0), np.float32)
+    for share, values, x, y in parts:
+        if values.size:
+            out[y - y0 : y - y0 + values.shape[0], x - x0 : x - x0 + values.shape[1]] += np.float32(share) * values
+    if darker is not None and darker[0].size:
+        values, x, y = darker
+        window = out[y - y0 : y - y0 + values.shape[0], x - x0 : x - x0 + values.shape[1]]
+        np.maximum(window, values, out=window)
+    return np.clip(out, 0.0, 1.0, out=out), x0, y0
+
+
 def as_unit_float(alpha: np.ndarray) -> np.ndarray:
     """An alpha of uint8, uint16 or float as float32 in [0, 1] (NaN as 0)."""
     if alpha.dtype == np.uint8:

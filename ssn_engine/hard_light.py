@@ -56,7 +56,7 @@ from PIL import Image, ImageFilter
 from scipy import ndimage
 
 from .camera import FORWARD, RIGHT, UP, camera_for_span
-from .framing import Framing
+from .framing import Framing, placed_sum
 from .hemisphere import direction
 from .stripes import for_each_stripe
 from .host_kit.light_map import GaussianLight, LightMap
@@ -590,9 +590,14 @@ def _blur(alpha: np.ndarray, sigma: float) -> np.ndarray:
         image = image.resize(size, Image.Resampling.BOX)
     padded = Image.new("L", (size[0] + 2 * pad, size[1] + 2 * pad), 0)
     padded.paste(image, (pad, pad))
-    blurred = padded.filter(ImageFilter.GaussianBlur(sigma / reduce)).crop((pad, pad, pad + size[0], pad + size[1]))
+    # cropped as an array: Pillow's crop would apply its decompression-bomb limit to our own buffers
+    blurred = np.asarray(padded.filter(ImageFilter.GaussianBlur(sigma / reduce)))[
+        pad : pad + size[1], pad : pad + size[0]
+    ]
     if reduce > 1:
-        blurred = blurred.resize((w, h), Image.Resampling.BILINEAR)
+        blurred = np.asarray(
+            Image.fromarray(np.ascontiguousarray(blurred), "L").resize((w, h), Image.Resampling.BILINEAR)
+        )
     return np.asarray(blurred, np.float32) * np.float32(1 / 255)
 
 
@@ -702,15 +707,4 @@ class ContactTracer:
         self, u: float, v: float, angle: float, framing: Framing, clip: bool = True
     ) -> tuple[np.ndarray, int, int]:
         """As :meth:`CardTracer.shadow`, the cards' shadows added (clipped to 1)."""
-        parts = [c.shadow(u, v, angle, framing, clip) for c in self.cards]
-        parts = [p for p in parts if p[0].size]
-        if not parts:
-            return np.zeros((0, 0), np.float32), 0, 0
-        x0, y0 = min(p[1] for p in parts), min(p[2] for p in parts)
-        x1 = max(p[1] + p[0].shape[1] for p in parts)
-        y1 = max(p[2] + p[0].shape[0] for p in parts)
-        out = np.zeros((y1 - y0, x1 - x0), np.float32)
-        for values, x, y in parts:
-            win = out[y - y0 : y - y0 + values.shape[0], x - x0 : x - x0 + values.shape[1]]
-            win += values
-        return np.minimum(out, 1.0, out=out), x0, y0
+        return placed_sum([(1.0, *c.shadow(u, v, angle, framing, clip)) for c in self.cards])

@@ -29,7 +29,7 @@ import numpy as np
 from scipy import ndimage
 
 from .ao_edit import MAX_GROW, apply_edits
-from .framing import CanvasShadow, Framing, frame_alpha
+from .framing import CanvasShadow, Framing, frame_alpha, union_box
 from .hemisphere import render_light_map
 from .host_kit.light_map import LightMap
 from .host_kit.sky_map import NETWORK_SHAPE
@@ -76,8 +76,7 @@ def combine_shadows(shadows: list[CanvasShadow], hard_share: float) -> CanvasSha
     shown = [s for s in shadows if not s.is_empty]
     if not shown:
         return CanvasShadow(np.zeros((0, 0), np.float32), 0, 0)
-    x0, y0 = min(s.x for s in shown), min(s.y for s in shown)
-    x1, y1 = max(s.x + s.shape[1] for s in shown), max(s.y + s.shape[0] for s in shown)
+    x0, y0, x1, y1 = union_box([(s.x, s.y, s.shape[1], s.shape[0]) for s in shown])
     darkest = np.zeros((y1 - y0, x1 - x0), np.float32)
     lit = np.ones_like(darkest)
     for s in shown:

@@ -19,7 +19,7 @@ import numpy as np
 
 from . import long_shadow
 from .ao_edit import apply_edits
-from .framing import CanvasShadow, Framing, as_unit_float, frame_alpha, shadow_to_canvas
+from .framing import CanvasShadow, Framing, as_unit_float, frame_alpha, placed_sum, shadow_to_canvas
 from .hard_light import ContactTracer, as_gaussians, split_lights
 from .hemisphere import light_power, render_light_map
 from .host_kit.camera_rules import DEFAULT_FOV, FOV_RANGE
@@ -161,11 +161,11 @@ class ShadowSession:
             for light, share in zip(traced, shares[: len(traced)], strict=True)
         ]
         net = self._network_canvas(frames[1], as_gaussians(traced), clip, framing)
-        values, x, y = _combine(parts, (net.values, net.x, net.y))
+        values, x, y = placed_sum(parts, (net.values, net.x, net.y))
         if broad.is_dark:
             return CanvasShadow(values, x, y)
         net = self._network_canvas(frames[0], broad, clip, framing)
-        return CanvasShadow(*_combine([(small, values, x, y), (1.0 - small, net.values, net.x, net.y)]))
+        return CanvasShadow(*placed_sum([(small, values, x, y), (1.0 - small, net.values, net.x, net.y)]))
 
     def _network_canvas(self, frame: np.ndarray, light_map: LightMap, clip: bool, framing: Framing) -> CanvasShadow:
         """The network's frame shadow of ``light_map`` on ``framing``'s canvas, continued beyond the frame's
@@ -194,25 +194,3 @@ class ShadowSession:
         in a preview."""
         mask = shadow_to_canvas(self.mask, framing, origin=(0.0, 0.0))  # with an origin: no fading at the frame's edges
         return mask.full_canvas(framing.canvas_width, framing.canvas_height)
-
-
-def _combine(
-    parts: list[tuple[float, np.ndarray, int, int]], darker: tuple[np.ndarray, int, int] | None = None
-) -> tuple[np.ndarray, int, int]:
-    """The sum of shadows (share, values (h, w), x, y) weighted by their shares over the union of their boxes,
-    and where ``darker`` (values, x, y) is darker, that: (values, x, y), clipped to [0, 1]."""
-    boxes = [(v, x, y) for _, v, x, y in parts] + ([darker] if darker is not None else [])
-    boxes = [b for b in boxes if b[0].size]
-    if not boxes:
-        return np.zeros((0, 0), np.float32), 0, 0
-    x0, y0 = min(b[1] for b in boxes), min(b[2] for b in boxes)
-    x1, y1 = max(b[1] + b[0].shape[1] for b in boxes), max(b[2] + b[0].shape[0] for b in boxes)
-    out = np.zeros((y1 - y0, x1 - x0), np.float32)
-    for share, values, x, y in parts:
-        if values.size:
-            out[y - y0 : y - y0 + values.shape[0], x - x0 : x - x0 + values.shape[1]] += np.float32(share) * values
-    if darker is not None and darker[0].size:
-        values, x, y = darker
-        window = out[y - y0 : y - y0 + values.shape[0], x - x0 : x - x0 + values.shape[1]]
-        np.maximum(window, values, out=window)
-    return np.clip(out, 0.0, 1.0), x0, y0

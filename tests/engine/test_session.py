@@ -97,10 +97,11 @@ def test_bad_edit_keeps_the_previous_state(counting):
 def test_render_frame_and_canvas_shadow(counting):
     alpha = drawn_alpha(200, 150)
     session = ShadowSession(alpha, counting)
-    frames = session.render_frame(one_light(0.5, 0.7))  # the broad light's, and the small lights' (none)
+    broad = one_light(0.5, 0.7, 0.01)  # 36 degrees across: left to the network
+    frames = session.render_frame(broad)  # the broad light's, and the small lights' (none)
     assert frames.shape == (2, 128, 128) and frames.dtype == np.float32
     assert frames[0].max() > 0.2 and frames[1].max() == 0
-    shadow = session.render(one_light(0.5, 0.7))
+    shadow = session.render(broad)
     full = shadow.full_canvas(200, 150)
     ys, xs = np.nonzero(alpha > 127)
     assert full[ys.max() + 3 :].sum() > 0.8 * full[alpha < 128].sum()  # below the object: towards the viewer
@@ -137,7 +138,7 @@ def test_an_unclipped_shadow_reaches_past_the_canvas():
     alpha = np.zeros((300, 400), np.uint8)
     alpha[100:260, 330:390] = drawn_alpha(60, 160)  # near the right edge
     session = ShadowSession(alpha, GeometricCard())
-    sun = one_light(0.25, 0.92)  # a long shadow to the right
+    sun = one_light(0.25, 0.92, 0.01)  # a long shadow to the right, of a broad light (the network's)
     frame = session.render_frame(sun)
     clipped, whole = session.to_canvas(frame, sun), session.to_canvas(frame, sun, clip=False)
     assert clipped.x + clipped.values.shape[1] <= 400  # cut at the canvas
@@ -214,7 +215,7 @@ def test_a_light_change_resolves_no_camera(monkeypatch):
     render = model.render
     monkeypatch.setattr(model, "render", lambda *args: renders.append(args[3]) or render(*args))
     for u in (0.3, 0.5, 0.7):
-        session.render(one_light(u, 0.4))
+        session.render(one_light(u, 0.4, 0.01))
     assert calls == {"cameras_for": 0, "estimate": 0}
     assert all(np.array_equal(c, session.used_cameras) for c in renders)
 
