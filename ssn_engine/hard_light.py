@@ -485,10 +485,10 @@ def _swept_card(
     out = np.zeros((h + hi[1] - lo[1], wd + hi[0] - lo[0]), np.uint8)
     out[-lo[1] : -lo[1] + h, -lo[0] : -lo[0] + wd] = card
     edges = np.linspace(0.0, top, THICKNESS_LEVELS + 1)
+    row_top, col_top = (allowed + soft).max(axis=1), (allowed + soft.max()).max(axis=0)
     for a, b in zip(edges[:-1], edges[1:], strict=True):
-        deep = allowed > b - soft
-        rows, cols = np.flatnonzero(deep.any(axis=1)), np.flatnonzero(deep.any(axis=0))
-        if rows.size == 0:
+        rows, cols = np.flatnonzero(row_top > b), np.flatnonzero(col_top > b)  # the part deep enough, boxed
+        if rows.size == 0 or cols.size == 0:
             break
         window = np.s_[rows[0] : rows[-1] + 1, cols[0] : cols[-1] + 1]  # the deeper, the smaller the part
         fade = np.clip((allowed[window] - b) / soft[rows[0] : rows[-1] + 1] + 1.0, 0.0, 1.0)
