@@ -29,8 +29,9 @@ round cross-section; a leg thin; never below the ground); the card is swept
 through that depth before the homography: each pixel repeated along the
 shift its shadow makes as it moves deeper (``THICKNESS_LEVELS`` bands of
 depth, each a segment drawn by doubling; a card larger than ``SWEEP_SIZE``
-is swept on a reduced copy, the card itself kept crisp). A light from nearly the card's side still turns
-it a little (``MIN_INCIDENCE``), so that no card is seen edge-on.
+is swept on a reduced copy, the card itself kept crisp). A light from nearly
+the card's side still turns it a little (``MIN_INCIDENCE``), so that no card
+is seen edge-on.
 
 Size: a disk light of apparent diameter ``angle`` seen from a ground point a
 distance D below a card point along the light blurs the card over a circle of
@@ -324,13 +325,14 @@ class CardTracer:
         xs = [(c - half) * d / float(cam.focal) for c in self._x_cols for d in depths]
         ax, az = self._card_axis(w)
         dx, dz = -w[0] / w[1], -w[2] / w[1]
+        deep = self.depth * self._depth_ray()  # the object's far side (its shadow lies no farther for its drop)
         corners = []
         for x in (min(xs), max(xs)):
             for h in (0.0, self.height):
                 gx, gz = x * ax + h * dx, x * az + h * dz
                 grow = reach * h / self.height
                 for ex, ez in ((0, 0), (grow, 0), (-grow, 0), (0, grow), (0, -grow)):
-                    corners += [(gx + ex, 0.0, gz + ez), (gx + ex, 0.0, gz + ez - self.depth)]
+                    corners += [(gx + ex, 0.0, gz + ez), (gx + ex + deep[0], 0.0, gz + ez + deep[2])]
         uv = self._ground_to_output(np.array(corners), framing)
         width, height = framing.canvas_width, framing.canvas_height
         margin = (UNCLIPPED_MARGIN * width, UNCLIPPED_MARGIN * height) if not clip else (0.0, 0.0)
