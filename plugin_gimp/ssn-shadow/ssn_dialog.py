@@ -10,6 +10,7 @@ from __future__ import annotations
 
 import os
 import sys
+from collections.abc import Iterator
 from contextlib import contextmanager
 from types import SimpleNamespace
 
@@ -97,9 +98,17 @@ class ShadowPreview:
     def render(self, values: dict) -> None:
         if self.cutout_id is None or self.busy:
             return
+        with self.engine_turn():
+            self._render(self.cutout_id, values)
+
+    @contextmanager
+    def engine_turn(self) -> Iterator[None]:
+        """Mark the preview busy while the dialog waits on the engine. The dialog's events are handled during
+        the wait, so a preview timer firing then must wait for its turn: the client answers one request at a time,
+        and a second one from this thread would wait for the first forever."""
         self.busy = True
         try:
-            self._render(self.cutout_id, values)
+            yield
         finally:
             self.busy = False
             if isinstance(self.engine.on_wait, EngineWait):
@@ -397,6 +406,8 @@ def _selftest(dialog, area: LightMapArea, preview: ShadowPreview, values, config
 
     from gi.repository import Gdk
 
+    if preview.busy:  # called among the events handled while a preview waits on the engine: start after it
+        return True
     editor = area.editor
     x, y = 0.85 * area.width, 0.7 * area.height
     press = SimpleNamespace(x=x, y=y, button=1, type=Gdk.EventType.BUTTON_PRESS, state=0)
@@ -434,6 +445,8 @@ def _selftest(dialog, area: LightMapArea, preview: ShadowPreview, values, config
     config.set_property("light-map", edited)
 
     def finish() -> bool:
+        if preview.busy:  # a preview of the edits above waits on the engine: press OK once it is shown
+            return True
         window = dialog.get_window()
         print(
             f"ssn-shadow dialog selftest: dialog {window.get_width()}x{window.get_height()}",
@@ -496,7 +509,8 @@ def _crispness(preview: ShadowPreview, cutout_id: str, values: dict) -> float:
     thumb = preview.thumbnail
     w, h = thumb.width, thumb.height
     settings = settings_from_arguments(values)
-    shown, _ = render_preview(preview.engine, cutout_id, settings, thumb, horizon=-float(h))  # off the image
+    with preview.engine_turn():
+        shown, _ = render_preview(preview.engine, cutout_id, settings, thumb, horizon=-float(h))  # off the image
     dark = [[thumb.data[(y * w + x) * thumb.channels] - shown[3 * (y * w + x)] for x in range(w)] for y in range(h)]
     energy = sum((row[x + 1] - row[x]) ** 2 for row in dark for x in range(w - 1))
     energy += sum((dark[y + 1][x] - dark[y][x]) ** 2 for y in range(h - 1) for x in range(w))
