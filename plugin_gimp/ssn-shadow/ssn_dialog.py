@@ -484,11 +484,12 @@ def _selftest(dialog, area: LightMapArea, preview: ShadowPreview, values, config
 
 
 def _size_selftest(area: LightMapArea, preview: ShadowPreview, values) -> None:
-    """For the integration test: set the selected light's size in the Size box to 12 and then 0.53 degrees,
-    render the preview at each and print the light's angle and how crisp its shadow is alone (:func:`_crispness`)."""
+    """For the integration test: set the selected light's size in the Size box to 30 (a broad light, the
+    network's) and then 0.53 degrees, render the preview at each and print the light's angle and how crisp its
+    shadow is alone (:func:`_crispness`)."""
     editor, crisp = area.editor, {}
     assert editor.selected is not None and preview.cutout_id is not None
-    for degrees in (12.0, 0.53):
+    for degrees in (30.0, 0.53):
         area.size_box.spin.set_value(degrees)
         preview.render(values())
         alone = dict(values(), **{"light-map": light_map.LightMap([editor.lights.lights[editor.selected]]).to_json()})
@@ -496,7 +497,7 @@ def _size_selftest(area: LightMapArea, preview: ShadowPreview, values) -> None:
     light = editor.lights.lights[editor.selected]
     print(
         f"ssn-shadow dialog selftest: size box {area.size_box.spin.get_value():.2f}, light angle {light.angle}, "
-        f"shadow crispness at 12 degrees {crisp[12.0]:.4f}, at 0.53 degrees {crisp[0.53]:.4f}",
+        f"shadow crispness at 30 degrees {crisp[30.0]:.4f}, at 0.53 degrees {crisp[0.53]:.4f}",
         file=sys.stderr,
         flush=True,
     )
