@@ -84,15 +84,20 @@ def main() -> None:
         raise SystemExit(data["error"])
     print(f"competing load: {args.load} busy processes")
     print("a light dragged on a 2000 x 2000 U8 canvas (60 Hz mouse moves): the docker's live preview")
-    print(f"{'light':10s} {'previews/s':>10s} {'median gap ms':>13s} {'worker ms':>9s} {'round trip ms':>13s}")
+    print(
+        f"{'light':10s} {'previews/s':>10s} {'median gap ms':>13s} {'worker ms':>9s} {'round trip ms':>13s} "
+        f"{'preview px':>10s}"
+    )
     for light, p in data["previews"].items():
+        size = " ".join("x".join(map(str, wh)) for wh in p["preview_sizes"])
         print(
             f"{light:10s} {p['previews_per_s']:10.1f} {p['median_preview_gap_ms']!s:>13s} "
-            f"{p['median_worker_ms']!s:>9s} {p['median_round_trip_ms']!s:>13s}"
+            f"{p['median_worker_ms']!s:>9s} {p['median_round_trip_ms']!s:>13s} {size:>10s}"
         )
     print(
         "medians; worker: its render of a preview (the shadow on the thumbnail, the composite); round trip: the "
-        "request to the reply's last byte in Krita"
+        "request to the reply's last byte in Krita; preview px: the preview's size (the docker's preview at its "
+        "preferred width)"
     )
     gen = data["generate_4000x3000_ms"]
     u8 = data["live"].get("U8", {}).get("release_to_layer_ms")
