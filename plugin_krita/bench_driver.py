@@ -19,7 +19,9 @@ RESULT = os.environ.get("SSN_BENCH_RESULT", "/tmp/ssn_bench.json")
 DRAG_S = float(os.environ.get("SSN_BENCH_DRAG_S", "8"))
 RELEASES = 5  # releases timed per depth (their median is reported)
 DEPTHS = os.environ.get("SSN_BENCH_DEPTHS", "U8,U16,F16,F32").split(",")
-out: dict[str, Any] = {"live": {}}
+# The presets whose light is dragged for the preview table: a Gaussian the network renders, a 0.53-degree sun traced
+LIGHTS = [name for name in os.environ.get("SSN_BENCH_LIGHTS", "softbox,sun").split(",") if name]
+out: dict[str, Any] = {"live": {}, "previews": {}}
 
 
 def pixel(depth, bgr, a):
@@ -115,6 +117,73 @@ def spin_for(seconds):
     loop = QEventLoop()
     QTimer.singleShot(int(seconds * 1000), loop.quit)
     loop.exec_()
+
+
+def preview_drag(doc, light):
+    """The preset ``light``'s light dragged on the docker's light map at the mouse's rate for DRAG_S, through the
+    docker's own panel (its map and preview drawn, its settings saved in the document as in Krita): the previews
+    per second, the gaps between them and where the time goes (the worker's render of each preview, its round
+    trip from the request to the reply's last byte)."""
+    from ssn_shadow.persistence import DocumentModels
+    from ssn_shadow.shared import light_map
+    from ssn_shadow.ui.panel import ShadowPanel
+
+    c = controller_for(doc)
+    c.set_model(DocumentModels(c.host).model_for(doc))
+    panel = ShadowPanel(c)
+    panel.resize(300, 700)  # the docker's preferred width
+    panel.show()
+    c.model.light_map = light_map.preset(light)
+    c.generate()
+    spin(c, 120)
+    previews, worker_ms, sizes = [], [], set()
+    c.previewed.connect(lambda rgb, w, h: (previews.append(time.perf_counter()), sizes.add((w, h))))
+    request = c.engine.request
+
+    def timed_request(cmd, *args, on_reply=None, **kwargs):
+        if cmd == "preview" and on_reply is not None:
+            answer = on_reply
+
+            def on_reply(reply, buffers):
+                worker_ms.append(sum(reply.get("timing_ms", {}).values()))
+                answer(reply, buffers)
+
+        return request(cmd, *args, on_reply=on_reply, **kwargs)
+
+    c.engine.request = timed_request
+    replies = trace_replies(c.engine)
+    editor, moves = panel.map_widget.editor, {"i": 0}
+    start = c.model.light_map.lights[0]
+    editor.press(start.u, start.v)
+
+    def move():  # what the map widget does on each mouse move of a drag
+        moves["i"] += 1
+        editor.drag(0.30 + 0.4 * ((moves["i"] % 240) / 240.0), 0.6)
+
+    timer = QTimer()
+    timer.timeout.connect(move)
+    timer.start(16)  # 60 Hz
+    loop = QEventLoop()
+    QTimer.singleShot(int(DRAG_S * 1000), loop.quit)
+    t0 = time.perf_counter()
+    loop.exec_()
+    timer.stop()
+    editor.release()
+    spin(c, 30)
+    in_window = [t for t in previews if t <= t0 + DRAG_S]
+    gaps = [b - a for a, b in zip(in_window, in_window[1:], strict=False)]
+    trips = [done - sent for sent, _, done, _ in replies.get("preview", [])]
+    out["previews"][light] = {
+        "canvas": f"{doc.width()}x{doc.height()}",
+        "mouse_moves": moves["i"],
+        "previews_per_s": round(len(in_window) / DRAG_S, 2),
+        "median_preview_gap_ms": _median([1e3 * g for g in gaps]),
+        "median_worker_ms": _median(worker_ms),
+        "median_round_trip_ms": _median([1e3 * t for t in trips]),
+        "preview_sizes": sorted(sizes),
+    }
+    panel.close()
+    c.engine.shutdown()
 
 
 def live_drag(doc, depth):
@@ -235,6 +304,9 @@ def generate_latency(doc, runs=3):
 
 def main(*args):
     try:
+        for light in LIGHTS:
+            preview_drag(document(2000, 2000), light)
+            save()
         for depth in DEPTHS:
             live_drag(document(2000, 2000, depth), depth)
             save()

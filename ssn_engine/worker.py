@@ -255,15 +255,18 @@ class Worker:
         read = s.camera_read_in(framing) if horizon is None and read_horizon else None
         if read is not None:
             horizon = read["horizon"]
+        t0 = time.perf_counter()
         shadow = s.render(light_map, framing)
+        t1 = time.perf_counter()
         color, opacity = header.get("color", (0.0, 0.0, 0.0)), float(header.get("opacity", 1.0))
-        reply = {}
+        image = preview_image(background, shadow, cover, color, opacity, horizon, read is not None)
+        reply: dict[str, Any] = {
+            "timing_ms": {"shadow": round(1e3 * (t1 - t0), 2), "image": round(1e3 * (time.perf_counter() - t1), 2)}
+        }
         reason = no_shadow_reason(light_map, shadow)
         if reason:
             reply["no_shadow"] = reason
-        return reply, {
-            "image": to_buffer(preview_image(background, shadow, cover, color, opacity, horizon, read is not None))
-        }
+        return reply, {"image": to_buffer(image)}
 
     @staticmethod
     def _preview_framing(s: Session, width: int, height: int) -> Framing:

@@ -29,6 +29,7 @@ the undo made its shadow layer the active one.
 
 from __future__ import annotations
 
+import math
 import time
 from typing import Any
 
@@ -43,8 +44,18 @@ from .properties import Property
 from .scheduling import Drag, LatestWins, RenderJob, RenderQueue
 from .shared import camera_rules, shadow_notes
 
-PREVIEW_SIDE = 320  # pixels: the longer side of the docker's live preview
+PREVIEW_SIDE = 320  # pixels: the longer side of the docker's live preview at most
 PAUSE_MS = 300  # a drag that rests this long writes the layer
+
+
+def preview_side(width: int, height: int, box: tuple[int, int] | None) -> int:
+    """The longer side of the preview of a ``width`` x ``height`` image shown in ``box`` (the preview's width
+    and height in device pixels; None: not shown yet): as large as it is drawn there, at most ``PREVIEW_SIDE``.
+    The worker's time for a preview grows with its pixels (a small light is traced on each)."""
+    if box is None:
+        return PREVIEW_SIDE
+    scale = min(box[0] / max(width, 1), box[1] / max(height, 1))
+    return max(1, min(PREVIEW_SIDE, math.ceil(max(width, height) * scale)))
 
 
 class ShadowController(QObject):
@@ -78,6 +89,7 @@ class ShadowController(QObject):
         self._layer_map: Any = None  # the light map of the last layer render sent
         self._background: tuple[int, int, bytes] | None = None  # the preview's image without its shadow
         self._preview_due = False  # a render that is an undo step of its own: the preview follows it
+        self.preview_box: tuple[int, int] | None = None  # where the preview is drawn, device pixels (the panel's)
         self._drag: Drag | None = None
         self._pause = QTimer(self)
         self._pause.setSingleShot(True)
@@ -204,7 +216,7 @@ class ShadowController(QObject):
             return Drag(self._take_background(source))
         shown = self.host.shadow_layer_id(source)  # its settings are the copy's
         try:
-            background, replaced = begin(source, PREVIEW_SIDE)
+            background, replaced = begin(source, self._preview_side(source))
         except Exception as exc:  # the UI boundary
             self.model.report_status("warning", f"No live preview: {type(exc).__name__}: {exc}")
             return Drag(None)
@@ -216,12 +228,15 @@ class ShadowController(QObject):
         return Drag(background, wrote=True)
 
     # -- preview ------------------------------------------------------------------
+    def _preview_side(self, source: Source) -> int:
+        return preview_side(source.width, source.height, self.preview_box)
+
     def _take_background(self, source: Source) -> tuple[int, int, bytes] | None:
         """The image without its shadow for the preview (None: no preview; the layer still follows)."""
         if self.cutout is None:  # the worker restarted: the layer alone follows
             return None
         try:
-            return self.host.preview_background(source, PREVIEW_SIDE)
+            return self.host.preview_background(source, self._preview_side(source))
         except Exception as exc:  # the UI boundary
             self.model.report_status("warning", f"No live preview: {type(exc).__name__}: {exc}")
             return None

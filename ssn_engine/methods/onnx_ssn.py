@@ -118,10 +118,10 @@ def _session(path: Path, role: str) -> ort.InferenceSession:
         raise ModelError(f"model file missing: {path}")
     options = ort.SessionOptions()
     options.graph_optimization_level = ort.GraphOptimizationLevel.ORT_ENABLE_ALL
-    # Threads spin while a run lasts (a light change's graph ~1 ms faster) and stop as soon as it returns, so that
-    # they do not hold a core the canvas work after it needs (docs/engine.md, "Speed").
-    options.add_session_config_entry("session.intra_op.allow_spinning", "1")
-    options.add_session_config_entry("session.force_spinning_stop", "1")
+    # Threads wait without spinning: spinning took ~1 ms off a light change on idle cores, but where another
+    # process wants the cores (the host, its UI, any other program) a spinning thread holds one the thread it waits
+    # for needs, and the SR graph took 3 to 5 times as long (docs/engine.md, "Speed").
+    options.add_session_config_entry("session.intra_op.allow_spinning", "0")
     options.enable_cpu_mem_arena = False  # the arena kept ~80 MB after the first AOP run; no measurable speed cost
     try:
         session = ort.InferenceSession(str(path), options, providers=["CPUExecutionProvider"])

@@ -349,8 +349,8 @@ def test_blur_frames_softens_the_cards_steps_and_keeps_its_shadow():
 
 
 def test_the_model_holds_no_core_once_a_light_change_returns(mask):
-    """onnxruntime's threads spin while a graph runs and stop when it returns: a worker waiting for the next light
-    change uses no CPU that the host (or the canvas work after the graph) needs."""
+    """onnxruntime's threads do not spin: a worker waiting for the next light change uses no CPU that the host (or
+    the canvas work after the graph) needs."""
     model = OnnxSSN(Path(api.__file__).parent / "models")
     masks = mask[None]
     ao = model.predict_ao(masks)

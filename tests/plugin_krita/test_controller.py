@@ -1,6 +1,8 @@
+import numpy as np
+import pytest
 from krita_helpers import FakeHost, cutout_alpha, wait_until, worker_command
 from PyQt5.QtCore import QEventLoop, QTimer
-from plugin_krita.ssn_shadow.controller import ShadowController
+from plugin_krita.ssn_shadow.controller import PREVIEW_SIDE, ShadowController, preview_side
 from plugin_krita.ssn_shadow.engine import EngineProcess
 from ssn_engine.host_kit.engine_config import EngineConfig
 
@@ -285,3 +287,64 @@ def test_an_undo_brings_back_the_settings_of_the_shadow_it_shows(qapp):
         assert c.model.light_map == lm.preset("low-sun-left") and len(host.writes) == 2
     finally:
         engine.shutdown()
+
+
+class SlowWorker:
+    """An engine whose replies wait until the test lets the worker answer (a slow worker); a preview's image is
+    grey at the level of the first light's u, so the test can tell which light a shown preview is of."""
+
+    def __init__(self):
+        self.waiting: list[tuple[str, dict, dict, object]] = []
+        self.sent: list[tuple[str, dict]] = []
+        self.most_previews_waiting = 0
+
+    def request(self, cmd, buffers=None, *, on_reply=None, on_error=None, timeout=None, **params):
+        self.sent.append((cmd, params))
+        self.waiting.append((cmd, params, buffers or {}, on_reply))
+        queued = sum(1 for w in self.waiting if w[0] == "preview")
+        self.most_previews_waiting = max(self.most_previews_waiting, queued)
+        return len(self.sent)
+
+    def answer(self) -> None:
+        """The worker answers its oldest request."""
+        cmd, params, buffers, on_reply = self.waiting.pop(0)
+        if cmd != "preview":
+            raise AssertionError(f"only previews expected during a drag, got {cmd}")
+        h, w = buffers["background"].shape[:2]
+        level = round(255 * params["light_map"]["lights"][0]["u"])
+        on_reply({}, {"image": np.full((h, w, 3), level, np.uint8)})
+
+
+def test_a_drag_while_the_worker_is_slow_keeps_one_preview_pending_and_ends_with_the_last_light(qapp):
+    """Moves come faster than the worker answers: never more than one preview request waits at the worker (no
+    stale previews queue up behind it), the moves in between become one request with the light of the moment,
+    and the drag ends showing the last light's preview."""
+    worker = SlowWorker()
+    host = FakeHost(w=800, h=640, alpha=cutout_alpha(800, 640, (320, 160, 480, 560)))
+    c = ShadowController(worker, host)
+    c.source, c.cutout = host.read_source(host.document), "c1"  # as after a Generate
+    shown = []
+    c.previewed.connect(lambda rgb, w, h: shown.append(rgb[0]))
+    for i in range(60):  # the mouse at 60 Hz, the worker answering one in 7 moves
+        moved(c, 0.2 + 0.01 * i, 0.6, i == 0, dragging=True)
+        if i % 7 == 6 and worker.waiting:
+            worker.answer()
+    while worker.waiting:
+        worker.answer()
+    previews = [params for cmd, params in worker.sent if cmd == "preview"]
+    assert worker.most_previews_waiting == 1
+    assert 8 <= len(previews) <= 10  # one per answer, and the one the last answer sent: not one per move
+    last = round(255 * (0.2 + 0.01 * 59))
+    assert previews[-1]["light_map"]["lights"][0]["u"] == pytest.approx(0.79)
+    assert shown[-1] == last and len(shown) == len(previews)
+    assert [cmd for cmd, _ in worker.sent] == ["preview"] * len(previews)  # the layer waits for the release
+
+
+def test_the_preview_is_rendered_as_large_as_the_docker_draws_it():
+    """The worker renders (and traces a small light on) each pixel of a preview: a preview drawn in a 280 x 175
+    box is asked for at that size, not larger; at most PREVIEW_SIDE pixels a side."""
+    assert preview_side(2000, 2000, (280, 175)) == 175
+    assert preview_side(4000, 3000, (280, 175)) == 234  # 233.3 rounded up: it fills the box's height
+    assert preview_side(800, 200, (280, 175)) == 280
+    assert preview_side(8000, 1000, (1200, 200)) == PREVIEW_SIDE  # a wide dock: at most that
+    assert preview_side(800, 640, None) == PREVIEW_SIDE  # no preview shown yet

@@ -1,6 +1,6 @@
 import json
 
-from PyQt5.QtCore import QEvent, QPoint, QPointF, Qt
+from PyQt5.QtCore import QElapsedTimer, QEvent, QPoint, QPointF, Qt
 from PyQt5.QtGui import QMouseEvent, QWheelEvent
 from PyQt5.QtTest import QTest
 from PyQt5.QtWidgets import QApplication
@@ -10,6 +10,7 @@ from ssn_engine.host_kit.ao_edits import AoEdits
 from plugin_krita.ssn_shadow.controller import ShadowController
 from plugin_krita.ssn_shadow.persistence import ANNOTATION, DocumentModels
 from plugin_krita.ssn_shadow.shared import light_map as lm
+from plugin_krita.ssn_shadow.ui import light_map_widget
 from plugin_krita.ssn_shadow.ui.light_map_widget import LightMapWidget
 from plugin_krita.ssn_shadow.ui.panel import ShadowPanel
 
@@ -18,11 +19,12 @@ class NoEngine:
     """An engine that never answers (enough for UI state)."""
 
     def __init__(self):
-        self.sent, self.params = [], []
+        self.sent, self.params, self.buffers = [], [], []
 
     def request(self, cmd, buffers=None, *, on_reply=None, on_error=None, timeout=None, **params):
         self.sent.append(cmd)
         self.params.append(params)
+        self.buffers.append(buffers or {})
         return len(self.sent)
 
 
@@ -57,6 +59,37 @@ def test_click_adds_drag_moves_right_click_deletes(qapp):
 
     QTest.mouseClick(w, Qt.RightButton, Qt.NoModifier, pos(w, 0.6, 0.2))
     assert len(w.light_map) == 0
+
+
+def test_a_drag_makes_the_maps_picture_at_most_every_interval_and_ends_with_the_lights_picture(qapp, monkeypatch):
+    """The map's picture (pure Python on Krita's UI thread) is not made for every mouse move of a drag, which at
+    the mouse's rate took CPU from the worker's previews; a pause in the drag, and its end, show the picture of
+    the lights where they are."""
+    made = []
+    real = light_map_widget.light_map_picture.map_rgb
+
+    def map_rgb(lights, width, height):
+        made.append(lights.copy())
+        return real(lights, width, height)
+
+    monkeypatch.setattr(light_map_widget.light_map_picture, "map_rgb", map_rgb)
+    w, events = widget(qapp, lm.preset("softbox"))
+    QTest.qWait(10)
+    light = w.light_map.lights[0]
+    QTest.mousePress(w, Qt.LeftButton, Qt.NoModifier, pos(w, light.u, light.v))
+    timer = QElapsedTimer()
+    timer.start()
+    for k in range(30):  # the mouse as fast as the event loop goes, each move drawn
+        target = QPointF(pos(w, 0.3 + 0.001 * k, light.v))
+        QApplication.sendEvent(w, QMouseEvent(QEvent.MouseMove, target, Qt.NoButton, Qt.LeftButton, Qt.NoModifier))
+        QApplication.processEvents()
+    most = timer.elapsed() // light_map_widget.PICTURE_INTERVAL_MS + 2
+    assert len(made) <= min(most, 29), (len(made), timer.elapsed())
+    QTest.qWait(2 * light_map_widget.PICTURE_INTERVAL_MS)  # the drag rests: the picture catches up
+    assert made[-1] == w.light_map
+    QTest.mouseRelease(w, Qt.LeftButton, Qt.NoModifier, pos(w, 0.31, light.v))
+    QTest.qWait(10)
+    assert made[-1] == w.light_map and w.picture() is not None
 
 
 def wheel(w, u, v):
@@ -196,6 +229,31 @@ def test_a_drag_on_the_map_previews_and_the_release_renders_the_layer(qapp):
     c.previewed.emit(bytes([90, 90, 90]) * (200 * 160), 200, 160)
     assert panel.preview.isVisible() and panel.preview.image.size().width() == 200
     assert panel.preview.heightForWidth(240) == 150 and panel.preview.heightForWidth(400) == 200
+
+
+def test_a_drag_previews_at_the_size_the_docker_draws_the_preview(qapp):
+    """The preview's image is asked for as large as the docker shows it (in device pixels), not larger: the
+    worker renders, and traces a small light on, each of its pixels."""
+    engine = NoEngine()
+    host = FakeHost(w=2000, h=1500)
+    c = ShadowController(engine, host)
+    panel = ShadowPanel(c)
+    panel.resize(300, 900)
+    panel.show()
+    c.source, c.cutout = host.read_source(host.document), "c1"  # as after a Generate
+    w = panel.map_widget
+    light = w.light_map.lights[0]
+    QTest.mousePress(w, Qt.LeftButton, Qt.NoModifier, pos(w, light.u, light.v))
+    target = QPointF(pos(w, light.u + 0.05, light.v))
+    QApplication.sendEvent(w, QMouseEvent(QEvent.MouseMove, target, Qt.NoButton, Qt.LeftButton, Qt.NoModifier))
+    assert engine.sent == ["preview"]
+    height, width = engine.buffers[0]["background"].shape[:2]
+    ratio = panel.preview.devicePixelRatioF()
+    box = (panel.preview.width() * ratio, panel.preview.height() * ratio)
+    assert width <= box[0] + 1 and height <= box[1] + 1  # drawn without being scaled down
+    assert max(width - box[0], height - box[1]) > -1.5  # filling the box's width or height
+    assert (width, height) != (320, 240)  # the size before, as large as the preview could be
+    QTest.mouseRelease(w, Qt.LeftButton, Qt.NoModifier, target.toPoint())
 
 
 def test_the_first_preview_of_a_drag_moves_nothing_under_the_mouse(qapp):

@@ -4,17 +4,25 @@ Click to add a light, drag to move it, wheel for its size (Shift: intensity),
 right-click or Delete to remove. The gestures are the host kit's
 ``LightMapEditor`` (the same as GIMP's); this widget draws the map and turns
 Qt's mouse events into the editor's calls.
+
+While a light moves (a drag, a slider) the map's picture is made again at most
+every ``PICTURE_INTERVAL_MS`` (the markers follow every move): the picture is
+pure Python, several milliseconds for a large disk light, on Krita's UI
+thread, and at the mouse's rate it took CPU from the worker rendering the
+drag's previews. The edit that ends the move draws it at once.
 """
 
 from __future__ import annotations
 
-from PyQt5.QtCore import QPointF, QRectF, QSize, Qt, pyqtSignal
+from PyQt5.QtCore import QElapsedTimer, QPointF, QRectF, QSize, Qt, QTimer, pyqtSignal
 from PyQt5.QtGui import QColor, QImage, QPainter, QPen, QPolygonF
 from PyQt5.QtWidgets import QSizePolicy, QWidget
 
 from ..shared import light_editor
 from ..shared import light_map as lm
 from ..shared import light_map_picture
+
+PICTURE_INTERVAL_MS = 50  # while a light moves, the map's picture is made at most this often
 
 
 class LightMapWidget(QWidget):
@@ -27,6 +35,10 @@ class LightMapWidget(QWidget):
         super().__init__(parent)
         self.editor = light_editor.LightMapEditor(light_map, self._changed, self._selected)
         self._picture: QImage | None = None
+        self._made = QElapsedTimer()  # since the picture was made
+        self._catch_up = QTimer(self)  # draws the picture of the lights a throttled move left behind
+        self._catch_up.setSingleShot(True)
+        self._catch_up.timeout.connect(self._redraw)
         self.setFocusPolicy(Qt.FocusPolicy.ClickFocus)
         self.setMouseTracking(False)
         self.setMinimumSize(160, 80)
@@ -70,9 +82,19 @@ class LightMapWidget(QWidget):
 
     # -- the editor's callbacks ----------------------------------------------------
     def _changed(self, live: bool, new_stroke: bool) -> None:
+        age = self._made.elapsed() if self._made.isValid() else PICTURE_INTERVAL_MS
+        if live and self._picture is not None and age < PICTURE_INTERVAL_MS:
+            if not self._catch_up.isActive():
+                self._catch_up.start(PICTURE_INTERVAL_MS - age)
+            self.update()  # the markers move now; the picture follows
+        else:
+            self._redraw()
+        self.lightsChanged.emit(live, new_stroke)
+
+    def _redraw(self) -> None:
+        self._catch_up.stop()
         self._picture = None
         self.update()
-        self.lightsChanged.emit(live, new_stroke)
 
     def _selected(self, index: int | None) -> None:
         self.update()
@@ -113,6 +135,7 @@ class LightMapWidget(QWidget):
             w, h = light_map_picture.PICTURE_SIZE
             data = light_map_picture.map_rgb(self.light_map, w, h)
             self._picture = QImage(data, w, h, 3 * w, QImage.Format_RGB888).copy()
+            self._made.start()
         return self._picture
 
     def paintEvent(self, event) -> None:

@@ -353,6 +353,7 @@ class ShadowPanel(QWidget):
         bind(c, "busy", guard(self._show_busy))
         c.aoChanged.connect(guard(self.ao_preview.set_images))
         c.previewed.connect(guard(self.preview.set_image))
+        self.preview.resized.connect(guard(lambda w, h: setattr(c, "preview_box", (w, h))))
         c.engineReady.connect(guard(self._engine_ready))
 
     def show_model(self, model: ShadowModel) -> None:

@@ -10,7 +10,7 @@ mouse in the middle of a drag.
 
 from __future__ import annotations
 
-from PyQt5.QtCore import QRectF, QSize, Qt
+from PyQt5.QtCore import QRectF, QSize, Qt, pyqtSignal
 from PyQt5.QtGui import QColor, QImage, QPainter
 from PyQt5.QtWidgets import QSizePolicy, QWidget
 
@@ -23,6 +23,8 @@ PLACEHOLDER = "After Generate: the image with its shadow and the horizon; it fol
 class ShadowPreview(QWidget):
     """Shows the latest preview image, scaled into a box of a fixed shape (its height depends only on the
     width)."""
+
+    resized = pyqtSignal(int, int)  # the box's width and height in device pixels: previews drawn as large as that
 
     def __init__(self, parent: QWidget | None = None) -> None:
         super().__init__(parent)
@@ -45,6 +47,11 @@ class ShadowPreview(QWidget):
         """No image (another document): the placeholder again, in the same place."""
         self.image = None
         self.update()
+
+    def resizeEvent(self, event) -> None:
+        super().resizeEvent(event)
+        ratio = self.devicePixelRatioF()
+        self.resized.emit(round(self.width() * ratio), round(self.height() * ratio))
 
     def sizeHint(self) -> QSize:
         return QSize(320, self.heightForWidth(320))
