@@ -127,6 +127,11 @@ class CanvasShadow:
     sampled from, so that a layer is made a band of rows at a time (:meth:`rows`) without a canvas-sized float
     array; :attr:`values` makes them all."""
 
+    @classmethod
+    def nothing(cls) -> CanvasShadow:
+        """No visible shadow (0 x 0 values)."""
+        return cls(np.zeros((0, 0), np.float32), 0, 0)
+
     def __init__(self, values: np.ndarray | _Enlarged, x: int, y: int) -> None:
         self.x, self.y = x, y
         if isinstance(values, _Enlarged):
@@ -303,7 +308,7 @@ def shadow_to_canvas(
     visible = shadow > SHADOW_FLOOR
     rows, cols = np.flatnonzero(visible.any(axis=1)), np.flatnonzero(visible.any(axis=0))
     if rows.size == 0:
-        return CanvasShadow(np.zeros((0, 0), np.float32), 0, 0)
+        return CanvasShadow.nothing()
     cx0, cy0 = framing.to_canvas(cols[0] + ox, rows[0] + oy)
     cx1, cy1 = framing.to_canvas(cols[-1] + 1 + ox, rows[-1] + 1 + oy)
     x0, y0, x1, y1 = math.floor(cx0), math.floor(cy0), math.ceil(cx1), math.ceil(cy1)
@@ -311,7 +316,7 @@ def shadow_to_canvas(
         x0, y0 = max(0, x0), max(0, y0)
         x1, y1 = min(framing.canvas_width, x1), min(framing.canvas_height, y1)
     if x1 <= x0 or y1 <= y0:
-        return CanvasShadow(np.zeros((0, 0), np.float32), 0, 0)
+        return CanvasShadow.nothing()
     s = framing.scale
     pad = math.ceil(s) + 1  # zero margin so the samples never leave the padded frame
     padded = np.pad(np.asarray(shadow, np.float32), pad)

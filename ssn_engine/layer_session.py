@@ -75,7 +75,7 @@ def combine_shadows(shadows: list[CanvasShadow], hard_share: float) -> CanvasSha
     rest times their union under a broad sky, ``1 - prod(1 - s_i)``."""
     shown = [s for s in shadows if not s.is_empty]
     if not shown:
-        return CanvasShadow(np.zeros((0, 0), np.float32), 0, 0)
+        return CanvasShadow.nothing()
     x0, y0, x1, y1 = union_box([(s.x, s.y, s.shape[1], s.shape[0]) for s in shown])
     darkest = np.zeros((y1 - y0, x1 - x0), np.float32)
     lit = np.ones_like(darkest)
@@ -213,25 +213,12 @@ class LayerSession:
         self.edits, self.ao = list(edits), self._layer_ao("ao")
         return self.ao
 
-    def render_frame(self, light_map: LightMap) -> np.ndarray:
-        """The objects' frame shadows (k, N, N) for a light map."""
-        return np.stack([part.render_frame(light_map) for part in self.parts])
-
-    def to_canvas(
-        self, frame: np.ndarray, light_map: LightMap, clip: bool = True, framing: Framing | None = None
-    ) -> CanvasShadow:
-        """The objects' frame shadows ``frame`` (k, N, N) of ``light_map`` on the canvas (or on ``framing``'s, a
-        preview's), combined."""
-        shadows = [
-            part.to_canvas(f, light_map, clip, self._part_framing(part, framing))
-            for part, f in zip(self.parts, frame, strict=True)
-        ]
+    def render(self, light_map: LightMap, framing: Framing | None = None, clip: bool = True) -> CanvasShadow:
+        """The combined shadow at canvas resolution, or on ``framing``'s canvas (each object's
+        :meth:`ShadowSession.render`, combined as the module docstring says)."""
+        shadows = [part.render(light_map, self._part_framing(part, framing), clip) for part in self.parts]
         elm = render_light_map(light_map, NETWORK_SHAPE[0])
         return combine_shadows(shadows, float(small_lights_share(elm[None])[0]))
-
-    def render(self, light_map: LightMap, framing: Framing | None = None) -> CanvasShadow:
-        """The combined shadow at canvas resolution, or on ``framing``'s canvas."""
-        return self.to_canvas(self.render_frame(light_map), light_map, framing=framing)
 
     def cover(self, framing: Framing) -> np.ndarray:
         """The layer's alpha (h, w) on ``framing``'s canvas, resampled from the objects' frames."""

@@ -12,7 +12,9 @@ E0: s = sum_i (E0_i / E0) s_i.
 
 from __future__ import annotations
 
+import concurrent.futures
 import math
+import threading
 from typing import Any
 
 import numpy as np
@@ -29,6 +31,18 @@ from .host_kit.sky_map import NETWORK_SHAPE
 from .methods import GeometricCard, ShadowMethod
 from .methods.base import camera_limits
 from .methods.geometric import camera_at
+
+_network: concurrent.futures.ThreadPoolExecutor | None = None
+_network_lock = threading.Lock()
+
+
+def _network_thread() -> concurrent.futures.ThreadPoolExecutor:
+    """The thread the network's frames are rendered on while the caller traces (one: onnxruntime has its own)."""
+    global _network
+    with _network_lock:
+        if _network is None:
+            _network = concurrent.futures.ThreadPoolExecutor(1, thread_name_prefix="ssn-network")
+        return _network
 
 
 def camera_input(framing: Framing, horizon: float, fov: float = DEFAULT_FOV) -> tuple[float, float]:
@@ -148,24 +162,53 @@ class ShadowSession:
         depth, its contact), that is kept: s_small = max(traced, network). The two parts add up in their
         shares of E0."""
         framing = framing or self.framing
+        nets = self._network_shadows(frames, light_map, clip, framing)
+        return self._combined(nets, light_map, self._traced(light_map, clip, framing))
+
+    def _network_shadows(
+        self, frames: np.ndarray, light_map: LightMap, clip: bool, framing: Framing
+    ) -> tuple[CanvasShadow, CanvasShadow | None]:
+        """The network's frames on ``framing``'s canvas: of the broad lights (without small lights, the whole
+        shadow), and of the small lights as Gaussians (None without small lights)."""
         traced, broad = split_lights(light_map)
         if not traced:
-            return self._network_canvas(frames[0], broad, clip, framing)
+            return self._network_canvas(frames[0], broad, clip, framing), None
+        wide = CanvasShadow.nothing() if broad.is_dark else self._network_canvas(frames[0], broad, clip, framing)
+        return wide, self._network_canvas(frames[1], as_gaussians(traced), clip, framing)
+
+    def _traced(self, light_map: LightMap, clip: bool, framing: Framing) -> list[tuple[float, np.ndarray, int, int]]:
+        """The small lights' traced shadows on ``framing``'s canvas, each with its share of their E0."""
+        traced, broad = split_lights(light_map)
+        if not traced:
+            return []
+        power = light_power(LightMap([*traced, *broad.lights]))[: len(traced)]
+        if power.sum() <= 0:
+            return []
+        return [
+            (share, *self.tracer.shadow(light.u, light.v, light.size_degrees, framing, clip))
+            for light, share in zip(traced, power / power.sum(), strict=True)
+        ]
+
+    @staticmethod
+    def _combined(
+        nets: tuple[CanvasShadow, CanvasShadow | None],
+        light_map: LightMap,
+        parts: list[tuple[float, np.ndarray, int, int]],
+    ) -> CanvasShadow:
+        """:meth:`to_canvas` from the network's shadows (:meth:`_network_shadows`) and the traced ``parts``
+        (:meth:`_traced`)."""
+        wide, net = nets
+        if net is None:
+            return wide
+        traced, broad = split_lights(light_map)
         power = light_power(LightMap([*traced, *broad.lights]))
         if power.sum() <= 0:
-            return CanvasShadow(np.zeros((0, 0), np.float32), 0, 0)
-        shares = power / power.sum()
-        small = float(shares[: len(traced)].sum())
-        parts = [
-            (share / small, *self.tracer.shadow(light.u, light.v, light.size_degrees, framing, clip))
-            for light, share in zip(traced, shares[: len(traced)], strict=True)
-        ]
-        net = self._network_canvas(frames[1], as_gaussians(traced), clip, framing)
+            return CanvasShadow.nothing()
+        small = float(power[: len(traced)].sum() / power.sum())
         values, x, y = placed_sum(parts, (net.values, net.x, net.y))
         if broad.is_dark:
             return CanvasShadow(values, x, y)
-        net = self._network_canvas(frames[0], broad, clip, framing)
-        return CanvasShadow(*placed_sum([(small, values, x, y), (1.0 - small, net.values, net.x, net.y)]))
+        return CanvasShadow(*placed_sum([(small, values, x, y), (1.0 - small, wide.values, wide.x, wide.y)]))
 
     def _network_canvas(self, frame: np.ndarray, light_map: LightMap, clip: bool, framing: Framing) -> CanvasShadow:
         """The network's frame shadow of ``light_map`` on ``framing``'s canvas, continued beyond the frame's
@@ -185,9 +228,17 @@ class ShadowSession:
         return shadow_to_canvas(values, framing, origin, clip)
 
     def render(self, light_map: LightMap, framing: Framing | None = None, clip: bool = True) -> CanvasShadow:
-        """The shadow at canvas resolution, or on ``framing``'s canvas (:meth:`render_frame`, then
-        :meth:`to_canvas`)."""
-        return self.to_canvas(self.render_frame(light_map), light_map, clip, framing)
+        """The shadow at canvas resolution, or on ``framing``'s canvas: :meth:`to_canvas` of :meth:`render_frame`,
+        the network's frames rendered on a thread of their own while the small lights are traced (both release
+        the GIL: a sun's shadow costs about the longer of the two, not their sum)."""
+        framing = framing or self.framing
+        if not split_lights(light_map)[0]:
+            return self.to_canvas(self.render_frame(light_map), light_map, clip, framing)
+        nets = _network_thread().submit(
+            lambda: self._network_shadows(self.render_frame(light_map), light_map, clip, framing)
+        )
+        parts = self._traced(light_map, clip, framing)
+        return self._combined(nets.result(), light_map, parts)
 
     def cover(self, framing: Framing) -> np.ndarray:
         """The cutout's alpha (h, w) on ``framing``'s canvas, resampled from the frame: what hides the shadow

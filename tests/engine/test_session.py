@@ -150,6 +150,21 @@ def test_an_unclipped_shadow_reaches_past_the_canvas():
     np.testing.assert_allclose(inside, clipped.values, atol=1e-5)  # the same shadow where both cover it
 
 
+def test_a_small_and_a_broad_light_render_the_same_shadow_while_the_network_runs_beside_the_tracer():
+    """``render`` runs the network on a thread of its own while the small lights are traced: the same pixels as
+    the network's frames then the canvas, one after the other, for a sun with a sky, clipped or whole."""
+    alpha = np.zeros((300, 400), np.uint8)
+    alpha[100:260, 130:190] = drawn_alpha(60, 160)
+    session = ShadowSession(alpha, GeometricCard())
+    lights = LightMap([GaussianLight.disk(0.3, 0.7, 0.53, 1.0), GaussianLight(0.6, 0.3, 0.05, 0.5)])
+    for clip in (True, False):
+        together = session.render(lights, clip=clip)
+        in_turn = session.to_canvas(session.render_frame(lights), lights, clip)
+        assert (together.x, together.y) == (in_turn.x, in_turn.y)
+        np.testing.assert_array_equal(together.values, in_turn.values)
+        assert together.values.max() > 0.5
+
+
 def test_a_canvas_joins_only_the_part_of_a_long_shadow_it_sees():
     """The frame's shadow joined to the card's over a window (a clipped canvas's) is the whole join, cropped."""
     rng = np.random.default_rng(5)
