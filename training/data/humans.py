@@ -48,14 +48,12 @@ STANDING = {  # (lo, hi) per joint role, each side: every pose starts from these
     "hip_y": (-6, 6),
     "knee_x": (0, 8),
 }
-ARMS = {  # the arms of a pose but walking: (lo, hi) per joint role over the standing ones
-    "arms_raised": {
-        "upperarm_y": (-150, -70),
-        "upperarm_x": (-30, 10),
-        "elbow_x": (-60, 0),
-    },  # both, or the left alone (2 in 5)
+# The arms of each pose but walking: (lo, hi) per joint role, over the standing ones; both arms, but arms_raised's
+# are the left alone 2 times in 5 and arm_out's one, either
+ARMS = {
+    "arms_raised": {"upperarm_y": (-150, -70), "upperarm_x": (-30, 10), "elbow_x": (-60, 0)},
     "arms_crossed": {"upperarm_y": (35, 50), "upperarm_x": (-45, -25), "elbow_x": (-110, -80), "elbow_z": (-80, -50)},
-    "arm_out": {"upperarm_y": (-50, -30), "upperarm_x": (-70, 0), "elbow_x": (-30, 0)},  # one side, either
+    "arm_out": {"upperarm_y": (-50, -30), "upperarm_x": (-70, 0), "elbow_x": (-30, 0)},
     "hands_on_hips": {"upperarm_y": (0, 15), "upperarm_x": (5, 25), "elbow_x": (-100, -70), "elbow_z": (-60, -30)},
 }
 
