@@ -3,9 +3,11 @@
 from __future__ import annotations
 
 import functools
+import io
 import os
 import sys
 from pathlib import Path
+from typing import TYPE_CHECKING
 
 import numpy as np
 
@@ -15,6 +17,12 @@ if str(REPO) not in sys.path:
 
 from ssn_engine.hemisphere import render_light_map  # noqa: E402
 from ssn_engine.host_kit.light_map import LightMap  # noqa: E402
+from ssn_engine.host_kit.protocol import read_message  # noqa: E402
+
+if TYPE_CHECKING:
+    from ssn_engine.worker import Worker
+
+HELLO = b'{"id": 99, "cmd": "hello"}\n'  # sent last: its answer shows the worker still in step
 
 
 @functools.lru_cache(maxsize=1)
@@ -99,3 +107,17 @@ def peak_alpha(shadow: np.ndarray, region: np.ndarray) -> float:
     """The peak of a shadow on a region of the canvas, robust to a few saturated contact pixels: its 95th
     percentile there."""
     return float(np.percentile(shadow[region], 95))
+
+
+def converse(worker: Worker, data: bytes) -> tuple[list[dict], bool]:
+    """Feed the byte stream ``data`` to ``worker`` in-process: its reply headers (each one's buffers read in full)
+    and whether it was asked to shut down (serve's result)."""
+    writer = io.BytesIO()
+    ended = worker.serve(io.BytesIO(data), writer)
+    writer.seek(0)
+    replies = []
+    while True:
+        try:
+            replies.append(read_message(writer)[0])
+        except EOFError:
+            return replies, ended

@@ -160,8 +160,13 @@ lights = st.builds(
 )
 
 
-def _elms(light_lists):
-    return np.stack([render_light_map(LightMap(ls)) for ls in light_lists]).astype(np.float32)
+def _draw_frames(data, min_lights: int) -> tuple[np.ndarray, np.ndarray]:
+    """Frames drawn from ``data``: (masks, one ELM a frame of ``min_lights`` to 3 lights)."""
+    m = data.draw(frame_masks())
+    light_lists = data.draw(
+        st.lists(st.lists(lights, min_size=min_lights, max_size=3), min_size=len(m), max_size=len(m))
+    )
+    return m, np.stack([render_light_map(LightMap(ls)) for ls in light_lists]).astype(np.float32)
 
 
 PROPERTY = settings(max_examples=6, deadline=None, suppress_health_check=[HealthCheck.too_slow])
@@ -170,9 +175,7 @@ PROPERTY = settings(max_examples=6, deadline=None, suppress_health_check=[Health
 @PROPERTY
 @given(data=st.data())
 def test_property_range_shape_and_inputs_unchanged(data):
-    m = data.draw(frame_masks())
-    light_lists = data.draw(st.lists(st.lists(lights, min_size=0, max_size=3), min_size=len(m), max_size=len(m)))
-    e = _elms(light_lists)
+    m, e = _draw_frames(data, min_lights=0)
     use_ao = data.draw(st.booleans())
     ao = np.clip(1.0 - 0.5 * m, 0, 1) if use_ao else None
     m0, e0 = m.copy(), e.copy()
@@ -208,9 +211,7 @@ def test_an_empty_mask_casts_no_shadow():
 @PROPERTY
 @given(data=st.data())
 def test_property_scaling_the_elm_does_not_change_the_shadow(data):
-    m = data.draw(frame_masks())
-    light_lists = data.draw(st.lists(st.lists(lights, min_size=1, max_size=3), min_size=len(m), max_size=len(m)))
-    e = _elms(light_lists)
+    m, e = _draw_frames(data, min_lights=1)
     k = data.draw(st.floats(1e-3, 1e3))
     assert np.allclose(api.predict_frames(m, k * e), api.predict_frames(m, e), atol=1e-4)
 

@@ -8,12 +8,11 @@ import json
 
 import numpy as np
 import pytest
+from engine_helpers import HELLO, converse
 
 from ssn_engine.methods import load_method
 from ssn_engine.host_kit.protocol import read_message
 from ssn_engine.worker import MAX_REQUEST_BYTES, Worker
-
-HELLO = b'{"id": 99, "cmd": "hello"}\n'
 
 
 @pytest.fixture(scope="module")
@@ -23,20 +22,6 @@ def worker() -> Worker:
 
 def message(header: dict, payload: bytes = b"") -> bytes:
     return json.dumps(header).encode() + b"\n" + payload
-
-
-def converse(worker: Worker, data: bytes) -> tuple[list[dict], bool]:
-    """Feed ``data`` to the worker; its reply headers (buffers checked to be complete) and serve's result."""
-    writer = io.BytesIO()
-    ended = worker.serve(io.BytesIO(data), writer)
-    writer.seek(0)
-    replies = []
-    while True:
-        try:
-            header, _ = read_message(writer)
-        except EOFError:
-            return replies, ended
-        replies.append(header)
 
 
 def alpha_entry(shape, dtype="uint8", nbytes=None, name="alpha") -> dict:

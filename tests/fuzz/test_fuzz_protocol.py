@@ -10,6 +10,7 @@ import threading
 
 import numpy as np
 import pytest
+from engine_helpers import HELLO, converse
 from fuzz_settings import FUZZ
 from hypothesis import given
 from hypothesis import strategies as st
@@ -19,7 +20,6 @@ from ssn_engine.methods import load_method
 from ssn_engine.host_kit.protocol import ProtocolError, read_message
 from ssn_engine.worker import Worker
 
-HELLO = b'{"id": 99, "cmd": "hello"}\n'
 ERROR_TYPES = {"BadRequest", "EmptyAlpha", "LightMapError", "UnknownCutout", "ModelError"}
 WORKER = Worker(load_method("geometric"))
 
@@ -65,23 +65,11 @@ def nested(draw) -> bytes:
     return inner + b"\n"
 
 
-def converse(data: bytes) -> tuple[list[dict], bool]:
-    writer = io.BytesIO()
-    ended = WORKER.serve(io.BytesIO(data), writer)
-    writer.seek(0)
-    replies = []
-    while True:
-        try:
-            replies.append(read_message(writer)[0])
-        except EOFError:
-            return replies, ended
-
-
 @FUZZ
 @given(stream=st.lists(requests() | nested() | st.binary(max_size=80).map(lambda b: b + b"\n"), min_size=1, max_size=4))
 def test_random_requests_always_get_documented_replies(stream):
     try:
-        replies, ended = converse(b"".join(stream) + HELLO)
+        replies, ended = converse(WORKER, b"".join(stream) + HELLO)
     except ProtocolError as exc:
         pytest.fail(f"the worker wrote a malformed reply: {exc}")
     for reply in replies:

@@ -11,19 +11,15 @@ import gi
 
 gi.require_version("Gimp", "3.0")
 from gi.repository import Gimp  # noqa: E402
+from gimp_check_kit import call_filter, layer_names  # noqa: E402
 
 # image, layer: from gimp_pawn_scene.py, exec'd first in the same globals
 image, layer = globals()["image"], globals()["layer"]
 
 OUT = globals().get("OUT_PATH", "/tmp/ssn-dialog.json")
 
-proc = Gimp.get_pdb().lookup_procedure("plug-in-ssn-shadow")
-config = proc.create_config()
-config.set_property("run-mode", Gimp.RunMode.INTERACTIVE)
-config.set_property("image", image)
-config.set_core_object_array("drawables", [layer])
-result = proc.run(config)
-out = {"status": result.index(0).value_nick, "layers": [lay.get_name() for lay in image.get_layers()]}
+result = call_filter(image, layer, Gimp.RunMode.INTERACTIVE)
+out = {"status": result.index(0).value_nick, "layers": layer_names(image)}
 if result.index(0) != Gimp.PDBStatusType.SUCCESS:
     out["error"] = Gimp.get_pdb().get_last_error()
 json.dump(out, open(OUT, "w"))

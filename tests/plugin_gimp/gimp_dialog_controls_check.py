@@ -16,6 +16,7 @@ import gi
 gi.require_version("Gimp", "3.0")
 gi.require_version("Gegl", "0.4")
 from gi.repository import Gegl, Gimp  # noqa: E402
+from gimp_check_kit import call_filter, layer_names  # noqa: E402
 
 HERE = os.path.dirname(globals().get("SCRIPT_PATH", "/tmp/ssn-controls/check.py"))
 LONG_NAME = "Pawn cut out of the holiday photograph " + "x" * 120  # one long word: it must wrap too
@@ -46,14 +47,9 @@ def run(name, image, layer, **task):
         json.dump({"run": name, **task}, f)
     out = {"run": name}
     try:
-        proc = Gimp.get_pdb().lookup_procedure("plug-in-ssn-shadow")
-        config = proc.create_config()
-        config.set_property("run-mode", Gimp.RunMode.INTERACTIVE)
-        config.set_property("image", image)
-        config.set_core_object_array("drawables", [layer])
-        result = proc.run(config)
+        result = call_filter(image, layer, Gimp.RunMode.INTERACTIVE)
         out["status"] = result.index(0).value_nick
-        out["layers"] = [lay.get_name() for lay in image.get_layers()]
+        out["layers"] = layer_names(image)
         parasite = image.get_parasite("ssn-shadow-camera")
         out["camera_record"] = bytes(parasite.get_data()).decode() if parasite is not None else None
     except Exception:  # noqa: BLE001 - report it to the test

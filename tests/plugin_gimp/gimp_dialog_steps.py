@@ -76,9 +76,9 @@ def drag(w, start, end):
     xdotool("mousemove", *on_screen(w, *end), "mouseup", "1")
 
 
-def popover_button(text):
-    """The button of the Reset popover whose label holds ``text`` (GTK keeps popovers among the window's
-    internal children)."""
+def button(text):
+    """The dialog's first button whose label holds ``text``, the Reset popover's included (GTK keeps popovers among
+    the window's internal children)."""
     found = []
 
     def walk(w):
@@ -88,7 +88,7 @@ def popover_button(text):
             w.forall(walk)
 
     walk(parts.dialog)
-    assert found, f"no '{text}' in the Reset popover"
+    assert found, f"no button '{text}' in the dialog"
     return found[0]
 
 
@@ -99,37 +99,41 @@ def settled():
     yield 300
 
 
-def reset():
-    """Issue #41, defect 10: Reset restores every control."""
-    area, editor = parts.area, parts.area.editor
-    yield from settled()
-    record["initial"] = snapshot()
-    light = editor.lights.lights[0]
+def drag_first_light(dx, dy):
+    """Drag the light map's first light by (dx, dy) pixels."""
+    area = parts.area
+    light = area.editor.lights.lights[0]
     start = (light.u * area.width, light.v * area.height)
-    drag(area, start, (start[0] + 60, start[1] + 20))
-    yield from settled()
-    record["dragged"] = snapshot()
+    drag(area, start, (start[0] + dx, start[1] + dy))
+
+
+def reset_to(item):
+    """Steps: Reset, then its popover's item ``item`` (a part of its label); wait for the preview."""
     click(parts.dialog.get_widget_for_response(RESET))
     yield 500
-    click(popover_button("Initial"))
+    click(button(item))
     yield from settled()
     yield from settled()  # the camera read again where the horizon box changed
+
+
+def reset():
+    """Issue #41, defect 10: Reset restores every control."""
+    yield from settled()
+    record["initial"] = snapshot()
+    drag_first_light(60, 20)
+    yield from settled()
+    record["dragged"] = snapshot()
+    yield from reset_to("Initial")
     record["after_initial"] = snapshot()
     parts.presets.set_active([row[0] for row in parts.presets.get_model()].index("high-sun"))
     yield from settled()
-    light = editor.lights.lights[0]
-    start = (light.u * area.width, light.v * area.height)
-    drag(area, start, (start[0] - 50, start[1] + 10))
+    drag_first_light(-50, 10)
     click(widget("use-horizon"))
     yield from settled()
     click(parts.preview.widget, y=40)
     yield from settled()
     record["edited"] = snapshot()
-    click(parts.dialog.get_widget_for_response(RESET))
-    yield 500
-    click(popover_button("Factory"))
-    yield from settled()
-    yield from settled()
+    yield from reset_to("Factory")
     record["after_factory"] = snapshot()
     done(Gtk.ResponseType.CANCEL)
 
@@ -147,8 +151,7 @@ def horizon_first():
     preview; then OK (the image keeps its camera)."""
     yield from settled()
     record["initial"] = snapshot()
-    guide = next(w for w in _buttons() if "guide" in (w.get_label() or ""))
-    click(guide)
+    click(button("guide"))
     yield from settled()
     record["from_guide"] = snapshot()
     record["scale"] = parts.preview.scale
@@ -169,8 +172,7 @@ def horizon_second():
     """Another image: nothing of the first image's horizon; From guide without a guide says how to add one."""
     yield from settled()
     record["initial"] = snapshot()
-    guide = next(w for w in _buttons() if "guide" in (w.get_label() or ""))
-    click(guide)
+    click(button("guide"))
     yield 600
     record["from_guide"] = snapshot()
     done(Gtk.ResponseType.CANCEL)
@@ -181,19 +183,6 @@ def horizon_again():
     yield from settled()
     record["initial"] = snapshot()
     done(Gtk.ResponseType.CANCEL)
-
-
-def _buttons():
-    found = []
-
-    def walk(w):
-        if isinstance(w, Gtk.Button):
-            found.append(w)
-        if isinstance(w, Gtk.Container):
-            w.forall(walk)
-
-    walk(parts.dialog)
-    return found
 
 
 def done(response):

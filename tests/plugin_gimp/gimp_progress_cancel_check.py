@@ -16,33 +16,30 @@ as before.
 
 import json
 import os
-import subprocess
-import sys
 import time
 
 import gi
 
 gi.require_version("Gimp", "3.0")
-gi.require_version("Gegl", "0.4")
-from gi.repository import Gegl, Gimp  # noqa: E402
+from gi.repository import Gimp  # noqa: E402
+from gimp_check_kit import (  # noqa: E402
+    call_filter,
+    layer_names,
+    pixels,
+    presser_said,
+    process_alive,
+    show,
+    start_presser,
+)
 
 # image, layer: from gimp_pawn_scene.py, exec'd first in the same globals; the paths: set by the test
 image, layer = globals()["image"], globals()["layer"]
 OUT, PID_FILE = globals()["OUT_PATH"], globals()["PID_FILE"]
-HANG = 1.5  # seconds the worker hangs before the click
 # GIMP 3.0.4's image window on a 1280 x 1024 Xvfb screen without a window manager: 800 x 600 at the origin, the
 # status bar's Cancel button (shown while a progress runs) at this point of it
 WINDOW, CANCEL = (800, 600), (519, 582)
 
-PRESSER = f"""
-import os, subprocess, sys, time
-frozen = {PID_FILE!r} + ".frozen"
-deadline = time.time() + 120
-while not os.path.exists(frozen) and time.time() < deadline:
-    time.sleep(0.05)
-time.sleep({HANG})
-def xdotool(*args):
-    return subprocess.run(["xdotool", *args], capture_output=True, text=True, timeout=20).stdout.split()
+CLICK = f"""
 window = xdotool("search", "--onlyvisible", "--name", "[[]Untitled[]].*layers")
 size = xdotool("getwindowgeometry", "--shell", window[0]) if window else []
 clicked = time.time()
@@ -52,61 +49,31 @@ print(clicked, open(frozen).read(), " ".join(size), flush=True)
 """
 
 
-def pixels(drawable):
-    rect = Gegl.Rectangle.new(0, 0, drawable.get_width(), drawable.get_height())
-    return bytes(drawable.get_buffer().get(rect, 1.0, "R'G'B'A u8", Gegl.AbyssPolicy.NONE))
-
-
-def names():
-    return [lay.get_name() for lay in image.get_layers()]
-
-
-def alive(pid):
-    try:
-        with open(f"/proc/{pid}/stat") as f:
-            return f.read().rsplit(")", 1)[1].split()[0] != "Z"
-    except FileNotFoundError:
-        return False
-
-
 def cancelled_call():
     """One call of the filter, cancelled by a click on GIMP's progress bar once the worker has frozen."""
     if os.path.exists(PID_FILE + ".frozen"):
         os.remove(PID_FILE + ".frozen")
-    presser = subprocess.Popen([sys.executable, "-c", PRESSER], stdout=subprocess.PIPE, text=True)
-    proc = Gimp.get_pdb().lookup_procedure("plug-in-ssn-shadow")
-    config = proc.create_config()
-    config.set_property("run-mode", Gimp.RunMode.NONINTERACTIVE)
-    config.set_property("image", image)
-    config.set_core_object_array("drawables", [layer])
-    config.set_property("light-map", "low-sun-right")
+    presser = start_presser(PID_FILE, CLICK)
     called = time.time()
-    status = proc.run(config).index(0).value_nick
-    call = {"status": status, "returned_at": time.time(), "worker": int(open(PID_FILE).read())}
+    result = call_filter(image, layer, Gimp.RunMode.NONINTERACTIVE, {"light-map": "low-sun-right"})
+    call = {"status": result.index(0).value_nick, "returned_at": time.time(), "worker": int(open(PID_FILE).read())}
     call.update(started_at=os.path.getmtime(PID_FILE), called_at=called)
     if os.path.exists(PID_FILE + ".frozen"):
         call["frozen_at"] = os.path.getmtime(PID_FILE + ".frozen")
-    try:
-        said = presser.communicate(timeout=30)[0].split()
-    except subprocess.TimeoutExpired:
-        presser.kill()
-        said = []
+    said = presser_said(presser)
     if len(said) >= 2:
         call.update(clicked_at=float(said[0]), frozen_on=said[1], window=said[2:])
     return call
 
 
-layer.get_buffer().flush()
-image.clean_all()
-Gimp.Display.new(image)
-Gimp.displays_flush()
-before, pawn = names(), pixels(layer)
+show(image, layer)
+before, pawn = layer_names(image), pixels(layer)
 out = {"expected_window": list(WINDOW)}
 out["first"] = cancelled_call()
 Gimp.displays_flush()
 out["second"] = cancelled_call()
-out["first_worker_alive"] = alive(out["first"]["worker"])
-out["layers_before"], out["layers_after"] = before, names()
+out["first_worker_alive"] = process_alive(out["first"]["worker"])
+out["layers_before"], out["layers_after"] = before, layer_names(image)
 out["pawn_unchanged"] = pixels(layer) == pawn
 with open(OUT, "w") as f:
     json.dump(out, f)

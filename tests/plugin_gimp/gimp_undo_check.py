@@ -14,6 +14,7 @@ import gi
 
 gi.require_version("Gimp", "3.0")
 from gi.repository import Gimp  # noqa: E402
+from gimp_check_kit import call_filter, layer_names, show  # noqa: E402
 
 # image, layer: from gimp_pawn_scene.py, exec'd first in the same globals
 image, layer = globals()["image"], globals()["layer"]
@@ -28,29 +29,16 @@ def report(key, value):
         json.dump(out, f)
 
 
-def names(image):
-    return [lay.get_name() for lay in image.get_layers()]
-
-
 def xdotool(*args):
     return subprocess.run(["xdotool", *args], capture_output=True, text=True, timeout=20)
 
 
-layer.get_buffer().flush()
-image.clean_all()
-Gimp.Display.new(image)
+show(image, layer)
+report("before", layer_names(image))
+result = call_filter(image, layer, Gimp.RunMode.NONINTERACTIVE, {"light-map": "low-sun-right"})
+report("status", result.index(0).value_nick)
 Gimp.displays_flush()
-report("before", names(image))
-
-proc = Gimp.get_pdb().lookup_procedure("plug-in-ssn-shadow")
-config = proc.create_config()
-config.set_property("run-mode", Gimp.RunMode.NONINTERACTIVE)
-config.set_property("image", image)
-config.set_core_object_array("drawables", [layer])
-config.set_property("light-map", "low-sun-right")
-report("status", proc.run(config).index(0).value_nick)
-Gimp.displays_flush()
-report("after", names(image))
+report("after", layer_names(image))
 
 window = None
 for _ in range(40):  # the image window's title lists its layers
@@ -65,11 +53,11 @@ if window:
     report("focused", xdotool("getwindowfocus", "getwindowname").stdout.strip())
     time.sleep(0.3)
     xdotool("key", "--clearmodifiers", "ctrl+z")  # exactly one undo
-    undone = names(image)
+    undone = layer_names(image)
     for _ in range(40):
         time.sleep(0.25)
-        undone = names(image)
+        undone = layer_names(image)
         if undone != out["after"]:
             break
     time.sleep(0.5)  # let a (wrong) second step show up, if any
-    report("after_undo", names(image))
+    report("after_undo", layer_names(image))

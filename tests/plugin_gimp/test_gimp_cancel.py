@@ -23,7 +23,7 @@ import tempfile
 from pathlib import Path
 
 import pytest
-from test_gimp_integration import IN_CI, SCENE_SCRIPT, _chroot_dir, _exec_scene_then, run_gimp
+from test_gimp_integration import _exec_scene_then, chroot, run_check  # noqa: F401 - its fixture, shared
 
 from plugin_gimp.install import install
 from ssn_engine.host_kit.protocol import PROTOCOL_VERSION
@@ -35,18 +35,8 @@ CHECK_SCRIPT = Path(__file__).with_name("gimp_cancel_check.py")
 PROGRESS_SCRIPT = Path(__file__).with_name("gimp_progress_cancel_check.py")
 
 
-@pytest.fixture(scope="module")
-def chroot() -> Path:
-    path = _chroot_dir()
-    if path is None:
-        if IN_CI:
-            pytest.fail("CI=true: the GIMP 3 chroot could not be built (needs root, debootstrap and the network)")
-        pytest.skip("no GIMP 3 chroot and it cannot be built here (needs root and debootstrap)")
-    return path
-
-
 @pytest.fixture
-def frozen(chroot):
+def frozen(chroot):  # noqa: F811 - the imported fixture
     """A throwaway folder in the chroot with a GIMP profile whose plug-in's shared worker freezes:
     (host path, inner path). Every worker it started is stopped afterwards."""
     work = Path(tempfile.mkdtemp(prefix="ssn-gimp-cancel-", dir=chroot / "tmp"))
@@ -55,7 +45,6 @@ def frozen(chroot):
     try:
         dest = install(work / "profile" / "plug-ins" / "ssn-shadow", python="/usr/bin/python3")
         shutil.copy(HUNG_WORKER, work / "hung_worker.py")
-        shutil.copy(SCENE_SCRIPT, work / "scene.py")
         config = json.loads((dest / "engine.json").read_text())
         config["args"] = [f"{inner}/hung_worker.py", str(PROTOCOL_VERSION), f"{inner}/worker.pid"]
         (dest / "engine.json").write_text(json.dumps(config))  # "shared" as installed: the default set-up
@@ -71,11 +60,9 @@ def _run_check(frozen, script: Path, **env: str) -> tuple[dict, str]:
     work, inner, started = frozen
     shutil.copy(script, work / "check.py")
     code = f'OUT_PATH = "{inner}/out.json"; PID_FILE = "{inner}/worker.pid"; '
-    run, seconds = run_gimp(inner, code + _exec_scene_then(inner, "check.py"), **env)
-    log = run.stdout + run.stderr
-    print(f"\nGIMP session: {seconds:.1f} s")
-    assert (work / "out.json").exists(), log[-6000:]
-    result = json.loads((work / "out.json").read_text())
+    result, log = run_check(
+        inner, code + _exec_scene_then(work, inner, "check.py"), work / "out.json", "GIMP session", **env
+    )
     started.extend(call["worker"] for call in (result.get("first"), result.get("second")) if call)
     if (work / "worker.pid").exists():
         started.append(int((work / "worker.pid").read_text()))

@@ -14,7 +14,7 @@ import tempfile
 from pathlib import Path
 
 import pytest
-from test_gimp_integration import chroot, run_gimp, worker  # noqa: F401 - the fixtures, shared
+from test_gimp_integration import chroot, kit_on_path, run_gimp, worker  # noqa: F401 - the fixtures, shared
 
 from plugin_gimp.install import install
 from ssn_engine.host_kit.camera_rules import NO_GUIDE, row_from_preview
@@ -40,7 +40,7 @@ def session(chroot, worker):  # noqa: F811 - the fixtures above
         shutil.copy(HERE / "gimp_dialog_steps.py", work / "steps.py")
         run, seconds = run_gimp(
             inner,
-            f'SCRIPT_PATH = "{inner}/check.py"; exec(open(SCRIPT_PATH).read())',
+            kit_on_path(work, inner) + f'SCRIPT_PATH = "{inner}/check.py"; exec(open(SCRIPT_PATH).read())',
             SSN_GIMP_XVFB="1",
             SSN_GIMP_SCREEN=f"{SCREEN[0]}x{SCREEN[1]}x24",
             SSN_SHADOW_DIALOG_SELFTEST=f"{inner}/steps.py",

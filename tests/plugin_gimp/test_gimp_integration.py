@@ -42,6 +42,7 @@ BATCH_SCRIPT = Path(__file__).with_name("gimp_batch_check.py")
 DIALOG_SCRIPT = Path(__file__).with_name("gimp_dialog_check.py")
 UNDO_SCRIPT = Path(__file__).with_name("gimp_undo_check.py")
 SCENE_SCRIPT = Path(__file__).with_name("gimp_pawn_scene.py")
+KIT_SCRIPT = Path(__file__).with_name("gimp_check_kit.py")  # what the check scripts share: they import it
 RELAY_SCRIPT = Path(__file__).with_name("stdio_relay.py")
 IN_CI = os.environ.get("CI") == "true"
 
@@ -284,6 +285,16 @@ def run_gimp(inner: str, code: str, profile: str = "profile", **env: str) -> tup
     return run, time.monotonic() - start
 
 
+def run_check(inner: str, code: str, out: Path, session: str, **options: str) -> tuple:
+    """Run ``code`` in GIMP (``options``: run_gimp's) and print how long the ``session`` took: (the JSON the check
+    wrote to ``out``, a host path; GIMP's log). Fails, showing the log's end, where the check wrote nothing."""
+    run, seconds = run_gimp(inner, code, **options)
+    log = run.stdout + run.stderr
+    print(f"\n{session}: {seconds:.1f} s")
+    assert out.exists(), log[-6000:]
+    return json.loads(out.read_text()), log
+
+
 @pytest.fixture(scope="module")
 def gimp_results(workdir):
     work, inner = workdir
@@ -416,10 +427,18 @@ def test_undo_group_closed(gimp_results):
     assert "plug-in crashed" not in log.lower() and "traceback" not in log.lower(), log[-4000:]
 
 
-def _exec_scene_then(inner: str, script: str, precision: str = "") -> str:
+def kit_on_path(work: Path, inner: str) -> str:
+    """Copy the check scripts' shared kit into ``work`` (``inner`` inside the chroot); python-fu-eval code that puts
+    it where they import it from."""
+    shutil.copy(KIT_SCRIPT, work / KIT_SCRIPT.name)
+    return f'import sys; sys.path.insert(0, "{inner}"); '
+
+
+def _exec_scene_then(work: Path, inner: str, script: str, precision: str = "") -> str:
     """python-fu-eval code: build the shared pawn scene (at ``precision``, a Gimp.Precision name, if given), then
-    run ``script`` in the same globals."""
-    return (
+    run ``script`` (in ``work``, ``inner`` inside the chroot) in the same globals; copies the scene and the kit."""
+    shutil.copy(SCENE_SCRIPT, work / "scene.py")
+    return kit_on_path(work, inner) + (
         f'SCENE_PRECISION = "{precision}"; exec(open("{inner}/scene.py").read()); exec(open("{inner}/{script}").read())'
     )
 
@@ -428,14 +447,8 @@ def test_one_undo_removes_the_shadow(workdir):
     """GIMP 3's PDB has no undo command, so the GUI (gimp-3.0 under Xvfb) gets a real Ctrl+Z (xdotool)."""
     work, inner = workdir
     shutil.copy(UNDO_SCRIPT, work / "undo.py")
-    shutil.copy(SCENE_SCRIPT, work / "scene.py")
-    run, seconds = run_gimp(
-        inner, f'OUT_PATH = "{inner}/out/undo.json"; {_exec_scene_then(inner, "undo.py")}', SSN_GIMP_GUI="1"
-    )
-    log = run.stdout + run.stderr
-    print(f"\ngimp-3.0 GUI undo session: {seconds:.1f} s")
-    assert (work / "out" / "undo.json").exists(), log[-6000:]
-    result = json.loads((work / "out" / "undo.json").read_text())
+    code = f'OUT_PATH = "{inner}/out/undo.json"; {_exec_scene_then(work, inner, "undo.py")}'
+    result, log = run_check(inner, code, work / "out" / "undo.json", "gimp-3.0 GUI undo session", SSN_GIMP_GUI="1")
     assert result["status"] == "success"
     assert result["after"] == ["Pawn", "Shadow: Pawn", "Background"]
     assert result["window"], f"no image window found: {result}\n{log[-3000:]}"
@@ -454,20 +467,13 @@ def test_interactive_dialog(workdir, worker, precision):
     install(work / profile / "plug-ins" / "ssn-shadow", address=("127.0.0.1", worker[0]), token=worker[1])
     (work / "out" / "dialog.json").unlink(missing_ok=True)
     shutil.copy(DIALOG_SCRIPT, work / "dialog.py")
-    shutil.copy(SCENE_SCRIPT, work / "scene.py")
     env = {"SSN_GIMP_XVFB": "1", "SSN_SHADOW_DIALOG_SELFTEST": "1"}
     if os.environ.get("SSN_GIMP_DIALOG_SCREENSHOT"):
         env["SSN_SHADOW_DIALOG_SCREENSHOT"] = inner + "/out/dialog.png"
-    run, seconds = run_gimp(
-        inner,
-        f'OUT_PATH = "{inner}/out/dialog.json"; {_exec_scene_then(inner, "dialog.py", precision)}',
-        profile=profile,
-        **env,
+    code = f'OUT_PATH = "{inner}/out/dialog.json"; {_exec_scene_then(work, inner, "dialog.py", precision)}'
+    result, log = run_check(
+        inner, code, work / "out" / "dialog.json", "gimp-console dialog session", profile=profile, **env
     )
-    log = run.stdout + run.stderr
-    print(f"\ngimp-console dialog session: {seconds:.1f} s")
-    assert (work / "out" / "dialog.json").exists(), log[-6000:]
-    result = json.loads((work / "out" / "dialog.json").read_text())
     assert result["status"] == "success", result.get("error")
     assert result["layers"] == ["Pawn", "Shadow: Pawn", "Background"]
     line = next((ln for ln in log.splitlines() if ln.startswith("ssn-shadow dialog selftest: lights=")), None)
@@ -520,13 +526,10 @@ def test_spawned_worker(workdir, worker):
     case = next(c for c in CASES if c["id"] == "rgb-u8-nonlinear")
     shutil.copy(BATCH_SCRIPT, work / "check.py")
     (work / "job-spawn.json").write_text(json.dumps({"out_dir": inner + "/out-spawn", "cases": [case]}))
-    run, seconds = run_gimp(
-        inner, f'JOB_PATH = "{inner}/job-spawn.json"; exec(open("{inner}/check.py").read())', profile="profile-spawn"
+    code = f'JOB_PATH = "{inner}/job-spawn.json"; exec(open("{inner}/check.py").read())'
+    (result,), _ = run_check(
+        inner, code, out / "results.json", "gimp-console spawned-worker session", profile="profile-spawn"
     )
-    print(f"\ngimp-console spawned-worker session: {seconds:.1f} s")
-    log = run.stdout + run.stderr
-    assert (out / "results.json").exists(), log[-6000:]
-    (result,) = json.loads((out / "results.json").read_text())
     assert result["status"] == "success", result.get("error")
     assert result["layers_after"] == ["Pawn", "Shadow: Pawn", "Background"]
     assert result["source_unchanged"] and result["selection_unchanged"]

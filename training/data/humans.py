@@ -40,17 +40,37 @@ LIMITS = {  # (axis, lo, hi) per joint role, degrees, in the left side's convent
 }
 
 
+STANDING = {  # (lo, hi) per joint role, each side: every pose starts from these
+    "upperarm_y": (30, 50),
+    "upperarm_x": (-15, 10),
+    "elbow_x": (-25, 0),
+    "hip_x": (-6, 4),
+    "hip_y": (-6, 6),
+    "knee_x": (0, 8),
+}
+# The arms of each pose but walking: (lo, hi) per joint role, over the standing ones; both arms, but arms_raised's
+# are the left alone 2 times in 5 and arm_out's one, either
+ARMS = {
+    "arms_raised": {"upperarm_y": (-150, -70), "upperarm_x": (-30, 10), "elbow_x": (-60, 0)},
+    "arms_crossed": {"upperarm_y": (35, 50), "upperarm_x": (-45, -25), "elbow_x": (-110, -80), "elbow_z": (-80, -50)},
+    "arm_out": {"upperarm_y": (-50, -30), "upperarm_x": (-70, 0), "elbow_x": (-30, 0)},
+    "hands_on_hips": {"upperarm_y": (0, 15), "upperarm_x": (5, 25), "elbow_x": (-100, -70), "elbow_z": (-60, -30)},
+}
+
+
+def _draw(a: dict[str, float], rng: np.random.Generator, sides: tuple[str, ...], ranges: dict) -> None:
+    """Set joint role ``r`` of each of ``sides`` in ``a`` to a uniform draw from ``ranges[r]`` (lo, hi), side by
+    side, in the order of ``ranges``."""
+    for side in sides:
+        for role, (lo, hi) in ranges.items():
+            a[f"{role}_{side}"] = rng.uniform(lo, hi)
+
+
 def _angles(pose: str, rng: np.random.Generator) -> dict[str, float]:
     """Joint angles (left-side convention for arms and legs, suffix _L/_R) of one pose family."""
     u = rng.uniform
     a: dict[str, float] = {}
-    for side in ("L", "R"):
-        a[f"upperarm_y_{side}"] = u(30, 50)
-        a[f"upperarm_x_{side}"] = u(-15, 10)
-        a[f"elbow_x_{side}"] = u(-25, 0)
-        a[f"hip_x_{side}"] = u(-6, 4)
-        a[f"hip_y_{side}"] = u(-6, 6)
-        a[f"knee_x_{side}"] = u(0, 8)
+    _draw(a, rng, ("L", "R"), STANDING)
     if pose == "walking":
         phase, stride = u(0, 2 * math.pi), u(15, 32)
         for side, sgn in (("L", 1.0), ("R", -1.0)):
@@ -59,30 +79,13 @@ def _angles(pose: str, rng: np.random.Generator) -> dict[str, float]:
             a[f"knee_x_{side}"] = max(0.0, 45 * sgn * math.sin(phase + 1.2)) + u(0, 8)
             a[f"upperarm_x_{side}"] = 0.8 * stride * s
             a[f"elbow_x_{side}"] = u(-35, -5)
-    elif pose == "arms_raised":
-        both = rng.random() < 0.6
-        for side in ("L", "R"):
-            if both or side == "L":
-                a[f"upperarm_y_{side}"] = u(-150, -70)
-                a[f"upperarm_x_{side}"] = u(-30, 10)
-                a[f"elbow_x_{side}"] = u(-60, 0)
-    elif pose == "arms_crossed":
-        for side in ("L", "R"):
-            a[f"upperarm_y_{side}"] = u(35, 50)
-            a[f"upperarm_x_{side}"] = u(-45, -25)
-            a[f"elbow_x_{side}"] = u(-110, -80)
-            a[f"elbow_z_{side}"] = u(-80, -50)
-    elif pose == "arm_out":
-        side = "L" if rng.random() < 0.5 else "R"
-        a[f"upperarm_y_{side}"] = u(-50, -30)
-        a[f"upperarm_x_{side}"] = u(-70, 0)
-        a[f"elbow_x_{side}"] = u(-30, 0)
-    elif pose == "hands_on_hips":
-        for side in ("L", "R"):
-            a[f"upperarm_y_{side}"] = u(0, 15)
-            a[f"upperarm_x_{side}"] = u(5, 25)
-            a[f"elbow_x_{side}"] = u(-100, -70)
-            a[f"elbow_z_{side}"] = u(-60, -30)
+    elif pose in ARMS:
+        sides = ("L", "R")
+        if pose == "arms_raised" and rng.random() >= 0.6:
+            sides = ("L",)
+        elif pose == "arm_out":
+            sides = ("L",) if rng.random() < 0.5 else ("R",)
+        _draw(a, rng, sides, ARMS[pose])
     a["spine_x"] = u(-8, 8)
     a["spine_z"] = u(-12, 12)
     a["head_z"] = u(-30, 30)
