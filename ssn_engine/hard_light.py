@@ -23,9 +23,9 @@ Pillow.
 
 Depth: a card alone casts a line under a light from its side, and nothing of
 a body that reaches away from the camera. Each pixel is taken to reach
-behind the card along the camera's ray by a depth (:func:`depth_map`) that
-grows with its distance to the outline (a body as deep as it is wide, a
-round cross-section; a leg thin; never below the ground); the card is swept
+behind the card along the camera's ray by a depth (:func:`depth_map`): the
+chord of a round cross-section as wide as the part it lies in (a body as
+deep as it is wide, a leg thin; never below the ground); the card is swept
 through that depth before the homography: each pixel repeated along the
 shift its shadow makes as it moves deeper (``THICKNESS_LEVELS`` bands of
 depth, each a segment drawn by doubling; a card larger than ``SWEEP_SIZE``
@@ -62,7 +62,8 @@ from .hemisphere import direction
 from .stripes import for_each_stripe
 from .host_kit.light_map import GaussianLight, LightMap
 
-THICKNESS = 2.0  # an object's depth behind its card per pixel of distance to its outline: a round cross-section
+DEPTH_SIZE = 320  # pixels: the object's depth is worked out on a copy reduced to about this size
+RADIUS_STEP = 1.25  # ratio of the local radii the depth map tells apart
 THICKNESS_LEVELS = 48  # bands of depth an object's thickness is swept in
 SWEEP_SIZE = 400  # pixels: a larger card is swept through its depth on a copy reduced to about this size
 MIN_INCIDENCE = 10.0  # degrees: the card turns just enough that a light's horizontal direction meets it at least so
@@ -664,15 +665,31 @@ def contact_bands(alpha: np.ndarray) -> list[tuple[int, int, int]]:
 
 
 def depth_map(alpha: np.ndarray) -> np.ndarray:
-    """How deep (pixels) the object reaches behind its card at each pixel: ``THICKNESS`` times the distance to
-    its outline (a body as deep as it is wide there, as a round cross-section, thinning to its edges); pixels of
-    the antialiased fringe take their nearest solid pixel's depth."""
-    solid = np.pad(alpha > SOLID, 1)  # the outline continues beyond the array's edges
+    """How deep (pixels) the object reaches behind its card at each pixel: a round cross-section. A pixel at
+    distance d from the outline, inside a part whose largest inscribed disk holding it has radius R (its local
+    radius: a leg's half-width, a body's half-height), reaches the chord of a circle of radius R there,
+    2 sqrt(2 R d - d^2): as deep as the part is wide at its middle, steep at its edges. Computed on a copy
+    reduced to about ``DEPTH_SIZE`` pixels and enlarged; pixels of the antialiased fringe take their nearest
+    solid pixel's depth."""
+    h, w = alpha.shape
+    k = max(1, math.ceil(max(h, w) / DEPTH_SIZE))
+    small = np.asarray(Image.fromarray(np.asarray(alpha, np.float32), "F").reduce(k)) if k > 1 else alpha
+    solid = np.pad(small > SOLID, 1)  # the outline continues beyond the array's edges
     if not solid.any():
         return np.zeros(alpha.shape, np.float32)
-    depth = np.float32(THICKNESS) * np.asarray(ndimage.distance_transform_edt(solid), np.float32)
+    d = np.asarray(ndimage.distance_transform_edt(solid), np.float32)
+    radius = d.copy()
+    r = 1.0
+    while r <= d.max():  # local radius: each pixel within r of a centre whose disk of radius r fits inside
+        radius[(ndimage.distance_transform_edt(d < r) < r) & (radius < r)] = r
+        r *= RADIUS_STEP
+    depth = 2.0 * k * np.sqrt(np.maximum(0.0, d * (2.0 * radius - d)))
     _, (iy, ix) = ndimage.distance_transform_edt(~solid, return_distances=True, return_indices=True)  # type: ignore[misc]
-    return depth[iy, ix][1:-1, 1:-1]
+    depth = np.ascontiguousarray(depth[iy, ix][1:-1, 1:-1], np.float32)
+    if k == 1:
+        return depth
+    big = Image.fromarray(depth, "F").resize((depth.shape[1] * k, depth.shape[0] * k), Image.Resampling.BILINEAR)
+    return np.asarray(big)[:h, :w]
 
 
 class ContactTracer:

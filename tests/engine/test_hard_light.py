@@ -141,12 +141,18 @@ def test_a_tail_or_a_sphere_s_side_is_no_ground():
     assert np.allclose(contact_line(alpha)[50:300], 200.0)
 
 
-def test_an_object_is_deep_where_it_is_wide_and_thin_at_its_edges():
+def test_an_object_is_as_deep_as_a_round_cross_section_of_its_local_width():
     alpha = np.zeros((100, 100), np.float32)
     alpha[:, 20:80] = 1.0  # a 60-pixel-wide column touching the array's top and bottom: open there
+    alpha[:, 85:91] = 1.0  # a 6-pixel leg beside it
     depth = depth_map(alpha)
-    assert depth[50, 50] == pytest.approx(60.0, abs=2.0)  # as deep as it is wide at its middle: round
-    assert depth[50, 20] < 4.0 and depth[50, 10] == depth[50, 20]  # the fringe takes its nearest solid depth
+    assert depth[50, 50] == pytest.approx(60.0, abs=2.0)  # as deep as it is wide at its middle
+    # 5 pixels in from its edge, a circle of radius 30 is 2 sqrt(5 * 55) deep: round, steep at the edges
+    assert depth[50, 24] == pytest.approx(2 * np.sqrt(4.5 * 55.5), rel=0.1)
+    assert depth[50, 10] == depth[50, 20]  # the fringe takes its nearest solid depth
+    assert depth[50, 85:91].max() == pytest.approx(6.0, abs=1.5)  # the leg as deep as it is wide, not the body
+    big = depth_map(np.kron(alpha, np.ones((8, 8), np.float32)))  # reduced, worked out, enlarged: the same shape
+    assert big[400, 400] == pytest.approx(8 * depth[50, 50], rel=0.05)
 
 
 def test_under_a_light_from_the_side_a_deep_object_shades_a_band_as_deep_as_itself(post):
