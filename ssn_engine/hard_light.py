@@ -62,7 +62,7 @@ from .hemisphere import direction
 from .stripes import for_each_stripe
 from .host_kit.light_map import GaussianLight, LightMap
 
-DEPTH_SIZE = 320  # pixels: the object's depth is worked out on a copy reduced to about this size
+DEPTH_SIZE = 256  # pixels: the object's depth is worked out on a copy reduced to about this size
 RADIUS_STEP = 1.25  # ratio of the local radii the depth map tells apart
 THICKNESS_LEVELS = 48  # bands of depth an object's thickness is swept in
 SWEEP_SIZE = 400  # pixels: a larger card is swept through its depth on a copy reduced to about this size
