@@ -59,7 +59,7 @@ from scipy import ndimage
 from .camera import FORWARD, RIGHT, UP, camera_for_span
 from .framing import Framing, placed_sum
 from .hemisphere import direction
-from .stripes import for_each_stripe
+from .stripes import for_each_stripe, in_background
 from .host_kit.light_map import GaussianLight, LightMap
 
 DEPTH_SIZE = 256  # pixels: the object's depth is worked out on a copy reduced to about this size
@@ -397,28 +397,21 @@ class CardTracer:
         return np.array([col[1] - col[0], row[1] - row[0]]) / source.scale
 
     def _swept(
-        self, card: np.ndarray, source: _Source, w: np.ndarray, soft: np.ndarray
+        self, card: np.ndarray, source: _Source, w: np.ndarray, soft: np.ndarray, k: int
     ) -> tuple[np.ndarray, tuple[int, int]]:
         """The card (uint8, blurred) swept through the object's depth: each pixel repeated along the shift
         (:meth:`_depth_step`) of every depth from 0 to its thickness (``THICKNESS_LEVELS`` bands of depth; where
-        the thickness ends, fading over ``soft`` pixels of depth given per row, as blurred as the card's row), and
-        the (x, y) by which the result's pixels are offset from the card's."""
+        the thickness ends, fading over ``soft`` pixels of depth given per row, as blurred as the card's row), on
+        a copy reduced ``k`` times (:func:`_sweep_reduction`; k > 1: without the card itself at full resolution),
+        and the (x, y) in the result's pixels of the card's pixel (0, 0)."""
         allowed = self._allowed_depth(source)
         step = self._depth_step(source, w)
-        k = max(1, math.ceil(max(card.shape) / SWEEP_SIZE))
         if k == 1:
             return _swept_card(card, allowed, step, soft)
-        # a big card is swept on a copy reduced to about SWEEP_SIZE, enlarged back; the card itself stays crisp
         h, wd = card.shape
         small = np.asarray(Image.fromarray(np.pad(card, ((0, -h % k), (0, -wd % k))), "L").reduce(k))
         reduced = allowed[::k, ::k][: small.shape[0], : small.shape[1]] / k
-        swept, (sx, sy) = _swept_card(small, reduced, step, soft[::k][: small.shape[0]] / k)
-        big = Image.fromarray(swept, "L").resize((swept.shape[1] * k, swept.shape[0] * k), Image.Resampling.BILINEAR)
-        out = np.asarray(big).copy()
-        ox, oy = sx * k, sy * k
-        view = out[oy : oy + h, ox : ox + wd]
-        np.maximum(view, card, out=view)
-        return out, (ox, oy)
+        return _swept_card(small, reduced, step, soft[::k][: small.shape[0]] / k)
 
     def _allowed_depth(self, source: _Source) -> np.ndarray:
         """How deep (pixels of ``source``) each of its pixels reaches behind the card: its thickness, and,
@@ -462,15 +455,25 @@ class CardTracer:
         source = self._source(framing.scale / fine)
         sigma_rows = self._sigma_rows(source, w, angle)
         card = self._blurred(source, sigma_rows)
-        hmat = self._homography(w, framing, source, (x0, y0))
+        to_card = self._homography(w, framing, source, (x0, y0)) @ np.diag([1.0 / fine, 1.0 / fine, 1.0])
+        size = ((x1 - x0) * fine, (y1 - y0) * fine)
+        k = _sweep_reduction(card) if self.depth > 0 else 1
+        # a card swept on a reduced copy is warped from it, and the card itself, crisp, on another thread meanwhile
+        crisp = in_background(_warp, card, to_card, size) if k > 1 else None
         if self.depth > 0:
-            card, shift = self._swept(card, source, w, 2.0 * sigma_rows)
-            hmat = np.array([[1.0, 0, shift[0]], [0, 1.0, shift[1]], [0, 0, 1.0]]) @ hmat
-        hmat = hmat @ np.diag([1.0 / fine, 1.0 / fine, 1.0])
-        values = _warp(card, hmat / hmat[2, 2], ((x1 - x0) * fine, (y1 - y0) * fine))
+            card, (sx, sy) = self._swept(card, source, w, 2.0 * sigma_rows, k)
+            to_card = np.array([[1.0 / k, 0, sx], [0, 1.0 / k, sy], [0, 0, 1.0]]) @ to_card
+        values = _warp(card, to_card, size)
+        if crisp is not None:
+            np.maximum(values, crisp.result(), out=values)
         if fine > 1:
             values = values.reshape(y1 - y0, fine, x1 - x0, fine).mean(axis=(1, 3))
         return values, x0, y0
+
+
+def _sweep_reduction(card: np.ndarray) -> int:
+    """How many times smaller a copy of ``card`` the depth is swept on: about ``SWEEP_SIZE`` pixels at most."""
+    return max(1, math.ceil(max(card.shape) / SWEEP_SIZE))
 
 
 def _swept_card(
@@ -527,9 +530,10 @@ def _sweep_into(out: np.ndarray, part: np.ndarray, origin: np.ndarray, start: np
 
 
 def _warp(card: np.ndarray, hmat: np.ndarray, size: tuple[int, int]) -> np.ndarray:
-    """The (height, width) output of the homography ``hmat`` (output to ``card`` coordinates, continuous) of
-    ``card`` (uint8), as float32 in [0, 1]: only the output pixels that can map into the card's non-zero box are
-    resampled, a band of ``BAND`` rows at a time, on the machine's cores."""
+    """The (height, width) output of the homography ``hmat`` (output to ``card`` coordinates, continuous; any
+    scale) of ``card`` (uint8), as float32 in [0, 1]: only the output pixels that can map into the card's
+    non-zero box are resampled, a band of ``BAND`` rows at a time, on the machine's cores."""
+    hmat = hmat / hmat[2, 2]
     width, height = size
     out = np.zeros((height, width), np.float32)
     rows, cols = np.flatnonzero(card.any(axis=1)), np.flatnonzero(card.any(axis=0))

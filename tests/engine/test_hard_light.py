@@ -207,3 +207,26 @@ def test_the_command_line_renders_an_angle_light_file_crisply(tmp_path, post):
     assert rows.size > 40 and s[FOOT + 1, LEFT + 5 : RIGHT - 5].min() > 0.95  # dark from the contact
     far = int(rows[int(0.8 * (rows.size - 1))])
     assert np.abs(np.diff(s[far])).max() > 0.2  # a crisp edge: a step of a fifth of full darkness in a pixel
+
+
+def test_a_card_swept_on_a_reduced_copy_casts_the_shadow_it_casts_when_swept_whole():
+    """A cutout larger than ``SWEEP_SIZE`` is swept through its depth on a reduced copy and warped from it, the
+    card itself warped crisp beside it: its shadow on a canvas twice the size, halved, is the shadow of the
+    same scene at half the size, swept whole."""
+    shadows = []
+    for scale in (1, 2):
+        alpha = np.zeros((H * scale, W * scale), np.uint8)
+        alpha[(FOOT - 240) * scale : FOOT * scale, (LEFT - 60) * scale : (RIGHT + 60) * scale] = 255  # a fat post
+        _, framing = frame_alpha(alpha, 256)
+        x0, y0, x1, y1 = framing.bbox
+        tracer = ContactTracer(alpha[y0:y1, x0:x1].astype(np.float32) / 255, framing, None)
+        values, x, y = tracer.shadow(0.25, 0.6, 0.53, framing)  # from the side: the depth's band is the shadow
+        out = np.zeros((H * scale, W * scale), np.float32)
+        out[y : y + values.shape[0], x : x + values.shape[1]] = values
+        shadows.append(out.reshape(H, scale, W, scale).mean(axis=(1, 3)))
+    whole, reduced = shadows
+    ground = np.ones((H, W), bool)
+    ground[FOOT - 240 : FOOT, LEFT - 60 : RIGHT + 60] = False  # the ground the post hides
+    assert whole[ground].sum() > 2000  # a shadow reaching well past the post
+    assert zncc(reduced[ground], whole[ground]) > 0.97
+    assert np.abs(reduced - whole)[ground].sum() < 0.06 * whole[ground].sum()
