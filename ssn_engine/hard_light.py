@@ -59,7 +59,7 @@ from scipy import ndimage
 from .camera import FORWARD, RIGHT, UP, camera_for_span
 from .framing import Framing, placed_sum
 from .hemisphere import direction
-from .stripes import for_each_stripe, in_background
+from .stripes import for_each_stripe
 from .host_kit.light_map import GaussianLight, LightMap
 
 DEPTH_SIZE = 256  # pixels: the object's depth is worked out on a copy reduced to about this size
@@ -458,14 +458,12 @@ class CardTracer:
         to_card = self._homography(w, framing, source, (x0, y0)) @ np.diag([1.0 / fine, 1.0 / fine, 1.0])
         size = ((x1 - x0) * fine, (y1 - y0) * fine)
         k = _sweep_reduction(card) if self.depth > 0 else 1
-        # a card swept on a reduced copy is warped from it, and the card itself, crisp, on another thread meanwhile
-        crisp = in_background(_warp, card, to_card, size) if k > 1 else None
+        # a card swept on a reduced copy is warped from it, and the card itself, crisp, beside it
+        values = _warp(card, to_card, size) if k > 1 else None
         if self.depth > 0:
             card, (sx, sy) = self._swept(card, source, w, 2.0 * sigma_rows, k)
             to_card = np.array([[1.0 / k, 0, sx], [0, 1.0 / k, sy], [0, 0, 1.0]]) @ to_card
-        values = _warp(card, to_card, size)
-        if crisp is not None:
-            np.maximum(values, crisp.result(), out=values)
+        values = _warp(card, to_card, size, values)
         if fine > 1:
             values = values.reshape(y1 - y0, fine, x1 - x0, fine).mean(axis=(1, 3))
         return values, x0, y0
@@ -529,13 +527,14 @@ def _sweep_into(out: np.ndarray, part: np.ndarray, origin: np.ndarray, start: np
         np.maximum(view, cur[y0 - at[1] : y1 - at[1], x0 - at[0] : x1 - at[0]], out=view)
 
 
-def _warp(card: np.ndarray, hmat: np.ndarray, size: tuple[int, int]) -> np.ndarray:
+def _warp(card: np.ndarray, hmat: np.ndarray, size: tuple[int, int], under: np.ndarray | None = None) -> np.ndarray:
     """The (height, width) output of the homography ``hmat`` (output to ``card`` coordinates, continuous; any
     scale) of ``card`` (uint8), as float32 in [0, 1]: only the output pixels that can map into the card's
-    non-zero box are resampled, a band of ``BAND`` rows at a time, on the machine's cores."""
+    non-zero box are resampled, a band of ``BAND`` rows at a time, on the machine's cores; where ``under`` is
+    given ((height, width) float32), the larger of it and the warp, in it."""
     hmat = hmat / hmat[2, 2]
     width, height = size
-    out = np.zeros((height, width), np.float32)
+    out = np.zeros((height, width), np.float32) if under is None else under
     rows, cols = np.flatnonzero(card.any(axis=1)), np.flatnonzero(card.any(axis=0))
     if rows.size == 0:
         return out
@@ -567,7 +566,8 @@ def _warp(card: np.ndarray, hmat: np.ndarray, size: tuple[int, int]) -> np.ndarr
             part = image.transform(
                 (c1 - c0, r1 - r0), Image.Transform.PERSPECTIVE, tuple(local.ravel()[:8]), Image.Resampling.BILINEAR
             )
-            out[r0:r1, c0:c1] = np.asarray(part, np.float32) * np.float32(1 / 255)
+            values = np.asarray(part, np.float32) * np.float32(1 / 255)
+            np.maximum(out[r0:r1, c0:c1], values, out=out[r0:r1, c0:c1])
 
     for_each_stripe(band, 0, height, width)
     return out

@@ -234,11 +234,10 @@ class ShadowSession:
         framing = framing or self.framing
         if not split_lights(light_map)[0]:
             return self.to_canvas(self.render_frame(light_map), light_map, clip, framing)
-        nets = _network_thread().submit(
-            lambda: self._network_shadows(self.render_frame(light_map), light_map, clip, framing)
-        )
+        frames = _network_thread().submit(self.render_frame, light_map)
         parts = self._traced(light_map, clip, framing)
-        return self._combined(nets.result(), light_map, parts)
+        nets = self._network_shadows(frames.result(), light_map, clip, framing)
+        return self._combined(nets, light_map, parts)
 
     def cover(self, framing: Framing) -> np.ndarray:
         """The cutout's alpha (h, w) on ``framing``'s canvas, resampled from the frame: what hides the shadow

@@ -10,9 +10,6 @@ import concurrent.futures
 import os
 import threading
 from collections.abc import Callable, Iterator
-from typing import TypeVar
-
-T = TypeVar("T")
 
 STRIPE_PIXELS = 1 << 18  # canvas pixels made at once: temporaries follow this, not the canvas
 THREADS = max(1, min(4, os.cpu_count() or 1))
@@ -46,9 +43,3 @@ def for_each_stripe(work: Callable[[slice], object], y0: int, y1: int, width: in
         return
     for _ in _executor().map(work, stripes):  # re-raises the first error of a stripe
         pass
-
-
-def in_background(work: Callable[..., T], *args: object) -> concurrent.futures.Future[T]:
-    """``work(*args)`` on one of the pool's threads, while the caller goes on (its own stripes run in turn
-    there, :func:`for_each_stripe`)."""
-    return _executor().submit(work, *args)
