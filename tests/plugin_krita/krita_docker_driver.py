@@ -29,19 +29,47 @@ def wait_idle(controller, timeout_s=120.0):
     pump(0.5)
 
 
+def person_in_window(name, x, y, w, h):
+    """A W x H U8 document named ``name`` in a Krita window, with a layer "Person" opaque over the w x h
+    rectangle at x, y: (the document, the layer, the window's QMainWindow)."""
+    doc = Krita.instance().createDocument(W, H, name, "RGBA", "U8", "", 72.0)
+    person = doc.createNode("Person", "paintlayer")
+    person.setPixelData(bytes([200, 90, 40, 255]) * (w * h), x, y, w, h)
+    doc.rootNode().addChildNode(person, doc.rootNode().childNodes()[0])
+    window = Krita.instance().openWindow()
+    window.addView(doc)
+    return doc, person, window.qwindow()
+
+
+def add_docker(qwin):
+    """The Soft Shadow docker added to the window where Krita puts a new docker (the right dock column)."""
+    from ssn_shadow.docker import DOCKER_ID, SoftShadowDocker
+
+    docker = SoftShadowDocker()
+    docker.setObjectName(DOCKER_ID)
+    qwin.addDockWidget(Qt.DockWidgetArea.RightDockWidgetArea, docker)
+    docker.show()
+    return docker
+
+
+def bind_to(docker, doc, person):
+    """The docker's controller and panel on ``doc``'s model, its source ``person`` (kritarunner's window may not
+    be the active one); Live off: the driver presses Generate."""
+    controller, panel = docker.controller, docker.panel
+    doc.setActiveNode(person)
+    pump(0.5)
+    controller.host.active_document = lambda: doc
+    controller.set_model(docker.models.model_for(doc))
+    panel.show_model(controller.model)
+    controller.live = False
+    return controller, panel
+
+
 def main(*args):
     try:
-        from ssn_shadow.docker import DOCKER_ID, SoftShadowDocker
         from ssn_shadow.shared import light_map as lm
 
-        k = Krita.instance()
-        doc = k.createDocument(W, H, "ssn-docker", "RGBA", "U8", "", 72.0)
-        person = doc.createNode("Person", "paintlayer")
-        person.setPixelData(bytes([200, 90, 40, 255]) * (80 * 180), 200, 90, 80, 180)
-        doc.rootNode().addChildNode(person, doc.rootNode().childNodes()[0])
-        window = k.openWindow()
-        window.addView(doc)
-        qwin = window.qwindow()
+        doc, person, qwin = person_in_window("ssn-docker", 200, 90, 80, 180)
         # A profile without a saved window geometry: Krita 5.1 opens its window at two thirds of a screen wider
         # than 1024 px, centred (KisMainWindow::initializeGeometry); the virtual screen has no window manager.
         screen = QApplication.primaryScreen().availableGeometry()
@@ -51,10 +79,7 @@ def main(*args):
         pump(2.0)
         layers = next(d for d in qwin.findChildren(QDockWidget) if d.objectName() == "KisLayerBox")
         default_width = layers.width()  # the right dock column of a fresh profile
-        docker = SoftShadowDocker()
-        docker.setObjectName(DOCKER_ID)
-        qwin.addDockWidget(Qt.DockWidgetArea.RightDockWidgetArea, docker)  # where Krita puts a new docker
-        docker.show()
+        docker = add_docker(qwin)
         pump(1.0)
         widened = docker.width()
         # Krita restores its dock column's width (its workspace) rather than widening it for a new docker
@@ -86,14 +111,8 @@ def main(*args):
         qwin.resizeDocks([docker], [default_width], Qt.Orientation.Horizontal)
         pump(0.5)
 
-        controller = docker.controller
-        doc.setActiveNode(person)
-        pump(0.5)
-        controller.host.active_document = lambda: doc  # kritarunner's window may not be the active one
-        controller.set_model(docker.models.model_for(doc))
-        panel.show_model(controller.model)
+        controller, panel = bind_to(docker, doc, person)
         controller.watch_history()
-        controller.live = False
         controller.model.light_map = lm.preset("low-sun-left")
         panel.generate.click()
         wait_idle(controller)
@@ -103,7 +122,7 @@ def main(*args):
         wait_idle(controller)
         doc.setActiveNode(person)
         pump(0.5)
-        undo = k.action("edit_undo")
+        undo = Krita.instance().action("edit_undo")
         steps = out["undo"] = []
         for _ in range(2):  # the new shadow goes, then the first one comes back
             text = undo.text()
