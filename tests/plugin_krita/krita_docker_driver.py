@@ -5,6 +5,7 @@ window of a fresh profile's size with the docker at Krita's default place and wi
 through the docker's panel and undoes them with Krita's undo action; it writes $SSN_TEST_RESULT.
 """
 
+import contextlib
 import json
 import os
 import time
@@ -19,6 +20,19 @@ RESULT = os.environ.get("SSN_TEST_RESULT", "/tmp/ssn_krita_docker.json")
 W, H = 480, 360
 NARROW = 260  # pixels: a dock column narrower than Krita's default
 out = {"log": []}
+
+
+@contextlib.contextmanager
+def recording(out, path):
+    """Run the driver's block, then write ``out`` to ``path`` as JSON: with "done" where the block ended, with the
+    traceback as "error" where it raised."""
+    try:
+        yield
+        out["done"] = True
+    except Exception:
+        out["error"] = traceback.format_exc()
+    with open(path, "w") as f:
+        json.dump(out, f, indent=1)
 
 
 def wait_idle(controller, timeout_s=120.0):
@@ -66,7 +80,7 @@ def bind_to(docker, doc, person):
 
 
 def main(*args):
-    try:
+    with recording(out, RESULT):
         from ssn_shadow.shared import light_map as lm
 
         doc, person, qwin = person_in_window("ssn-docker", 200, 90, 80, 180)
@@ -142,8 +156,3 @@ def main(*args):
         out["first_light_map"] = first
         out["messages"] = list(controller.model.status)
         docker.engine.shutdown()
-        out["done"] = True
-    except Exception:
-        out["error"] = traceback.format_exc()
-    with open(RESULT, "w") as f:
-        json.dump(out, f, indent=1)

@@ -6,11 +6,9 @@ after each and writes, per size, what the box shows, the light map the docker ho
 layer is, to $SSN_TEST_RESULT.
 """
 
-import json
 import os
-import traceback
 
-from krita_docker_driver import H, W, add_docker, bind_to, person_in_window, wait_idle
+from krita_docker_driver import H, W, add_docker, bind_to, person_in_window, recording, wait_idle
 from krita_driver import alpha_plane, pump
 from PyQt5.QtCore import Qt
 from PyQt5.QtTest import QTest
@@ -29,7 +27,7 @@ def crispness(alpha):
 
 
 def main(*args):
-    try:
+    with recording(out, RESULT):
         doc, person, qwin = person_in_window("ssn-size", 160, 120, 60, 160)
         qwin.show()
         docker = add_docker(qwin)
@@ -61,8 +59,3 @@ def main(*args):
         out["messages"] = list(controller.model.status)
         out["docks"] = [d.objectName() for d in qwin.findChildren(QDockWidget)][:3]
         docker.engine.shutdown()
-        out["done"] = True
-    except Exception:
-        out["error"] = traceback.format_exc()
-    with open(RESULT, "w") as f:
-        json.dump(out, f, indent=1)
