@@ -22,6 +22,21 @@ DEPTHS = os.environ.get("SSN_BENCH_DEPTHS", "U8,U16,F16,F32").split(",")
 # The presets whose light is dragged for the preview table: a Gaussian the network renders, a 0.53-degree sun traced
 LIGHTS = [name for name in os.environ.get("SSN_BENCH_LIGHTS", "softbox,sun").split(",") if name]
 out: dict[str, Any] = {"live": {}, "previews": {}}
+PIXEL_BYTES = {"U8": 4, "U16": 8, "F16": 8, "F32": 16}
+# the parts of a release reported (medians, ms): the release to the written layer, and where its time went
+RELEASE_PARTS = (
+    "to_layer",
+    "request_after",
+    "waiting",
+    "worker",
+    "worker_shadow",
+    "worker_to_canvas",
+    "worker_layer",
+    "reply_transfer",
+    "after_reply",
+    "write",
+    "longest_stall",
+)
 
 
 def pixel(depth, bgr, a):
@@ -104,6 +119,20 @@ def trace_replies(engine):
     return traced
 
 
+def timed(obj, name):
+    """Wrap ``obj.name`` so that each call's milliseconds are appended to the returned list."""
+    call, times = getattr(obj, name), []
+
+    def timed_call(*args):
+        t = time.perf_counter()
+        result = call(*args)
+        times.append(1e3 * (time.perf_counter() - t))
+        return result
+
+    setattr(obj, name, timed_call)
+    return times
+
+
 def spin(controller, timeout_s):
     loop = QEventLoop()
     QTimer.singleShot(int(timeout_s * 1000), loop.quit)
@@ -137,17 +166,23 @@ def preview_drag(doc, light):
     c.generate()
     spin(c, 120)
     previews, worker_ms, sizes = [], [], set()
-    c.previewed.connect(lambda rgb, w, h: (previews.append(time.perf_counter()), sizes.add((w, h))))
+
+    def previewed(rgb, w, h):
+        previews.append(time.perf_counter())
+        sizes.add((w, h))
+
+    c.previewed.connect(previewed)
     request = c.engine.request
 
     def timed_request(cmd, *args, on_reply=None, **kwargs):
-        if cmd == "preview" and on_reply is not None:
-            answer = on_reply
+        answer = on_reply
+        if cmd == "preview" and answer is not None:
 
-            def on_reply(reply, buffers):
+            def timed_reply(reply, buffers):
                 worker_ms.append(sum(reply.get("timing_ms", {}).values()))
                 answer(reply, buffers)
 
+            on_reply = timed_reply
         return request(cmd, *args, on_reply=on_reply, **kwargs)
 
     c.engine.request = timed_request
@@ -195,27 +230,10 @@ def live_drag(doc, depth):
     c.model.status_changed.connect(lambda status: messages.append(list(status)) if status[0] != "info" else None)
     c.generate()
     spin(c, 120)
-    previews, writes, write_ms = [], [], []
+    previews, writes = [], []
     c.previewed.connect(lambda rgb, w, h: previews.append(time.perf_counter()))
     c.rendered.connect(lambda info: writes.append((time.perf_counter(), info)))
-    host_write = c.host.write
-
-    def timed_write(*args):
-        t = time.perf_counter()
-        result = host_write(*args)
-        write_ms.append(1e3 * (time.perf_counter() - t))
-        return result
-
-    c.host.write = timed_write
-    begin_drag, start_ms = c.host.begin_drag, []
-
-    def timed_begin_drag(*args):
-        t = time.perf_counter()
-        result = begin_drag(*args)
-        start_ms.append(1e3 * (time.perf_counter() - t))
-        return result
-
-    c.host.begin_drag = timed_begin_drag
+    write_ms, start_ms = timed(c.host, "write"), timed(c.host, "begin_drag")
     replies = trace_replies(c.engine)
     light = {"i": 0}
     editor = c.model.light_map.copy()
@@ -244,7 +262,11 @@ def live_drag(doc, depth):
     ticker = QTimer()
     ticker.timeout.connect(lambda: ticks.append(time.perf_counter()))
     for _ in range(RELEASES):
-        drag(0.25)  # a short drag: a preview is in flight at the release, as after a real one
+        # A short drag: a preview is in flight at the release, as after a real one. Its first move, the drag's
+        # start, is made before the quarter second (at 16 bit and float it holds the event loop 0.3 s, which
+        # would otherwise end the drag as its first preview leaves, the release waiting for all of it).
+        move()
+        drag(0.25)
         ticks.clear()
         ticker.start(1)
         released, start = time.perf_counter(), len(writes)
@@ -257,9 +279,24 @@ def live_drag(doc, depth):
             sent, first, done, chunks = replies["render"][-1]
             turns = [released] + [t for t in ticks if t <= at] + [t for t in ticks if t > at][:1]
             stall = max((b - a for a, b in zip(turns, turns[1:], strict=False)), default=0.0)
+            worker = info["timing_ms"]
             releases.append(
-                (1e3 * (at - released), write_ms[start], sum(info["timing_ms"].values()), info["created"])
-                + (1e3 * (sent - released), 1e3 * (done - first), chunks, 1e3 * stall)
+                {
+                    "to_layer": 1e3 * (at - released),
+                    "write": write_ms[start],
+                    "worker": sum(worker.values()),
+                    **{f"worker_{part}": ms for part, ms in worker.items()},
+                    "created": info["created"],
+                    "request_after": 1e3 * (sent - released),
+                    # from the request to the reply's first byte, less the render: the preview still in flight
+                    # at the release, the worker reading the request and writing the reply
+                    "waiting": 1e3 * (first - sent) - sum(worker.values()),
+                    "reply_transfer": 1e3 * (done - first),
+                    "reply_chunks": chunks,
+                    "after_reply": 1e3 * (at - done) - write_ms[start],  # decoding, dispatch, the signal
+                    "layer_mb": info["width"] * info["height"] * PIXEL_BYTES[depth] / 1e6,
+                    "longest_stall": 1e3 * stall,
+                }
             )
     out["live"][depth] = {
         "canvas": "2000x2000",
@@ -270,15 +307,11 @@ def live_drag(doc, depth):
         "median_preview_gap_ms": round(1e3 * gaps[len(gaps) // 2], 1) if gaps else None,
         "layer_writes_during_drag": during,
         "releases": len(releases),
-        "release_to_layer_ms": _median([r[0] for r in releases]),
-        "release_write_ms": _median([r[1] for r in releases]),
-        "release_worker_ms": _median([r[2] for r in releases]),
-        "release_new_layer": any(r[3] for r in releases),
+        **{f"release_{k}_ms": _median([r[k] for r in releases]) for k in RELEASE_PARTS},
+        "release_new_layer": any(r["created"] for r in releases),
         "drag_start_ms": _median(start_ms[1:]),  # the releases' drags (their undo step, the preview's background)
-        "release_request_after_ms": _median([r[4] for r in releases]),
-        "release_reply_transfer_ms": _median([r[5] for r in releases]),
-        "release_reply_chunks": _median([r[6] for r in releases]),
-        "release_longest_stall_ms": _median([r[7] for r in releases]),
+        "release_reply_chunks": _median([r["reply_chunks"] for r in releases]),
+        "release_layer_mb": _median([r["layer_mb"] for r in releases]),
         "total_s": round(time.perf_counter() - t0, 2),
     }
     c.engine.shutdown()

@@ -5,6 +5,7 @@ window of a fresh profile's size with the docker at Krita's default place and wi
 through the docker's panel and undoes them with Krita's undo action; it writes $SSN_TEST_RESULT.
 """
 
+import contextlib
 import json
 import os
 import time
@@ -21,6 +22,19 @@ NARROW = 260  # pixels: a dock column narrower than Krita's default
 out = {"log": []}
 
 
+@contextlib.contextmanager
+def recording(out, path):
+    """Run the driver's block, then write ``out`` to ``path`` as JSON: with "done" where the block ended, with the
+    traceback as "error" where it raised."""
+    try:
+        yield
+        out["done"] = True
+    except Exception:
+        out["error"] = traceback.format_exc()
+    with open(path, "w") as f:
+        json.dump(out, f, indent=1)
+
+
 def wait_idle(controller, timeout_s=120.0):
     deadline = time.monotonic() + timeout_s
     pump(0.2)
@@ -29,19 +43,47 @@ def wait_idle(controller, timeout_s=120.0):
     pump(0.5)
 
 
+def person_in_window(name, x, y, w, h):
+    """A W x H U8 document named ``name`` in a Krita window, with a layer "Person" opaque over the w x h
+    rectangle at x, y: (the document, the layer, the window's QMainWindow)."""
+    doc = Krita.instance().createDocument(W, H, name, "RGBA", "U8", "", 72.0)
+    person = doc.createNode("Person", "paintlayer")
+    person.setPixelData(bytes([200, 90, 40, 255]) * (w * h), x, y, w, h)
+    doc.rootNode().addChildNode(person, doc.rootNode().childNodes()[0])
+    window = Krita.instance().openWindow()
+    window.addView(doc)
+    return doc, person, window.qwindow()
+
+
+def add_docker(qwin):
+    """The Soft Shadow docker added to the window where Krita puts a new docker (the right dock column)."""
+    from ssn_shadow.docker import DOCKER_ID, SoftShadowDocker
+
+    docker = SoftShadowDocker()
+    docker.setObjectName(DOCKER_ID)
+    qwin.addDockWidget(Qt.DockWidgetArea.RightDockWidgetArea, docker)
+    docker.show()
+    return docker
+
+
+def bind_to(docker, doc, person):
+    """The docker's controller and panel on ``doc``'s model, its source ``person`` (kritarunner's window may not
+    be the active one); Live off: the driver presses Generate."""
+    controller, panel = docker.controller, docker.panel
+    doc.setActiveNode(person)
+    pump(0.5)
+    controller.host.active_document = lambda: doc
+    controller.set_model(docker.models.model_for(doc))
+    panel.show_model(controller.model)
+    controller.live = False
+    return controller, panel
+
+
 def main(*args):
-    try:
-        from ssn_shadow.docker import DOCKER_ID, SoftShadowDocker
+    with recording(out, RESULT):
         from ssn_shadow.shared import light_map as lm
 
-        k = Krita.instance()
-        doc = k.createDocument(W, H, "ssn-docker", "RGBA", "U8", "", 72.0)
-        person = doc.createNode("Person", "paintlayer")
-        person.setPixelData(bytes([200, 90, 40, 255]) * (80 * 180), 200, 90, 80, 180)
-        doc.rootNode().addChildNode(person, doc.rootNode().childNodes()[0])
-        window = k.openWindow()
-        window.addView(doc)
-        qwin = window.qwindow()
+        doc, person, qwin = person_in_window("ssn-docker", 200, 90, 80, 180)
         # A profile without a saved window geometry: Krita 5.1 opens its window at two thirds of a screen wider
         # than 1024 px, centred (KisMainWindow::initializeGeometry); the virtual screen has no window manager.
         screen = QApplication.primaryScreen().availableGeometry()
@@ -51,10 +93,7 @@ def main(*args):
         pump(2.0)
         layers = next(d for d in qwin.findChildren(QDockWidget) if d.objectName() == "KisLayerBox")
         default_width = layers.width()  # the right dock column of a fresh profile
-        docker = SoftShadowDocker()
-        docker.setObjectName(DOCKER_ID)
-        qwin.addDockWidget(Qt.DockWidgetArea.RightDockWidgetArea, docker)  # where Krita puts a new docker
-        docker.show()
+        docker = add_docker(qwin)
         pump(1.0)
         widened = docker.width()
         # Krita restores its dock column's width (its workspace) rather than widening it for a new docker
@@ -86,14 +125,8 @@ def main(*args):
         qwin.resizeDocks([docker], [default_width], Qt.Orientation.Horizontal)
         pump(0.5)
 
-        controller = docker.controller
-        doc.setActiveNode(person)
-        pump(0.5)
-        controller.host.active_document = lambda: doc  # kritarunner's window may not be the active one
-        controller.set_model(docker.models.model_for(doc))
-        panel.show_model(controller.model)
+        controller, panel = bind_to(docker, doc, person)
         controller.watch_history()
-        controller.live = False
         controller.model.light_map = lm.preset("low-sun-left")
         panel.generate.click()
         wait_idle(controller)
@@ -103,7 +136,7 @@ def main(*args):
         wait_idle(controller)
         doc.setActiveNode(person)
         pump(0.5)
-        undo = k.action("edit_undo")
+        undo = Krita.instance().action("edit_undo")
         steps = out["undo"] = []
         for _ in range(2):  # the new shadow goes, then the first one comes back
             text = undo.text()
@@ -123,8 +156,3 @@ def main(*args):
         out["first_light_map"] = first
         out["messages"] = list(controller.model.status)
         docker.engine.shutdown()
-        out["done"] = True
-    except Exception:
-        out["error"] = traceback.format_exc()
-    with open(RESULT, "w") as f:
-        json.dump(out, f, indent=1)

@@ -90,6 +90,21 @@ def run_kritarunner(
     return data
 
 
+def run_in_fresh_profile(tmp_path: Path, module: str) -> dict:
+    """Run ``main`` of the driver ``module`` in Krita with a fresh profile (under ``tmp_path``, the plug-in
+    installed there) on a virtual 1366 x 768 screen (:func:`run_kritarunner`); OpenGL off, which the virtual X
+    server cannot run (it changes no dock size)."""
+    from plugin_krita.install import install
+
+    pykrita = tmp_path / "pykrita"
+    install(dest=pykrita, python=sys.executable)
+    home = tmp_path / "home"
+    (home / ".config").mkdir(parents=True)
+    (home / ".config" / "kritadisplayrc").write_text("[General]\nOpenGLRenderer=none\n")
+    env = {"HOME": str(home), "XDG_CONFIG_HOME": str(home / ".config"), "XDG_DATA_HOME": str(home / "data")}
+    return run_kritarunner(pykrita, module, "main", tmp_path / "result.json", env, "1366x768x24")
+
+
 def worker_command(*args: str) -> EngineConfig:
     """The real engine worker from this checkout, or another Python command."""
     return EngineConfig((sys.executable, *(args or ("-m", "ssn_engine", "serve"))), env={"PYTHONPATH": str(REPO)})

@@ -6,19 +6,15 @@ after each and writes, per size, what the box shows, the light map the docker ho
 layer is, to $SSN_TEST_RESULT.
 """
 
-import json
 import os
-import traceback
 
-from krita import Krita
-from krita_docker_driver import wait_idle
+from krita_docker_driver import H, W, add_docker, bind_to, person_in_window, recording, wait_idle
 from krita_driver import alpha_plane, pump
 from PyQt5.QtCore import Qt
 from PyQt5.QtTest import QTest
 from PyQt5.QtWidgets import QDockWidget
 
 RESULT = os.environ.get("SSN_TEST_RESULT", "/tmp/ssn_krita_size.json")
-W, H = 480, 360
 out: dict = {"sizes": {}}
 
 
@@ -31,30 +27,12 @@ def crispness(alpha):
 
 
 def main(*args):
-    try:
-        from ssn_shadow.docker import DOCKER_ID, SoftShadowDocker
-
-        k = Krita.instance()
-        doc = k.createDocument(W, H, "ssn-size", "RGBA", "U8", "", 72.0)
-        person = doc.createNode("Person", "paintlayer")
-        person.setPixelData(bytes([200, 90, 40, 255]) * (60 * 160), 160, 120, 60, 160)
-        doc.rootNode().addChildNode(person, doc.rootNode().childNodes()[0])
-        window = k.openWindow()
-        window.addView(doc)
-        qwin = window.qwindow()
+    with recording(out, RESULT):
+        doc, person, qwin = person_in_window("ssn-size", 160, 120, 60, 160)
         qwin.show()
-        docker = SoftShadowDocker()
-        docker.setObjectName(DOCKER_ID)
-        qwin.addDockWidget(Qt.DockWidgetArea.RightDockWidgetArea, docker)
-        docker.show()
+        docker = add_docker(qwin)
         pump(1.5)
-        panel, controller = docker.panel, docker.controller
-        doc.setActiveNode(person)
-        pump(0.5)
-        controller.host.active_document = lambda: doc  # kritarunner's window may not be the active one
-        controller.set_model(docker.models.model_for(doc))
-        panel.show_model(controller.model)
-        controller.live = False
+        controller, panel = bind_to(docker, doc, person)
         panel.presets.setCurrentIndex(panel.presets.findData("sun"))
         panel.presets.activated.emit(panel.presets.currentIndex())
         pump(0.2)
@@ -81,8 +59,3 @@ def main(*args):
         out["messages"] = list(controller.model.status)
         out["docks"] = [d.objectName() for d in qwin.findChildren(QDockWidget)][:3]
         docker.engine.shutdown()
-        out["done"] = True
-    except Exception:
-        out["error"] = traceback.format_exc()
-    with open(RESULT, "w") as f:
-        json.dump(out, f, indent=1)

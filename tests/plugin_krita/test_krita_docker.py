@@ -1,25 +1,15 @@
 """The docker in a real Krita window (kritarunner) on a 1366 x 768 screen: its width, and Krita's undo."""
 
-import sys
-
 import pytest
-from krita_helpers import run_kritarunner
+from krita_helpers import run_in_fresh_profile
 
-from plugin_krita.install import install
 from plugin_krita.ssn_shadow.shared import light_map as lm
 
 pytestmark = pytest.mark.krita
 
 
 def test_the_docker_fits_krita_default_dock_and_follows_undo(tmp_path):
-    pykrita = tmp_path / "pykrita"
-    install(dest=pykrita, python=sys.executable)
-    home = tmp_path / "home"
-    (home / ".config").mkdir(parents=True)
-    # a fresh profile; OpenGL off, which the virtual X server cannot run (it changes no dock size)
-    (home / ".config" / "kritadisplayrc").write_text("[General]\nOpenGLRenderer=none\n")
-    env = {"HOME": str(home), "XDG_CONFIG_HOME": str(home / ".config"), "XDG_DATA_HOME": str(home / "data")}
-    data = run_kritarunner(pykrita, "krita_docker_driver", "main", tmp_path / "result.json", env, "1366x768x24")
+    data = run_in_fresh_profile(tmp_path, "krita_docker_driver")
 
     layout = data["layout"]
     assert layout["window"][2] == layout["screen"][2] * 2 // 3, layout  # a fresh profile's window

@@ -1,23 +1,14 @@
 """A light's size in degrees, typed into the docker's Size box in a real Krita window (kritarunner)."""
 
-import sys
-
 import pytest
-from krita_helpers import run_kritarunner
+from krita_helpers import run_in_fresh_profile
 
-from plugin_krita.install import install
 
 pytestmark = pytest.mark.krita
 
 
 def test_the_size_box_makes_a_05_degree_sun_and_its_shadow_is_crisper_than_at_12(tmp_path):
-    pykrita = tmp_path / "pykrita"
-    install(dest=pykrita, python=sys.executable)
-    home = tmp_path / "home"
-    (home / ".config").mkdir(parents=True)
-    (home / ".config" / "kritadisplayrc").write_text("[General]\nOpenGLRenderer=none\n")  # no OpenGL under Xvfb
-    env = {"HOME": str(home), "XDG_CONFIG_HOME": str(home / ".config"), "XDG_DATA_HOME": str(home / "data")}
-    data = run_kritarunner(pykrita, "krita_size_driver", "main", tmp_path / "result.json", env, "1366x768x24")
+    data = run_in_fresh_profile(tmp_path, "krita_size_driver")
     assert data.get("done"), data.get("error")
 
     assert data["preset_size"] == 0.53  # the Sun preset's light

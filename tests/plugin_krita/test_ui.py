@@ -42,6 +42,24 @@ def pos(w, u, v):
     return QPoint(round(p.x()), round(p.y()))
 
 
+def drag_move(w, point):
+    """A mouse move over ``w`` to ``point`` with the left button held (QTest's mouseMove carries no button)."""
+    QApplication.sendEvent(w, QMouseEvent(QEvent.MouseMove, QPointF(point), Qt.NoButton, Qt.LeftButton, Qt.NoModifier))
+
+
+def generated_panel(width, height, host=None):
+    """The panel shown at ``width`` x ``height`` on a controller as after a Generate (its source read, its cutout
+    at the worker), whose engine never answers: (the engine, the host, the controller, the panel)."""
+    engine, host = NoEngine(), host or FakeHost()
+    c = ShadowController(engine, host)
+    panel = ShadowPanel(c)
+    panel.resize(width, height)
+    panel.show()
+    QApplication.processEvents()
+    c.source, c.cutout = host.read_source(host.document), "c1"
+    return engine, host, c, panel
+
+
 def test_click_adds_drag_moves_right_click_deletes(qapp):
     w, events = widget(qapp)
     QTest.mouseClick(w, Qt.LeftButton, Qt.NoModifier, pos(w, 0.3, 0.5))
@@ -50,8 +68,7 @@ def test_click_adds_drag_moves_right_click_deletes(qapp):
     assert abs(light.u - 0.3) < 0.01 and abs(light.v - 0.5) < 0.02
 
     QTest.mousePress(w, Qt.LeftButton, Qt.NoModifier, pos(w, 0.3, 0.5))
-    move = QMouseEvent(QEvent.MouseMove, QPointF(pos(w, 0.6, 0.2)), Qt.NoButton, Qt.LeftButton, Qt.NoModifier)
-    QApplication.sendEvent(w, move)
+    drag_move(w, pos(w, 0.6, 0.2))
     QTest.mouseRelease(w, Qt.LeftButton, Qt.NoModifier, pos(w, 0.6, 0.2))
     light = w.light_map.lights[0]
     assert len(w.light_map) == 1 and abs(light.u - 0.6) < 0.01 and abs(light.v - 0.2) < 0.02
@@ -80,8 +97,7 @@ def test_a_drag_makes_the_maps_picture_at_most_every_interval_and_ends_with_the_
     timer = QElapsedTimer()
     timer.start()
     for k in range(30):  # the mouse as fast as the event loop goes, each move drawn
-        target = QPointF(pos(w, 0.3 + 0.001 * k, light.v))
-        QApplication.sendEvent(w, QMouseEvent(QEvent.MouseMove, target, Qt.NoButton, Qt.LeftButton, Qt.NoModifier))
+        drag_move(w, pos(w, 0.3 + 0.001 * k, light.v))
         QApplication.processEvents()
     most = timer.elapsed() // light_map_widget.PICTURE_INTERVAL_MS + 2
     assert len(made) <= min(most, 29), (len(made), timer.elapsed())
@@ -206,19 +222,12 @@ def test_panel_state(qapp):
 
 
 def test_a_drag_on_the_map_previews_and_the_release_renders_the_layer(qapp):
-    engine = NoEngine()
-    host = FakeHost()
-    c = ShadowController(engine, host)
-    panel = ShadowPanel(c)
-    panel.resize(360, 900)
-    panel.show()
-    c.source, c.cutout = host.read_source(host.document), "c1"  # as after a Generate
+    engine, host, c, panel = generated_panel(360, 900)
     w = panel.map_widget
     light = w.light_map.lights[0]
     QTest.mousePress(w, Qt.LeftButton, Qt.NoModifier, pos(w, light.u, light.v))
     for k in range(1, 4):
-        target = QPointF(pos(w, light.u + 0.05 * k, light.v))
-        QApplication.sendEvent(w, QMouseEvent(QEvent.MouseMove, target, Qt.NoButton, Qt.LeftButton, Qt.NoModifier))
+        drag_move(w, pos(w, light.u + 0.05 * k, light.v))
     assert engine.sent == ["preview"]  # one in flight (this engine never answers), no layer render
     assert engine.params[0]["read_horizon"] is True and "horizon" not in engine.params[0]  # no camera set
     QTest.mouseRelease(w, Qt.LeftButton, Qt.NoModifier, pos(w, light.u + 0.15, light.v))
@@ -234,18 +243,12 @@ def test_a_drag_on_the_map_previews_and_the_release_renders_the_layer(qapp):
 def test_a_drag_previews_at_the_size_the_docker_draws_the_preview(qapp):
     """The preview's image is asked for as large as the docker shows it (in device pixels), not larger: the
     worker renders, and traces a small light on, each of its pixels."""
-    engine = NoEngine()
-    host = FakeHost(w=2000, h=1500)
-    c = ShadowController(engine, host)
-    panel = ShadowPanel(c)
-    panel.resize(300, 900)
-    panel.show()
-    c.source, c.cutout = host.read_source(host.document), "c1"  # as after a Generate
+    engine, host, c, panel = generated_panel(300, 900, FakeHost(w=2000, h=1500))
     w = panel.map_widget
     light = w.light_map.lights[0]
     QTest.mousePress(w, Qt.LeftButton, Qt.NoModifier, pos(w, light.u, light.v))
-    target = QPointF(pos(w, light.u + 0.05, light.v))
-    QApplication.sendEvent(w, QMouseEvent(QEvent.MouseMove, target, Qt.NoButton, Qt.LeftButton, Qt.NoModifier))
+    target = pos(w, light.u + 0.05, light.v)
+    drag_move(w, target)
     assert engine.sent == ["preview"]
     height, width = engine.buffers[0]["background"].shape[:2]
     ratio = panel.preview.devicePixelRatioF()
@@ -253,30 +256,23 @@ def test_a_drag_previews_at_the_size_the_docker_draws_the_preview(qapp):
     assert width <= box[0] + 1 and height <= box[1] + 1  # drawn without being scaled down
     assert max(width - box[0], height - box[1]) > -1.5  # filling the box's width or height
     assert (width, height) != (320, 240)  # the size before, as large as the preview could be
-    QTest.mouseRelease(w, Qt.LeftButton, Qt.NoModifier, target.toPoint())
+    QTest.mouseRelease(w, Qt.LeftButton, Qt.NoModifier, target)
 
 
 def test_the_first_preview_of_a_drag_moves_nothing_under_the_mouse(qapp):
     """The first light drag after Generate: the preview's first image comes mid-drag; the map stays where it
     is, and the light ends where the mouse was released."""
-    engine = NoEngine()
-    host = FakeHost()
-    c = ShadowController(engine, host)
-    panel = ShadowPanel(c)
-    panel.resize(300, 700)
-    panel.show()
-    QApplication.processEvents()
-    c.source, c.cutout = host.read_source(host.document), "c1"  # as after a Generate
+    engine, host, c, panel = generated_panel(300, 700)
     w = panel.map_widget
     light = w.light_map.lights[0]
     at_press = w.mapTo(panel, QPoint(0, 0))
     QTest.mousePress(w, Qt.LeftButton, Qt.NoModifier, pos(w, light.u, light.v))
     target = pos(w, light.u + 0.1, light.v + 0.1)
-    QApplication.sendEvent(w, QMouseEvent(QEvent.MouseMove, QPointF(target), Qt.NoButton, Qt.LeftButton, Qt.NoModifier))
+    drag_move(w, target)
     c.previewed.emit(bytes([90, 90, 90]) * (320 * 240), 320, 240)  # the drag's first preview
     QApplication.processEvents()
     assert w.mapTo(panel, QPoint(0, 0)) == at_press
-    QApplication.sendEvent(w, QMouseEvent(QEvent.MouseMove, QPointF(target), Qt.NoButton, Qt.LeftButton, Qt.NoModifier))
+    drag_move(w, target)
     QTest.mouseRelease(w, Qt.LeftButton, Qt.NoModifier, target)
     QApplication.processEvents()
     assert w.mapTo(panel, QPoint(0, 0)) == at_press

@@ -365,13 +365,7 @@ class ShadowPanel(QWidget):
             self.preview.clear()
         self._bindings = [
             bind(model, "light_map", guard(self._show_light_map)),
-            bind(
-                model,
-                "ao_strength",
-                lambda v: self.ao_strength.setValue(round(100 * v)),
-                self.ao_strength.valueChanged,
-                guard(lambda v: setattr(model, "ao_strength", v / 100.0)),
-            ),
+            self._bind_percent(model, "ao_strength", self.ao_strength),
             bind(
                 model,
                 "use_horizon",
@@ -379,31 +373,34 @@ class ShadowPanel(QWidget):
                 self.use_horizon.toggled,
                 guard(lambda on: setattr(model, "use_horizon", on)),
             ),
-            bind(
-                model,
-                "horizon",
-                guard(lambda v: self._show_camera_fields()),
-                self.horizon.editingFinished,
-                guard(lambda: setattr(model, "horizon", float(self.horizon.value()))),
-            ),
-            bind(
-                model,
-                "fov",
-                guard(lambda v: self._show_camera_fields()),
-                self.fov.editingFinished,
-                guard(lambda: setattr(model, "fov", float(self.fov.value()))),
-            ),
+            self._bind_camera_field(model, "horizon", self.horizon),
+            self._bind_camera_field(model, "fov", self.fov),
             bind(model, "camera_read", guard(lambda _: self._show_camera_fields())),
             bind(model, "color", guard(self._show_colour)),
-            bind(
-                model,
-                "opacity",
-                lambda v: self.opacity.setValue(round(100 * v)),
-                self.opacity.valueChanged,
-                guard(lambda v: setattr(model, "opacity", v / 100.0)),
-            ),
+            self._bind_percent(model, "opacity", self.opacity),
             bind(model, "status", guard(lambda status: self.show_message(*status))),
         ]
+
+    def _bind_percent(self, model: ShadowModel, name: str, box: QSlider) -> Binding:
+        """The model's fraction ``name`` (0 to 1) shown and edited in percent on the slider ``box``."""
+        return bind(
+            model,
+            name,
+            lambda v: box.setValue(round(100 * v)),
+            box.valueChanged,
+            self._guard(lambda v: setattr(model, name, v / 100.0)),
+        )
+
+    def _bind_camera_field(self, model: ShadowModel, name: str, box: QSpinBox | QDoubleSpinBox) -> Binding:
+        """The model's camera value ``name`` edited in ``box`` (taken when its editing ends); the camera fields
+        shown anew when it changes."""
+        return bind(
+            model,
+            name,
+            self._guard(lambda v: self._show_camera_fields()),
+            box.editingFinished,
+            self._guard(lambda: setattr(model, name, float(box.value()))),
+        )
 
     def _guard(self, fn):
         """Catch everything at the UI boundary and show it in the docker instead."""
