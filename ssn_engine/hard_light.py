@@ -685,7 +685,8 @@ def depth_map(alpha: np.ndarray) -> np.ndarray:
     radius = d.copy()
     r = 1.0
     while r <= d.max():  # local radius: each pixel within r of a centre whose disk of radius r fits inside
-        radius[(ndimage.distance_transform_edt(d < r) < r) & (radius < r)] = r
+        near = np.asarray(ndimage.distance_transform_edt(d < r), np.float32) < r
+        radius[near & (radius < r)] = r
         r *= RADIUS_STEP
     depth = 2.0 * k * np.sqrt(np.maximum(0.0, d * (2.0 * radius - d)))
     _, (iy, ix) = ndimage.distance_transform_edt(~solid, return_distances=True, return_indices=True)  # type: ignore[misc]
