@@ -30,7 +30,6 @@ RELEASE_PARTS = (
     "waiting",
     "worker",
     "worker_shadow",
-    "worker_to_canvas",
     "worker_layer",
     "reply_transfer",
     "after_reply",

@@ -122,7 +122,6 @@ def main() -> None:
         ("waiting", "waiting"),
         ("worker", "worker"),
         ("shadow", "worker_shadow"),
-        ("canvas", "worker_to_canvas"),
         ("layer", "worker_layer"),
         ("reply", "reply_transfer"),
         ("after", "after_reply"),
@@ -141,8 +140,9 @@ def main() -> None:
         "Krita's part of a drag's start (its undo step, the shadow layer replaced by a copy of itself, and the "
         "preview's background). queued: release to the render request; waiting: the request to the reply's first "
         "byte less the render (a preview still in flight at the release, the worker reading the request and "
-        "writing the reply); worker: its render, of which shadow (the network), canvas (the shadow at the "
-        "canvas's size) and layer (the layer's pixels in the document's format); reply: the reply's first to last "
+        "writing the reply); worker: its render, of which shadow (the shadow at the canvas's size: the network, "
+        "and the traced lights on a thread beside it) and layer (the layer's pixels in the document's format); "
+        "reply: the reply's first to last "
         "byte in Krita, in that many reads; after: the reply's last byte to the written layer less Krita's write "
         "(decoding, dispatch); write: Krita's part (the layer written in place); MB: the layer's bytes"
     )

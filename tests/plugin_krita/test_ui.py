@@ -99,7 +99,8 @@ def test_a_drag_makes_the_maps_picture_at_most_every_interval_and_ends_with_the_
     for k in range(30):  # the mouse as fast as the event loop goes, each move drawn
         drag_move(w, pos(w, 0.3 + 0.001 * k, light.v))
         QApplication.processEvents()
-    most = timer.elapsed() // light_map_widget.PICTURE_INTERVAL_MS + 2
+    # the widget's first picture (its first paint may come late on a busy machine), the press's, one per interval
+    most = timer.elapsed() // light_map_widget.PICTURE_INTERVAL_MS + 3
     assert len(made) <= min(most, 29), (len(made), timer.elapsed())
     QTest.qWait(2 * light_map_widget.PICTURE_INTERVAL_MS)  # the drag rests: the picture catches up
     assert made[-1] == w.light_map
