@@ -222,7 +222,7 @@ class CardTracer:
         self._full = _Source(alpha, s, framing.offset_x + (x0 - pad) * s, framing.offset_y + (y0 - pad) * s)
         self._sources: dict[int, _Source] = {}
         self._allowed: dict[int, np.ndarray] = {}
-        self._levels: dict[float, list[_Level]] = {}
+        self._levels: dict[float, dict[int, tuple[int, int, _Level]]] = {}  # per scale, level: rows, blurred
 
     # -- the cutout at the output's resolution ------------------------------------------------------------------
     def _source(self, out_scale: float) -> _Source:
@@ -242,15 +242,25 @@ class CardTracer:
             self._thickness[k] = thick.reshape(h // k + (h % k > 0), k, -1, k).max(axis=(1, 3)) / k
         return self._sources[k]
 
-    def _level(self, source: _Source, k: int) -> _Level:
+    def _level(self, source: _Source, k: int, r0: int, r1: int) -> _Level:
         """The source blurred by a Gaussian of sigma ``MIN_SIGMA * 2^((k - 1) / LEVELS_PER_OCTAVE)`` pixels
-        (k = 0: unblurred), made once per source."""
-        if source.scale not in self._levels:
-            self._levels[source.scale] = [_Level.of(source.alpha)]
-        levels = self._levels[source.scale]
-        while len(levels) <= k:
-            levels.append(_Level.of(_blur(source.alpha, MIN_SIGMA * 2.0 ** ((len(levels) - 1) / LEVELS_PER_OCTAVE))))
-        return levels[k]
+        (k = 0: unblurred), over at least its rows [r0, r1): blurred only over the rows a light needs of it (each
+        level serves a band of rows), kept and widened as other lights need more."""
+        levels = self._levels.setdefault(source.scale, {})
+        kept = levels.get(k)
+        if kept is not None and kept[0] <= r0 and r1 <= kept[1]:
+            return kept[2]
+        lo, hi = (r0, r1) if kept is None else (min(kept[0], r0), max(kept[1], r1))
+        if k == 0:
+            lo, hi, level = 0, source.alpha.shape[0], _Level.of(source.alpha)
+        else:
+            sigma = MIN_SIGMA * 2.0 ** ((k - 1) / LEVELS_PER_OCTAVE)
+            margin = math.ceil(4 * sigma) + 2  # rows beyond [lo, hi) that reach into it
+            a, b = max(0, lo - margin), min(source.alpha.shape[0], hi + margin)
+            level = _Level.of(_blur(source.alpha[a:b], sigma)[lo - a : hi - a])
+            level = replace(level, y=level.y + lo)
+        levels[k] = (lo, hi, level)
+        return level
 
     def _blurred(self, source: _Source, sigma_rows: np.ndarray) -> np.ndarray:
         """The source (uint8) blurred row by row: row i by a Gaussian of about sigma ``sigma_rows[i]`` pixels (the
@@ -260,7 +270,7 @@ class CardTracer:
         out = np.zeros(source.alpha.shape, np.uint8)
         starts = np.flatnonzero(np.diff(level, prepend=-1))  # sigma grows with the height: bands of rows share a level
         for a, b in zip(starts, [*starts[1:], len(level)], strict=True):
-            self._level(source, int(level[a])).paste(out, int(a), int(b))
+            self._level(source, int(level[a]), int(a), int(b)).paste(out, int(a), int(b))
         return out
 
     # -- geometry ---------------------------------------------------------------------------------------------
