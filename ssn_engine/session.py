@@ -12,9 +12,7 @@ E0: s = sum_i (E0_i / E0) s_i.
 
 from __future__ import annotations
 
-import concurrent.futures
 import math
-import threading
 from typing import Any
 
 import numpy as np
@@ -25,24 +23,15 @@ from .framing import CanvasShadow, Framing, as_unit_float, frame_alpha, placed_s
 from .hard_light import ContactTracer, as_gaussians, split_lights
 from .hemisphere import light_power, render_light_map
 from .host_kit.camera_rules import DEFAULT_FOV, FOV_RANGE
-from .host_kit.light_map import LightMap
+from .host_kit.light_map import GaussianLight, LightMap
 from .host_kit.shadow_notes import HIDDEN, NO_LIGHT
 from .host_kit.sky_map import NETWORK_SHAPE
 from .methods import GeometricCard, ShadowMethod
 from .methods.base import camera_limits
 from .methods.geometric import camera_at
+from .stripes import thread_pool
 
-_network: concurrent.futures.ThreadPoolExecutor | None = None
-_network_lock = threading.Lock()
-
-
-def _network_thread() -> concurrent.futures.ThreadPoolExecutor:
-    """The thread the network's frames are rendered on while the caller traces (one: onnxruntime has its own)."""
-    global _network
-    with _network_lock:
-        if _network is None:
-            _network = concurrent.futures.ThreadPoolExecutor(1, thread_name_prefix="ssn-network")
-        return _network
+NETWORK_THREAD = "ssn-network"  # the thread the network's frames render on while the caller traces
 
 
 def camera_input(framing: Framing, horizon: float, fov: float = DEFAULT_FOV) -> tuple[float, float]:
@@ -162,53 +151,33 @@ class ShadowSession:
         depth, its contact), that is kept: s_small = max(traced, network). The two parts add up in their
         shares of E0."""
         framing = framing or self.framing
-        nets = self._network_shadows(frames, light_map, clip, framing)
-        return self._combined(nets, light_map, self._traced(light_map, clip, framing))
+        traced, broad = split_lights(light_map)
+        shares = _shares(traced, broad)
+        nets = self._network_shadows(frames, traced, broad, clip, framing)
+        return _combined(nets, self._traced(traced, shares, clip, framing), shares, len(traced), broad.is_dark)
 
     def _network_shadows(
-        self, frames: np.ndarray, light_map: LightMap, clip: bool, framing: Framing
+        self, frames: np.ndarray, traced: list[GaussianLight], broad: LightMap, clip: bool, framing: Framing
     ) -> tuple[CanvasShadow, CanvasShadow | None]:
-        """The network's frames on ``framing``'s canvas: of the broad lights (without small lights, the whole
-        shadow), and of the small lights as Gaussians (None without small lights)."""
-        traced, broad = split_lights(light_map)
+        """The network's frames on ``framing``'s canvas: of the ``broad`` lights (without ``traced`` ones, the
+        whole shadow), and of the traced lights as Gaussians (None without them)."""
         if not traced:
             return self._network_canvas(frames[0], broad, clip, framing), None
         wide = CanvasShadow.nothing() if broad.is_dark else self._network_canvas(frames[0], broad, clip, framing)
         return wide, self._network_canvas(frames[1], as_gaussians(traced), clip, framing)
 
-    def _traced(self, light_map: LightMap, clip: bool, framing: Framing) -> list[tuple[float, np.ndarray, int, int]]:
-        """The small lights' traced shadows on ``framing``'s canvas, each with its share of their E0."""
-        traced, broad = split_lights(light_map)
-        if not traced:
-            return []
-        power = light_power(LightMap([*traced, *broad.lights]))[: len(traced)]
-        if power.sum() <= 0:
+    def _traced(
+        self, traced: list[GaussianLight], shares: np.ndarray, clip: bool, framing: Framing
+    ) -> list[tuple[float, np.ndarray, int, int]]:
+        """The ``traced`` lights' shadows on ``framing``'s canvas, each with its share of their E0 (``shares``:
+        every light's share of E0, the traced ones first: :func:`_shares`)."""
+        small = float(shares[: len(traced)].sum())
+        if not traced or small <= 0:
             return []
         return [
-            (share, *self.tracer.shadow(light.u, light.v, light.size_degrees, framing, clip))
-            for light, share in zip(traced, power / power.sum(), strict=True)
+            (share / small, *self.tracer.shadow(light.u, light.v, light.size_degrees, framing, clip))
+            for light, share in zip(traced, shares[: len(traced)], strict=True)
         ]
-
-    @staticmethod
-    def _combined(
-        nets: tuple[CanvasShadow, CanvasShadow | None],
-        light_map: LightMap,
-        parts: list[tuple[float, np.ndarray, int, int]],
-    ) -> CanvasShadow:
-        """:meth:`to_canvas` from the network's shadows (:meth:`_network_shadows`) and the traced ``parts``
-        (:meth:`_traced`)."""
-        wide, net = nets
-        if net is None:
-            return wide
-        traced, broad = split_lights(light_map)
-        power = light_power(LightMap([*traced, *broad.lights]))
-        if power.sum() <= 0:
-            return CanvasShadow.nothing()
-        small = float(power[: len(traced)].sum() / power.sum())
-        values, x, y = placed_sum(parts, (net.values, net.x, net.y))
-        if broad.is_dark:
-            return CanvasShadow(values, x, y)
-        return CanvasShadow(*placed_sum([(small, values, x, y), (1.0 - small, wide.values, wide.x, wide.y)]))
 
     def _network_canvas(self, frame: np.ndarray, light_map: LightMap, clip: bool, framing: Framing) -> CanvasShadow:
         """The network's frame shadow of ``light_map`` on ``framing``'s canvas, continued beyond the frame's
@@ -232,15 +201,46 @@ class ShadowSession:
         the network's frames rendered on a thread of their own while the small lights are traced (both release
         the GIL: a sun's shadow costs about the longer of the two, not their sum)."""
         framing = framing or self.framing
-        if not split_lights(light_map)[0]:
+        traced, broad = split_lights(light_map)
+        if not traced:
             return self.to_canvas(self.render_frame(light_map), light_map, clip, framing)
-        frames = _network_thread().submit(self.render_frame, light_map)
-        parts = self._traced(light_map, clip, framing)
-        nets = self._network_shadows(frames.result(), light_map, clip, framing)
-        return self._combined(nets, light_map, parts)
+        frames = thread_pool(NETWORK_THREAD, 1).submit(self.render_frame, light_map)
+        shares = _shares(traced, broad)
+        parts = self._traced(traced, shares, clip, framing)
+        nets = self._network_shadows(frames.result(), traced, broad, clip, framing)
+        return _combined(nets, parts, shares, len(traced), broad.is_dark)
 
     def cover(self, framing: Framing) -> np.ndarray:
         """The cutout's alpha (h, w) on ``framing``'s canvas, resampled from the frame: what hides the shadow
         in a preview."""
         mask = shadow_to_canvas(self.mask, framing, origin=(0.0, 0.0))  # with an origin: no fading at the frame's edges
         return mask.full_canvas(framing.canvas_width, framing.canvas_height)
+
+
+def _shares(traced: list[GaussianLight], broad: LightMap) -> np.ndarray:
+    """Each light's share of the ground's unoccluded irradiance E0, the ``traced`` lights first, then the
+    ``broad`` ones (zeros where nothing lights)."""
+    power = light_power(LightMap([*traced, *broad.lights]))
+    return power / power.sum() if power.sum() > 0 else np.zeros_like(power)
+
+
+def _combined(
+    nets: tuple[CanvasShadow, CanvasShadow | None],
+    parts: list[tuple[float, np.ndarray, int, int]],
+    shares: np.ndarray,
+    n_traced: int,
+    broad_dark: bool,
+) -> CanvasShadow:
+    """:meth:`ShadowSession.to_canvas` from the network's shadows (``_network_shadows``), the traced ``parts``
+    (``_traced``) and every light's share of E0 (:func:`_shares`: the first ``n_traced`` traced; ``broad_dark``:
+    the others give no light)."""
+    wide, net = nets
+    if net is None:
+        return wide
+    if not shares.any():
+        return CanvasShadow.nothing()
+    small = float(shares[:n_traced].sum())
+    values, x, y = placed_sum(parts, (net.values, net.x, net.y))
+    if broad_dark:
+        return CanvasShadow(values, x, y)
+    return CanvasShadow(*placed_sum([(small, values, x, y), (1.0 - small, wide.values, wide.x, wide.y)]))

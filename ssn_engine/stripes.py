@@ -14,8 +14,8 @@ from collections.abc import Callable, Iterator
 STRIPE_PIXELS = 1 << 18  # canvas pixels made at once: temporaries follow this, not the canvas
 THREADS = max(1, min(4, os.cpu_count() or 1))
 _PREFIX = "ssn-stripes"
-_pool: concurrent.futures.ThreadPoolExecutor | None = None
-_pool_lock = threading.Lock()
+_pools: dict[str, concurrent.futures.ThreadPoolExecutor] = {}
+_pools_lock = threading.Lock()
 
 
 def row_stripes(y0: int, y1: int, width: int) -> Iterator[slice]:
@@ -25,12 +25,12 @@ def row_stripes(y0: int, y1: int, width: int) -> Iterator[slice]:
         yield slice(start, min(start + rows, y1))
 
 
-def _executor() -> concurrent.futures.ThreadPoolExecutor:
-    global _pool
-    with _pool_lock:
-        if _pool is None:
-            _pool = concurrent.futures.ThreadPoolExecutor(THREADS, thread_name_prefix=_PREFIX)
-        return _pool
+def thread_pool(prefix: str, threads: int) -> concurrent.futures.ThreadPoolExecutor:
+    """The process's pool of ``threads`` threads named ``prefix``, made on first use."""
+    with _pools_lock:
+        if prefix not in _pools:
+            _pools[prefix] = concurrent.futures.ThreadPoolExecutor(threads, thread_name_prefix=prefix)
+        return _pools[prefix]
 
 
 def for_each_stripe(work: Callable[[slice], object], y0: int, y1: int, width: int) -> None:
@@ -41,5 +41,5 @@ def for_each_stripe(work: Callable[[slice], object], y0: int, y1: int, width: in
         for rows in stripes:
             work(rows)
         return
-    for _ in _executor().map(work, stripes):  # re-raises the first error of a stripe
+    for _ in thread_pool(_PREFIX, THREADS).map(work, stripes):  # re-raises the first error of a stripe
         pass
