@@ -278,8 +278,7 @@ class LayerWriter:
             return WriteResult(existing, False, "", node_id(existing))
         if existing is not None:
             # A copy keeps its mode without the extra undo command setBlendingMode would add.
-            node = existing.duplicate()
-            node.setName(shadow_name(source_node.name()))
+            node = self._copy(existing, source_node)
             self._clear(node, self._rect_of(existing), rect)
         else:
             node = document.createNode(shadow_name(source_node.name()), "paintlayer")
@@ -288,14 +287,7 @@ class LayerWriter:
         x, y, w, h = rect
         if w > 0 and h > 0:
             node.setPixelData(pixels, x, y, w, h)
-        self._rects[node_id(node)] = rect
-        if existing is not None:
-            existing.remove()
-        # Node.remove and Node.addChildNode each wait for Krita to recomposite the whole image (Krita 5.1: their
-        # commands mark the image's bounds dirty): nothing is left to wait for after them.
-        notice = self._insert_below(document, source_node, node)
-        document.setActiveNode(source_node)  # Krita makes an added layer active; keep the source active
-        return WriteResult(node, True, notice, node_id(node))
+        return self._replace(document, source_node, existing, node, rect)
 
     def take_over(self, document: Document, source_node: Node, while_out: Callable[[], object]) -> WriteResult | None:
         """Replace the source's shadow layer by a copy of itself, the undo step of the writes in place that follow
@@ -310,15 +302,38 @@ class LayerWriter:
         existing = shadow_of(source_node)
         if existing is None:
             return None
-        node = existing.duplicate()
+        return self._replace(
+            document, source_node, existing, self._copy(existing, source_node), self._rect_of(existing), while_out
+        )
+
+    @staticmethod
+    def _copy(shadow: Node, source_node: Node) -> Node:
+        """A copy of the shadow layer ``shadow``, named for ``source_node``."""
+        node = shadow.duplicate()
         node.setName(shadow_name(source_node.name()))
-        self._rects[node_id(node)] = self._rect_of(existing)
-        existing.remove()
+        return node
+
+    def _replace(
+        self,
+        document: Document,
+        source_node: Node,
+        existing: Node | None,
+        node: Node,
+        rect: Rect,
+        while_out: Callable[[], object] = lambda: None,
+    ) -> WriteResult:
+        """``node``, covering ``rect``, in the place of the shadow layer ``existing`` (None: added below the
+        source), ``while_out()`` run between the removal and the addition; the source stays the active layer."""
+        self._rects[node_id(node)] = rect
+        if existing is not None:
+            existing.remove()
         try:
             while_out()
         finally:
+            # Node.remove and Node.addChildNode each wait for Krita to recomposite the whole image (Krita 5.1:
+            # their commands mark the image's bounds dirty): nothing is left to wait for after them.
             notice = self._insert_below(document, source_node, node)
-            document.setActiveNode(source_node)
+            document.setActiveNode(source_node)  # Krita makes an added layer active; keep the source active
         return WriteResult(node, True, notice, node_id(node))
 
     def _rect_of(self, node: Node) -> Rect:
