@@ -237,20 +237,22 @@ class EngineClient:
             self._stderr.append(line.decode("utf-8", "replace").rstrip())
 
     def close(self) -> None:
-        """Stop the worker (or disconnect) without waiting for it."""
-        if self._proc is not None:
+        """Stop the worker (or disconnect) without waiting for it. Safe from two threads at once (a request's
+        thread that saw the worker die and a host thread that cancels): each works on what it took."""
+        proc, sock = self._proc, self._sock
+        self._proc = self._sock = self._reader = self._writer = None
+        if proc is not None:
             try:
-                self._proc.kill()
-                self._proc.wait(timeout=5)
+                proc.kill()
+                proc.wait(timeout=5)
             except (OSError, subprocess.TimeoutExpired):
                 pass
-        if self._sock is not None:
+        if sock is not None:
             try:
-                self._sock.shutdown(socket.SHUT_RDWR)  # wakes a thread blocked reading it (close alone may not)
-                self._sock.close()
+                sock.shutdown(socket.SHUT_RDWR)  # wakes a thread blocked reading it (close alone may not)
+                sock.close()
             except OSError:
                 pass
-        self._proc = self._sock = self._reader = self._writer = None
 
     def _stop_worker(self) -> None:
         """Stop a worker that is working on a request nobody waits for any more: a spawned one by :meth:`close`,
