@@ -13,7 +13,8 @@ import numpy as np
 from PIL import Image
 
 from .compositing import shadow_layer
-from .framing import frame_alpha
+from .framing import as_unit_float, frame_alpha
+from .hard_light import ContactTracer
 from .hemisphere import render_light_map
 from .host_kit.light_map import SUN, GaussianLight, LightMap, preset
 from .layer_session import open_session
@@ -35,6 +36,7 @@ BUDGET_MS = {
     "SR, sun dragged": 15.0,
     "light moved 4000x3000": 25.0,
     "sun moved 4000x3000": 40.0,  # a 0.53-degree disk, traced at the canvas's resolution (docs/hard_light.md)
+    "tracer analysis 4000x3000": 30.0,  # made on a cutout's first small light (as the cutout analysis's)
 }
 BUDGET_MIB = 400.0
 
@@ -137,6 +139,11 @@ def run_benchmark(repeats: int = 20, method: str = "auto") -> dict[str, np.ndarr
     results["end to end 4000x3000 (frame+AO+SR+layer)"] = time_calls(end_to_end, e2e_repeats, warmup=1)
     results["light moved 4000x3000 (SR+to canvas+layer)"] = time_calls(
         lambda: shadow_layer(session.render(light)), e2e_repeats, warmup=1
+    )
+    x0, y0, x1, y1 = session.framing.bbox
+    crop = as_unit_float(cutout[y0:y1, x0:x1, 3])
+    results["tracer analysis 4000x3000 (depth, cards)"] = time_calls(
+        lambda: ContactTracer(crop, session.framing, None), repeats
     )
     # a 0.53-degree sun dragged across a low sky: every render a new direction, traced at the canvas's resolution
     suns = _alternating([LightMap([GaussianLight.disk(0.2 + 0.6 * k / DRAG, 0.7, SUN, 1.0)]) for k in range(DRAG)])

@@ -20,6 +20,7 @@ from .host_kit.camera_rules import DEFAULT_FOV
 DISTANCE = 2.0
 TOP_MARGIN = 0.03
 DEFAULT_PITCH = 15.0
+SPAN_TOLERANCE = 1e-9  # relative: a card's fit stops once its span is this near the rows it must span
 PITCH_RANGE = (-10.0, 80.0)  # pitches :func:`camera_for_span` searches; a horizon beyond them is clamped
 
 RIGHT = np.array([1.0, 0.0, 0.0])
@@ -125,15 +126,13 @@ def _fit_span(n: int, fov: float, pitch: float, top: float, base: float) -> Came
     """The camera of a vertical card standing at the origin whose projection spans rows [top, base):
     its height found by fixed-point iteration, the lens shift putting its foot on row ``base``. None where no
     card does (a camera looking so steeply down through so wide a lens that the card's top would lie behind it)."""
-    height = 0.5
+    height, span = 0.5, None
     for _ in range(12):
         cam = Camera(n, height / 2, fov=fov, pitch=pitch)
         span = _span(cam, height)
-        if span is None:
-            return None
+        if span is None or abs(span - (base - top)) <= SPAN_TOLERANCE * (base - top):
+            break
         height *= (base - top) / span
-    cam = Camera(n, height / 2, fov=fov, pitch=pitch)
-    span = _span(cam, height)
     if span is None or abs(span - (base - top)) > 0.01 * (base - top):  # no card, or the iteration found none
         return None
     cam.shift = base - _axis_row(cam, 0.0)

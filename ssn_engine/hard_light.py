@@ -62,7 +62,7 @@ from .hemisphere import direction
 from .stripes import for_each_stripe
 from .host_kit.light_map import GaussianLight, LightMap
 
-DEPTH_SIZE = 256  # pixels: the object's depth is worked out on a copy reduced to about this size
+DEPTH_SIZE = 128  # pixels: the object's depth is worked out on a copy reduced to about this size
 RADIUS_STEP = 1.25  # ratio of the local radii the depth map tells apart
 THICKNESS_LEVELS = 48  # bands of depth an object's thickness is swept in
 SWEEP_SIZE = 400  # pixels: a larger card is swept through its depth on a copy reduced to about this size
@@ -77,6 +77,7 @@ __all__ = [
     "contact_bands",
     "contact_line",
     "depth_map",
+    "footprint_rise",
     "light_direction",
     "split_lights",
     "traced_share",
@@ -621,13 +622,17 @@ def _blur(alpha: np.ndarray, sigma: float) -> np.ndarray:
 BAND_RISE = 0.03  # share of the cutout's height the contact line may rise within one card
 MAX_BANDS = 12
 MAX_CONTACT_SLOPE = 1.0  # rows per column: a steeper contact line is no ground
+FOOTPRINT_DEPTH = 1.0  # a footprint reaches back from its front point at most this many times as far as sideways
 RAMP = 0.5  # share of the narrower band over which two neighbouring cards cross-fade
 
 
-def contact_line(alpha: np.ndarray) -> np.ndarray:
+def contact_line(alpha: np.ndarray, max_rise: float | None = None) -> np.ndarray:
     """The ground contact row of each column (float, nan where the cutout has no column): the lower convex hull
     of the cutout's lowest solid pixels, so that parts standing farther back (higher in the picture) stand on
-    the ground there, and a gap between legs spans from foot to foot."""
+    the ground there, and a gap between legs spans from foot to foot. From the lowest point outwards, a hull
+    steeper than ``MAX_CONTACT_SLOPE`` is no ground (a tail): the line stays level beyond; and it rises above
+    the lowest point by at most ``max_rise`` rows per column of distance from it (:func:`footprint_rise`: what a
+    footprint on the ground can show the camera; a round body's underside rises faster)."""
     solid = alpha > SOLID
     cols = np.flatnonzero(solid.any(axis=0))
     if cols.size == 0:
@@ -643,8 +648,6 @@ def contact_line(alpha: np.ndarray) -> np.ndarray:
                 break
         hull.append((x, y))
     hx, hy = np.array(hull).T
-    # from the lowest point outwards, a hull steeper than ``MAX_CONTACT_SLOPE`` is no ground (a tail, a sphere's
-    # side): the line stays level beyond
     low = int(np.argmax(hy))
     for step in (1, -1):
         k = low
@@ -653,14 +656,34 @@ def contact_line(alpha: np.ndarray) -> np.ndarray:
         end = slice(k + 1, None) if step == 1 else slice(None, k)
         hy[end] = hy[k]
     line = np.full(alpha.shape[1], np.nan)
-    line[cols[0] : cols[-1] + 1] = np.interp(np.arange(cols[0], cols[-1] + 1), hx, hy)
+    xs = np.arange(cols[0], cols[-1] + 1)
+    line[cols[0] : cols[-1] + 1] = np.interp(xs, hx, hy)
+    if max_rise is not None:
+        np.maximum(line[xs], hy[low] - max_rise * np.abs(xs - hx[low]), out=line[cols[0] : cols[-1] + 1])
     return line
 
 
-def contact_bands(alpha: np.ndarray) -> list[tuple[int, int, int]]:
-    """Column bands (c0, c1, foot) of the cutout over which its contact line (:func:`contact_line`) rises by at
-    most ``BAND_RISE`` of its height (at most ``MAX_BANDS`` bands); ``foot`` is the band's lowest contact row."""
-    line = contact_line(alpha)
+def footprint_rise(alpha: np.ndarray, framing: Framing, camera: tuple[float, float] | None) -> float | None:
+    """How many rows per column a footprint's outline can rise from its lowest point under ``camera`` (as
+    :class:`CardTracer`'s): a footprint reaching back ``FOOTPRINT_DEPTH`` times as far as sideways (a round one
+    reaches back as far) is foreshortened by sin(e) where the camera looks down on the ground by e. A camera
+    looking along the ground sees every footprint nearly level, and a ball's rising underside as no ground."""
+    rows = np.flatnonzero((alpha > ROWS_ALPHA).any(axis=1))
+    solid = np.flatnonzero((alpha > SOLID).any(axis=1))
+    if rows.size == 0 or solid.size == 0:
+        return None
+    s, oy = framing.scale, framing.offset_y + framing.bbox[1] * framing.scale
+    horizon, focal = camera if camera is not None else (None, None)
+    cam, _ = camera_for_span(framing.n, rows[0] * s + oy, (solid[-1] + 1) * s + oy, horizon, focal)
+    ray = cam.view + (0.5 * cam.n + float(cam.shift) - (solid[-1] + 1) * s - oy) / float(cam.focal) * cam.up
+    return FOOTPRINT_DEPTH * max(0.0, -float(ray[1])) / float(np.linalg.norm(ray))
+
+
+def contact_bands(alpha: np.ndarray, max_rise: float | None = None) -> list[tuple[int, int, int]]:
+    """Column bands (c0, c1, foot) of the cutout over which its contact line (:func:`contact_line`, rising at
+    most ``max_rise``) rises by at most ``BAND_RISE`` of its height (at most ``MAX_BANDS`` bands); ``foot`` is
+    the band's lowest contact row."""
+    line = contact_line(alpha, max_rise)
     cols = np.flatnonzero(np.isfinite(line))
     if cols.size == 0:
         return []
@@ -713,7 +736,7 @@ class ContactTracer:
 
     def __init__(self, alpha: np.ndarray, framing: Framing, camera: tuple[float, float] | None) -> None:
         alpha = np.clip(np.asarray(alpha, np.float32), 0.0, 1.0)
-        bands = contact_bands(alpha)
+        bands = contact_bands(alpha, footprint_rise(alpha, framing, camera))
         x0, y0 = framing.bbox[:2]
         self.cards: list[CardTracer] = []
         width = alpha.shape[1]

@@ -17,6 +17,7 @@ from ssn_engine.hard_light import (
     contact_bands,
     contact_line,
     depth_map,
+    footprint_rise,
     split_lights,
     traced_share,
 )
@@ -139,6 +140,31 @@ def test_a_tail_or_a_sphere_s_side_is_no_ground():
     alpha[100:200, 50:250] = 1.0
     alpha[20:30, 250:300] = 1.0  # a tail sticking out at the top right
     assert np.allclose(contact_line(alpha)[50:300], 200.0)
+
+
+def test_a_ball_seen_along_the_ground_stands_on_its_lowest_point_and_a_can_seen_from_above_on_its_base():
+    """A footprint on the ground is foreshortened by how steeply the camera looks down on it: seen along the
+    ground (horizon through the ball's middle) a ball's rising underside is no ground, its contact line stays
+    level within a few rows; seen from above, the elliptic outline of a can's round base is its footprint."""
+    canvas = np.zeros((H, W), np.float32)
+    yy, xx = np.mgrid[:H, :W]
+    canvas[(yy - 400) ** 2 + (xx - 500) ** 2 <= 150**2] = 1.0  # a ball, its lowest row 550
+    _, framing = frame_alpha(canvas, 256)
+    x0, y0, x1, y1 = framing.bbox
+    ball = canvas[y0:y1, x0:x1]
+    focal = 0.5 * 256 / np.tan(np.radians(10.0))  # 20 degrees across the frame
+    level = footprint_rise(ball, framing, (400 * framing.scale + framing.offset_y, focal))
+    steep = footprint_rise(ball, framing, (-300 * framing.scale + framing.offset_y, focal))
+    assert level is not None and steep is not None and level < 0.2 < 0.4 < steep
+    line = contact_line(ball, level)
+    bottom = line[ball.shape[1] // 2]
+    assert np.nanmin(line) >= bottom - level * 150 - 1 > bottom - 32  # level within 0.2 rows per column
+    assert np.nanmin(contact_line(ball)) < bottom - 40  # without the camera: the underside, up to slope 1
+    can = np.zeros((300, 200), np.float32)
+    can[:250, :] = 1.0
+    can[(yy[:300, :200] - 250) ** 2 / 50**2 + (xx[:300, :200] - 100) ** 2 / 100**2 <= 1.0] = 1.0  # its base
+    line = contact_line(can, steep)
+    assert line[100] == pytest.approx(300.0, abs=1.0) and line[5] < 285.0  # the base's sides stand farther back
 
 
 def test_an_object_is_as_deep_as_a_round_cross_section_of_its_local_width():
