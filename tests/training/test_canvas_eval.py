@@ -15,7 +15,8 @@ from scipy import ndimage
 
 from ssn_engine.hemisphere import direction
 from ssn_engine.host_kit.light_map import LightMap
-from training.canvas_eval import cases, disk, metrics, render, score, sheet
+from ssn_engine.hard_light import light_direction
+from training.canvas_eval import cases, disk, metrics, oracle, render, score, sheet
 from training.canvas_eval.render_set import render_set
 from training.data import meshes, procedural
 from training.data.items import Item
@@ -359,3 +360,22 @@ def test_scoring_an_unfinished_set_names_the_missing_truths(tmp_path):
     cases.truth_path(data, group, 12.0).unlink()
     with pytest.raises(FileNotFoundError, match="1 truths are missing.*render"):
         score.run_scoring(data, tmp_path / "out", ROOT, sys.executable, log=lambda _: None)
+
+
+def test_the_oracle_casts_the_true_solid_as_the_renderer_does():
+    """The oracle's segments from the first to the last surface along each pixel's ray cast the box's own
+    shadow (the renderer's, one direction): as large and in the same place."""
+    mesh = _box_on_ground()
+    v = np.ascontiguousarray(meshes.yawed(mesh.vertices, 20.0))
+    canvas = render.canvas_camera(v, 320, 240, 15.0)
+    w = light_direction((150.0 + 180.0) / 360.0, 1.0 - 35.0 / 90.0)  # elevation 35, azimuth 150: behind the camera
+    truth = render.disk_shadow(v, mesh.faces, meshes.topology(mesh), canvas, w[None])
+    front, back = oracle.surface_depths(v, mesh.faces, canvas.camera, 320, 240, oracle.SUPERSAMPLE)
+    yy, xx = np.nonzero(np.isfinite(front))
+    cols, rows = (xx + 0.5) / oracle.SUPERSAMPLE, (yy + 0.5) / oracle.SUPERSAMPLE
+    solid = oracle.cast(canvas.camera, cols, rows, front[yy, xx], back[yy, xx], w, (240, 320))
+    mask = render.canvas_mask(v, mesh.faces, meshes.topology(mesh), canvas)
+    ground = metrics.ground_region(mask, canvas.horizon)
+    assert truth[ground].sum() > 500  # a shadow worth comparing lies on the visible ground
+    assert metrics.region_zncc(solid, truth, ground) > 0.95
+    assert solid[ground].sum() == pytest.approx(truth[ground].sum(), rel=0.1)

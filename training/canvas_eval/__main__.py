@@ -5,6 +5,7 @@ python -m training.canvas_eval score --method cli [--data data/canvas_test] [--r
                                      --out data/canvas_eval/NAME
 python -m training.canvas_eval sheet --predictions data/canvas_eval/NAME [--out docs/img/canvas_eval_sheet.png]
 python -m training.canvas_eval mitsuba [--data data/canvas_test] [--groups 3]
+python -m training.canvas_eval oracle [--data data/canvas_test] [--out data/canvas_eval/oracle.json]
 """
 
 from __future__ import annotations
@@ -16,6 +17,7 @@ from pathlib import Path
 from training.data import render_bases
 
 from .mitsuba_check import compare
+from .oracle import run_oracle
 from .render_set import render_set
 from .score import run_scoring
 from .sheet import write_sheet
@@ -41,6 +43,11 @@ def _sheet(args: argparse.Namespace) -> int:
 
 def _mitsuba(args: argparse.Namespace) -> int:
     compare(args.data, args.groups, args.samples, args.stride)
+    return 0
+
+
+def _oracle(args: argparse.Namespace) -> int:
+    run_oracle(args.data, args.out, args.groups)
     return 0
 
 
@@ -86,6 +93,12 @@ def build_parser() -> argparse.ArgumentParser:
     m.add_argument("--samples", type=int, default=1024, help="random directions per pixel in the disk")
     m.add_argument("--stride", type=int, default=4, help="check every STRIDE-th pixel in each direction")
     m.set_defaults(func=_mitsuba)
+
+    o = sub.add_parser("oracle", help="score the traced representation given the true geometry (0.53 degrees)")
+    o.add_argument("--data", type=Path, default=DEFAULT_DATA)
+    o.add_argument("--out", type=Path, help="write the scores here (json)")
+    o.add_argument("--groups", nargs="+", help="only these groups (default: all)")
+    o.set_defaults(func=_oracle)
     return p
 
 
