@@ -5,7 +5,7 @@ python -m training.canvas_eval score --method cli [--data data/canvas_test] [--r
                                      --out data/canvas_eval/NAME
 python -m training.canvas_eval sheet --predictions data/canvas_eval/NAME [--out docs/img/canvas_eval_sheet.png]
 python -m training.canvas_eval mitsuba [--data data/canvas_test] [--groups 3]
-python -m training.canvas_eval oracle [--data data/canvas_test] [--out data/canvas_eval/oracle.json]
+python -m training.canvas_eval oracle [--data data/canvas_test] [--out data/canvas_eval/oracle.json] [--sheet PNG]
 """
 
 from __future__ import annotations
@@ -47,7 +47,7 @@ def _mitsuba(args: argparse.Namespace) -> int:
 
 
 def _oracle(args: argparse.Namespace) -> int:
-    run_oracle(args.data, args.out, args.groups)
+    run_oracle(args.data, args.out, args.groups, args.sheet)
     return 0
 
 
@@ -98,6 +98,7 @@ def build_parser() -> argparse.ArgumentParser:
     o.add_argument("--data", type=Path, default=DEFAULT_DATA)
     o.add_argument("--out", type=Path, help="write the scores here (json)")
     o.add_argument("--groups", nargs="+", help="only these groups (default: all)")
+    o.add_argument("--sheet", type=Path, help="write a picture of the truth and the variants for four groups here")
     o.set_defaults(func=_oracle)
     return p
 

@@ -36,6 +36,7 @@ from ssn_engine.hard_light import depth_map, light_direction
 from ssn_engine.host_kit.light_map import LightMap
 
 from . import cases, metrics, render_set
+from .sheet import default_groups, panel_sheet
 
 SUPERSAMPLE = 3  # rays per pixel side
 SAMPLES = 32  # points cast along each ray's segment
@@ -196,10 +197,28 @@ def hard_shadows(group: cases.Group, alpha: np.ndarray, w: np.ndarray, ss: int =
     return {name: cast(cam, cols, rows, t0, t1, w, size) for name, (t0, t1) in segments.items()}
 
 
-def run_oracle(data: Path, out: Path | None = None, names: list[str] | None = None, log=print) -> dict:
+SHORT = {  # the sheet's captions
+    VARIANTS[0]: "true solid",
+    VARIANTS[1]: "true surface, round",
+    VARIANTS[2]: "true surface only",
+    VARIANTS[3]: "smooth surface, round",
+    VARIANTS[4]: "column's surface, round",
+}
+
+
+def run_oracle(
+    data: Path,
+    out: Path | None = None,
+    names: list[str] | None = None,
+    sheet: Path | None = None,
+    log=print,
+) -> dict:
     """Score every variant on each group of the test set at ``data`` against its 0.53-degree truth; prints a
-    line a group and the means, and writes them to ``out`` (json) when given."""
+    line a group and the means, and writes them to ``out`` (json) when given; ``sheet``: a picture of the truth
+    and every variant for four groups spread over the set (:func:`sheet.default_groups`)."""
     groups = [g for g in cases.read_groups(data) if not names or g.name in names]
+    pictured = set(default_groups(groups, min(4, len(groups)))) if sheet is not None else set()
+    panels = []
     rows = []
     for g in groups:
         alpha = cases.read_mask(data, g).astype(np.float32)
@@ -211,10 +230,15 @@ def run_oracle(data: Path, out: Path | None = None, names: list[str] | None = No
             **{k: metrics.score_case(v, truth, alpha, g.horizon)["zncc"] for k, v in shadows.items()},
         }
         log(g.name + "  " + "  ".join(f"{k}: {row[k]:.3f}" for k in VARIANTS))
+        if g.name in pictured:
+            shown = [(f"{g.name}: truth", truth)] + [(f"{SHORT[k]} {row[k]:.2f}", v) for k, v in shadows.items()]
+            panels.append([(caption, s, alpha) for caption, s in shown])
         rows.append(row)
     means = {k: float(np.mean([r[k] for r in rows])) for k in VARIANTS}
     log("mean  " + "  ".join(f"{k}: {v:.3f}" for k, v in means.items()))
     result = {"angle": cases.ANGLES[0], "groups": rows, "means": means}
+    if sheet is not None:
+        panel_sheet(panels, sheet)
     if out is not None:
         Path(out).parent.mkdir(parents=True, exist_ok=True)
         Path(out).write_text(json.dumps(result, indent=1))

@@ -30,6 +30,23 @@ def default_groups(groups: list[cases.Group], count: int = 4) -> list[str]:
     return [firsts[i].name for i in np.linspace(0, len(firsts) - 1, count).round().astype(int)]
 
 
+def panel_sheet(rows: list[list[tuple[str, np.ndarray, np.ndarray]]], out: Path) -> None:
+    """A PNG at ``out`` of panels ``PANEL_WIDTH`` wide, a row of them per list: each (caption, s, the object's
+    mask) drawn by :func:`composite` under its caption."""
+    first = rows[0][0][1]
+    height = round(PANEL_WIDTH * first.shape[0] / first.shape[1])
+    sheet = Image.new("L", (max(map(len, rows)) * PANEL_WIDTH, len(rows) * (height + LABEL)), 255)
+    draw = ImageDraw.Draw(sheet)
+    for r, row in enumerate(rows):
+        for c, (caption, s, mask) in enumerate(row):
+            x, y = c * PANEL_WIDTH, r * (height + LABEL)
+            panel = Image.fromarray(composite(s, mask)).resize((PANEL_WIDTH, height), Image.Resampling.LANCZOS)
+            sheet.paste(panel, (x, y + LABEL))
+            draw.text((x + 4, y + 2), caption, fill=0)
+    out.parent.mkdir(parents=True, exist_ok=True)
+    sheet.save(out, optimize=True)
+
+
 def write_sheet(data: Path, predictions: Path, out: Path, names: list[str] | None = None, mode: str = "camera") -> None:
     """Rows: groups; columns: truth and prediction at each size of ``cases.ANGLES``. Writes a PNG to ``out``."""
     groups = {g.name: g for g in cases.read_groups(data)}
@@ -37,24 +54,17 @@ def write_sheet(data: Path, predictions: Path, out: Path, names: list[str] | Non
     unknown = [n for n in names if n not in groups]
     if unknown:
         raise ValueError(f"unknown groups {unknown}; the set has {sorted(groups)}")
-    first = groups[names[0]]
-    height = round(PANEL_WIDTH * first.height / first.width)
-    cols = 2 * len(cases.ANGLES)
-    sheet = Image.new("L", (cols * PANEL_WIDTH, len(names) * (height + LABEL)), 255)
-    draw = ImageDraw.Draw(sheet)
-    for r, name in enumerate(names):
+    rows = []
+    for name in names:
         group = groups[name]
         mask = cases.read_mask(data, group)
-        for k, angle in enumerate(cases.ANGLES):
+        row = []
+        for angle in cases.ANGLES:
             truth = cases.read_truth(data, group, angle)
             pred = read_layer(prediction_path(predictions, mode, group, angle), truth.shape)
-            for j, (what, s) in enumerate((("truth", truth), (mode, pred))):
-                x, y = (2 * k + j) * PANEL_WIDTH, r * (height + LABEL)
-                panel = Image.fromarray(composite(s, mask)).resize((PANEL_WIDTH, height), Image.Resampling.LANCZOS)
-                sheet.paste(panel, (x, y + LABEL))
-                draw.text((x + 4, y + 2), f"{group.name} {angle:g} deg: {what}", fill=0)
-    out.parent.mkdir(parents=True, exist_ok=True)
-    sheet.save(out, optimize=True)
+            row += [(f"{group.name} {angle:g} deg: {what}", s, mask) for what, s in (("truth", truth), (mode, pred))]
+        rows.append(row)
+    panel_sheet(rows, out)
 
 
-__all__ = ["composite", "default_groups", "write_sheet"]
+__all__ = ["composite", "default_groups", "panel_sheet", "write_sheet"]
