@@ -9,7 +9,9 @@ canvas, or a frame).
 Geometry: the cutout stands on its *contact line* (:func:`contact_line`), the
 lower convex hull of its lowest solid pixels: a part standing farther back
 (higher in the picture, a shoe's heel, the farther of two toys) stands on
-the ground there, and a gap between legs spans from foot to foot. Along it
+the ground there, and a gap between legs spans from foot to foot; it rises
+no faster than a footprint can show the camera (:func:`footprint_rise`), so
+a ball seen along the ground stands on its lowest point. Along it
 the cutout is cut into bands (:func:`contact_bands`), each the geometric
 method's card (:mod:`ssn_engine.methods.geometric`): a flat card standing
 upright on its band's contact row, facing the camera of the conventions
