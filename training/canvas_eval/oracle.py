@@ -177,8 +177,8 @@ def hard_shadows(group: cases.Group, alpha: np.ndarray, w: np.ndarray, ss: int =
     k = max(1, int(SMOOTH * height / 4))  # blurred on a copy k times smaller: the Gaussian spans 4 of its pixels
 
     def reduced(a: np.ndarray) -> np.ndarray:
-        h, w = a.shape
-        return np.pad(a, ((0, -h % k), (0, -w % k))).reshape(-(-h // k), k, -(-w // k), k).mean(axis=(1, 3))
+        rh, rw = a.shape
+        return np.pad(a, ((0, -rh % k), (0, -rw % k))).reshape(-(-rh // k), k, -(-rw // k), k).mean(axis=(1, 3))
 
     sigma = SMOOTH * height / k
     smooth = ndimage.gaussian_filter(reduced(np.nan_to_num(distance)), sigma)
