@@ -76,11 +76,25 @@ class Camera:
         self.shift = top_row(self.n) - float(self.project(points)[..., 1].min())
         return self
 
+    def rays(self, cols: np.ndarray, rows: np.ndarray) -> np.ndarray:
+        """World directions (..., 3) through image points (``cols``, ``rows``, broadcast together), scaled to a
+        unit camera depth: a point at depth t along one is ``centre + t * ray``."""
+        c = (np.asarray(cols, np.float64) - 0.5 * self.n) / self.focal
+        r = -(np.asarray(rows, np.float64) - self.shift - 0.5 * self.n) / self.focal
+        return self.view + c[..., None] * RIGHT + r[..., None] * self.up
+
     def pixel_rays(self) -> np.ndarray:
         """Unnormalised world directions (N, N, 3) through every pixel centre."""
-        c = (np.arange(self.n) + 0.5 - 0.5 * self.n) / self.focal
-        r = -(np.arange(self.n) + 0.5 - self.shift - 0.5 * self.n) / self.focal
-        return self.view + c[None, :, None] * RIGHT + r[:, None, None] * self.up
+        centres = np.arange(self.n) + 0.5
+        return self.rays(centres[None, :], centres[:, None])
+
+    def projection(self) -> np.ndarray:
+        """(3, 4): a world point (x, y, z, 1) to its image point (col, row, 1) times its camera depth."""
+        f, half = float(self.focal), 0.5 * self.n
+        rows = np.stack(
+            [f * RIGHT + half * self.view, -f * self.up + (half + float(self.shift)) * self.view, self.view]
+        )
+        return np.concatenate([rows, -(rows @ self.centre)[:, None]], axis=1)
 
     def ground_points(self) -> tuple[np.ndarray, np.ndarray]:
         """Ground points (N, N, 3) seen through each pixel, and where the ray reaches the ground."""

@@ -310,9 +310,7 @@ class CardTracer:
         det = ax * dz - az * dx
         det = det if abs(det) > 1e-9 else 1e-9
         card = np.array([[dz, -dx, 0.0], [-az, ax, 0.0], [0.0, 0.0, det]])  # (gx, gz, 1) -> (x, h, 1)
-        rel = np.array([[1.0, 0, -c[0]], [0, 1.0, -c[1]], [0, 0, -c[2]]])  # (x, h, 1) -> card point - centre
-        depth, upc = view, up
-        project = np.stack([f * right + (n / 2) * depth, -f * upc + (n / 2 + shift) * depth, depth])
+        project = cam.projection()[:, [0, 1, 3]]  # the card's points (x, h, 0) -> frame
         to_source = np.array(
             [
                 [1 / source.scale, 0, -source.offset_x / source.scale],
@@ -320,7 +318,7 @@ class CardTracer:
                 [0, 0, 1.0],
             ]
         )
-        return to_source @ project @ rel @ card @ ground @ ray @ to_frame
+        return to_source @ project @ card @ ground @ ray @ to_frame
 
     def _ground_to_output(self, points: np.ndarray, framing: Framing) -> np.ndarray:
         """Ground points (k, 3) to continuous output coordinates (k, 2); points behind the camera give nan."""
@@ -676,8 +674,9 @@ def footprint_rise(alpha: np.ndarray, framing: Framing, camera: tuple[float, flo
         return None
     s, oy = framing.scale, framing.offset_y + framing.bbox[1] * framing.scale
     horizon, focal = camera if camera is not None else (None, None)
-    cam, _ = camera_for_span(framing.n, rows[0] * s + oy, (solid[-1] + 1) * s + oy, horizon, focal)
-    ray = cam.view + (0.5 * cam.n + float(cam.shift) - (solid[-1] + 1) * s - oy) / float(cam.focal) * cam.up
+    base = (solid[-1] + 1) * s + oy  # the frame row of the lowest solid pixel's foot
+    cam, _ = camera_for_span(framing.n, rows[0] * s + oy, base, horizon, focal)
+    ray = cam.rays(0.5 * cam.n, base)
     return FOOTPRINT_DEPTH * max(0.0, -float(ray[1])) / float(np.linalg.norm(ray))
 
 

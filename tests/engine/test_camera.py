@@ -119,3 +119,15 @@ def test_a_wide_lens_looking_steeply_down_gets_the_steepest_card_it_can_fit():
 def test_focal_length_and_field_of_view_are_inverse():
     assert fov_from_focal(256, focal_from_fov(256, 45.0)) == pytest.approx(45.0)
     assert focal_from_fov(256, 90.0) == pytest.approx(128.0)
+
+
+def test_a_point_along_a_ray_projects_back_to_its_image_point_at_its_depth():
+    """``rays`` and ``projection`` are each other's inverse: the point at camera depth t along the ray through
+    (col, row) lands on (col, row), and the projection's third row is that depth."""
+    cam = Camera(128, 0.4, fov=50.0, pitch=25.0)
+    cam.shift = 7.0
+    cols, rows, t = np.array([3.5, 64.0, 120.25]), np.array([10.0, 70.5, 127.0]), np.array([1.5, 2.0, 3.25])
+    points = cam.centre + t[:, None] * cam.rays(cols, rows)
+    image = np.concatenate([points, np.ones((3, 1))], axis=1) @ cam.projection().T
+    assert np.allclose(image[:, 2], t) and np.allclose(image[:, :2] / image[:, 2:], np.stack([cols, rows], 1))
+    assert np.allclose(np.stack(cam.project_xyz(*points.T), 1), np.stack([cols, rows], 1))

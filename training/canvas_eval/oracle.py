@@ -101,13 +101,6 @@ def _splat(rays, t0, t1, samples, centre, w, project, out):  # pragma: no cover 
                 out[row, col] = 1.0
 
 
-def _projection(cam: Camera) -> np.ndarray:
-    """(3, 4): a world point (x, y, z, 1) to (col, row, 1) times its camera depth."""
-    f, half = float(cam.focal), 0.5 * cam.n
-    rows = np.stack([f * RIGHT + half * cam.view, -f * cam.up + (half + float(cam.shift)) * cam.view, cam.view])
-    return np.concatenate([rows, -(rows @ cam.centre)[:, None]], axis=1)
-
-
 def surface_depths(vertices: np.ndarray, faces: np.ndarray, cam: Camera, width: int, height: int, ss: int):
     """The nearest and farthest camera depth of the mesh at each of ``ss`` x ``ss`` points a canvas pixel
     ((height ss, width ss), inf / -inf where no face is)."""
@@ -118,13 +111,6 @@ def surface_depths(vertices: np.ndarray, faces: np.ndarray, cam: Camera, width: 
     back = np.full((height * ss, width * ss), -np.inf)
     _raster(col * ss, row * ss, depth, np.ascontiguousarray(faces, np.int64), front, back)
     return front, back
-
-
-def camera_rays(cam: Camera, cols: np.ndarray, rows: np.ndarray) -> np.ndarray:
-    """(k, 3) world rays through canvas points (``cols``, ``rows``), scaled to unit camera depth."""
-    f = float(cam.focal)
-    right = ((cols - 0.5 * cam.n) / f)[:, None] * RIGHT
-    return cam.view[None] + right - ((rows - 0.5 * cam.n - float(cam.shift)) / f)[:, None] * cam.up
 
 
 def cast(
@@ -139,7 +125,7 @@ def cast(
     """The hard shadow (height, width) = ``size`` of the segments from camera depth ``t0`` to ``t1`` along the
     rays through canvas points (``cols``, ``rows``), under a light along ``w`` (world, (3,))."""
     out = np.zeros(size, np.float32)
-    rays = np.ascontiguousarray(camera_rays(cam, cols, rows))
+    rays = np.ascontiguousarray(cam.rays(cols, rows))
     _splat(
         rays,
         np.ascontiguousarray(t0, np.float64),
@@ -147,7 +133,7 @@ def cast(
         SAMPLES,
         cam.centre,
         np.asarray(w, np.float64),
-        _projection(cam),
+        cam.projection(),
         out,
     )
     return ndimage.binary_closing(out > 0, np.ones((3, 3), bool), iterations=2).astype(np.float32)
@@ -162,7 +148,7 @@ def hard_shadows(group: cases.Group, alpha: np.ndarray, w: np.ndarray, ss: int =
     yy, xx = np.nonzero(np.isfinite(front))
     cols, rows = (xx + 0.5) / ss, (yy + 0.5) / ss
     t_front, t_back = front[yy, xx], back[yy, xx]
-    rays = camera_rays(cam, cols, rows)
+    rays = cam.rays(cols, rows)
     run = np.hypot(rays @ RIGHT, rays @ FORWARD)  # horizontal distance a unit of camera depth goes
     pixels = depth_map(alpha)[np.minimum(yy // ss, group.height - 1), np.minimum(xx // ss, group.width - 1)]
 
@@ -245,4 +231,4 @@ def run_oracle(
     return result
 
 
-__all__ = ["VARIANTS", "camera_rays", "cast", "hard_shadows", "run_oracle", "surface_depths"]
+__all__ = ["VARIANTS", "cast", "hard_shadows", "run_oracle", "surface_depths"]
