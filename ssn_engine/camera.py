@@ -76,7 +76,7 @@ class Camera:
         self.shift = top_row(self.n) - float(self.project(points)[..., 1].min())
         return self
 
-    def rays(self, cols: np.ndarray, rows: np.ndarray) -> np.ndarray:
+    def rays(self, cols: np.ndarray | float, rows: np.ndarray | float) -> np.ndarray:
         """World directions (..., 3) through image points (``cols``, ``rows``, broadcast together), scaled to a
         unit camera depth: a point at depth t along one is ``centre + t * ray``."""
         c = (np.asarray(cols, np.float64) - 0.5 * self.n) / self.focal
