@@ -66,7 +66,7 @@ from .host_kit.light_map import GaussianLight, LightMap
 
 DEPTH_SIZE = 128  # pixels: the object's depth is worked out on a copy reduced to about this size
 RADIUS_STEP = 1.25  # ratio of the local radii the depth map tells apart
-THICKNESS_LEVELS = 48  # bands of depth an object's thickness is swept in
+THICKNESS_LEVELS = 16  # bands of depth an object's thickness is swept in
 SWEEP_SIZE = 400  # pixels: a larger card is swept through its depth on a copy reduced to about this size
 MIN_INCIDENCE = 10.0  # degrees: the card turns just enough that a light's horizontal direction meets it at least so
 
