@@ -18,7 +18,8 @@ score says how much of the error is in each guess:
 
 Each variant is a hard shadow (no penumbra: compare it with the 0.53-degree truths), splatted from
 ``SUPERSAMPLE`` x ``SUPERSAMPLE`` rays a pixel and ``SAMPLES`` points along each, the holes between splats
-closed over a pixel or two, scored as ``score`` scores the CLI (ZNCC on the visible ground).
+closed over a pixel or two, scored as ``score`` scores the CLI (ZNCC on the visible ground; the fine
+metrics, band-pass ZNCC and gradient energy, beside it).
 """
 
 from __future__ import annotations
@@ -48,6 +49,7 @@ VARIANTS = (
     "smooth surface, round depth",
     "column's surface, round depth",
 )
+FINE_METRICS = ("bandpass_zncc", "gradient_energy")  # scored beside ZNCC: "<variant>, <metric>"
 
 
 @numba.njit(cache=True)
@@ -211,16 +213,15 @@ def run_oracle(
         truth = cases.read_truth(data, g, cases.ANGLES[0])
         light = LightMap.from_json(cases.light_path(data, g, cases.ANGLES[0]).read_text()).lights[0]
         shadows = hard_shadows(g, alpha, light_direction(light.u, light.v))
-        row = {
-            "group": g.name,
-            **{k: metrics.score_case(v, truth, alpha, g.horizon)["zncc"] for k, v in shadows.items()},
-        }
+        scores = {k: metrics.score_case(v, truth, alpha, g.horizon) for k, v in shadows.items()}
+        row = {"group": g.name, **{k: scores[k]["zncc"] for k in VARIANTS}}
+        row.update({f"{k}, {m}": scores[k][m] for k in VARIANTS for m in FINE_METRICS})
         log(g.name + "  " + "  ".join(f"{k}: {row[k]:.3f}" for k in VARIANTS))
         if g.name in pictured:
             shown = [(f"{g.name}: truth", truth)] + [(f"{SHORT[k]} {row[k]:.2f}", v) for k, v in shadows.items()]
             panels.append([(caption, s, alpha) for caption, s in shown])
         rows.append(row)
-    means = {k: float(np.mean([r[k] for r in rows])) for k in VARIANTS}
+    means = {k: float(np.mean([r[k] for r in rows])) for k in rows[0] if k != "group"} if rows else {}
     log("mean  " + "  ".join(f"{k}: {v:.3f}" for k, v in means.items()))
     result = {"angle": cases.ANGLES[0], "groups": rows, "means": means}
     if sheet is not None:
