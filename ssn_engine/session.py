@@ -13,6 +13,7 @@ E0: s = sum_i (E0_i / E0) s_i.
 from __future__ import annotations
 
 import math
+from collections.abc import Callable
 from typing import Any
 
 import numpy as np
@@ -150,11 +151,18 @@ class ShadowSession:
         shares of E0, and where the network's shadow of them as Gaussians is darker (the object's extent in
         depth, its contact), that is kept: s_small = max(traced, network). The two parts add up in their
         shares of E0."""
-        framing = framing or self.framing
+        return self._on_canvas(lambda: frames, light_map, clip, framing or self.framing)
+
+    def _on_canvas(
+        self, frames: Callable[[], np.ndarray], light_map: LightMap, clip: bool, framing: Framing
+    ) -> CanvasShadow:
+        """:meth:`to_canvas`, the network's frames taken from ``frames()`` once the small lights are traced (so
+        that :meth:`render` can make them meanwhile)."""
         traced, broad = split_lights(light_map)
         shares = _shares(traced, broad)
-        nets = self._network_shadows(frames, traced, broad, clip, framing)
-        return _combined(nets, self._traced(traced, shares, clip, framing), shares, len(traced), broad.is_dark)
+        parts = self._traced(traced, shares, clip, framing)
+        nets = self._network_shadows(frames(), traced, broad, clip, framing)
+        return _combined(nets, parts, shares, len(traced), broad.is_dark)
 
     def _network_shadows(
         self, frames: np.ndarray, traced: list[GaussianLight], broad: LightMap, clip: bool, framing: Framing
@@ -201,14 +209,10 @@ class ShadowSession:
         the network's frames rendered on a thread of their own while the small lights are traced (both release
         the GIL: a sun's shadow costs about the longer of the two, not their sum)."""
         framing = framing or self.framing
-        traced, broad = split_lights(light_map)
-        if not traced:
+        if not split_lights(light_map)[0]:
             return self.to_canvas(self.render_frame(light_map), light_map, clip, framing)
         frames = thread_pool(NETWORK_THREAD, 1).submit(self.render_frame, light_map)
-        shares = _shares(traced, broad)
-        parts = self._traced(traced, shares, clip, framing)
-        nets = self._network_shadows(frames.result(), traced, broad, clip, framing)
-        return _combined(nets, parts, shares, len(traced), broad.is_dark)
+        return self._on_canvas(frames.result, light_map, clip, framing)
 
     def cover(self, framing: Framing) -> np.ndarray:
         """The cutout's alpha (h, w) on ``framing``'s canvas, resampled from the frame: what hides the shadow
