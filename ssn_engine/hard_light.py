@@ -95,6 +95,8 @@ MIN_SIGMA = 0.35  # pixels: a blur below this is left sharp
 WIDE_BLUR = 4.0  # pixels: a wider blur is made on a copy reduced this many times fewer than its sigma
 SUPERSAMPLE = 4  # at most this many samples across each output pixel coarser than the cutout's canvas
 BAND = 16  # output rows resampled at once (each band only over the columns the shadow can reach)
+RUN_GAP = 32  # output columns: two runs of a band to resample closer than this are resampled as one
+RUN_MARGIN = 2  # output columns resampled beyond a run's ends
 PAD = 0.25  # share of the cutout's size added above and beside it, where its blurred copies spread
 UNCLIPPED_MARGIN = 0.5  # share of the canvas a layer that may leave the canvas reaches beyond each side
 
@@ -470,11 +472,15 @@ class CardTracer:
         size = ((x1 - x0) * fine, (y1 - y0) * fine)
         k = _sweep_reduction(card) if self.depth > 0 else 1
         # a card swept on a reduced copy is warped from it, and the card itself, crisp, beside it
-        values = _warp(card, to_card, size) if k > 1 else None
-        if self.depth > 0:
-            card, (sx, sy) = self._swept(card, source, w, 2.0 * sigma_rows, k)
-            to_card = np.array([[1.0 / k, 0, sx], [0, 1.0 / k, sy], [0, 0, 1.0]]) @ to_card
-        values = _warp(card, to_card, size, values)
+        if k == 1:
+            if self.depth > 0:
+                card, (sx, sy) = self._swept(card, source, w, 2.0 * sigma_rows, 1)
+                to_card = np.array([[1.0, 0, sx], [0, 1.0, sy], [0, 0, 1.0]]) @ to_card
+            values = _warp(card, to_card, size)
+        else:  # swept on a reduced copy and warped from it; the card itself, crisp, where that is partial
+            swept, (sx, sy) = self._swept(card, source, w, 2.0 * sigma_rows, k)
+            values = _warp(swept, np.array([[1.0 / k, 0, sx], [0, 1.0 / k, sy], [0, 0, 1.0]]) @ to_card, size)
+            values = _warp(card, to_card, size, values, within=True)
         if fine > 1:
             values = values.reshape(y1 - y0, fine, x1 - x0, fine).mean(axis=(1, 3))
         return values, x0, y0
@@ -538,11 +544,15 @@ def _sweep_into(out: np.ndarray, part: np.ndarray, origin: np.ndarray, start: np
         np.maximum(view, cur[y0 - at[1] : y1 - at[1], x0 - at[0] : x1 - at[0]], out=view)
 
 
-def _warp(card: np.ndarray, hmat: np.ndarray, size: tuple[int, int], under: np.ndarray | None = None) -> np.ndarray:
+def _warp(
+    card: np.ndarray, hmat: np.ndarray, size: tuple[int, int], under: np.ndarray | None = None, within: bool = False
+) -> np.ndarray:
     """The (height, width) output of the homography ``hmat`` (output to ``card`` coordinates, continuous; any
     scale) of ``card`` (uint8), as float32 in [0, 1]: only the output pixels that can map into the card's
     non-zero box are resampled, a band of ``BAND`` rows at a time, on the machine's cores; where ``under`` is
-    given ((height, width) float32), the larger of it and the warp, in it."""
+    given ((height, width) float32), the larger of it and the warp, in it. ``within``: the warp lies within
+    ``under``'s non-zero part, so only the columns of a band where ``under`` is neither 0 nor 1 are resampled
+    (and a pixel or two around)."""
     hmat = hmat / hmat[2, 2]
     width, height = size
     out = np.zeros((height, width), np.float32) if under is None else under
@@ -571,17 +581,32 @@ def _warp(card: np.ndarray, hmat: np.ndarray, size: tuple[int, int], under: np.n
             c0, c1 = (0, width) if quad is None else _columns(quad, r0, r1, width)
             if c1 <= c0:
                 continue
-            shift = np.array([[1.0, 0.0, c0], [0.0, 1.0, r0], [0.0, 0.0, 1.0]])
-            local = hmat @ shift
-            local = local / local[2, 2]
-            part = image.transform(
-                (c1 - c0, r1 - r0), Image.Transform.PERSPECTIVE, tuple(local.ravel()[:8]), Image.Resampling.BILINEAR
-            )
-            values = np.asarray(part, np.float32) * np.float32(1 / 255)
-            np.maximum(out[r0:r1, c0:c1], values, out=out[r0:r1, c0:c1])
+            for a, b in _partial_runs(out[r0:r1, c0:c1], c0, width) if within else [(c0, c1)]:
+                shift = np.array([[1.0, 0.0, a], [0.0, 1.0, r0], [0.0, 0.0, 1.0]])
+                local = hmat @ shift
+                local = local / local[2, 2]
+                part = image.transform(
+                    (b - a, r1 - r0), Image.Transform.PERSPECTIVE, tuple(local.ravel()[:8]), Image.Resampling.BILINEAR
+                )
+                values = np.asarray(part, np.float32) * np.float32(1 / 255)
+                np.maximum(out[r0:r1, a:b], values, out=out[r0:r1, a:b])
 
     for_each_stripe(band, 0, height, width)
     return out
+
+
+def _partial_runs(under: np.ndarray, start: int, width: int) -> list[tuple[int, int]]:
+    """The column runs [a, b) (offset by ``start``, within ``width``) where some row of ``under`` lies strictly
+    between 0 and 1, widened by ``RUN_MARGIN`` and joined across gaps shorter than ``RUN_GAP``."""
+    used = ((under > 0) & (under < 1)).any(axis=0)
+    edges = np.flatnonzero(np.diff(used, prepend=False, append=False))
+    runs: list[tuple[int, int]] = []
+    for a, b in zip(edges[::2] + start - RUN_MARGIN, edges[1::2] + start + RUN_MARGIN, strict=True):
+        if runs and a - runs[-1][1] < RUN_GAP:
+            runs[-1] = (runs[-1][0], int(b))
+        else:
+            runs.append((int(a), int(b)))
+    return [(max(0, a), min(width, b)) for a, b in runs]
 
 
 def _columns(quad: np.ndarray, r0: int, r1: int, width: int) -> tuple[int, int]:
