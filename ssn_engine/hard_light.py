@@ -94,7 +94,9 @@ LEVELS_PER_OCTAVE = 2  # blurred copies of the cutout per doubling of the blur
 MIN_SIGMA = 0.35  # pixels: a blur below this is left sharp
 WIDE_BLUR = 4.0  # pixels: a wider blur is made on a copy reduced this many times fewer than its sigma
 SUPERSAMPLE = 4  # at most this many samples across each output pixel coarser than the cutout's canvas
-BAND = 16  # output rows resampled at once (each band only over the columns the shadow can reach)
+BAND = 64  # output rows resampled at once (each band only over the columns the shadow can reach)
+MIN_W = 1e-6  # a card point whose output w is below this share of its box's largest lies at the horizon
+SLABS = 8  # bands of a card's rows whose output quadrilaterals bound where its warp is resampled
 RUN_GAP = 32  # output columns: two runs of a band to resample closer than this are resampled as one
 RUN_MARGIN = 2  # output columns resampled beyond a run's ends
 PAD = 0.25  # share of the cutout's size added above and beside it, where its blurred copies spread
@@ -556,29 +558,19 @@ def _warp(
     hmat = hmat / hmat[2, 2]
     width, height = size
     out = np.zeros((height, width), np.float32) if under is None else under
-    rows, cols = np.flatnonzero(card.any(axis=1)), np.flatnonzero(card.any(axis=0))
-    if rows.size == 0:
+    outlines = _slab_outlines(card, hmat, size)
+    if not outlines:
         return out
-    corners = np.array(
-        [
-            [cols[0] - 1, rows[0] - 1, 1],
-            [cols[-1] + 2, rows[0] - 1, 1],
-            [cols[-1] + 2, rows[-1] + 2, 1],
-            [cols[0] - 1, rows[-1] + 2, 1],
-        ],
-        float,
-    )
-    back = corners @ np.linalg.inv(hmat).T
-    if (back[:, 2] <= 0).any() or (back[:, 2] * np.linalg.det(hmat) < 0).any():
-        quad = None  # the card's box reaches beyond the horizon: resample every output pixel
-    else:
-        quad = back[:, :2] / back[:, 2:]
+    row_lo, row_hi = _row_columns(outlines, height)
     image = Image.fromarray(card, "L")
 
     def band(stripe: slice) -> None:
         for r0 in range(stripe.start, stripe.stop, BAND):
             r1 = min(r0 + BAND, stripe.stop)
-            c0, c1 = (0, width) if quad is None else _columns(quad, r0, r1, width)
+            lo, hi = float(row_lo[r0 : r1 + 1].min()), float(row_hi[r0 : r1 + 1].max())
+            if hi < lo:
+                continue
+            c0, c1 = max(0, math.floor(lo) - 1), min(width, math.ceil(hi) + 2)
             if c1 <= c0:
                 continue
             for a, b in _partial_runs(out[r0:r1, c0:c1], c0, width) if within else [(c0, c1)]:
@@ -609,16 +601,57 @@ def _partial_runs(under: np.ndarray, start: int, width: int) -> list[tuple[int, 
     return [(max(0, a), min(width, b)) for a, b in runs]
 
 
-def _columns(quad: np.ndarray, r0: int, r1: int, width: int) -> tuple[int, int]:
-    """The output columns [c0, c1) that the convex quadrilateral ``quad`` (4, 2) covers in rows [r0, r1)."""
-    xs = [x for x, y in quad if r0 <= y <= r1]
-    for (xa, ya), (xb, yb) in zip(quad, np.roll(quad, -1, axis=0), strict=True):
-        for y in (r0, r1):
-            if (ya - y) * (yb - y) < 0:
-                xs.append(xa + (y - ya) / (yb - ya) * (xb - xa))
-    if not xs:
-        return 0, 0
-    return max(0, math.floor(min(xs)) - 1), min(width, math.ceil(max(xs)) + 2)
+def _slab_outlines(card: np.ndarray, hmat: np.ndarray, size: tuple[int, int]) -> list[np.ndarray]:
+    """Where ``card``'s non-zero pixels can lie on the ``size`` (w, h) output of the homography ``hmat`` (output
+    to card): the output polygons (k, 2) of the boxes of its non-zero part in ``SLABS`` bands of rows (a tall
+    card's shadow is a slanted strip its bounding box would cover many times over), each cut where it would
+    reach beyond the horizon or behind the camera (its shadow runs off the output there)."""
+    rows = np.flatnonzero(card.any(axis=1))
+    if rows.size == 0:
+        return []
+    inverse = np.linalg.inv(hmat)
+    side = math.copysign(1.0, float(hmat[2] @ [0.5 * size[0], 0.5 * size[1], 1.0]))  # w's sign on the output
+    outlines = []
+    edges = np.linspace(rows[0], rows[-1] + 1, SLABS + 1).round().astype(int)
+    for a, b in zip(edges[:-1], edges[1:], strict=True):
+        cols = np.flatnonzero(card[a:b].any(axis=0)) if b > a else np.zeros(0, int)
+        if cols.size == 0:
+            continue
+        box = np.array(
+            [[cols[0] - 1, a - 1, 1], [cols[-1] + 2, a - 1, 1], [cols[-1] + 2, b + 1, 1], [cols[0] - 1, b + 1, 1]],
+            float,
+        )
+        mapped = box @ inverse.T
+        reach = side * mapped[:, 2] - MIN_W * np.abs(mapped[:, 2]).max()
+        kept = []
+        for i in range(4):  # the box's part in front of the camera (Sutherland-Hodgman, one edge)
+            j = (i + 1) % 4
+            if reach[i] >= 0:
+                kept.append(mapped[i])
+            if (reach[i] >= 0) != (reach[j] >= 0):
+                kept.append(mapped[i] + (mapped[j] - mapped[i]) * reach[i] / (reach[i] - reach[j]))
+        if kept:
+            kept = np.array(kept)
+            outlines.append(kept[:, :2] / kept[:, 2:])
+    return outlines
+
+
+def _row_columns(outlines: list[np.ndarray], height: int) -> tuple[np.ndarray, np.ndarray]:
+    """For each output row line y = 0 .. ``height``: the least and the most x that the convex polygons
+    ``outlines`` (each (k, 2)) reach on it or between it and the next (inf and -inf where they do not)."""
+    start = np.concatenate(outlines)
+    end = np.concatenate([np.roll(outline, -1, axis=0) for outline in outlines])
+    y = np.arange(height + 1, dtype=float)[:, None]
+    with np.errstate(divide="ignore", invalid="ignore"):
+        t = (y - start[:, 1]) / (end[:, 1] - start[:, 1])
+    crossing = (t >= 0) & (t <= 1)
+    x = start[:, 0] + np.where(crossing, t, 0.0) * (end[:, 0] - start[:, 0])
+    lo, hi = np.where(crossing, x, np.inf).min(axis=1), np.where(crossing, x, -np.inf).max(axis=1)
+    row = np.floor(start[:, 1])
+    inside = (row >= 0) & (row <= height)
+    np.minimum.at(lo, row[inside].astype(int), start[inside, 0])
+    np.maximum.at(hi, row[inside].astype(int), start[inside, 0])
+    return lo, hi
 
 
 def _blur(alpha: np.ndarray, sigma: float) -> np.ndarray:

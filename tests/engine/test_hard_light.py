@@ -10,6 +10,7 @@ import pytest
 from PIL import Image
 
 from ssn_engine.cli import main
+from ssn_engine import hard_light
 from ssn_engine.framing import Framing, frame_alpha
 from ssn_engine.hard_light import (
     CardTracer,
@@ -256,3 +257,28 @@ def test_a_card_swept_on_a_reduced_copy_casts_the_shadow_it_casts_when_swept_who
     assert whole[ground].sum() > 2000  # a shadow reaching well past the post
     assert zncc(reduced[ground], whole[ground]) > 0.97
     assert np.abs(reduced - whole)[ground].sum() < 0.06 * whole[ground].sum()
+
+
+@pytest.mark.parametrize("u, v", [(0.5, 0.8), (0.0, 0.75), (0.1, 0.55), (0.3, 0.9)])
+def test_the_warp_resamples_every_pixel_the_card_can_reach(tracer, u, v):
+    """The warp resamples only the columns of each band that the card's rows can reach (cut where a shadow
+    runs behind the camera, a light in front of the object) and, for the crisp card, only where its swept copy
+    is partial: the shadow is what resampling every output pixel gives."""
+    card = tracer[0].cards[0]
+    framing = tracer[1]
+    w = hard_light.light_direction(u, v)
+    source = card._source(framing.scale)
+    blurred = card._blurred(source, card._sigma_rows(source, w, 0.53))
+    hmat = card._homography(w, framing, source, (0, 0))
+    size = (W, H)
+    full = np.asarray(
+        Image.fromarray(blurred, "L").transform(
+            size, Image.Transform.PERSPECTIVE, tuple((hmat / hmat[2, 2]).ravel()[:8]), Image.Resampling.BILINEAR
+        ),
+        np.float32,
+    ) * np.float32(1 / 255)
+    assert full.sum() > 500  # the card casts a shadow onto the canvas
+    assert np.array_equal(hard_light._warp(blurred, hmat, size), full)
+    under = np.clip(full * 1.5, 0.0, 1.0)  # partial where the card's edges are, dark inside
+    got = hard_light._warp(blurred, hmat, size, under.copy(), within=True)
+    assert np.array_equal(got, np.maximum(under, full))
