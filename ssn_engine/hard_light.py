@@ -96,7 +96,7 @@ WIDE_BLUR = 4.0  # pixels: a wider blur is made on a copy reduced this many time
 SUPERSAMPLE = 4  # at most this many samples across each output pixel coarser than the cutout's canvas
 BAND = 64  # output rows resampled at once (each band only over the columns the shadow can reach)
 MIN_W = 1e-6  # a card point whose output w is below this share of its box's largest lies at the horizon
-SLABS = 8  # bands of a card's rows whose output quadrilaterals bound where its warp is resampled
+SLABS = 8  # bands of a card's rows whose boxes' outlines on the output bound where its warp is resampled
 RUN_GAP = 32  # output columns: two runs of a band to resample closer than this are resampled as one
 RUN_MARGIN = 2  # output columns resampled beyond a run's ends
 PAD = 0.25  # share of the cutout's size added above and beside it, where its blurred copies spread
@@ -473,7 +473,6 @@ class CardTracer:
         to_card = self._homography(w, framing, source, (x0, y0)) @ np.diag([1.0 / fine, 1.0 / fine, 1.0])
         size = ((x1 - x0) * fine, (y1 - y0) * fine)
         k = _sweep_reduction(card) if self.depth > 0 else 1
-        # a card swept on a reduced copy is warped from it, and the card itself, crisp, beside it
         if k == 1:
             if self.depth > 0:
                 card, (sx, sy) = self._swept(card, source, w, 2.0 * sigma_rows, 1)
@@ -551,10 +550,10 @@ def _warp(
 ) -> np.ndarray:
     """The (height, width) output of the homography ``hmat`` (output to ``card`` coordinates, continuous; any
     scale) of ``card`` (uint8), as float32 in [0, 1]: only the output pixels that can map into the card's
-    non-zero box are resampled, a band of ``BAND`` rows at a time, on the machine's cores; where ``under`` is
-    given ((height, width) float32), the larger of it and the warp, in it. ``within``: the warp lies within
-    ``under``'s non-zero part, so only the columns of a band where ``under`` is neither 0 nor 1 are resampled
-    (and a pixel or two around)."""
+    non-zero part (:func:`_slab_outlines`) are resampled, a band of ``BAND`` rows at a time, on the machine's
+    cores; where ``under`` is given ((height, width) float32), the larger of it and the warp, in it.
+    ``within``: the warp lies within ``under``'s non-zero part, so only the columns of a band where ``under``
+    is neither 0 nor 1 are resampled (and a pixel or two around)."""
     hmat = hmat / hmat[2, 2]
     width, height = size
     out = np.zeros((height, width), np.float32) if under is None else under
@@ -631,8 +630,8 @@ def _slab_outlines(card: np.ndarray, hmat: np.ndarray, size: tuple[int, int]) ->
             if (reach[i] >= 0) != (reach[j] >= 0):
                 kept.append(mapped[i] + (mapped[j] - mapped[i]) * reach[i] / (reach[i] - reach[j]))
         if kept:
-            kept = np.array(kept)
-            outlines.append(kept[:, :2] / kept[:, 2:])
+            points = np.array(kept)
+            outlines.append(points[:, :2] / points[:, 2:])
     return outlines
 
 
