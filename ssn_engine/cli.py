@@ -82,8 +82,8 @@ class CtrlC:
 
     @contextlib.contextmanager
     def held(self) -> Iterator[None]:
-        """Hold Ctrl+C over a block that must not be cut short: loading onnxruntime, whose initialisation
-        turns an exception raised inside it into an ImportError."""
+        """Hold Ctrl+C over a block that must not be cut short: loading numpy or onnxruntime, whose
+        initialisation turns an exception raised inside it into an ImportError."""
         self._holding, self._pending = True, False
         try:
             yield
@@ -607,11 +607,13 @@ def _handling_ctrl_c(argv: Sequence[str] | None, placed: list[Path]) -> int:
 
 
 def _run(argv: Sequence[str] | None, placed: list[Path]) -> int:
-    args = build_parser().parse_args(argv)
+    with CTRL_C.held():  # numpy's C extension imports Python modules as it loads: an interrupt there is an ImportError
+        parser = build_parser()
+        from .imageio import ImageFileError
+        from .host_kit.light_map import LightMapError
+        from .methods import ModelError
+    args = parser.parse_args(argv)
     args.placed = placed
-    from .imageio import ImageFileError
-    from .host_kit.light_map import LightMapError
-    from .methods import ModelError
 
     try:
         return args.func(args)
