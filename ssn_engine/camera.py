@@ -76,12 +76,18 @@ class Camera:
         self.shift = top_row(self.n) - float(self.project(points)[..., 1].min())
         return self
 
+    def ray_matrix(self) -> np.ndarray:
+        """(3, 3): an image point (col, row, 1) to the world direction through it, scaled to a unit camera depth
+        (a point at depth t along it is ``centre + t * direction``)."""
+        f, half = float(self.focal), 0.5 * self.n
+        origin = self.view - half / f * RIGHT + (half + float(self.shift)) / f * self.up
+        return np.stack([RIGHT / f, -self.up / f, origin], axis=1)
+
     def rays(self, cols: np.ndarray | float, rows: np.ndarray | float) -> np.ndarray:
-        """World directions (..., 3) through image points (``cols``, ``rows``, broadcast together), scaled to a
-        unit camera depth: a point at depth t along one is ``centre + t * ray``."""
-        c = (np.asarray(cols, np.float64) - 0.5 * self.n) / self.focal
-        r = -(np.asarray(rows, np.float64) - self.shift - 0.5 * self.n) / self.focal
-        return self.view + c[..., None] * RIGHT + r[..., None] * self.up
+        """World directions (..., 3) through image points (``cols``, ``rows``, broadcast together), as
+        :meth:`ray_matrix` gives them."""
+        c, r = np.broadcast_arrays(np.asarray(cols, np.float64), np.asarray(rows, np.float64))
+        return np.stack([c, r, np.ones_like(c)], axis=-1) @ self.ray_matrix().T
 
     def pixel_rays(self) -> np.ndarray:
         """Unnormalised world directions (N, N, 3) through every pixel centre."""

@@ -299,15 +299,13 @@ class CardTracer:
         continuous source coordinates: output pixel -> frame -> camera ray -> ground -> card along ``w`` ->
         frame -> source pixel."""
         cam = self.camera
-        n, f, shift = cam.n, float(cam.focal), float(cam.shift)
         s, ox, oy = (
             framing.scale,
             framing.offset_x + origin[0] * framing.scale,
             framing.offset_y + origin[1] * framing.scale,
         )
         to_frame = np.array([[s, 0, ox], [0, s, oy], [0, 0, 1.0]])
-        right, up, view, c = np.array([1.0, 0, 0]), cam.up, cam.view, cam.centre
-        ray = np.stack([right / f, -up / f, view - (n / 2) / f * right + (n / 2 + shift) / f * up], axis=1)
+        c = cam.centre
         ground = np.array([[-c[1], c[0], 0.0], [0.0, c[2], -c[1]], [0.0, 1.0, 0.0]])  # ray -> (gx, gz, 1)
         ax, az = self._card_axis(w)
         dx, dz = -w[0] / w[1], -w[2] / w[1]
@@ -322,7 +320,7 @@ class CardTracer:
                 [0, 0, 1.0],
             ]
         )
-        return to_source @ project @ card @ ground @ ray @ to_frame
+        return to_source @ project @ card @ ground @ cam.ray_matrix() @ to_frame
 
     def _ground_to_output(self, points: np.ndarray, framing: Framing) -> np.ndarray:
         """Ground points (k, 3) to continuous output coordinates (k, 2); points behind the camera give nan."""
@@ -472,16 +470,14 @@ class CardTracer:
         card = self._blurred(source, sigma_rows)
         to_card = self._homography(w, framing, source, (x0, y0)) @ np.diag([1.0 / fine, 1.0 / fine, 1.0])
         size = ((x1 - x0) * fine, (y1 - y0) * fine)
-        k = _sweep_reduction(card) if self.depth > 0 else 1
-        if k == 1:
-            if self.depth > 0:
-                card, (sx, sy) = self._swept(card, source, w, 2.0 * sigma_rows, 1)
-                to_card = np.array([[1.0, 0, sx], [0, 1.0, sy], [0, 0, 1.0]]) @ to_card
-            values = _warp(card, to_card, size)
-        else:  # swept on a reduced copy and warped from it; the card itself, crisp, where that is partial
+        if self.depth > 0:
+            k = _sweep_reduction(card)
             swept, (sx, sy) = self._swept(card, source, w, 2.0 * sigma_rows, k)
             values = _warp(swept, np.array([[1.0 / k, 0, sx], [0, 1.0 / k, sy], [0, 0, 1.0]]) @ to_card, size)
-            values = _warp(card, to_card, size, values, within=True)
+            if k > 1:  # swept on a reduced copy: the card itself, crisp, where that copy's shadow is partial
+                values = _warp(card, to_card, size, values, within=True)
+        else:
+            values = _warp(card, to_card, size)
         if fine > 1:
             values = values.reshape(y1 - y0, fine, x1 - x0, fine).mean(axis=(1, 3))
         return values, x0, y0
