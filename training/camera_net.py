@@ -30,6 +30,7 @@ from ssn_engine.model_config import ModelConfig
 
 from .data.camera_views import KIND_NAMES, load
 from .graph_weights import fitted, folded_constants
+from .model_card import put_section
 
 EDGES = np.linspace(-0.9, 0.4, 27)  # horizon bins, rows over N of the canonical frame (data: -0.83 to 0.31)
 LABEL_SIGMA = 0.04  # the soft labels' spread, over N
@@ -313,14 +314,5 @@ def install(run: Path, models: Path) -> None:
         "error (px) |\n"
         f"|---|---:|---:|---:|\n{rows}\n\n"
     )
-    card_path = models / "MODEL_CARD.md"
-    text = card_path.read_text()
-    if CARD_SECTION in text:
-        start = text.index(CARD_SECTION)
-        end = text.index("## ", start + len(CARD_SECTION))
-        text = text[:start] + section + text[end:]
-    else:
-        at = text.index("## Training data")
-        text = text[:at] + section + text[at:]
-    card_path.write_text(text)
+    put_section(models / "MODEL_CARD.md", CARD_SECTION, section)
     print(f"installed {run / 'camera.onnx'} into {models}")

@@ -11,17 +11,14 @@ import argparse
 from pathlib import Path
 
 from .data.camera_views import make
-from .data.views import CAMERAS
+from .data.views import add_split_arguments
 
 
 def parse_args(argv: list[str] | None = None) -> argparse.Namespace:
     p = argparse.ArgumentParser(prog="python -m training.heights", description=(__doc__ or "").split("\n")[0])
     sub = p.add_subparsers(dest="command", required=True)
     m = sub.add_parser("make", help="masks and camera inputs of a split's views, and the camera estimator's inputs")
-    m.add_argument("--split", required=True, choices=("train", "val", "test"))
-    m.add_argument("--cameras", nargs="+", default=["continuous"], choices=CAMERAS)
-    m.add_argument("--out", required=True)
-    m.add_argument("--seed", type=int, default=0, help="the items' seed (procedural shapes and people)")
+    add_split_arguments(m)
     m.add_argument(
         "--view-seed", type=int, help="draw other views of the same items (default: --seed, the dataset's views)"
     )

@@ -10,7 +10,7 @@ from ssn_engine.model_config import ModelConfig
 from .checkpoint import load_models
 from .data.store import ViewStore
 
-__all__ = ["MIX_RECORD", "mesh_attribution", "model_card", "training_summary"]
+__all__ = ["MIX_RECORD", "mesh_attribution", "model_card", "put_section", "training_summary"]
 
 MIX_RECORD = "the family mixture"  # model.json "lights" of an SR trained with --lights mix
 
@@ -174,3 +174,16 @@ def training_summary(path: Path, ck: dict) -> str:
             f"(learning rate {args['lr']:g})"
         )
     return text
+
+
+def put_section(card: Path, title: str, section: str) -> None:
+    """Write ``section`` (starting with the heading ``title``) into the model card at ``card``: in place of the
+    section of that title, else before "## Training data"."""
+    text = card.read_text()
+    if title in text:
+        start = text.index(title)
+        text = text[:start] + section + text[text.index("## ", start + len(title)) :]
+    else:
+        at = text.index("## Training data")
+        text = text[:at] + section + text[at:]
+    card.write_text(text)

@@ -4,6 +4,7 @@
   (ssn_engine/methods/onnx_ssn.py), each GroupNorm as two fused kernels (:class:`FixedGroupNorm`), the output
   clamped to [0, 1], a dynamic batch axis.
 - :func:`without_mirror_average`: a mirror-averaged graph rewritten to run its network once.
+- :func:`half_weights`: a graph's weights stored in half precision, cast back as it loads.
 - :func:`parity`: the largest difference between a graph and its torch network.
 """
 
@@ -29,6 +30,7 @@ __all__ = [
     "export_graph",
     "fill_norm_constants",
     "for_export",
+    "half_weights",
     "mirror_concat",
     "parity",
     "session",
@@ -95,11 +97,14 @@ class Clamped(nn.Module):
         return self.net(*inputs).clamp(0.0, 1.0)
 
 
-def export_graph(net: nn.Module, module: str, resolution: int, path: Path, opset: int = 18) -> None:
-    """torch.onnx.export with the contract's names and a dynamic batch axis."""
+def export_graph(
+    net: nn.Module, module: str, resolution: int, path: Path, opset: int = 18, output: str | None = None
+) -> None:
+    """torch.onnx.export with the contract's names and a dynamic batch axis (``output``: another name for the
+    output, as the surface model's "height" from an AOP's network)."""
     mask = torch.rand(2, 1, resolution, resolution)
     if module == "aop":
-        args, names, out = (mask,), ["mask"], ["ao"]
+        args, names, out = (mask,), ["mask"], [output or "ao"]
         if takes_camera(net):
             args, names = args + (torch.tensor([[0.4, 1.2], [0.6, 1.0]]),), names + ["camera"]
     else:
@@ -122,6 +127,29 @@ def export_graph(net: nn.Module, module: str, resolution: int, path: Path, opset
         dynamo=False,
     )
     fill_norm_constants(path)
+
+
+def half_weights(path: Path, smallest: int = 1024) -> None:
+    """Rewrite the graph at ``path`` with each float32 initializer of at least ``smallest`` values stored in
+    float16 and cast back to float32 by a Cast node (folded when onnxruntime loads the graph, so that it runs in
+    float32 as before): half the bytes, each weight within 2^-11 of itself."""
+    model = onnx.load(str(path))
+    g = model.graph
+    casts, kept = [], []
+    for init in g.initializer:
+        array = numpy_helper.to_array(init)
+        if array.dtype != np.float32 or array.size < smallest:
+            kept.append(init)
+            continue
+        kept.append(numpy_helper.from_array(array.astype(np.float16), init.name + "_half"))
+        casts.append(helper.make_node("Cast", [init.name + "_half"], [init.name], to=onnx.TensorProto.FLOAT))
+    del g.initializer[:]
+    g.initializer.extend(kept)
+    nodes = casts + list(g.node)
+    del g.node[:]
+    g.node.extend(nodes)
+    onnx.checker.check_model(model)
+    onnx.save(model, str(path))
 
 
 def fill_norm_constants(path: Path) -> None:

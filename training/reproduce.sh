@@ -6,8 +6,10 @@
 #   4. the AOP given the camera: each AOP network fine-tuned with the camera input
 #   5. the camera estimator: its data, then its training
 #   6. the export: the graphs, model.json and the model card in OUT, then the estimator installed there
+#   7. the surface model (the hard-light tracer's pixel heights): its data, training on a GPU, then installed in OUT
 # On this project's 2-core CPU machine the stages took about: datasets 1 to 2 worker-hours each, AOPs 45 and
-# 42 min, SR 59 + 85 + 27 + 42 min, the camera AOPs 28 min side by side, the estimator 35 min (docs/training.md).
+# 42 min, SR 59 + 85 + 27 + 42 min, the camera AOPs 28 min side by side, the estimator 35 min (docs/training.md);
+# the surface model's data about 3 minutes a set, its training 7.3 + 4.1 minutes on one H200 GPU (SURFACE_DEVICE).
 # Every training stage resumes from its run's last.pt, so re-running the script continues a stopped stage.
 # Install the result with: cp OUT/*.onnx OUT/model.json OUT/MODEL_CARD.md ssn_engine/models/
 # Usage: training/reproduce.sh [DATA] [RUNS] [OUT]   (env: DRY_RUN=1 prints the commands without running them)
@@ -75,3 +77,19 @@ run python -m training.export --aop "$RUNS/m_aop/aop.onnx" --aop-without-mirror 
     --aop-camera "$RUNS/aop_cam0/last.pt" "$RUNS/aop_cam1/last.pt" --sr "$RUNS/sr_zncc2/last.pt" --mirror-average \
     --out "$OUT" --data "$DATA/ssn256c" --floor 0.004 --floor-small-lights 0.02 --shadow-reach 16 --ao-gamma 0.6
 run python -m training.camera_estimator --out "$RUNS/camera" --minutes 0 --install "$OUT"
+
+# 7. The surface model (docs/hard_light.md, "Where each pixel's surface lies"): pixel heights of three sets of
+# training views (other procedural shapes, people and views with each seed), trained on a GPU, then fine-tuned on
+# all three sets.
+SURFACE="$DATA/surface128"
+for seed in 0 1 2; do
+    name=train$([ "$seed" = 0 ] || echo "_s$seed")
+    run python -m training.surface make --split train --cameras continuous paper --seed "$seed" \
+        --out "$SURFACE/$name.npz"
+done
+run python -m training.surface make --split val --cameras continuous paper --out "$SURFACE/val.npz"
+run python -m training.surface train --data "$SURFACE" --sets train --run "$RUNS/surface_b" --minutes 7.3 \
+    --batch 64 --lr 2e-3 --widths 16 32 64 128 192 256 --device "${SURFACE_DEVICE:-cuda}"
+run python -m training.surface train --data "$SURFACE" --run "$RUNS/surface_c" --minutes 4.1 --batch 64 \
+    --lr 1e-3 --init "$RUNS/surface_b/last.pt" --device "${SURFACE_DEVICE:-cuda}"
+run python -m training.surface install "$RUNS/surface_c/last.pt" --models "$OUT"

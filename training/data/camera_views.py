@@ -8,6 +8,7 @@ training.heights make`` writes a split's views to one npz file (:func:`make`); :
 
 from __future__ import annotations
 
+from collections.abc import Iterator
 from pathlib import Path
 from typing import Any
 
@@ -22,10 +23,11 @@ from . import meshes
 from .generate import view_rng
 from .meshes import yawed
 from .render_bases import mask_coverage, view_camera
+from .items import Item
 from .sources import all_items, build_mesh
 from .views import VIEWS, draw_view
 
-__all__ = ["ESTIMATOR_KEYS", "KEYS", "KIND_NAMES", "R", "load", "make", "view_record"]
+__all__ = ["ESTIMATOR_KEYS", "KEYS", "KIND_NAMES", "R", "load", "make", "split_views", "view_record"]
 
 FRAME = 256  # the frame the masks are covered at (the engine's N)
 R = 128
@@ -51,6 +53,29 @@ def view_record(mesh: meshes.Mesh, topo: meshes.Topology, yaw: float, pitch: flo
     }
 
 
+def split_views(
+    split: str, cameras: list[str], seed: int = 0, procedural: int = 36, humans: int = 48, view_seed: int | None = None
+) -> Iterator[tuple[Item, meshes.Mesh, meshes.Topology, tuple[float, float, float]]]:
+    """Every view of ``split``'s items under each camera set, drawn as ``training.make_dataset`` draws them
+    (``view_seed``, default ``seed``: other views of the same items): (item, mesh, its topology, (yaw, pitch,
+    fov)), with a progress line."""
+    items = [it for it in all_items(("mesh", "procedural", "anny"), procedural, humans, seed) if it.split == split]
+    prog = Progress(len(items) * len(cameras))
+    for c, which in enumerate(cameras):
+        for q, item in enumerate(items):
+            mesh = build_mesh(item)
+            topo = meshes.topology(mesh)
+            for k in range(VIEWS):
+                yield (
+                    item,
+                    mesh,
+                    topo,
+                    draw_view(k, view_rng(seed if view_seed is None else view_seed, item.id, k), which),
+                )
+            prog.update(c * len(items) + q + 1, item.id)
+    prog.close()
+
+
 def make(
     split: str,
     cameras: list[str],
@@ -63,24 +88,15 @@ def make(
     """Write every view of ``split`` under each camera set to ``out`` (npz; masks as float16, the estimator's
     inputs as 8-bit). ``view_seed`` (default: ``seed``, the dataset's own views) draws other views of the same
     items."""
-    items = [it for it in all_items(("mesh", "procedural", "anny"), procedural, humans, seed) if it.split == split]
     rec: dict[str, list] = {key: [] for key in KEYS + ESTIMATOR_KEYS}
-    prog = Progress(len(items) * len(cameras))
-    for c, which in enumerate(cameras):
-        for q, item in enumerate(items):
-            mesh = build_mesh(item)
-            topo = meshes.topology(mesh)
-            for k in range(VIEWS):
-                yaw, pitch, fov = draw_view(k, view_rng(seed if view_seed is None else view_seed, item.id, k), which)
-                view = view_record(mesh, topo, yaw, pitch, fov)
-                rec["mask"].append(view["mask"].astype(np.float16))
-                rec["camera"].append(view["camera"])
-                rec["estimator"].append(np.round(view["estimator"] * 255).astype(np.uint8))
-                rec["estimator_camera"].append(view["estimator_camera"])
-                rec["kind"].append(KIND_NAMES.index(item.kind))
-                rec["pitch"].append(pitch)
-            prog.update(c * len(items) + q + 1, item.id)
-    prog.close()
+    for item, mesh, topo, (yaw, pitch, fov) in split_views(split, cameras, seed, procedural, humans, view_seed):
+        view = view_record(mesh, topo, yaw, pitch, fov)
+        rec["mask"].append(view["mask"].astype(np.float16))
+        rec["camera"].append(view["camera"])
+        rec["estimator"].append(np.round(view["estimator"] * 255).astype(np.uint8))
+        rec["estimator_camera"].append(view["estimator_camera"])
+        rec["kind"].append(KIND_NAMES.index(item.kind))
+        rec["pitch"].append(pitch)
     out.parent.mkdir(parents=True, exist_ok=True)
     arrays: dict[str, Any] = {k: np.asarray(v) for k, v in rec.items()}
     np.savez_compressed(out, **arrays, cameras=np.array(cameras))

@@ -2,6 +2,8 @@
 
 from __future__ import annotations
 
+import argparse
+
 import numpy as np
 
 YAWS = (0.0, 45.0, -45.0, 90.0, -90.0)
@@ -51,3 +53,11 @@ def pitch_groups(pitches: list[float]) -> dict[str, list[int]]:
     for i, label in sorted(enumerate(labels), key=lambda il: (float(il[1].split("-")[0]), il[0])):
         groups.setdefault(label, []).append(i)
     return groups
+
+
+def add_split_arguments(parser: argparse.ArgumentParser) -> None:
+    """The arguments of a command that writes a split's views to one file: --split, --cameras, --out, --seed."""
+    parser.add_argument("--split", required=True, choices=("train", "val", "test"))
+    parser.add_argument("--cameras", nargs="+", default=["continuous"], choices=CAMERAS)
+    parser.add_argument("--out", required=True)
+    parser.add_argument("--seed", type=int, default=0, help="the items' seed (procedural shapes and people)")

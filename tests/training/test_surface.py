@@ -1,0 +1,90 @@
+"""The surface model's data and training (training.surface): pixel heights of a mesh's visible surface, the
+packed views, a training run and its installation into a model folder."""
+
+from __future__ import annotations
+
+import json
+import shutil
+from pathlib import Path
+
+import numpy as np
+import pytest
+
+from ssn_engine.camera import Camera
+from ssn_engine.methods import load_method
+from ssn_engine.methods.onnx_ssn import OnnxSSN
+from training.data.surface_views import R, load, pixel_heights, save
+
+pytest.importorskip("torch")
+
+ROOT = Path(__file__).resolve().parents[2]
+
+
+def _box(half: float = 0.2, height: float = 1.0) -> tuple[np.ndarray, np.ndarray]:
+    """A box standing on the ground, centred on the origin: vertices (8, 3) and triangles (12, 3)."""
+    v = np.array([[x, y, z] for x in (-half, half) for y in (0.0, height) for z in (-half, half)], np.float64)
+    quads = [(0, 1, 3, 2), (4, 6, 7, 5), (0, 4, 5, 1), (2, 3, 7, 6), (0, 2, 6, 4), (1, 5, 7, 3)]
+    return v, np.array([t for a, b, c, d in quads for t in ((a, b, c), (a, c, d))], np.int64)
+
+
+def test_a_box_s_front_stands_on_its_bottom_edge_and_its_top_reaches_back():
+    """Looking down at a box: its front face's pixels have their feet on the face's bottom edge (the lowest row of
+    their column); its top face's, farther back, higher in the picture."""
+    vertices, faces = _box()
+    cam = Camera(R, 0.5, fov=40.0, pitch=25.0).frame_top(vertices)
+    h = pixel_heights(vertices, faces, cam)
+    col = R // 2
+    covered = np.flatnonzero(np.isfinite(h[:, col]))
+    feet = h[covered, col] + covered + 0.5
+    bottom = covered[-1] + 1.0
+    front_edge = cam.project_xyz(np.array([0.0]), np.array([1.0]), np.array([0.2]))[1][0]  # the top front edge
+    front = covered + 0.5 > front_edge
+    assert front.sum() > 10 and (~front).sum() > 5
+    assert np.abs(feet[front] - bottom).max() < 1.0
+    top = feet[~front]  # the top face's feet: behind the front's, the farther the higher in the picture
+    assert np.all(np.diff(top) > 0) and top[-1] < bottom and top[0] < bottom - 10.0
+
+
+def test_views_travel_packed_and_come_back(tmp_path):
+    rng = np.random.default_rng(0)
+    mask = np.zeros((R, R), np.float32)
+    mask[30:90, 50:70] = 1.0
+    height = np.where(mask > 0, rng.uniform(0, 100, (R, R)), np.nan).astype(np.float32)
+    save(tmp_path / "v.npz", [{"mask": mask, "camera": (10.0, 150.0), "height": height}] * 2, [15.0, 20.0])
+    back = load([tmp_path / "v.npz"])
+    assert back["mask"].shape == (2, R, R) and np.array_equal(back["mask"][1], mask)
+    assert np.abs(back["height"][0] - np.nan_to_num(height)).max() <= 0.25  # half rows, rounded
+    assert np.allclose(back["camera"][0], np.array([10.0, 150.0]) / R) and list(back["pitch"]) == [15.0, 20.0]
+
+
+def test_a_short_training_run_installs_into_a_model_folder(tmp_path, monkeypatch):
+    """A few steps on the CPU, then installed: the graph within 1e-4 of torch, model.json naming it, the engine
+    reading pixel heights through it."""
+    from training.surface_model import install, train
+
+    rng = np.random.default_rng(1)
+    views = []
+    for _ in range(4):
+        mask = np.zeros((R, R), np.float32)
+        top, left = rng.integers(10, 50, 2)
+        mask[top : top + 60, left : left + 20] = 1.0
+        rows = np.arange(R, dtype=np.float32)[:, None] + 0.5
+        views.append({"mask": mask, "camera": (20.0, 160.0), "height": np.where(mask > 0, top + 60 - rows, np.nan)})
+    save(tmp_path / "data" / "train.npz", views, [10.0] * 4)
+    save(tmp_path / "data" / "val.npz", views[:2], [10.0] * 2)
+    train(tmp_path / "data", [tmp_path / "data" / "train.npz"], tmp_path / "run", 0.02, 2, 1e-3, "cpu", 0, (4, 8, 8))
+    log = [json.loads(line) for line in (tmp_path / "run" / "log.jsonl").read_text().splitlines()]
+    assert log[-1]["step"] >= 1 and np.isfinite(log[-1]["val mae"])
+    models = tmp_path / "models"
+    shutil.copytree(ROOT / "ssn_engine" / "models", models)
+    assert install(tmp_path / "run" / "last.pt", models) < 1e-4
+    card = json.loads((models / "model.json").read_text())
+    assert card["surface"] == "surface.onnx" and "steps of 2 views" in card["surface_training"]
+    assert (models / "MODEL_CARD.md").read_text().count("## Surface model") == 1
+    monkeypatch.setenv("SSN_SHADOW_MODEL_DIR", str(models))
+    frame = np.zeros((1, 256, 256), np.float32)
+    frame[0, 60:200, 100:140] = 1.0
+    method = load_method("ssn").method
+    assert isinstance(method, OnnxSSN)
+    heights = method.pixel_heights(frame, np.array([[40.0, 300.0]]))
+    assert heights is not None and heights.shape == (1, 256, 256) and np.isfinite(heights).all()

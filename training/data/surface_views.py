@@ -1,0 +1,119 @@
+"""The surface model's data: each view's mask, camera input and the pixel height of the surface it shows.
+
+A covered pixel's *pixel height* is how many rows below it the image of its visible surface point's foot lies:
+the point's ground projection straight below it, projected back into the frame (Sheng et al.'s pixel height, SSG
+/ PixHt-Lab). With the camera it places each pixel's surface in 3D, which the outline alone does not tell: the
+hard-light tracer (:mod:`ssn_engine.hard_light`) starts each pixel's segment there.
+
+Each view's camera is drawn exactly as ``training.make_dataset`` draws it; its mask is the dataset's coverage at
+N = 256 resampled to R; the surface is the mesh's nearest face at each pixel centre of R. ``python -m
+training.surface make`` writes a split's views to one npz file (:func:`make`): masks bit-packed at 0.5 coverage,
+heights as 8 bits (``HEIGHT_STEPS`` a frame) on the covered pixels only, so that a split travels small.
+"""
+
+from __future__ import annotations
+
+from pathlib import Path
+
+import numpy as np
+from scipy import ndimage
+
+from ssn_engine.camera import Camera
+from ssn_engine.frames import resample_frames
+
+from ..canvas_eval.oracle import surface_depths
+from . import meshes
+from .camera_views import split_views
+from .meshes import yawed
+from .render_bases import mask_coverage, view_camera
+
+__all__ = ["HEIGHT_STEPS", "R", "load", "make", "pixel_heights", "save", "view_record"]
+
+FRAME = 256  # the frame the masks are covered at (the engine's N)
+R = 128
+HEIGHT_STEPS = 2 * R  # an 8-bit pixel height counts half rows of R: up to 127.5 rows (a frame)
+
+
+def pixel_heights(vertices: np.ndarray, faces: np.ndarray, cam: Camera) -> np.ndarray:
+    """(n, n) the pixel height (rows of ``cam``'s frame) of the mesh's visible surface at each pixel centre of
+    ``cam``'s frame; nan where no face is."""
+    n = cam.n
+    front, _ = surface_depths(vertices, faces, cam, n, n, 1)
+    yy, xx = np.nonzero(np.isfinite(front))
+    points = cam.centre + front[yy, xx, None] * cam.rays(xx + 0.5, yy + 0.5)
+    _, foot_row = cam.project_xyz(points[:, 0], np.zeros(len(points)), points[:, 2])
+    out = np.full((n, n), np.nan, np.float32)
+    out[yy, xx] = foot_row - (yy + 0.5)
+    return out
+
+
+def view_record(mesh: meshes.Mesh, topo: meshes.Topology, yaw: float, pitch: float, fov: float) -> dict:
+    """One view at R: its mask (coverage), camera input (horizon row, focal length) and pixel heights (rows)."""
+    v = np.ascontiguousarray(yawed(mesh.vertices, yaw))
+    cam = view_camera(v, FRAME, fov, pitch)
+    frame_mask = mask_coverage(v, mesh.faces, topo, cam, 4)
+    small = Camera(R, cam.target_height, fov=fov, pitch=pitch, shift=cam.shift * R / FRAME)
+    return {
+        "mask": resample_frames(frame_mask[None], R)[0],
+        "camera": (small.horizon, float(small.focal)),
+        "height": pixel_heights(v, mesh.faces, small),
+    }
+
+
+def make(split: str, cameras: list[str], out: Path, seed: int = 0, procedural: int = 36, humans: int = 48) -> None:
+    """Write every view of ``split`` under each camera set to ``out`` (npz): ``masks`` bit-packed (mask > 0.5,
+    (n, R * R / 8)), ``heights`` uint8 over the masks' set pixels in order (nearest surface's where a set pixel's
+    centre misses the mesh), ``camera`` (n, 2) at R, ``pitch``."""
+    views, pitches = [], []
+    for _, mesh, topo, (yaw, pitch, fov) in split_views(split, cameras, seed, procedural, humans):
+        views.append(view_record(mesh, topo, yaw, pitch, fov))
+        pitches.append(pitch)
+    save(out, views, pitches)
+
+
+def save(out: Path, views: list[dict], pitches: list[float]) -> None:
+    """Write :func:`view_record` views and their pitches to ``out`` as :func:`make` does."""
+    masks, heights = [], []
+    for view in views:
+        solid = view["mask"] > 0.5
+        masks.append(np.packbits(solid.ravel()))
+        h = _fill_nearest(view["height"])[solid]
+        heights.append(np.clip(np.round(h * HEIGHT_STEPS / R), 0, 255).astype(np.uint8))
+    out.parent.mkdir(parents=True, exist_ok=True)
+    np.savez_compressed(
+        out,
+        masks=np.asarray(masks),
+        heights=np.concatenate(heights),
+        camera=np.asarray([v["camera"] for v in views], np.float32),
+        pitch=np.asarray(pitches, np.float32),
+    )
+
+
+def _fill_nearest(h: np.ndarray) -> np.ndarray:
+    """``h`` with each nan replaced by its nearest finite value."""
+    miss = np.isnan(h)
+    if not miss.any() or miss.all():
+        return np.nan_to_num(h)
+    _, (iy, ix) = ndimage.distance_transform_edt(miss, return_indices=True)  # type: ignore[misc]
+    return h[iy, ix]
+
+
+def load(paths: list[Path]) -> dict[str, np.ndarray]:
+    """The views of several :func:`make` files: ``mask`` (n, R, R) float32 in {0, 1}, ``height`` (n, R, R) rows of
+    R (0 off the mask), ``camera`` (n, 2) in frames (horizon row / R, focal length / R), ``pitch``."""
+    masks, heights, cams, pitches = [], [], [], []
+    for p in paths:
+        f = np.load(p)
+        m = np.unpackbits(f["masks"], axis=1)[:, : R * R].reshape(-1, R, R).astype(bool)
+        h = np.zeros(m.shape, np.float32)
+        h[m] = f["heights"].astype(np.float32) * R / HEIGHT_STEPS
+        masks.append(m.astype(np.float32))
+        heights.append(h)
+        cams.append(f["camera"] / R)
+        pitches.append(f["pitch"])
+    return {
+        "mask": np.concatenate(masks),
+        "height": np.concatenate(heights),
+        "camera": np.concatenate(cams),
+        "pitch": np.concatenate(pitches),
+    }

@@ -1,0 +1,65 @@
+"""The surface model: a pixel height for each pixel of a cutout. ``python -m training.surface make|train|export``.
+
+    python -m training.surface make --split train --cameras continuous paper --out data/surface128/train.npz
+    python -m training.surface make --split val --cameras continuous paper --out data/surface128/val.npz
+    python -m training.surface train --data data/surface128 --run runs/surface --minutes 7
+    python -m training.surface install runs/surface/last.pt --models ssn_engine/models
+
+What a view holds: :mod:`training.data.surface_views`; the network and its loss: :mod:`training.surface_model`.
+"""
+
+from __future__ import annotations
+
+import argparse
+from pathlib import Path
+
+from .data.views import add_split_arguments
+
+
+def parse_args(argv: list[str] | None = None) -> argparse.Namespace:
+    p = argparse.ArgumentParser(prog="python -m training.surface", description=(__doc__ or "").split("\n")[0])
+    sub = p.add_subparsers(dest="command", required=True)
+    m = sub.add_parser("make", help="masks, camera inputs and pixel heights of a split's views")
+    add_split_arguments(m)
+    t = sub.add_parser("train", help="train the surface model on a folder's train.npz, scored on its val.npz")
+    t.add_argument("--data", required=True)
+    t.add_argument("--sets", nargs="+", help="the training files' names in --data (default: every train*.npz)")
+    t.add_argument("--run", required=True, help="folder for checkpoints and the log")
+    t.add_argument("--minutes", type=float, default=7.0, help="stop after this long (the schedule fits it)")
+    t.add_argument("--batch", type=int, default=64)
+    t.add_argument("--lr", type=float, default=2e-3)
+    t.add_argument("--device", default="cuda", help="torch device (cuda, cpu)")
+    t.add_argument("--seed", type=int, default=0)
+    t.add_argument("--widths", type=int, nargs="+", help="the U-Net's width per stage (default: the shipped one's)")
+    t.add_argument("--init", help="a checkpoint to go on from (fine-tuning it; its widths)")
+    e = sub.add_parser("install", help="a checkpoint's graph into a model folder (model.json and the card too)")
+    e.add_argument("checkpoint")
+    e.add_argument("--models", required=True, help="the model folder (ssn_engine/models)")
+    return p.parse_args(argv)
+
+
+def main(argv: list[str] | None = None) -> None:
+    args = parse_args(argv)
+    if args.command == "make":
+        from .data.surface_views import make
+
+        make(args.split, args.cameras, Path(args.out), args.seed)
+    elif args.command == "train":
+        from .surface_model import train
+
+        from .surface_model import WIDTHS
+
+        widths = tuple(args.widths) if args.widths else WIDTHS
+        init = Path(args.init) if args.init else None
+        data = Path(args.data)
+        sets = [data / f"{name}.npz" for name in args.sets] if args.sets else sorted(data.glob("train*.npz"))
+        train(data, sets, Path(args.run), args.minutes, args.batch, args.lr, args.device, args.seed, widths, init)
+    else:
+        from .surface_model import install
+
+        diff = install(Path(args.checkpoint), Path(args.models))
+        print(f"installed {args.checkpoint} into {args.models} (graph within {diff:.1e} of torch)")
+
+
+if __name__ == "__main__":
+    main()

@@ -1,0 +1,206 @@
+"""The surface model's training and export: mask and camera input -> each pixel's pixel height.
+
+The network is the AOP's U-Net taking the camera input (:class:`training.model.unet.AOPNet`, ``camera=True``),
+wider, its output the pixel height in frames (rows / R) of :mod:`training.data.surface_views`. Loss: L1 on the
+covered pixels, plus L1 on the height's differences to the right and below within them (so that a leg in front
+of a body keeps its step). Mirrored half of the time (a pixel height does not change in a mirror). Trained for a
+fixed time, the learning rate falling along a cosine over it; scored on the validation split every
+``VAL_EVERY`` steps (mean absolute error in rows of R, by pitch).
+"""
+
+from __future__ import annotations
+
+import dataclasses
+import json
+import math
+import time
+from pathlib import Path
+
+import numpy as np
+import torch
+
+from ssn_engine.model_config import ModelConfig
+
+from .data.surface_views import R, load
+from .model_card import put_section
+from .model.unet import AOPNet, UNetConfig
+from .onnx_graphs import export_graph, half_weights, session
+
+WIDTHS = (12, 24, 48, 96, 160, 256)
+VAL_EVERY = 500
+GRAD_WEIGHT = 1.0
+CARD_SECTION = "## Surface model"
+
+
+def build(widths: tuple[int, ...] = WIDTHS) -> AOPNet:
+    """The untrained surface network."""
+    return AOPNet(UNetConfig(widths=widths, groups=4, resolution=R, camera=True))
+
+
+def loss_terms(pred: torch.Tensor, target: torch.Tensor, mask: torch.Tensor) -> tuple[torch.Tensor, torch.Tensor]:
+    """Mean L1 of the height over the covered pixels, and of its differences to the right and below over pairs of
+    covered pixels."""
+    n = mask.sum().clamp(min=1.0)
+    l1 = ((pred - target).abs() * mask).sum() / n
+    grad = pred.new_zeros(())
+    for dim in (-1, -2):
+        pair = mask.narrow(dim, 1, R - 1) * mask.narrow(dim, 0, R - 1)
+        dp = pred.diff(dim=dim) - target.diff(dim=dim)
+        grad = grad + (dp.abs() * pair).sum() / pair.sum().clamp(min=1.0)
+    return l1, grad
+
+
+def _tensors(data: dict[str, np.ndarray], device: str) -> tuple[torch.Tensor, torch.Tensor, torch.Tensor]:
+    return (
+        torch.from_numpy(data["mask"][:, None]).to(device),
+        torch.from_numpy(data["height"][:, None] / R).to(device),
+        torch.from_numpy(data["camera"].astype(np.float32)).to(device),
+    )
+
+
+def evaluate(net: AOPNet, data: dict[str, np.ndarray], device: str, batch: int = 256) -> dict[str, float]:
+    """Mean absolute error (rows of R) of the pixel height over covered pixels, all views and by pitch (0-10,
+    10-20, 20+ degrees)."""
+    mask, target, camera = _tensors(data, device)
+    err, count = [], []
+    net.eval()
+    with torch.no_grad():
+        for i in range(0, len(mask), batch):
+            m = mask[i : i + batch]
+            pred = net(m, camera[i : i + batch]).float()
+            err.append(((pred - target[i : i + batch]).abs() * m).sum(dim=(1, 2, 3)).cpu().numpy() * R)
+            count.append(m.sum(dim=(1, 2, 3)).cpu().numpy())
+    net.train()
+    e, c = np.concatenate(err), np.concatenate(count)
+    pitch = data["pitch"]
+    out = {"mae": float(e.sum() / c.sum())}
+    for name, lo, hi in (("pitch 0-10", -1, 10), ("pitch 10-20", 10, 20), ("pitch 20+", 20, 90)):
+        sel = (pitch >= lo) & (pitch < hi)
+        if sel.any():
+            out[name] = float(e[sel].sum() / c[sel].sum())
+    return out
+
+
+def train(
+    data: Path,
+    sets: list[Path],
+    run: Path,
+    minutes: float,
+    batch: int,
+    lr: float,
+    device: str,
+    seed: int,
+    widths: tuple[int, ...] = WIDTHS,
+    init: Path | None = None,
+) -> None:
+    """Train on the views of ``sets`` (:func:`training.data.surface_views.make` files) for ``minutes``, scoring
+    ``data``/val.npz; writes ``run``/last.pt and ``run``/log.jsonl. ``init``: a checkpoint to go on from (its
+    widths, not ``widths``)."""
+    torch.manual_seed(seed)
+    rng = np.random.default_rng(seed)
+    run.mkdir(parents=True, exist_ok=True)
+    train_set, val_set = load(sets), load([data / "val.npz"])
+    mask, target, camera = _tensors(train_set, device)
+    net = (build(widths) if init is None else load_checkpoint(init).train()).to(device)
+    history = [] if init is None else torch.load(init, map_location="cpu", weights_only=True).get("history", [])
+    name = torch.cuda.get_device_name(device) if device.startswith("cuda") else "cpu"
+    stage = {"views": len(mask), "batch": batch, "lr": lr, "device": name, "init": bool(init)}
+    opt = torch.optim.AdamW(net.parameters(), lr=lr, weight_decay=1e-4)
+    cuda = device.startswith("cuda")
+    budget, start, step = minutes * 60.0, time.time(), 0
+    log = (run / "log.jsonl").open("w")
+    print(f"{len(mask)} training views, {len(val_set['mask'])} validation views", flush=True)
+    while True:
+        done = (time.time() - start) / budget
+        if done >= 1.0:
+            break
+        for group in opt.param_groups:
+            group["lr"] = lr * min(1.0, (step + 1) / 200) * 0.5 * (1.0 + math.cos(math.pi * done))
+        idx = torch.from_numpy(rng.integers(0, len(mask), batch)).to(device)
+        m, t, c = mask[idx], target[idx], camera[idx]
+        if rng.random() < 0.5:
+            m, t = m.flip(-1), t.flip(-1)
+        with torch.autocast("cuda", dtype=torch.bfloat16, enabled=cuda):
+            pred = net(m, c)
+        l1, grad = loss_terms(pred.float(), t, m)
+        loss = l1 + GRAD_WEIGHT * grad
+        opt.zero_grad(set_to_none=True)
+        loss.backward()
+        opt.step()
+        step += 1
+        if step % VAL_EVERY == 0:
+            row = {"step": step, "seconds": round(time.time() - start, 1), "l1": l1.item(), "grad": grad.item()}
+            row.update({f"val {k}": v for k, v in evaluate(net, val_set, device).items()})
+            log.write(json.dumps(row) + "\n")
+            log.flush()
+            print(row, flush=True)
+            _save(net, run / "last.pt", [*history, {**stage, "steps": step, "minutes": row["seconds"] / 60}], row)
+    row = {"step": step, "seconds": round(time.time() - start, 1)}
+    row.update({f"val {k}": v for k, v in evaluate(net, val_set, device).items()})
+    log.write(json.dumps(row) + "\n")
+    log.close()
+    print(row, flush=True)
+    _save(net, run / "last.pt", [*history, {**stage, "steps": step, "minutes": row["seconds"] / 60}], row)
+
+
+def _save(net: AOPNet, path: Path, history: list[dict], row: dict) -> None:
+    """The network (weights in half precision: half the bytes, precision enough), its configuration, the
+    training stages that made it (``history``: views, batch, lr, device, steps, minutes each) and its last
+    validation scores."""
+    state = {k: v.detach().half().cpu() for k, v in net.state_dict().items()}
+    torch.save({"state": state, "config": net.config.to_dict(), "history": history, "scores": row}, path)
+
+
+def load_checkpoint(path: Path) -> AOPNet:
+    """The network of a :func:`train` checkpoint, in float32 on the CPU."""
+    ck = torch.load(path, map_location="cpu", weights_only=True)
+    net = AOPNet(UNetConfig.from_dict(ck["config"]))
+    net.load_state_dict({k: v.float() for k, v in ck["state"].items()})
+    return net.eval()
+
+
+def install(checkpoint: Path, models: Path) -> float:
+    """Install the checkpoint's network into a model folder: the graph ``surface.onnx`` (:func:`export`), the
+    ``surface`` and ``surface_training`` entries of model.json and a section of MODEL_CARD.md; returns the
+    graph's largest difference to torch."""
+    diff = export(checkpoint, models / "surface.onnx")
+    ck = torch.load(checkpoint, map_location="cpu", weights_only=True)
+    stages = "; then ".join(
+        f"{h['steps']} steps of {h['batch']} views ({h['views']} views, learning rate {h['lr']:g}) in "
+        f"{h['minutes']:.1f} minutes on {'one ' + h['device'] + ' GPU' if h['device'] != 'cpu' else 'the CPU'}"
+        for h in ck["history"]
+    )
+    scores = ck["scores"]
+    by_pitch = ", ".join(f"{k[len('val pitch ') :]}: {v:.2f}" for k, v in scores.items() if k.startswith("val pitch"))
+    training = (
+        f"widths {list(ck['config']['widths'])}, {stages}; validation mean absolute error "
+        f"{scores['val mae']:.2f} rows of R = {R} (pitch {by_pitch})"
+    )
+    meta = models / "model.json"
+    config = ModelConfig.from_json(meta.read_text())
+    meta.write_text(dataclasses.replace(config, surface="surface.onnx", surface_training=training).to_json())
+    section = (
+        f"{CARD_SECTION}\n\n`surface.onnx` reads each pixel's pixel height (how far below it the image of the ground "
+        "straight below the surface it shows lies) from the mask and the camera input; the hard-light tracer "
+        "places each pixel's surface with it (docs/hard_light.md). Trained by `python -m training.surface` "
+        f"(training/reproduce.sh, stage 7): {training}.\n\n"
+    )
+    put_section(models / "MODEL_CARD.md", CARD_SECTION, section)
+    return diff
+
+
+def export(checkpoint: Path, out: Path) -> float:
+    """Write the checkpoint's network as ONNX ("mask" [b, 1, R, R], "camera" [b, 2] -> "height" [b, 1, R, R],
+    frames, clamped to [0, 1]; the weights stored in half precision); returns the largest difference of
+    onnxruntime's output to torch's."""
+    net = load_checkpoint(checkpoint)
+    out.parent.mkdir(parents=True, exist_ok=True)
+    export_graph(net, "aop", R, out, output="height")
+    half_weights(out)  # the weights were trained and kept in half precision (:func:`_save`)
+    rng = np.random.default_rng(0)
+    mask = (rng.random((2, 1, R, R)) > 0.5).astype(np.float32)
+    camera = np.array([[0.4, 1.2], [0.7, 0.9]], np.float32)
+    got = session(out).run(None, {"mask": mask, "camera": camera})[0]
+    with torch.no_grad():
+        ref = net(torch.from_numpy(mask), torch.from_numpy(camera)).clamp(0.0, 1.0).numpy()
+    return float(np.abs(got - ref).max())
