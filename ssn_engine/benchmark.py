@@ -13,11 +13,11 @@ import numpy as np
 from PIL import Image
 
 from .compositing import shadow_layer
-from .framing import as_unit_float, frame_alpha
-from .hard_light import ContactTracer
+from .framing import frame_alpha
 from .hemisphere import render_light_map
 from .host_kit.light_map import SUN, GaussianLight, LightMap, preset
 from .layer_session import open_session
+from .session import ShadowSession
 from .methods import GeometricCard, load_method
 from .samples import pawn_cutout
 from .worker import tune_malloc
@@ -140,11 +140,8 @@ def run_benchmark(repeats: int = 20, method: str = "auto") -> dict[str, np.ndarr
     results["light moved 4000x3000 (SR+to canvas+layer)"] = time_calls(
         lambda: shadow_layer(session.render(light)), e2e_repeats, warmup=1
     )
-    x0, y0, x1, y1 = session.framing.bbox
-    crop = as_unit_float(cutout[y0:y1, x0:x1, 3])
-    results["tracer analysis 4000x3000 (depth, cards)"] = time_calls(
-        lambda: ContactTracer(crop, session.framing, None), repeats
-    )
+    single = session if isinstance(session, ShadowSession) else session.parts[0]  # (the pawn is one object)
+    results["tracer analysis 4000x3000 (surface, cards)"] = time_calls(single.make_tracer, repeats)
     # a 0.53-degree sun dragged across a low sky: every render a new direction, traced at the canvas's resolution
     suns = _alternating([LightMap([GaussianLight.disk(0.2 + 0.6 * k / DRAG, 0.7, SUN, 1.0)]) for k in range(DRAG)])
     results["sun moved 4000x3000 (traced+layer)"] = time_calls(

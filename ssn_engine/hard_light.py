@@ -24,14 +24,17 @@ card's hard shadow is one homography of the cutout's alpha, resampled by
 Pillow.
 
 Depth: a card alone casts a line under a light from its side, and nothing of
-a body that reaches away from the camera. Each pixel is taken to reach
-behind the card along the camera's ray by a depth (:func:`depth_map`): the
-chord of a round cross-section as wide as the part it lies in (a body as
-deep as it is wide, a leg thin; never below the ground); the card is swept
-through that depth before the homography: each pixel repeated along the
-shift its shadow makes as it moves deeper (``THICKNESS_LEVELS`` bands of
-depth, each a segment drawn by doubling; a card larger than ``SWEEP_SIZE``
-is swept on a reduced copy, the card itself kept crisp). A light from nearly
+a body that reaches away from the camera. Each pixel shows a surface on its
+card, or, with a model's pixel heights (:func:`foot_rows`: how far below
+each pixel the image of the ground under its surface lies), that far behind
+the card along its camera ray; from there it reaches deeper by a depth
+(:func:`depth_map`): the chord of a round cross-section as wide as the part
+it lies in (a body as deep as it is wide, a leg thin; never below the
+ground). The card is swept through that span before the homography: each
+pixel repeated along the shift its shadow makes as it moves deeper, a shift
+that changes over the card (``THICKNESS_LEVELS`` bands of depth, each a
+segment drawn by doubling, in cells each along its own shift; a card larger
+than ``SWEEP_SIZE`` is swept on a reduced copy, the card itself kept crisp). A light from nearly
 the card's side still turns it a little (``MIN_INCIDENCE``), so that no card
 is seen edge-on.
 
@@ -52,6 +55,7 @@ the light strikes the card obliquely).
 from __future__ import annotations
 
 import math
+from collections.abc import Callable
 from dataclasses import dataclass, replace
 
 import numpy as np
@@ -67,6 +71,8 @@ from .host_kit.light_map import GaussianLight, LightMap
 DEPTH_SIZE = 128  # pixels: the object's depth is worked out on a copy reduced to about this size
 RADIUS_STEP = 1.25  # ratio of the local radii the depth map tells apart
 THICKNESS_LEVELS = 16  # bands of depth an object's thickness is swept in
+SURFACE_LEVELS = 48  # the same where its pixels' surfaces lie at different depths (each starts at its band's start:
+# 16 bands left a staircase along a shadow's far edge)
 SWEEP_SIZE = 400  # pixels: a larger card is swept through its depth on a copy reduced to about this size
 MIN_INCIDENCE = 10.0  # degrees: the card turns just enough that a light's horizontal direction meets it at least so
 
@@ -96,9 +102,16 @@ WIDE_BLUR = 4.0  # pixels: a wider blur is made on a copy reduced this many time
 SUPERSAMPLE = 4  # at most this many samples across each output pixel coarser than the cutout's canvas
 BAND = 64  # output rows resampled at once (each band only over the columns the shadow can reach)
 MIN_W = 1e-6  # a card point whose output w is below this share of its box's largest lies at the horizon
+STEP_TOLERANCE = 1.0  # pixels: a card is swept in cells, each along one shift with depth, so that no pixel's
+# deepest copy lies farther than this from where its own shift puts it
+MAX_STEP_CELLS = (2, 2)  # cells down and across a card at most
+Cells = Callable[[float], list[tuple[int, int, int, int, np.ndarray]]]  # a depth -> the cells swept to it
 SLABS = 8  # bands of a card's rows whose boxes' outlines on the output bound where its warp is resampled
 RUN_GAP = 32  # output columns: two runs of a band to resample closer than this are resampled as one
 RUN_MARGIN = 2  # output columns resampled beyond a run's ends
+HORIZON_GAP = 0.02  # share of the frame below the horizon that a foot's row is kept to (the ground recedes to
+# infinity at the horizon: a foot read there is read a little nearer)
+MAX_SURFACE_DEPTH = 2.0  # a pixel's surface lies behind its card by at most this many times the cutout's size
 PAD = 0.25  # share of the cutout's size added above and beside it, where its blurred copies spread
 UNCLIPPED_MARGIN = 0.5  # share of the canvas a layer that may leave the canvas reaches beyond each side
 
@@ -189,7 +202,12 @@ class CardTracer:
     foot : int or None
         The row of ``alpha`` (one past it) on which the card stands, at or below its lowest row (default: that).
     thickness : np.ndarray or None
-        (h, w) how deep (pixels) each pixel reaches behind the card (:func:`depth_map`); None: a flat card.
+        (h, w) how deep (pixels) each pixel reaches behind its surface (:func:`depth_map`); None: a flat card.
+    feet : np.ndarray or None
+        (h, w) the row of ``alpha`` (continuous) of each pixel's foot: the image of the ground point straight
+        below the surface the pixel shows (:func:`foot_rows`). Where it lies above the card's foot, the pixel's
+        surface lies behind the card by the ground's distance between the two (:meth:`_surface_depth`); None:
+        every surface on the card.
     """
 
     def __init__(
@@ -200,6 +218,7 @@ class CardTracer:
         origin: tuple[int, int] | None = None,
         foot: int | None = None,
         thickness: np.ndarray | None = None,
+        feet: np.ndarray | None = None,
     ) -> None:
         alpha = np.clip(np.asarray(alpha, np.float32), 0.0, 1.0)
         x0, y0 = origin if origin is not None else framing.bbox[:2]
@@ -214,7 +233,9 @@ class CardTracer:
         self.camera, self.height = camera_for_span(framing.n, top, base, horizon, focal)
         self._world_per_pixel = s * self._mid_depth() / float(self.camera.focal)  # at the card, per alpha pixel
         thick = np.zeros(alpha.shape, np.float32) if thickness is None else np.asarray(thickness, np.float32)
-        thick = np.pad(thick[: rows[-1] + 1], ((0, foot - rows[-1] - 1), (0, 0)))
+        near = np.zeros(alpha.shape, np.float32) if feet is None else self._surface_depth(feet, framing, y0, base)
+        near = np.pad(near[: rows[-1] + 1], ((0, foot - rows[-1] - 1), (0, 0)))
+        thick = near + np.pad(thick[: rows[-1] + 1], ((0, foot - rows[-1] - 1), (0, 0)))  # from here on: the far end
         self.depth = float(thick.max()) * self._world_per_pixel  # world units the object reaches behind the card
         alpha = alpha[: rows[-1] + 1]
         solid = np.flatnonzero((alpha > SOLID).any(axis=1))
@@ -225,10 +246,11 @@ class CardTracer:
         self._x_cols = (cols[0] * s + framing.offset_x + x0 * s, (cols[-1] + 1) * s + framing.offset_x + x0 * s)
         pad = math.ceil(PAD * max(alpha.shape))  # room for the blur above and beside the cutout (not below: ground)
         alpha = np.pad(alpha, ((pad, 0), (pad, pad)))
-        self._thickness = {1: np.pad(thick, ((pad, 0), (pad, pad)))}  # per reduction: depth behind, in its pixels
+        self._far = {1: np.pad(thick, ((pad, 0), (pad, pad)))}  # per reduction: depth behind the card, its pixels
+        self._near = {1: np.pad(near, ((pad, 0), (pad, pad)))}  # the same of the surface the pixel shows
         self._full = _Source(alpha, s, framing.offset_x + (x0 - pad) * s, framing.offset_y + (y0 - pad) * s)
         self._sources: dict[int, _Source] = {}
-        self._allowed: dict[int, np.ndarray] = {}
+        self._allowed: dict[int, tuple[np.ndarray, np.ndarray]] = {}
         self._levels: dict[float, dict[int, tuple[int, int, _Level]]] = {}  # per scale, level: rows, blurred
 
     # -- the cutout at the output's resolution ------------------------------------------------------------------
@@ -245,8 +267,9 @@ class CardTracer:
             padded = np.pad(full.alpha, ((0, -h % k), (0, -w % k)))  # zeros below the foot: ground, and right
             small = np.asarray(Image.fromarray(padded, "F").reduce(k))
             self._sources[k] = _Source(small, full.scale * k, full.offset_x, full.offset_y)
-            thick = np.pad(self._thickness[1], ((0, -h % k), (0, -w % k)))
-            self._thickness[k] = thick.reshape(h // k + (h % k > 0), k, -1, k).max(axis=(1, 3)) / k
+            far, near = (np.pad(d[1], ((0, -h % k), (0, -w % k))) for d in (self._far, self._near))
+            self._far[k] = far.reshape(h // k + (h % k > 0), k, -1, k).max(axis=(1, 3)) / k
+            self._near[k] = near.reshape(h // k + (h % k > 0), k, -1, k).min(axis=(1, 3)) / k
         return self._sources[k]
 
     def _level(self, source: _Source, k: int, r0: int, r1: int) -> _Level:
@@ -387,54 +410,127 @@ class CardTracer:
         h = np.clip(-(up0 + k * d0) / (uph + k * dh), 0.0, self.height)
         return h, d0 + dh * h
 
-    def _depth_ray(self) -> np.ndarray:
-        """The camera's ray through the card's centre, scaled to a unit horizontal length: a point this much
-        farther along it lies one world unit deeper behind the card (and, looking down, lower)."""
-        ray = np.array([0.0, 0.5 * self.height, 0.0]) - self.camera.centre
-        return ray / math.hypot(ray[0], ray[2])
+    def _depth_ray(self, height: np.ndarray | float | None = None) -> np.ndarray:
+        """The camera's ray through the card's centre line at ``height`` (default: half the card's), scaled to
+        a unit horizontal length ((..., 3)): a point this much farther along it lies one world unit deeper
+        behind the card (and, looking down, lower)."""
+        h = np.asarray(0.5 * self.height if height is None else height, np.float64)
+        ray = np.stack([np.zeros_like(h), h, np.zeros_like(h)], axis=-1) - self.camera.centre
+        return ray / np.hypot(ray[..., 0], ray[..., 2])[..., None]
 
-    def _depth_step(self, source: _Source, w: np.ndarray) -> np.ndarray:
-        """How far (source pixels, (x, y)) the card's shadow moves when what a source pixel shows lies one
-        source pixel's worth of world units deeper along the camera's ray, through the card's homography at
-        its centre."""
+    def _depth_steps(self, source: _Source, w: np.ndarray, cols: np.ndarray, rows: np.ndarray) -> np.ndarray:
+        """At source pixels (``cols``, ``rows``) ((n, 2), source pixels (x, y)): how far the card's shadow moves
+        when what the pixel shows lies one source pixel's worth of world units deeper along its own camera ray,
+        through the card's homography there (looking down, a deeper point near the ground drops more than one
+        near the card's top; off the image's centre, it moves sideways too)."""
         ax, az = self._card_axis(w)
         dx, dz = -w[0] / w[1], -w[2] / w[1]
         det = ax * dz - az * dx
         det = det if abs(det) > 1e-9 else 1e-9
+        cam = self.camera
         b = self._world_per_pixel * source.scale / self._full.scale  # world units per pixel of this source
-        r = self._depth_ray()
-        gx, gz = b * (r[0] + r[1] * dx), b * (r[2] + r[1] * dz)  # the ground shift of the deeper point's shadow
+        fx = (np.asarray(cols, np.float64) + 0.5) * source.scale + source.offset_x
+        fy = (np.asarray(rows, np.float64) + 0.5) * source.scale + source.offset_y
+        rays = cam.rays(fx, fy)
+        t = -cam.centre[2] / np.where(np.abs(rays[:, 2]) > 1e-12, rays[:, 2], 1e-12)
+        on_card = cam.centre + t[:, None] * rays  # where the pixel's ray meets the card's plane (z = 0)
+        r = rays / np.hypot(rays[:, 0], rays[:, 2])[:, None]
+        gx, gz = b * (r[:, 0] + r[:, 1] * dx), b * (r[:, 2] + r[:, 1] * dz)  # the ground shift of its shadow
         x, h = -(dz * gx - dx * gz) / det, -(-az * gx + ax * gz) / det  # on the card, where that content lands
-        points = np.array([[0.0, 0.5 * self.height, 0.0], [x, 0.5 * self.height + h, 0.0]])
-        col, row = self.camera.project_xyz(points[:, 0], points[:, 1], points[:, 2])
-        return np.array([col[1] - col[0], row[1] - row[0]]) / source.scale
+        zero = np.zeros_like(x)
+        col0, row0 = cam.project_xyz(on_card[:, 0], on_card[:, 1], zero)
+        col1, row1 = cam.project_xyz(on_card[:, 0] + x, on_card[:, 1] + h, zero)
+        return np.stack([col1 - col0, row1 - row0], axis=1) / source.scale
+
+    def _step_cells(self, source: _Source, w: np.ndarray, k: int) -> tuple[Cells, np.ndarray]:
+        """For a copy of the source reduced ``k`` times: the cells of it (r0, r1, c0, c1, step) swept to a depth
+        (its pixels), over each of which one depth step (:meth:`_depth_steps`, at the cell's centre) puts every
+        pixel within ``STEP_TOLERANCE`` pixels of where its own step puts it (at most ``MAX_STEP_CELLS`` down
+        and across); and the steps at the copy's corners and between ((25, 2): they bound the others)."""
+        h, wd = source.alpha.shape
+        probe = np.linspace(0.0, 1.0, 5)
+        pc, pr = np.meshgrid(probe * (wd - 1), probe * (h - 1))
+        grid = self._depth_steps(source, w, pc.ravel(), pr.ravel()).reshape(5, 5, 2)
+        spread = np.array([np.ptp(grid, axis=axis).max() for axis in (0, 1)]) * k / STEP_TOLERANCE  # down, along
+        made: dict[tuple[int, int], list[tuple[int, int, int, int, np.ndarray]]] = {}
+
+        def cells(depth: float) -> list[tuple[int, int, int, int, np.ndarray]]:
+            n_r, n_c = (
+                int(np.clip(math.ceil(x * depth), 1, most)) for x, most in zip(spread, MAX_STEP_CELLS, strict=True)
+            )
+            if (n_r, n_c) not in made:
+                rb = np.linspace(0, h, n_r + 1).round().astype(int)
+                cb = np.linspace(0, wd, n_c + 1).round().astype(int)
+                cc, rr = np.meshgrid(0.5 * (cb[:-1] + cb[1:]), 0.5 * (rb[:-1] + rb[1:]))
+                steps = self._depth_steps(source, w, cc.ravel(), rr.ravel()).reshape(n_r, n_c, 2)
+                rb, cb = -(-rb // k), -(-cb // k)  # on the reduced copy
+                made[n_r, n_c] = [
+                    (int(rb[i]), int(rb[i + 1]), int(cb[j]), int(cb[j + 1]), steps[i, j])
+                    for i in range(n_r)
+                    for j in range(n_c)
+                    if rb[i + 1] > rb[i] and cb[j + 1] > cb[j]
+                ]
+            return made[n_r, n_c]
+
+        return cells, grid.reshape(-1, 2)
 
     def _swept(
         self, card: np.ndarray, source: _Source, w: np.ndarray, soft: np.ndarray, k: int
     ) -> tuple[np.ndarray, tuple[int, int]]:
         """The card (uint8, blurred) swept through the object's depth: each pixel repeated along the shift
-        (:meth:`_depth_step`) of every depth from 0 to its thickness (``THICKNESS_LEVELS`` bands of depth; where
-        the thickness ends, fading over ``soft`` pixels of depth given per row, as blurred as the card's row), on
-        a copy reduced ``k`` times (:func:`_sweep_reduction`; k > 1: without the card itself at full resolution),
-        and the (x, y) in the result's pixels of the card's pixel (0, 0)."""
-        allowed = self._allowed_depth(source)
-        step = self._depth_step(source, w)
+        (:meth:`_step_cells`) of every depth from its surface's to its far end (``THICKNESS_LEVELS`` bands of
+        depth; where it ends, fading over ``soft`` pixels of depth given per row, as blurred as the card's row),
+        on a copy reduced ``k`` times (:func:`_sweep_reduction`; k > 1: without the card itself at full
+        resolution), and the (x, y) in the result's pixels of the card's pixel (0, 0)."""
+        near, far = self._allowed_depth(source)
+        cells, steps = self._step_cells(source, w, k)
         if k == 1:
-            return _swept_card(card, allowed, step, soft)
+            return _swept_card(card, near, far, cells, steps, soft)
         h, wd = card.shape
         small = np.asarray(Image.fromarray(np.pad(card, ((0, -h % k), (0, -wd % k))), "L").reduce(k))
-        reduced = allowed[::k, ::k][: small.shape[0], : small.shape[1]] / k
-        return _swept_card(small, reduced, step, soft[::k][: small.shape[0]] / k)
+        near, far = (d[::k, ::k][: small.shape[0], : small.shape[1]] / k for d in (near, far))
+        return _swept_card(small, near, far, cells, steps, soft[::k][: small.shape[0]] / k)
 
-    def _allowed_depth(self, source: _Source) -> np.ndarray:
-        """How deep (pixels of ``source``) each of its pixels reaches behind the card: its thickness, and,
-        looking down, no deeper along the ray than where the ray meets the ground (made once per source)."""
+    def _allowed_depth(self, source: _Source) -> tuple[np.ndarray, np.ndarray]:
+        """How deep (pixels of ``source``) behind the card each of its pixels' surface lies and how deep the
+        object reaches there, looking down no deeper along the ray than where the ray meets the ground (made
+        once per source)."""
         k = round(source.scale / self._full.scale)
         if k not in self._allowed:
-            drop = max(0.0, -self._depth_ray()[1]) * self._world_per_pixel * k  # height lost per pixel of depth
-            above = self._row_heights(source)[:, None] / max(drop, 1e-9)
-            self._allowed[k] = np.minimum(self._thickness[k], above).astype(np.float32)
+            heights = self._row_heights(source)
+            drop = np.maximum(0.0, -self._depth_ray(heights)[:, 1]) * self._world_per_pixel * k  # per pixel of depth
+            above = (heights / np.maximum(drop, 1e-9))[:, None]
+            self._allowed[k] = (
+                np.minimum(self._near[k], above).astype(np.float32),
+                np.minimum(self._far[k], above).astype(np.float32),
+            )
         return self._allowed[k]
+
+    def _surface_depth(self, feet: np.ndarray, framing: Framing, y0: int, base: float) -> np.ndarray:
+        """How deep (pixels of ``alpha``) behind the card each pixel's surface lies, from its foot's row
+        (``feet``, rows of ``alpha``, whose row 0 lies at canvas row ``y0``): the ground's distance from the
+        camera at the foot's row less at the card's foot (frame row ``base``), along the card's depth ray; 0
+        in front of the card, at most ``MAX_SURFACE_DEPTH`` times the cutout's size."""
+        cam, s = self.camera, framing.scale
+        h, w = feet.shape
+        k = max(1, math.ceil(max(h, w) / DEPTH_SIZE))  # worked out on a reduced copy (it is smooth) and enlarged
+        lowest = cam.horizon + HORIZON_GAP * cam.n  # a foot nearer the horizon than this lies this near it
+        rows = np.maximum((np.asarray(feet[::k, ::k], np.float64) + y0) * s + framing.offset_y, lowest)
+        ahead = self._ground_ahead(rows) - self._ground_ahead(np.array([max(base, lowest)]))[0]
+        along = abs(float(self._depth_ray() @ FORWARD))  # the depth ray's unit horizontal length, ahead
+        pixels = np.clip(ahead / max(along, 1e-9) / self._world_per_pixel, 0.0, MAX_SURFACE_DEPTH * max(h, w))
+        if k > 1:
+            size = (pixels.shape[1] * k, pixels.shape[0] * k)
+            big = Image.fromarray(pixels.astype(np.float32), "F").resize(size, Image.Resampling.BILINEAR)
+            pixels = np.asarray(big)[:h, :w]
+        return pixels.astype(np.float32)
+
+    def _ground_ahead(self, rows: np.ndarray) -> np.ndarray:
+        """How far ahead of the camera (world units along the forward axis) the ground lies at frame ``rows``
+        (below the horizon; the same along a row, the camera having no roll)."""
+        rays = self.camera.rays(np.full(rows.shape, 0.5 * self.camera.n), rows)
+        t = -self.camera.centre[1] / np.minimum(rays[..., 1], -1e-12)
+        return (self.camera.centre + t[..., None] * rays) @ FORWARD
 
     def _mid_depth(self) -> float:
         """The camera depth of the card's centre line at half its height."""
@@ -475,7 +571,8 @@ class CardTracer:
             swept, (sx, sy) = self._swept(card, source, w, 2.0 * sigma_rows, k)
             values = _warp(swept, np.array([[1.0 / k, 0, sx], [0, 1.0 / k, sy], [0, 0, 1.0]]) @ to_card, size)
             if k > 1:  # swept on a reduced copy: the card itself, crisp, where that copy's shadow is partial
-                values = _warp(card, to_card, size, values, within=True)
+                near = self._allowed_depth(source)[0]  # (those whose surfaces lie on the card)
+                values = _warp(_at_card(card, near, 1.0), to_card, size, values, within=True)
         else:
             values = _warp(card, to_card, size)
         if fine > 1:
@@ -489,30 +586,46 @@ def _sweep_reduction(card: np.ndarray) -> int:
 
 
 def _swept_card(
-    card: np.ndarray, allowed: np.ndarray, step: np.ndarray, soft: np.ndarray
+    card: np.ndarray, near: np.ndarray, far: np.ndarray, cells: Cells, steps: np.ndarray, soft: np.ndarray
 ) -> tuple[np.ndarray, tuple[int, int]]:
-    """``card`` (uint8) with each pixel repeated at ``-step * d`` for every depth d from 0 to ``allowed`` there
-    (pixels; ``THICKNESS_LEVELS`` bands of depth; a pixel's copies fade out over its last ``soft`` pixels of
-    depth, ``soft`` given per row), and the (x, y) of the card's pixel (0, 0) in the result."""
+    """``card`` (uint8) with each pixel repeated at ``-step * d`` for every depth d from ``near`` to ``far``
+    there (pixels; ``THICKNESS_LEVELS`` bands of depth, ``SURFACE_LEVELS`` where ``near`` is not all 0, a pixel
+    in each band that its span meets, from the
+    band's start; its copies fade out over its last ``soft`` pixels of depth, ``soft`` given per row; ``step``
+    that of the cell (r0, r1, c0, c1, step) of ``cells(b)`` the pixel lies in, for a band reaching depth b;
+    ``steps`` (n, 2) bound every step), and the (x, y) of the card's pixel (0, 0) in the result."""
     soft = np.maximum(np.asarray(soft, np.float32), 1e-3)[:, None]
-    top = float(allowed.max())
-    reach = -step * top  # the swept copy of a pixel lies up to this far from it
-    lo = np.floor(np.minimum(reach, 0)).astype(int)
-    hi = np.ceil(np.maximum(reach, 0)).astype(int)
+    top = float(far.max())
     h, wd = card.shape
+    reach = -np.asarray(steps) * top  # the swept copy of a pixel lies up to this far from it
+    lo = np.floor(np.minimum(reach.min(axis=0), 0)).astype(int)
+    hi = np.ceil(np.maximum(reach.max(axis=0), 0)).astype(int)
     out = np.zeros((h + hi[1] - lo[1], wd + hi[0] - lo[0]), np.uint8)
-    out[-lo[1] : -lo[1] + h, -lo[0] : -lo[0] + wd] = card
-    edges = np.linspace(0.0, top, THICKNESS_LEVELS + 1)
-    row_top, col_top = (allowed + soft).max(axis=1), (allowed + soft.max()).max(axis=0)
+    edges = np.linspace(0.0, top, (SURFACE_LEVELS if near.any() else THICKNESS_LEVELS) + 1)
+    out[-lo[1] : -lo[1] + h, -lo[0] : -lo[0] + wd] = _at_card(card, near, edges[1])
+    row_top, col_top = (far + soft).max(axis=1), (far + soft.max()).max(axis=0)
     for a, b in zip(edges[:-1], edges[1:], strict=True):
-        rows, cols = np.flatnonzero(row_top > b), np.flatnonzero(col_top > b)  # the part deep enough, boxed
+        rows, cols = np.flatnonzero(row_top > a), np.flatnonzero(col_top > a)  # the part reaching the band, boxed
         if rows.size == 0 or cols.size == 0:
             break
-        window = np.s_[rows[0] : rows[-1] + 1, cols[0] : cols[-1] + 1]  # the deeper, the smaller the part
-        fade = np.clip((allowed[window] - b) / soft[rows[0] : rows[-1] + 1] + 1.0, 0.0, 1.0)
-        part = (card[window] * fade).astype(np.uint8)
-        _sweep_into(out, part, -lo + (cols[0], rows[0]), -step * a, -step * (b - a))
+        for r0, r1, c0, c1, step in cells(b):
+            r0, r1 = max(r0, int(rows[0])), min(r1, int(rows[-1]) + 1)  # the deeper, the smaller the part
+            c0, c1 = max(c0, int(cols[0])), min(c1, int(cols[-1]) + 1)
+            if r1 <= r0 or c1 <= c0:
+                continue
+            window = np.s_[r0:r1, c0:c1]
+            fade = np.clip((far[window] - b) / soft[r0:r1] + 1.0, 0.0, 1.0)
+            if a > 0:  # a span starting in the band is drawn over it, however short (those of band 0: the card)
+                fade = np.where(near[window] >= a, 1.0, fade)
+            part = (card[window] * fade * (near[window] < (b if b < top else np.inf))).astype(np.uint8)
+            if part.any():
+                _sweep_into(out, part, -lo + (c0, r0), -step * a, -step * (b - a))
     return out, (int(-lo[0]), int(-lo[1]))
+
+
+def _at_card(card: np.ndarray, near: np.ndarray, depth: float) -> np.ndarray:
+    """``card`` where its pixels' surfaces lie within ``depth`` of the card (all of it where every one does)."""
+    return card if not near.any() else np.where(near < depth, card, 0).astype(card.dtype)
 
 
 def _sweep_into(out: np.ndarray, part: np.ndarray, origin: np.ndarray, start: np.ndarray, span: np.ndarray) -> None:
@@ -784,17 +897,42 @@ def depth_map(alpha: np.ndarray) -> np.ndarray:
     return np.asarray(big)[:h, :w]
 
 
+def foot_rows(shape: tuple[int, int], framing: Framing, heights: np.ndarray) -> np.ndarray:
+    """(h, w) = ``shape``: the row (continuous) of the cutout's crop at ``framing.bbox`` of each pixel's foot, from
+    the pixel heights ``heights`` (N, N) over the frame (frame rows: how far below each frame pixel its foot
+    lies). Sampled on a copy reduced to about ``DEPTH_SIZE`` pixels and enlarged."""
+    h, w = shape
+    k = max(1, math.ceil(max(h, w) / DEPTH_SIZE))
+    x0, y0 = framing.bbox[:2]
+    rows, cols = np.arange(0, h, k) + 0.5 * k, np.arange(0, w, k) + 0.5 * k  # reduced pixels' centres
+    fx, fy = (cols + x0) * framing.scale + framing.offset_x, (rows + y0) * framing.scale + framing.offset_y
+    grid = np.meshgrid(fy - 0.5, fx - 0.5, indexing="ij")
+    small = ndimage.map_coordinates(np.asarray(heights, np.float32), grid, order=1, mode="nearest") / framing.scale
+    big = Image.fromarray(small.astype(np.float32), "F").resize(
+        (small.shape[1] * k, small.shape[0] * k), Image.Resampling.BILINEAR
+    )
+    return np.asarray(big)[:h, :w] + (np.arange(h, dtype=np.float32) + 0.5)[:, None]
+
+
 class ContactTracer:
     """The cutout as cards standing on its contact line: one :class:`CardTracer` per band of
-    :func:`contact_bands`, cross-faded where two meet, their shadows added."""
+    :func:`contact_bands`, cross-faded where two meet, their shadows added; ``heights`` (N, N), optional: the
+    frame's pixel heights (:func:`foot_rows`), which place each pixel's surface behind its card."""
 
-    def __init__(self, alpha: np.ndarray, framing: Framing, camera: tuple[float, float] | None) -> None:
+    def __init__(
+        self,
+        alpha: np.ndarray,
+        framing: Framing,
+        camera: tuple[float, float] | None,
+        heights: np.ndarray | None = None,
+    ) -> None:
         alpha = np.clip(np.asarray(alpha, np.float32), 0.0, 1.0)
         bands = contact_bands(alpha, footprint_rise(alpha, framing, camera))
         x0, y0 = framing.bbox[:2]
         self.cards: list[CardTracer] = []
         width = alpha.shape[1]
         thickness = depth_map(alpha)
+        feet = None if heights is None else foot_rows(alpha.shape, framing, heights)
         for i, (c0, c1, foot) in enumerate(bands):
             weight = np.zeros(width, np.float32)
             weight[c0:c1] = 1.0
@@ -809,7 +947,15 @@ class ContactTracer:
             used = np.flatnonzero(weight > 0)
             a, b = int(used[0]), int(used[-1]) + 1
             part = alpha[:, a:b] * weight[a:b]
-            card = CardTracer(part, framing, camera, origin=(x0 + a, y0), foot=foot, thickness=thickness[:, a:b])
+            card = CardTracer(
+                part,
+                framing,
+                camera,
+                origin=(x0 + a, y0),
+                foot=foot,
+                thickness=thickness[:, a:b],
+                feet=None if feet is None else feet[:, a:b],
+            )
             if not card.empty:
                 self.cards.append(card)
         self.empty = not self.cards

@@ -41,8 +41,8 @@ class ModelConfig:
     ----------
     resolution
         R, the frame size the graphs run at (a multiple of 16).
-    aop, sr, aop_camera, camera
-        The graph files in the folder (``aop_camera``, ``camera``: optional).
+    aop, sr, aop_camera, camera, surface
+        The graph files in the folder (``aop_camera``, ``camera``, ``surface``: optional).
     elm_shape
         The network's light map shape, ``NETWORK_SHAPE``.
     output_floor, output_floor_small_lights
@@ -53,7 +53,7 @@ class ModelConfig:
         The predicted AO map is raised to this power.
     card_blur
         Gaussian blur of the card's shadow in model pixels before the SR (0: off).
-    mirror_average, card_input, sr_training, lights, training_data, camera_training, export
+    mirror_average, card_input, sr_training, lights, training_data, camera_training, surface_training, export
         Informational records for people (the engine reads the graphs, not these).
     """
 
@@ -75,6 +75,8 @@ class ModelConfig:
     training_data: str | None = None
     camera: str | None = None
     camera_training: str | None = None
+    surface: str | None = None
+    surface_training: str | None = None
 
     def __post_init__(self) -> None:
         _check(self)
@@ -160,7 +162,9 @@ def _check(config: ModelConfig) -> None:
         raise ModelConfigError(
             f"card_blur must be a number of pixels in [0, {MAX_CARD_BLUR}], got {config.card_blur!r}"
         )
-    for name in ("aop", "sr", "aop_camera", "camera"):
+    for name in ("aop", "sr", "aop_camera", "camera", "surface"):
         value = getattr(config, name)
-        if not (value is None and name in ("aop_camera", "camera")) and (not isinstance(value, str) or not value):
+        if not (value is None and name in ("aop_camera", "camera", "surface")) and (
+            not isinstance(value, str) or not value
+        ):
             raise ModelConfigError(f"{name} must name a graph file, got {value!r}")

@@ -123,8 +123,20 @@ class ShadowSession:
     def tracer(self) -> ContactTracer:
         """The tracer of this cutout's small lights (made on first use, with the camera the session uses)."""
         if self._tracer is None:
-            self._tracer = ContactTracer(as_unit_float(self._cutout), self.framing, camera_at(self.used_cameras, 0))
+            self._tracer = self.make_tracer()
         return self._tracer
+
+    def make_tracer(self) -> ContactTracer:
+        """A new tracer of this cutout (the cutout's analysis: where each pixel's surface lies, for a model that
+        reads it, its depth and its cards)."""
+        read = getattr(self.method, "pixel_heights", None)
+        heights = read(self.mask[None], self.used_cameras) if read is not None else None
+        return ContactTracer(
+            as_unit_float(self._cutout),
+            self.framing,
+            camera_at(self.used_cameras, 0),
+            None if heights is None else heights[0],
+        )
 
     def render_frame(self, light_map: LightMap) -> np.ndarray:
         """The network's frame shadows (2, N, N) of the light map: of its broad lights (those not traced), and of

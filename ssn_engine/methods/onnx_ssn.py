@@ -13,6 +13,10 @@ A model folder holds ``model.json`` (:class:`ssn_engine.model_config.ModelConfig
 - camera.onnx (optional, with a geometry-guided SR; named by ``camera``): "mask" [b, 1, 64, 64] -> "camera"
   [b, 2], the camera input read from the mask (:mod:`ssn_engine.methods.camera_estimate`), used when a call
   gives none
+- surface.onnx (optional, named by ``surface``): "mask" [b, 1, R, R] (0 or 1: coverage above 0.5), "camera"
+  [b, 2] (as aop_camera's) -> "height" [b, 1, R, R], each covered pixel's pixel height in frames (how far below
+  it, / R, the image of the ground straight below the surface it shows lies; :meth:`OnnxSSN.pixel_heights`),
+  which places each pixel's surface for the hard-light tracer (:mod:`ssn_engine.hard_light`)
 The ELM goes in normalised by :func:`ssn_engine.hemisphere.network_elm`.
 ``model.json`` may set ``output_floor``: shadow values below it are the network's
 residual noise and are removed by :func:`apply_floor` (chosen on the validation split);
@@ -62,6 +66,7 @@ _EXPECTED = {
     "aop_camera": [({"mask": 4, "camera": 2}, {"ao": 4})],
     "sr": [({"mask": 4, "ao": 4, "elm": 3}, {"shadow": 4}), ({"mask": 4, "ao": 4, "elm": 3, "card": 4}, {"shadow": 4})],
     "camera": [({"mask": 4}, {"camera": 2})],
+    "surface": [({"mask": 4, "camera": 2}, {"height": 4})],
 }
 
 
@@ -169,6 +174,7 @@ class OnnxSSN:
         takes_card = "card" in {i.name for i in self._sr.get_inputs()}
         self.card: GeometricCard | None = GeometricCard(FRAME, internal=config.resolution) if takes_card else None
         self._camera = _session(model_dir / config.camera, "camera") if takes_card and config.camera else None
+        self._surface = _session(model_dir / config.surface, "surface") if config.surface else None
         self._estimates: dict[bytes, np.ndarray] = {}  # mask digest -> its estimated camera input
         self._check_run()
 
@@ -200,10 +206,28 @@ class OnnxSSN:
             s = _run(self._sr, "shadow", feeds)
             if self._camera is not None:  # (an empty frame would not reach the graph)
                 _run(self._camera, "camera", {"mask": np.zeros((1, 1, INPUT, INPUT), np.float32)})
+            if self._surface is not None:
+                _run(self._surface, "height", {"mask": mask, "camera": np.array([[0.5, 1.2]], np.float32)})
         except Exception as exc:
             raise ModelError(f"model in {self.config.aop} / {self.config.sr} failed a test run: {exc}") from None
         if s.shape != mask.shape:
             raise ModelError(f"sr output has shape {s.shape}, expected {mask.shape}")
+
+    def pixel_heights(self, masks: np.ndarray, cameras: np.ndarray | None) -> np.ndarray | None:
+        """Each frame pixel's pixel height (b, N, N), frame rows, read by the surface model from the masks and
+        the camera inputs (the given ones, else the estimator's reading); off the mask, its nearest covered
+        pixel's. None for a model without a surface model, or with no camera to read it with."""
+        cameras = self.cameras_for(masks, cameras)
+        if self._surface is None or cameras is None:
+            return None
+        m = (resample_frames(masks, self.model_resolution) > 0.5).astype(np.float32)
+        frames = (np.asarray(cameras, np.float64) / FRAME).astype(np.float32)
+        heights = _run(self._surface, "height", {"mask": m[:, None], "camera": frames})[:, 0]
+        for b in range(len(heights)):
+            if m[b].any():
+                _, (iy, ix) = ndimage.distance_transform_edt(m[b] == 0, return_indices=True)  # type: ignore[misc]
+                heights[b] = heights[b][iy, ix]
+        return resample_frames(heights, FRAME) * FRAME
 
     def predict_ao(self, masks: np.ndarray, cameras: np.ndarray | None = None) -> np.ndarray:
         """The AO maps (from the camera-taking AOP where the call gives the camera input and the model has one); a

@@ -282,3 +282,41 @@ def test_the_warp_resamples_every_pixel_the_card_can_reach(tracer, u, v):
     under = np.clip(full * 1.5, 0.0, 1.0)  # partial where the card's edges are, dark inside
     got = hard_light._warp(blurred, hmat, size, under.copy(), within=True)
     assert np.array_equal(got, np.maximum(under, full))
+
+
+@pytest.mark.parametrize("back", [0, 40])
+def test_a_surface_read_behind_the_card_casts_from_where_it_stands(post, back):
+    """Each pixel's surface placed by its foot's row (``feet``): the post read as standing ``back`` rows above its
+    lowest row (farther from the camera) casts its top's shadow where a post standing there casts it, the
+    surface's point on the top pixel's own ray above that foot, cast along the light; read as standing on its own
+    lowest row, the flat card's shadow."""
+    _, framing = frame_alpha(post, 256)
+    x0, y0, x1, y1 = framing.bbox
+    crop = post[y0:y1, x0:x1].astype(np.float32) / 255
+    u, v = 0.1, 0.6  # from behind the camera and its left: the shadow falls away, up the canvas
+    card = CardTracer(crop, framing, None, feet=np.full(crop.shape, FOOT - y0 - back, np.float32))
+    values, x, y = card.shadow(u, v, 0.53, framing)
+    s = np.zeros((H, W), np.float32)
+    s[y : y + values.shape[0], x : x + values.shape[1]] = values
+    if back == 0:
+        flat, fx0, fy0 = CardTracer(crop, framing, None).shadow(u, v, 0.53, framing)
+        t = np.zeros((H, W), np.float32)
+        t[fy0 : fy0 + flat.shape[0], fx0 : fx0 + flat.shape[1]] = flat
+        assert np.abs(s - t).max() < 2 / 255
+    # where the top's shadow lies: the ground below the foot's row, the top pixel's ray at its distance
+    cam, ahead = card.camera, hard_light.FORWARD
+    centre = 0.5 * (LEFT + RIGHT)
+    foot_x, foot_y = framing.to_frame(centre, FOOT - back)
+    ray = cam.rays(np.array([foot_x]), np.array([foot_y]))[0]
+    distance = (cam.centre - cam.centre[1] / ray[1] * ray) @ ahead
+    top = cam.rays(*[np.array([c]) for c in framing.to_frame(centre, FOOT - 300 + 0.5)])[0]
+    point = cam.centre + (distance - cam.centre @ ahead) / (top @ ahead) * top
+    w = hard_light.light_direction(u, v)
+    ground = point - point[1] / w[1] * w
+    tip = np.array(framing.to_canvas(*[float(c[0]) for c in cam.project_xyz(*[np.array([g]) for g in ground])]))
+    yy, xx = np.nonzero(s > 0.5)
+    end = yy <= yy.min() + 2  # the far end, up the canvas: the shadow of the post's top edge
+    measured = np.array([xx[end].mean(), yy.min() + 0.5])
+    length = np.hypot(*(tip - (centre, FOOT - back)))
+    assert length > 100
+    assert np.hypot(*(measured - tip)) < 0.03 * length, (measured, tip)

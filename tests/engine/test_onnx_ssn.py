@@ -223,10 +223,10 @@ def test_graph_with_wrong_input_names(tmp_path, monkeypatch):
     assert "image" in message and "mask" in message
 
 
-@pytest.mark.parametrize("graph", ["camera", "aop_camera"])
+@pytest.mark.parametrize("graph", ["camera", "aop_camera", "surface"])
 def test_a_bad_optional_graph_is_named(tmp_path, monkeypatch, graph):
-    """The shipped model with its camera estimator or its camera-taking AOP missing, or replaced by the plain AOP
-    (another contract)."""
+    """The shipped model with its camera estimator, its camera-taking AOP or its surface model missing, or
+    replaced by the plain AOP (another contract)."""
     import shutil
 
     folder = tmp_path / "m"
@@ -238,12 +238,12 @@ def test_a_bad_optional_graph_is_named(tmp_path, monkeypatch, graph):
 
 
 def test_the_shipped_model_fits_the_wheel_budget():
-    """Every graph model.json names is a shipped file, and together they stay within the 30 MB budget."""
+    """Every graph model.json names is a shipped file, and together they stay within the 35 MB budget."""
     folder = Path(api.__file__).parent / "models"
     card = json.loads((folder / "model.json").read_text())
-    graphs = [folder / card[k] for k in ("aop", "sr", "aop_camera", "camera") if card.get(k)]
-    assert len(graphs) == 4 and all(g.is_file() for g in graphs)
-    assert sum(g.stat().st_size for g in graphs) <= 30e6
+    graphs = [folder / card[k] for k in ("aop", "sr", "aop_camera", "camera", "surface") if card.get(k)]
+    assert len(graphs) == 5 and all(g.is_file() for g in graphs)
+    assert sum(g.stat().st_size for g in graphs) <= 35e6
 
 
 def test_graphs_named_in_the_card(tmp_path, monkeypatch, mask):
@@ -362,3 +362,23 @@ def test_the_model_holds_no_core_once_a_light_change_returns(mask):
     after = os.times()
     busy = (after.user - before.user) + (after.system - before.system)
     assert busy < 0.015, f"{busy:.3f} s of CPU in 0.3 s of idling after a render"
+
+
+def test_the_surface_model_reads_a_post_as_standing_on_its_lowest_row(tmp_path, monkeypatch):
+    """The shipped surface model's pixel heights of an upright post, camera given: each pixel's foot on (about)
+    the post's lowest row, so the height falls from the post's height at its top to 0 at its foot; off the
+    mask, its nearest covered pixel's. A model without a surface graph reads none."""
+    method = load_method("ssn").method
+    assert isinstance(method, OnnxSSN)
+    mask = np.zeros((1, 256, 256), np.float32)
+    mask[0, 60:220, 118:138] = 1.0
+    camera = np.array([[40.0, 300.0]])
+    heights = method.pixel_heights(mask, camera)
+    assert heights is not None and heights.shape == (1, 256, 256)
+    rows = np.arange(256) + 0.5
+    feet = heights[0, 60:220, 118:138] + rows[60:220, None]
+    assert np.median(np.abs(feet - 220.0)) < 8.0  # within 5 % of the post's height
+    assert abs(heights[0, 10, 10] - heights[0, 60, 118]) < 1.0  # the corner takes the top's value
+    monkeypatch.setenv("SSN_SHADOW_MODEL_DIR", str(make_model_dir(tmp_path / "m")))
+    plain = load_method("ssn").method
+    assert isinstance(plain, OnnxSSN) and plain.pixel_heights(mask, camera) is None
