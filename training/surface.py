@@ -13,7 +13,9 @@ from __future__ import annotations
 import argparse
 from pathlib import Path
 
+from .data.surface_views import make
 from .data.views import add_split_arguments
+from .surface_model import WIDTHS, install, train
 
 
 def parse_args(argv: list[str] | None = None) -> argparse.Namespace:
@@ -41,22 +43,14 @@ def parse_args(argv: list[str] | None = None) -> argparse.Namespace:
 def main(argv: list[str] | None = None) -> None:
     args = parse_args(argv)
     if args.command == "make":
-        from .data.surface_views import make
-
         make(args.split, args.cameras, Path(args.out), args.seed)
     elif args.command == "train":
-        from .surface_model import train
-
-        from .surface_model import WIDTHS
-
         widths = tuple(args.widths) if args.widths else WIDTHS
         init = Path(args.init) if args.init else None
         data = Path(args.data)
         sets = [data / f"{name}.npz" for name in args.sets] if args.sets else sorted(data.glob("train*.npz"))
         train(data, sets, Path(args.run), args.minutes, args.batch, args.lr, args.device, args.seed, widths, init)
     else:
-        from .surface_model import install
-
         diff = install(Path(args.checkpoint), Path(args.models))
         print(f"installed {args.checkpoint} into {args.models} (graph within {diff:.1e} of torch)")
 

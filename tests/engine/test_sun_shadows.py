@@ -109,7 +109,9 @@ def test_sun_shadow_length_on_held_out_shapes():
 @pytest.mark.parametrize("u", [0.25, 0.75])
 def test_a_long_shadow_has_no_seam_where_the_network_frame_ends(wide_canvases, name, u):
     """Past the frame's border the card continues the network's shadow; where the two disagree the join is a
-    gradual cross-fade, not a step (a straight edge across the shadow at the frame's border)."""
+    gradual cross-fade, not a step (a straight edge across the shadow at the frame's border): summed down the
+    canvas, the shadow changes no more from one frame pixel to the next at the border than beside it (the
+    traced sun's crisp edges, slanting across the columns, change it as much everywhere)."""
     alpha = wide_canvases[name]
     session = ShadowSession(alpha, api.default_method().method)
     framing = session.framing
@@ -118,7 +120,9 @@ def test_a_long_shadow_has_no_seam_where_the_network_frame_ends(wide_canvases, n
         border = framing.to_canvas(edge, 0)[0]
         cols = np.round(border + np.arange(-20, 21) / framing.scale).astype(int)  # frame-pixel steps across it
         across = shadow[:, np.clip(cols, 0, alpha.shape[1] - 1)]
-        assert np.abs(np.diff(across, axis=1)).max() < 0.03
+        change = np.abs(np.diff(across, axis=1)).sum(axis=0)  # per step between neighbouring frame pixels
+        beside = np.r_[change[:17], change[23:]]
+        assert change[17:23].max() <= 1.5 * np.median(beside) + 0.5, (change[17:23], np.median(beside))
 
 
 @pytest.mark.parametrize("preset_name", ["high-sun", "low-sun-left"])
