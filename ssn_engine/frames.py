@@ -6,6 +6,7 @@ import hashlib
 
 import numpy as np
 from PIL import Image
+from scipy import ndimage
 
 
 def frame_key(frame: np.ndarray, extra: bytes = b"") -> bytes:
@@ -27,3 +28,12 @@ def resample_frames(frames: np.ndarray, size: int) -> np.ndarray:
     return np.stack(
         [np.asarray(Image.fromarray(f, "F").resize((size, size), Image.Resampling.BILINEAR)) for f in frames]
     )
+
+
+def nearest_fill(values: np.ndarray, known: np.ndarray) -> np.ndarray:
+    """``values`` (h, w) with each pixel where ``known`` (bool, (h, w)) is False given its nearest known pixel's
+    value (as it is where every pixel or none is known)."""
+    if known.all() or not known.any():
+        return values
+    _, (iy, ix) = ndimage.distance_transform_edt(~known, return_indices=True)  # type: ignore[misc]
+    return values[iy, ix]

@@ -63,6 +63,7 @@ from PIL import Image, ImageFilter
 from scipy import ndimage
 
 from .camera import FORWARD, RIGHT, UP, camera_for_span
+from .frames import nearest_fill
 from .framing import Framing, placed_sum
 from .hemisphere import direction
 from .stripes import for_each_stripe
@@ -519,11 +520,7 @@ class CardTracer:
         ahead = self._ground_ahead(rows) - self._ground_ahead(np.array([max(base, lowest)]))[0]
         along = abs(float(self._depth_ray() @ FORWARD))  # the depth ray's unit horizontal length, ahead
         pixels = np.clip(ahead / max(along, 1e-9) / self._world_per_pixel, 0.0, MAX_SURFACE_DEPTH * max(h, w))
-        if k > 1:
-            size = (pixels.shape[1] * k, pixels.shape[0] * k)
-            big = Image.fromarray(pixels.astype(np.float32), "F").resize(size, Image.Resampling.BILINEAR)
-            pixels = np.asarray(big)[:h, :w]
-        return pixels.astype(np.float32)
+        return _enlarged(pixels, k, (h, w))
 
     def _ground_ahead(self, rows: np.ndarray) -> np.ndarray:
         """How far ahead of the camera (world units along the forward axis) the ground lies at frame ``rows``
@@ -889,12 +886,16 @@ def depth_map(alpha: np.ndarray) -> np.ndarray:
         radius[near & (radius < r)] = r
         r *= RADIUS_STEP
     depth = 2.0 * k * np.sqrt(np.maximum(0.0, d * (2.0 * radius - d)))
-    _, (iy, ix) = ndimage.distance_transform_edt(~solid, return_distances=True, return_indices=True)  # type: ignore[misc]
-    depth = np.ascontiguousarray(depth[iy, ix][1:-1, 1:-1], np.float32)
-    if k == 1:
-        return depth
-    big = Image.fromarray(depth, "F").resize((depth.shape[1] * k, depth.shape[0] * k), Image.Resampling.BILINEAR)
-    return np.asarray(big)[:h, :w]
+    return _enlarged(nearest_fill(depth, solid)[1:-1, 1:-1], k, (h, w))
+
+
+def _enlarged(small: np.ndarray, k: int, shape: tuple[int, int]) -> np.ndarray:
+    """``small``, worked out on a copy reduced ``k`` times, enlarged bilinearly (float32) and cut to ``shape``."""
+    small = np.ascontiguousarray(small, np.float32)
+    if k > 1:
+        size = (small.shape[1] * k, small.shape[0] * k)
+        small = np.asarray(Image.fromarray(small, "F").resize(size, Image.Resampling.BILINEAR))
+    return small[: shape[0], : shape[1]]
 
 
 def foot_rows(shape: tuple[int, int], framing: Framing, heights: np.ndarray) -> np.ndarray:
@@ -908,10 +909,7 @@ def foot_rows(shape: tuple[int, int], framing: Framing, heights: np.ndarray) -> 
     fx, fy = (cols + x0) * framing.scale + framing.offset_x, (rows + y0) * framing.scale + framing.offset_y
     grid = np.meshgrid(fy - 0.5, fx - 0.5, indexing="ij")
     small = ndimage.map_coordinates(np.asarray(heights, np.float32), grid, order=1, mode="nearest") / framing.scale
-    big = Image.fromarray(small.astype(np.float32), "F").resize(
-        (small.shape[1] * k, small.shape[0] * k), Image.Resampling.BILINEAR
-    )
-    return np.asarray(big)[:h, :w] + (np.arange(h, dtype=np.float32) + 0.5)[:, None]
+    return _enlarged(small, k, (h, w)) + (np.arange(h, dtype=np.float32) + 0.5)[:, None]
 
 
 class ContactTracer:

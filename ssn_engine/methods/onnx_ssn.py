@@ -43,7 +43,7 @@ from typing import TYPE_CHECKING
 import numpy as np
 from scipy import ndimage
 
-from ..frames import frame_key, resample_frames
+from ..frames import frame_key, nearest_fill, resample_frames
 from ..hemisphere import light_concentration, network_elm
 from ..host_kit.sky_map import NETWORK_SHAPE
 from ..model_config import FRAME, ModelConfig, ModelConfigError
@@ -224,9 +224,7 @@ class OnnxSSN:
         frames = (np.asarray(cameras, np.float64) / FRAME).astype(np.float32)
         heights = _run(self._surface, "height", {"mask": m[:, None], "camera": frames})[:, 0]
         for b in range(len(heights)):
-            if m[b].any():
-                _, (iy, ix) = ndimage.distance_transform_edt(m[b] == 0, return_indices=True)  # type: ignore[misc]
-                heights[b] = heights[b][iy, ix]
+            heights[b] = nearest_fill(heights[b], m[b] > 0)
         return resample_frames(heights, FRAME) * FRAME
 
     def predict_ao(self, masks: np.ndarray, cameras: np.ndarray | None = None) -> np.ndarray:

@@ -16,10 +16,9 @@ from __future__ import annotations
 from pathlib import Path
 
 import numpy as np
-from scipy import ndimage
 
 from ssn_engine.camera import Camera
-from ssn_engine.frames import resample_frames
+from ssn_engine.frames import nearest_fill, resample_frames
 
 from ..canvas_eval.oracle import surface_depths
 from . import meshes
@@ -77,7 +76,7 @@ def save(out: Path, views: list[dict], pitches: list[float]) -> None:
     for view in views:
         solid = view["mask"] > 0.5
         masks.append(np.packbits(solid.ravel()))
-        h = _fill_nearest(view["height"])[solid]
+        h = np.nan_to_num(nearest_fill(view["height"], np.isfinite(view["height"])))[solid]
         heights.append(np.clip(np.round(h * HEIGHT_STEPS / R), 0, 255).astype(np.uint8))
     out.parent.mkdir(parents=True, exist_ok=True)
     np.savez_compressed(
@@ -87,15 +86,6 @@ def save(out: Path, views: list[dict], pitches: list[float]) -> None:
         camera=np.asarray([v["camera"] for v in views], np.float32),
         pitch=np.asarray(pitches, np.float32),
     )
-
-
-def _fill_nearest(h: np.ndarray) -> np.ndarray:
-    """``h`` with each nan replaced by its nearest finite value."""
-    miss = np.isnan(h)
-    if not miss.any() or miss.all():
-        return np.nan_to_num(h)
-    _, (iy, ix) = ndimage.distance_transform_edt(miss, return_indices=True)  # type: ignore[misc]
-    return h[iy, ix]
 
 
 def load(paths: list[Path]) -> dict[str, np.ndarray]:
