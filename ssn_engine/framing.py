@@ -193,11 +193,16 @@ def placed_sum(
     boxes = [b for b in boxes if b[0].size]
     if not boxes:
         return np.zeros((0, 0), np.float32), 0, 0
+    whole = [(v, x, y) for share, v, x, y in parts if v.size and share == 1.0]
+    if len(boxes) == 1 and darker is None and whole:  # one part, whole: nothing to add up
+        values, x, y = whole[0]
+        return np.clip(values, 0.0, 1.0, dtype=np.float32), x, y
     x0, y0, x1, y1 = union_box([(x, y, v.shape[1], v.shape[0]) for v, x, y in boxes])
     out = np.zeros((y1 - y0, x1 - x0), np.float32)
     for share, values, x, y in parts:
         if values.size:
-            out[y - y0 : y - y0 + values.shape[0], x - x0 : x - x0 + values.shape[1]] += np.float32(share) * values
+            window = out[y - y0 : y - y0 + values.shape[0], x - x0 : x - x0 + values.shape[1]]
+            window += values if share == 1.0 else np.float32(share) * values
     if darker is not None and darker[0].size:
         values, x, y = darker
         window = out[y - y0 : y - y0 + values.shape[0], x - x0 : x - x0 + values.shape[1]]

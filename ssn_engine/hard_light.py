@@ -252,6 +252,8 @@ class CardTracer:
         self._full = _Source(alpha, s, framing.offset_x + (x0 - pad) * s, framing.offset_y + (y0 - pad) * s)
         self._sources: dict[int, _Source] = {}
         self._allowed: dict[int, tuple[np.ndarray, np.ndarray]] = {}
+        self._reduced: dict[tuple[int, int], tuple[np.ndarray, np.ndarray]] = {}  # per reduction, sweep's: near, far
+        self._on_card: dict[int, np.ndarray | None] = {}  # per reduction: the pixels whose surface is the card's
         self._levels: dict[float, dict[int, tuple[int, int, _Level]]] = {}  # per scale, level: rows, blurred
 
     # -- the cutout at the output's resolution ------------------------------------------------------------------
@@ -457,7 +459,7 @@ class CardTracer:
 
         def cells(depth: float) -> list[tuple[int, int, int, int, np.ndarray]]:
             n_r, n_c = (
-                int(np.clip(math.ceil(x * depth), 1, most)) for x, most in zip(spread, MAX_STEP_CELLS, strict=True)
+                min(max(math.ceil(float(x) * depth), 1), most) for x, most in zip(spread, MAX_STEP_CELLS, strict=True)
             )
             if (n_r, n_c) not in made:
                 rb = np.linspace(0, h, n_r + 1).round().astype(int)
@@ -483,13 +485,17 @@ class CardTracer:
         depth; where it ends, fading over ``soft`` pixels of depth given per row, as blurred as the card's row),
         on a copy reduced ``k`` times (:func:`_sweep_reduction`; k > 1: without the card itself at full
         resolution), and the (x, y) in the result's pixels of the card's pixel (0, 0)."""
-        near, far = self._allowed_depth(source)
         cells, steps = self._step_cells(source, w, k)
         if k == 1:
+            near, far = self._allowed_depth(source)
             return _swept_card(card, near, far, cells, steps, soft)
         h, wd = card.shape
         small = np.asarray(Image.fromarray(np.pad(card, ((0, -h % k), (0, -wd % k))), "L").reduce(k))
-        near, far = (d[::k, ::k][: small.shape[0], : small.shape[1]] / k for d in (near, far))
+        key = (round(source.scale / self._full.scale), k)
+        if key not in self._reduced:
+            near, far = (d[::k, ::k][: small.shape[0], : small.shape[1]] / k for d in self._allowed_depth(source))
+            self._reduced[key] = near, far
+        near, far = self._reduced[key]
         return _swept_card(small, near, far, cells, steps, soft[::k][: small.shape[0]] / k)
 
     def _allowed_depth(self, source: _Source) -> tuple[np.ndarray, np.ndarray]:
@@ -506,6 +512,16 @@ class CardTracer:
                 np.minimum(self._far[k], above).astype(np.float32),
             )
         return self._allowed[k]
+
+    def _at_card(self, card: np.ndarray, source: _Source) -> np.ndarray:
+        """``card`` (of ``source``) where its pixels' surfaces lie within a pixel of the card (all of it where
+        every one does)."""
+        k = round(source.scale / self._full.scale)
+        if k not in self._on_card:
+            near = self._allowed_depth(source)[0]
+            self._on_card[k] = near < 1.0 if near.any() else None
+        on_card = self._on_card[k]
+        return card if on_card is None else card * on_card
 
     def _surface_depth(self, feet: np.ndarray, framing: Framing, y0: int, base: float) -> np.ndarray:
         """How deep (pixels of ``alpha``) behind the card each pixel's surface lies, from its foot's row
@@ -568,8 +584,7 @@ class CardTracer:
             swept, (sx, sy) = self._swept(card, source, w, 2.0 * sigma_rows, k)
             values = _warp(swept, np.array([[1.0 / k, 0, sx], [0, 1.0 / k, sy], [0, 0, 1.0]]) @ to_card, size)
             if k > 1:  # swept on a reduced copy: the card itself, crisp, where that copy's shadow is partial
-                near = self._allowed_depth(source)[0]  # (those whose surfaces lie on the card)
-                values = _warp(_at_card(card, near, 1.0), to_card, size, values, within=True)
+                values = _warp(self._at_card(card, source), to_card, size, values, within=True)
         else:
             values = _warp(card, to_card, size)
         if fine > 1:
@@ -587,10 +602,10 @@ def _swept_card(
 ) -> tuple[np.ndarray, tuple[int, int]]:
     """``card`` (uint8) with each pixel repeated at ``-step * d`` for every depth d from ``near`` to ``far``
     there (pixels; ``THICKNESS_LEVELS`` bands of depth, ``SURFACE_LEVELS`` where ``near`` is not all 0, a pixel
-    in each band that its span meets, from the
-    band's start; its copies fade out over its last ``soft`` pixels of depth, ``soft`` given per row; ``step``
-    that of the cell (r0, r1, c0, c1, step) of ``cells(b)`` the pixel lies in, for a band reaching depth b;
-    ``steps`` (n, 2) bound every step), and the (x, y) of the card's pixel (0, 0) in the result."""
+    in each band that its span meets, from the band's start; its copies fade out over its last ``soft`` pixels
+    of depth, ``soft`` given per row; ``step`` that of the cell (r0, r1, c0, c1, step) of ``cells(b)`` the pixel
+    lies in, for a band reaching depth b; ``steps`` (n, 2) bound every step), and the (x, y) of the card's pixel
+    (0, 0) in the result."""
     soft = np.maximum(np.asarray(soft, np.float32), 1e-3)[:, None]
     top = float(far.max())
     h, wd = card.shape
@@ -599,30 +614,86 @@ def _swept_card(
     hi = np.ceil(np.maximum(reach.max(axis=0), 0)).astype(int)
     out = np.zeros((h + hi[1] - lo[1], wd + hi[0] - lo[0]), np.uint8)
     edges = np.linspace(0.0, top, (SURFACE_LEVELS if near.any() else THICKNESS_LEVELS) + 1)
-    out[-lo[1] : -lo[1] + h, -lo[0] : -lo[0] + wd] = _at_card(card, near, edges[1])
+    out[-lo[1] : -lo[1] + h, -lo[0] : -lo[0] + wd] = card * (near < edges[1])  # the card, its first band's depth
     row_top, col_top = (far + soft).max(axis=1), (far + soft.max()).max(axis=0)
-    for a, b in zip(edges[:-1], edges[1:], strict=True):
+    bands = _BandValues(card, near, far, soft, edges)
+    # Every band's segment is as long (the bands are even), so per cell the bands' parts are placed at their
+    # starts and the segment drawn once over them all: the segment's max commutes with the max over bands.
+    starts: dict[tuple[int, ...], tuple[np.ndarray, list[int], np.ndarray]] = {}
+    for i, (a, b) in enumerate(zip(edges[:-1], edges[1:], strict=True)):
         rows, cols = np.flatnonzero(row_top > a), np.flatnonzero(col_top > a)  # the part reaching the band, boxed
         if rows.size == 0 or cols.size == 0:
             break
-        for r0, r1, c0, c1, step in cells(b):
+        live = bands.at(i)
+        for cell in cells(b):
+            r0, r1, c0, c1, step = cell
             r0, r1 = max(r0, int(rows[0])), min(r1, int(rows[-1]) + 1)  # the deeper, the smaller the part
             c0, c1 = max(c0, int(cols[0])), min(c1, int(cols[-1]) + 1)
-            if r1 <= r0 or c1 <= c0:
-                continue
-            window = np.s_[r0:r1, c0:c1]
-            fade = np.clip((far[window] - b) / soft[r0:r1] + 1.0, 0.0, 1.0)
-            if a > 0:  # a span starting in the band is drawn over it, however short (those of band 0: the card)
-                fade = np.where(near[window] >= a, 1.0, fade)
-            part = (card[window] * fade * (near[window] < (b if b < top else np.inf))).astype(np.uint8)
-            if part.any():
-                _sweep_into(out, part, -lo + (c0, r0), -step * a, -step * (b - a))
+            part = live[r0:r1, c0:c1]
+            if r1 > r0 and c1 > c0 and part.any():
+                key = (*cell[:4], id(step))
+                if key not in starts:
+                    starts[key] = (np.zeros_like(out), [out.shape[1], out.shape[0], 0, 0], -step * (b - a))
+                placed, box, _ = starts[key]
+                x, y = -lo + (c0, r0) + np.round(-step * a).astype(int)
+                view = placed[y : y + part.shape[0], x : x + part.shape[1]]
+                np.maximum(view, part, out=view)
+                box[:] = min(box[0], x), min(box[1], y), max(box[2], x + part.shape[1]), max(box[3], y + part.shape[0])
+    for placed, (x0, y0, x1, y1), span in starts.values():
+        _sweep_into(out, placed[y0:y1, x0:x1], np.array([x0, y0]), np.zeros(2), span)
     return out, (int(-lo[0]), int(-lo[1]))
 
 
-def _at_card(card: np.ndarray, near: np.ndarray, depth: float) -> np.ndarray:
-    """``card`` where its pixels' surfaces lie within ``depth`` of the card (all of it where every one does)."""
-    return card if not near.any() else np.where(near < depth, card, 0).astype(card.dtype)
+class _BandValues:
+    """The card's pixels as each band of depth ``edges`` sweeps them: a pixel whose surface (``near``) lies in
+    band i > 0 is drawn whole in it, however short its span; one whose surface lies nearer is drawn in each band
+    its span fills, then faded over the last ``soft`` pixels of depth past its far end, ``far``: its value in
+    band [a, b) is ``card * clip((far - b) / soft + 1, 0, 1)``. Kept as one array updated band by band, only at
+    the pixels whose value changes (each changes a few times), not worked out anew over the card for each band."""
+
+    def __init__(
+        self, card: np.ndarray, near: np.ndarray, far: np.ndarray, soft: np.ndarray, edges: np.ndarray
+    ) -> None:
+        self.live = np.zeros(card.shape, np.uint8)
+        self._card = card.ravel()
+        lit = np.flatnonzero(self._card)
+        n_bands = len(edges) - 1
+        near_l, far_l = near.ravel()[lit], far.ravel()[lit]
+        self._soft = np.broadcast_to(soft, card.shape).ravel()[lit]
+        self._far, self._edges = far_l, edges
+        start = np.minimum(np.searchsorted(edges, near_l, side="right") - 1, n_bands - 1)  # the band of its surface
+        full = np.searchsorted(edges, far_l, side="right") - 1  # bands before this one end at or before its far end
+        fading = np.maximum(full, start + (start > 0))  # from here its value is faded (band 0: no surface's override)
+        gone = np.maximum(np.searchsorted(edges, far_l + self._soft, side="left") - 1, fading)  # and from here 0
+        whole = fading > start  # drawn whole from its start (else faded there already, or never drawn)
+        self._starts = _by_band(lit[whole], start[whole], n_bands)
+        self._ends = _by_band(lit, gone, n_bands)
+        span = gone - fading  # bands a pixel fades over (usually 0 or 1)
+        each = [np.flatnonzero(span > m) for m in range(int(span.max(initial=0)))]
+        fade_at = np.concatenate([np.arange(len(lit))[j] for j in each]) if each else np.zeros(0, int)
+        fade_band = np.concatenate([fading[j] + m for m, j in enumerate(each)]) if each else np.zeros(0, int)
+        self._fades = _by_band(fade_at, fade_band, n_bands)
+        self._lit = lit
+
+    def at(self, i: int) -> np.ndarray:
+        """The values (uint8, the card's shape) in band i (bands taken in order from 0)."""
+        live = self.live.reshape(-1)
+        live[self._ends[i]] = 0
+        started = self._starts[i]
+        live[started] = self._card[started]
+        k = self._fades[i]
+        if k.size:
+            fade = np.clip((self._far[k] - self._edges[i + 1]) / self._soft[k] + 1.0, 0.0, 1.0)
+            live[self._lit[k]] = (self._card[self._lit[k]] * fade).astype(np.uint8)
+        return self.live
+
+
+def _by_band(items: np.ndarray, band: np.ndarray, n_bands: int) -> list[np.ndarray]:
+    """``items`` grouped by ``band`` (0 .. ``n_bands`` - 1; others dropped): one array per band."""
+    band = band.astype(np.int16)  # (sorted by radix)
+    order = np.argsort(band, kind="stable")
+    bounds = np.searchsorted(band[order], np.arange(n_bands + 1, dtype=np.int16))
+    return [items[order[bounds[i] : bounds[i + 1]]] for i in range(n_bands)]
 
 
 def _sweep_into(out: np.ndarray, part: np.ndarray, origin: np.ndarray, start: np.ndarray, span: np.ndarray) -> None:
