@@ -251,8 +251,7 @@ class CardTracer:
         self._near = {1: np.pad(near, ((pad, 0), (pad, pad)))}  # the same of the surface the pixel shows
         self._full = _Source(alpha, s, framing.offset_x + (x0 - pad) * s, framing.offset_y + (y0 - pad) * s)
         self._sources: dict[int, _Source] = {}
-        self._allowed: dict[int, tuple[np.ndarray, np.ndarray]] = {}
-        self._reduced: dict[tuple[int, int], tuple[np.ndarray, np.ndarray]] = {}  # per reduction, sweep's: near, far
+        self._swept_depths: dict[tuple[int, int], tuple[np.ndarray, np.ndarray]] = {}  # per reduction and sweep's
         self._on_card: dict[int, np.ndarray | None] = {}  # per reduction: the pixels whose surface is the card's
         self._levels: dict[float, dict[int, tuple[int, int, _Level]]] = {}  # per scale, level: rows, blurred
 
@@ -486,40 +485,42 @@ class CardTracer:
         on a copy reduced ``k`` times (:func:`_sweep_reduction`; k > 1: without the card itself at full
         resolution), and the (x, y) in the result's pixels of the card's pixel (0, 0)."""
         cells, steps = self._step_cells(source, w, k)
+        near, far = self._sweep_depths(source, k)
         if k == 1:
-            near, far = self._allowed_depth(source)
             return _swept_card(card, near, far, cells, steps, soft)
         h, wd = card.shape
         small = np.asarray(Image.fromarray(np.pad(card, ((0, -h % k), (0, -wd % k))), "L").reduce(k))
-        key = (round(source.scale / self._full.scale), k)
-        if key not in self._reduced:
-            near, far = (d[::k, ::k][: small.shape[0], : small.shape[1]] / k for d in self._allowed_depth(source))
-            self._reduced[key] = near, far
-        near, far = self._reduced[key]
         return _swept_card(small, near, far, cells, steps, soft[::k][: small.shape[0]] / k)
 
-    def _allowed_depth(self, source: _Source) -> tuple[np.ndarray, np.ndarray]:
-        """How deep (pixels of ``source``) behind the card each of its pixels' surface lies and how deep the
-        object reaches there, looking down no deeper along the ray than where the ray meets the ground (made
-        once per source)."""
-        k = round(source.scale / self._full.scale)
-        if k not in self._allowed:
-            heights = self._row_heights(source)
-            drop = np.maximum(0.0, -self._depth_ray(heights)[:, 1]) * self._world_per_pixel * k  # per pixel of depth
-            above = (heights / np.maximum(drop, 1e-9))[:, None]
-            self._allowed[k] = (
-                np.minimum(self._near[k], above).astype(np.float32),
-                np.minimum(self._far[k], above).astype(np.float32),
+    def _sweep_depths(self, source: _Source, k: int) -> tuple[np.ndarray, np.ndarray]:
+        """How deep (pixels of the copy of ``source`` reduced ``k`` times that its depth is swept on) behind the
+        card each of its pixels' surface lies and how deep the object reaches there, looking down no deeper
+        along the ray than where the ray meets the ground (made once per source and k)."""
+        key = (round(source.scale / self._full.scale), k)
+        if key not in self._swept_depths:
+            near, far = (d[key[0]][::k, ::k] for d in (self._near, self._far))
+            above = self._above(source)[::k]
+            self._swept_depths[key] = (
+                np.minimum(near, above).astype(np.float32) / k,
+                np.minimum(far, above).astype(np.float32) / k,
             )
-        return self._allowed[k]
+        return self._swept_depths[key]
+
+    def _above(self, source: _Source) -> np.ndarray:
+        """(rows, 1) per row of ``source``: how deep (its pixels) a point can lie behind the card along the
+        camera's ray before that ray meets the ground."""
+        heights = self._row_heights(source)
+        k = round(source.scale / self._full.scale)
+        drop = np.maximum(0.0, -self._depth_ray(heights)[:, 1]) * self._world_per_pixel * k  # per pixel of depth
+        return (heights / np.maximum(drop, 1e-9))[:, None]
 
     def _at_card(self, card: np.ndarray, source: _Source) -> np.ndarray:
         """``card`` (of ``source``) where its pixels' surfaces lie within a pixel of the card (all of it where
         every one does)."""
         k = round(source.scale / self._full.scale)
         if k not in self._on_card:
-            near = self._allowed_depth(source)[0]
-            self._on_card[k] = near < 1.0 if near.any() else None
+            near = self._near[k]
+            self._on_card[k] = (np.minimum(near, self._above(source)) < 1.0) if near.any() else None
         on_card = self._on_card[k]
         return card if on_card is None else card * on_card
 
