@@ -669,11 +669,10 @@ class _BandValues:
         whole = fading > start  # drawn whole from its start (else faded there already, or never drawn)
         self._starts = _by_band(lit[whole], start[whole], n_bands)
         self._ends = _by_band(lit, gone, n_bands)
-        span = gone - fading  # bands a pixel fades over (usually 0 or 1)
-        each = [np.flatnonzero(span > m) for m in range(int(span.max(initial=0)))]
-        fade_at = np.concatenate([np.arange(len(lit))[j] for j in each]) if each else np.zeros(0, int)
-        fade_band = np.concatenate([fading[j] + m for m, j in enumerate(each)]) if each else np.zeros(0, int)
-        self._fades = _by_band(fade_at, fade_band, n_bands)
+        fades = np.flatnonzero(gone > fading)  # (positions in ``lit``) pixels faded over some bands
+        order = np.argsort(fading[fades].astype(np.int16), kind="stable")
+        self._fade_at, self._fade_from, self._fade_to = fades[order], fading[fades][order], gone[fades][order]
+        self._fade_count = np.searchsorted(self._fade_from, np.arange(n_bands), side="right")  # fading from <= i
         self._lit = lit
 
     def at(self, i: int) -> np.ndarray:
@@ -682,7 +681,8 @@ class _BandValues:
         live[self._ends[i]] = 0
         started = self._starts[i]
         live[started] = self._card[started]
-        k = self._fades[i]
+        n = self._fade_count[i]
+        k = self._fade_at[:n][self._fade_to[:n] > i]  # fading in this band
         if k.size:
             fade = np.clip((self._far[k] - self._edges[i + 1]) / self._soft[k] + 1.0, 0.0, 1.0)
             live[self._lit[k]] = (self._card[self._lit[k]] * fade).astype(np.uint8)
