@@ -31,12 +31,13 @@ the card along its camera ray; from there it reaches deeper by a depth
 (:func:`depth_map`): the chord of a round cross-section as wide as the part
 it lies in (a body as deep as it is wide, a leg thin; never below the
 ground). The card is swept through that span before the homography: each
-pixel repeated along the shift its shadow makes as it moves deeper, a shift
-that changes over the card (``THICKNESS_LEVELS`` bands of depth, each a
-segment drawn by doubling, in cells each along its own shift; a card larger
-than ``SWEEP_SIZE`` is swept on a reduced copy, the card itself kept crisp). A light from nearly
-the card's side still turns it a little (``MIN_INCIDENCE``), so that no card
-is seen edge-on.
+pixel repeated along the shift its shadow makes as it moves deeper, from
+where its own shift puts its surface to where its depth ends (each span as
+one or two segments a power of two long, each length drawn once by doubling
+over all its copies, in cells each along its own shift; a card larger than
+``SWEEP_SIZE`` is swept on a reduced copy, the card itself kept crisp). A
+light from nearly the card's side still turns it a little
+(``MIN_INCIDENCE``), so that no card is seen edge-on.
 
 Size: a disk light of apparent diameter ``angle`` seen from a ground point a
 distance D below a card point along the light blurs the card over a circle of
@@ -71,9 +72,7 @@ from .host_kit.light_map import GaussianLight, LightMap
 
 DEPTH_SIZE = 128  # pixels: the object's depth is worked out on a copy reduced to about this size
 RADIUS_STEP = 1.25  # ratio of the local radii the depth map tells apart
-THICKNESS_LEVELS = 16  # bands of depth an object's thickness is swept in
-SURFACE_LEVELS = 48  # the same where its pixels' surfaces lie at different depths (each starts at its band's start:
-# 16 bands left a staircase along a shadow's far edge)
+SWEEP_BLUR_SHARE = 10.0  # percent of a card's rows blurred less than the pixel of the copy its depth is swept on
 SWEEP_SIZE = 400  # pixels: a larger card is swept through its depth on a copy reduced to about this size
 MIN_INCIDENCE = 10.0  # degrees: the card turns just enough that a light's horizontal direction meets it at least so
 
@@ -106,7 +105,7 @@ MIN_W = 1e-6  # a card point whose output w is below this share of its box's lar
 STEP_TOLERANCE = 1.0  # pixels: a card is swept in cells, each along one shift with depth, so that no pixel's
 # deepest copy lies farther than this from where its own shift puts it
 MAX_STEP_CELLS = (2, 2)  # cells down and across a card at most
-Cells = Callable[[float], list[tuple[int, int, int, int, np.ndarray]]]  # a depth -> the cells swept to it
+Cell = tuple[int, int, int, int, np.ndarray]  # rows r0:r1 and columns c0:c1 of a card swept along one step
 SLABS = 8  # bands of a card's rows whose boxes' outlines on the output bound where its warp is resampled
 RUN_GAP = 32  # output columns: two runs of a band to resample closer than this are resampled as one
 RUN_MARGIN = 2  # output columns resampled beyond a run's ends
@@ -420,11 +419,14 @@ class CardTracer:
         ray = np.stack([np.zeros_like(h), h, np.zeros_like(h)], axis=-1) - self.camera.centre
         return ray / np.hypot(ray[..., 0], ray[..., 2])[..., None]
 
-    def _depth_steps(self, source: _Source, w: np.ndarray, cols: np.ndarray, rows: np.ndarray) -> np.ndarray:
-        """At source pixels (``cols``, ``rows``) ((n, 2), source pixels (x, y)): how far the card's shadow moves
-        when what the pixel shows lies one source pixel's worth of world units deeper along its own camera ray,
-        through the card's homography there (looking down, a deeper point near the ground drops more than one
-        near the card's top; off the image's centre, it moves sideways too)."""
+    def _depth_lines(
+        self, source: _Source, w: np.ndarray, cols: np.ndarray, rows: np.ndarray
+    ) -> tuple[np.ndarray, np.ndarray]:
+        """At source pixels (``cols``, ``rows``): where (frame pixels, homogeneous, (n, 3)) the card's point the
+        pixel shows lies, p0, and how that moves, p1, when what the pixel shows lies one source pixel's worth of
+        world units deeper along its own camera ray, through the card's homography: at d such units deeper its
+        content lands at (p0 + d p1)[:2] / (p0 + d p1)[2] (looking down, a deeper point near the ground drops
+        more than one near the card's top; off the image's centre, it moves sideways too)."""
         ax, az = self._card_axis(w)
         dx, dz = -w[0] / w[1], -w[2] / w[1]
         det = ax * dz - az * dx
@@ -439,58 +441,65 @@ class CardTracer:
         r = rays / np.hypot(rays[:, 0], rays[:, 2])[:, None]
         gx, gz = b * (r[:, 0] + r[:, 1] * dx), b * (r[:, 2] + r[:, 1] * dz)  # the ground shift of its shadow
         x, h = -(dz * gx - dx * gz) / det, -(-az * gx + ax * gz) / det  # on the card, where that content lands
-        zero = np.zeros_like(x)
-        col0, row0 = cam.project_xyz(on_card[:, 0], on_card[:, 1], zero)
-        col1, row1 = cam.project_xyz(on_card[:, 0] + x, on_card[:, 1] + h, zero)
-        return np.stack([col1 - col0, row1 - row0], axis=1) / source.scale
+        project = cam.projection()[:, [0, 1, 3]]  # the card's points (x, h, 0) -> frame
+        p0 = np.stack([on_card[:, 0], on_card[:, 1], np.ones_like(x)], axis=1) @ project.T
+        p1 = np.stack([x, h, np.zeros_like(x)], axis=1) @ project.T
+        return p0, p1
 
-    def _step_cells(self, source: _Source, w: np.ndarray, k: int) -> tuple[Cells, np.ndarray]:
-        """For a copy of the source reduced ``k`` times: the cells of it (r0, r1, c0, c1, step) swept to a depth
-        (its pixels), over each of which one depth step (:meth:`_depth_steps`, at the cell's centre) puts every
-        pixel within ``STEP_TOLERANCE`` pixels of where its own step puts it (at most ``MAX_STEP_CELLS`` down
-        and across); and the steps at the copy's corners and between ((25, 2): they bound the others)."""
+    def _depth_steps(self, source: _Source, w: np.ndarray, cols: np.ndarray, rows: np.ndarray) -> np.ndarray:
+        """At source pixels (``cols``, ``rows``) ((n, 2), source pixels (x, y)): how far the card's shadow moves
+        when what the pixel shows lies one source pixel's worth of world units deeper (:meth:`_depth_lines`)."""
+        p0, p1 = self._depth_lines(source, w, cols, rows)
+        return (_landing(p0, p1, np.ones(len(p0))) - _landing(p0, p1, np.zeros(len(p0)))).T / source.scale
+
+    def _step_cells(self, source: _Source, w: np.ndarray, k: int, depth: float) -> tuple[list[Cell], np.ndarray]:
+        """For a copy of the source reduced ``k`` times, swept to ``depth`` (its pixels): its cells (r0, r1, c0,
+        c1, step), over each of which one depth step (:meth:`_depth_steps`, at the cell's centre) draws a
+        segment of depth within ``STEP_TOLERANCE`` pixels of where each pixel's own step puts it (at most
+        ``MAX_STEP_CELLS`` down and across), and the steps at the copy's corners and between (they bound the
+        others)."""
         h, wd = source.alpha.shape
         probe = np.linspace(0.0, 1.0, 5)
         pc, pr = np.meshgrid(probe * (wd - 1), probe * (h - 1))
         grid = self._depth_steps(source, w, pc.ravel(), pr.ravel()).reshape(5, 5, 2)
         spread = np.array([np.ptp(grid, axis=axis).max() for axis in (0, 1)]) * k / STEP_TOLERANCE  # down, along
-        made: dict[tuple[int, int], list[tuple[int, int, int, int, np.ndarray]]] = {}
-
-        def cells(depth: float) -> list[tuple[int, int, int, int, np.ndarray]]:
-            n_r, n_c = (
-                min(max(math.ceil(float(x) * depth), 1), most) for x, most in zip(spread, MAX_STEP_CELLS, strict=True)
-            )
-            if (n_r, n_c) not in made:
-                rb = np.linspace(0, h, n_r + 1).round().astype(int)
-                cb = np.linspace(0, wd, n_c + 1).round().astype(int)
-                cc, rr = np.meshgrid(0.5 * (cb[:-1] + cb[1:]), 0.5 * (rb[:-1] + rb[1:]))
-                steps = self._depth_steps(source, w, cc.ravel(), rr.ravel()).reshape(n_r, n_c, 2)
-                rb, cb = -(-rb // k), -(-cb // k)  # on the reduced copy
-                made[n_r, n_c] = [
-                    (int(rb[i]), int(rb[i + 1]), int(cb[j]), int(cb[j + 1]), steps[i, j])
-                    for i in range(n_r)
-                    for j in range(n_c)
-                    if rb[i + 1] > rb[i] and cb[j + 1] > cb[j]
-                ]
-            return made[n_r, n_c]
-
+        n_r, n_c = (
+            min(max(math.ceil(float(x) * depth), 1), most) for x, most in zip(spread, MAX_STEP_CELLS, strict=True)
+        )
+        rb = np.linspace(0, h, n_r + 1).round().astype(int)
+        cb = np.linspace(0, wd, n_c + 1).round().astype(int)
+        cc, rr = np.meshgrid(0.5 * (cb[:-1] + cb[1:]), 0.5 * (rb[:-1] + rb[1:]))
+        steps = self._depth_steps(source, w, cc.ravel(), rr.ravel()).reshape(n_r, n_c, 2)
+        rb, cb = -(-rb // k), -(-cb // k)  # on the reduced copy
+        cells = [
+            (int(rb[i]), int(rb[i + 1]), int(cb[j]), int(cb[j + 1]), steps[i, j])
+            for i in range(n_r)
+            for j in range(n_c)
+            if rb[i + 1] > rb[i] and cb[j + 1] > cb[j]
+        ]
         return cells, grid.reshape(-1, 2)
 
     def _swept(
         self, card: np.ndarray, source: _Source, w: np.ndarray, soft: np.ndarray, k: int
     ) -> tuple[np.ndarray, tuple[int, int]]:
-        """The card (uint8, blurred) swept through the object's depth: each pixel repeated along the shift
-        (:meth:`_step_cells`) of every depth from its surface's to its far end (``THICKNESS_LEVELS`` bands of
-        depth; where it ends, fading over ``soft`` pixels of depth given per row, as blurred as the card's row),
-        on a copy reduced ``k`` times (:func:`_sweep_reduction`; k > 1: without the card itself at full
-        resolution), and the (x, y) in the result's pixels of the card's pixel (0, 0)."""
-        cells, steps = self._step_cells(source, w, k)
+        """The card (uint8, blurred) swept through the object's depth (:func:`_swept_card`): each pixel repeated
+        along its own shift with depth (:meth:`_depth_steps`) from its surface's depth to its far end (fading out
+        over ``soft`` pixels of depth given per row, as blurred as the card's row), on a copy reduced ``k`` times
+        (:func:`_sweep_reduction`; k > 1: without the card itself at full resolution); and the (x, y) in the
+        result's pixels of the card's pixel (0, 0)."""
         near, far = self._sweep_depths(source, k)
-        if k == 1:
-            return _swept_card(card, near, far, cells, steps, soft)
-        h, wd = card.shape
-        small = np.asarray(Image.fromarray(np.pad(card, ((0, -h % k), (0, -wd % k))), "L").reduce(k))
-        return _swept_card(small, near, far, cells, steps, soft[::k][: small.shape[0]] / k)
+        cells, steps = self._step_cells(source, w, k, float(far.max()))
+
+        def lines(rows: np.ndarray, cols: np.ndarray) -> tuple[np.ndarray, np.ndarray]:  # in the reduced copy
+            p0, p1 = self._depth_lines(source, w, cols * k + 0.5 * (k - 1), rows * k + 0.5 * (k - 1))
+            unit = 1.0 / (source.scale * k)
+            return p0 * [unit, unit, 1.0], p1 * [k * unit, k * unit, k]
+
+        if k > 1:
+            h, wd = card.shape
+            card = np.asarray(Image.fromarray(np.pad(card, ((0, -h % k), (0, -wd % k))), "L").reduce(k))
+            soft = soft[::k][: card.shape[0]] / k
+        return _swept_card(card, near, far, soft, cells, steps, lines)
 
     def _sweep_depths(self, source: _Source, k: int) -> tuple[np.ndarray, np.ndarray]:
         """How deep (pixels of the copy of ``source`` reduced ``k`` times that its depth is swept on) behind the
@@ -581,7 +590,7 @@ class CardTracer:
         to_card = self._homography(w, framing, source, (x0, y0)) @ np.diag([1.0 / fine, 1.0 / fine, 1.0])
         size = ((x1 - x0) * fine, (y1 - y0) * fine)
         if self.depth > 0:
-            k = _sweep_reduction(card)
+            k = _sweep_reduction(card, sigma_rows)
             swept, (sx, sy) = self._swept(card, source, w, 2.0 * sigma_rows, k)
             values = _warp(swept, np.array([[1.0 / k, 0, sx], [0, 1.0 / k, sy], [0, 0, 1.0]]) @ to_card, size)
             if k > 1:  # swept on a reduced copy: the card itself, crisp, where that copy's shadow is partial
@@ -593,108 +602,107 @@ class CardTracer:
         return values, x0, y0
 
 
-def _sweep_reduction(card: np.ndarray) -> int:
-    """How many times smaller a copy of ``card`` the depth is swept on: about ``SWEEP_SIZE`` pixels at most."""
-    return max(1, math.ceil(max(card.shape) / SWEEP_SIZE))
+def _sweep_reduction(card: np.ndarray, sigma_rows: np.ndarray) -> int:
+    """How many times smaller a copy of ``card`` the depth is swept on: about ``SWEEP_SIZE`` pixels at most, and
+    a pixel as wide as the blur of most of its rows (``sigma_rows``, pixels; a soft light's copy needs no finer)."""
+    rows = np.flatnonzero(card.any(axis=1))
+    blur = float(np.percentile(sigma_rows[rows], SWEEP_BLUR_SHARE)) if rows.size else 0.0
+    return max(1, math.ceil(max(card.shape) / SWEEP_SIZE), int(blur))
 
 
 def _swept_card(
-    card: np.ndarray, near: np.ndarray, far: np.ndarray, cells: Cells, steps: np.ndarray, soft: np.ndarray
+    card: np.ndarray,
+    near: np.ndarray,
+    far: np.ndarray,
+    soft: np.ndarray,
+    cells: list[Cell],
+    steps: np.ndarray,
+    lines: Callable[[np.ndarray, np.ndarray], tuple[np.ndarray, np.ndarray]],
 ) -> tuple[np.ndarray, tuple[int, int]]:
     """``card`` (uint8) with each pixel repeated at ``-step * d`` for every depth d from ``near`` to ``far``
-    there (pixels; ``THICKNESS_LEVELS`` bands of depth, ``SURFACE_LEVELS`` where ``near`` is not all 0, a pixel
-    in each band that its span meets, from the band's start; its copies fade out over its last ``soft`` pixels
-    of depth, ``soft`` given per row; ``step`` that of the cell (r0, r1, c0, c1, step) of ``cells(b)`` the pixel
-    lies in, for a band reaching depth b; ``steps`` (n, 2) bound every step), and the (x, y) of the card's pixel
-    (0, 0) in the result."""
-    soft = np.maximum(np.asarray(soft, np.float32), 1e-3)[:, None]
+    there (pixels), then at half its value on over ``soft`` pixels of depth (given per row: where the shadow
+    ends, as blurred as the card's row); and the (x, y) of the card's pixel (0, 0) in the result.
+    ``lines(rows, cols)`` gives where pixels' copies lie ((n, 3) p0 and p1: at depth d, at
+    (p0 + d p1)[:2] / (p0 + d p1)[2], pixels of ``card``), which places each copy's start; it reaches on along
+    the step of the cell (r0, r1, c0, c1, step) of ``cells`` the pixel lies in; ``steps`` ((n, 2)) bound every
+    step.
+
+    A pixel's span is drawn as one or two copies of a segment a power of two long in depth (:func:`_segments`),
+    so that it starts and ends where its own depths say, whatever the other pixels' spans; each length's copies,
+    cell by cell, are scattered at their starts and the segment drawn once over them all (the segment's max
+    commutes with the max over its copies)."""
     top = float(far.max())
     h, wd = card.shape
-    reach = -np.asarray(steps) * top  # the swept copy of a pixel lies up to this far from it
-    lo = np.floor(np.minimum(reach.min(axis=0), 0)).astype(int)
-    hi = np.ceil(np.maximum(reach.max(axis=0), 0)).astype(int)
-    out = np.zeros((h + hi[1] - lo[1], wd + hi[0] - lo[0]), np.uint8)
-    edges = np.linspace(0.0, top, (SURFACE_LEVELS if near.any() else THICKNESS_LEVELS) + 1)
-    out[-lo[1] : -lo[1] + h, -lo[0] : -lo[0] + wd] = card * (near < edges[1])  # the card, its first band's depth
-    row_top, col_top = (far + soft).max(axis=1), (far + soft.max()).max(axis=0)
-    bands = _BandValues(card, near, far, soft, edges)
-    # Every band's segment is as long (the bands are even), so per cell the bands' parts are placed at their
-    # starts and the segment drawn once over them all: the segment's max commutes with the max over bands.
-    starts: dict[tuple[int, ...], tuple[np.ndarray, list[int], np.ndarray]] = {}
-    for i, (a, b) in enumerate(zip(edges[:-1], edges[1:], strict=True)):
-        rows, cols = np.flatnonzero(row_top > a), np.flatnonzero(col_top > a)  # the part reaching the band, boxed
-        if rows.size == 0 or cols.size == 0:
-            break
-        live = bands.at(i)
-        for cell in cells(b):
-            r0, r1, c0, c1, step = cell
-            r0, r1 = max(r0, int(rows[0])), min(r1, int(rows[-1]) + 1)  # the deeper, the smaller the part
-            c0, c1 = max(c0, int(cols[0])), min(c1, int(cols[-1]) + 1)
-            part = live[r0:r1, c0:c1]
-            if r1 > r0 and c1 > c0 and part.any():
-                key = (*cell[:4], id(step))
-                if key not in starts:
-                    starts[key] = (np.zeros_like(out), [out.shape[1], out.shape[0], 0, 0], -step * (b - a))
-                placed, box, _ = starts[key]
-                x, y = -lo + (c0, r0) + np.round(-step * a).astype(int)
-                view = placed[y : y + part.shape[0], x : x + part.shape[1]]
-                np.maximum(view, part, out=view)
-                box[:] = min(box[0], x), min(box[1], y), max(box[2], x + part.shape[1]), max(box[3], y + part.shape[0])
-    for placed, (x0, y0, x1, y1), span in starts.values():
-        _sweep_into(out, placed[y0:y1, x0:x1], np.array([x0, y0]), np.zeros(2), span)
+    lit = np.flatnonzero(card)
+    if lit.size == 0:
+        return np.zeros((1, 1), np.uint8), (0, 0)
+    cell = np.zeros(card.shape, np.int16)  # which cell each pixel lies in
+    for i, (r0, r1, c0, c1, _) in enumerate(cells):
+        cell[r0:r1, c0:c1] = i
+    longest = max(float(np.hypot(*step)) for *_, step in cells)
+    unit = 1.0 / longest if longest > 1e-9 else max(top, 1.0)  # depth shifting a copy by a pixel at most
+    rows, cols = np.divmod(lit, wd)
+    value = card.ravel()[lit]
+    n, f = near.ravel()[lit], far.ravel()[lit]
+    fade = np.minimum(np.broadcast_to(np.maximum(soft, 0.0)[:, None], card.shape).ravel()[lit], top - f)
+    # each span [n, f] drawn whole, then its fade [f, f + fade] at half the value, where that is a pixel or more
+    faded = np.flatnonzero(fade >= unit)
+    spans = [(n, f, np.arange(lit.size), value), (f[faded], f[faded] + fade[faded], faded, value[faded] // 2)]
+    copies = [(at, j, index[of], v[of]) for a, b, index, v in spans for at, j, of in [_segments(a, b, unit)]]
+    starts, lengths, which, values = (np.concatenate(x) for x in zip(*copies, strict=True))
+    p0, p1 = lines(rows.astype(np.float64), cols.astype(np.float64))
+    # where each copy starts (pixels of the card, rounded): its pixel's content at the copy's start depth
+    a0, b0, c0, a1, b1, c1 = (x[which] for x in (*p0.T.astype(np.float32), *p1.T.astype(np.float32)))
+    depth = starts.astype(np.float32)
+    at = c0 + depth * c1
+    ix = cols[which] + np.rint(a0 / c0 - (a0 + depth * a1) / at).astype(np.int32)
+    iy = rows[which] + np.rint(b0 / c0 - (b0 + depth * b1) / at).astype(np.int32)
+    # kept within the card's size beyond where the steps at depth 0 would take the deepest (the card's top seen
+    # from a low sun can project towards the horizon)
+    reach = -np.asarray(steps) * top
+    lo_cap = np.floor(np.minimum(reach.min(axis=0), 0)).astype(int) - (wd, h)
+    hi_cap = np.ceil(np.maximum(reach.max(axis=0), 0)).astype(int) + (2 * wd, 2 * h)
+    kept = (ix >= lo_cap[0]) & (ix < hi_cap[0]) & (iy >= lo_cap[1]) & (iy < hi_cap[1])
+    lengths, which, values, ix, iy = (x[kept] for x in (lengths, which, values, ix, iy))
+    key = (cell.ravel()[lit][which] * 64 + lengths).astype(np.int16)  # (sorted by radix)
+    order = np.argsort(key, kind="stable")
+    bounds = np.flatnonzero(np.diff(key[order], prepend=-1, append=-1))
+    groups = []  # each segment's copies: (their starts, their values, the segment, its box x0, y0, x1, y1)
+    for a, b in zip(bounds[:-1], bounds[1:], strict=True):
+        group = order[a:b]
+        c, j = divmod(int(key[group[0]]), 64)
+        span = -cells[c][4] * unit * 2.0**j
+        gx, gy = ix[group], iy[group]
+        box = (int(gx.min()), int(gy.min()), int(gx.max()) + 1, int(gy.max()) + 1)
+        groups.append((gx, gy, values[group], span, box))
+    boxes = np.array([g[4] for g in groups] + [(0, 0, wd, h)], float)
+    spans = np.array([g[3] for g in groups] + [(0.0, 0.0)])
+    lo = np.floor(np.minimum(boxes[:, :2], boxes[:, :2] + spans).min(axis=0)).astype(int) - 1
+    hi = np.ceil(np.maximum(boxes[:, 2:], boxes[:, 2:] + spans).max(axis=0)).astype(int) + 1
+    out = np.zeros((hi[1] - lo[1], hi[0] - lo[0]), np.uint8)
+    for gx, gy, v, span, (x0, y0, x1, y1) in groups:
+        placed = np.zeros((y1 - y0, x1 - x0), np.uint8)
+        np.maximum.at(placed, (gy - y0, gx - x0), v)
+        _sweep_into(out, placed, np.array([x0, y0]) - lo, np.zeros(2), span)
     return out, (int(-lo[0]), int(-lo[1]))
 
 
-class _BandValues:
-    """The card's pixels as each band of depth ``edges`` sweeps them: a pixel whose surface (``near``) lies in
-    band i > 0 is drawn whole in it, however short its span; one whose surface lies nearer is drawn in each band
-    its span fills, then faded over the last ``soft`` pixels of depth past its far end, ``far``: its value in
-    band [a, b) is ``card * clip((far - b) / soft + 1, 0, 1)``. Kept as one array updated band by band, only at
-    the pixels whose value changes (each changes a few times), not worked out anew over the card for each band."""
-
-    def __init__(
-        self, card: np.ndarray, near: np.ndarray, far: np.ndarray, soft: np.ndarray, edges: np.ndarray
-    ) -> None:
-        self.live = np.zeros(card.shape, np.uint8)
-        self._card = card.ravel()
-        lit = np.flatnonzero(self._card)
-        n_bands = len(edges) - 1
-        near_l, far_l = near.ravel()[lit], far.ravel()[lit]
-        self._soft = np.broadcast_to(soft, card.shape).ravel()[lit]
-        self._far, self._edges = far_l, edges
-        start = np.minimum(np.searchsorted(edges, near_l, side="right") - 1, n_bands - 1)  # the band of its surface
-        full = np.searchsorted(edges, far_l, side="right") - 1  # bands before this one end at or before its far end
-        fading = np.maximum(full, start + (start > 0))  # from here its value is faded (band 0: no surface's override)
-        gone = np.maximum(np.searchsorted(edges, far_l + self._soft, side="left") - 1, fading)  # and from here 0
-        whole = fading > start  # drawn whole from its start (else faded there already, or never drawn)
-        self._starts = _by_band(lit[whole], start[whole], n_bands)
-        self._ends = _by_band(lit, gone, n_bands)
-        fades = np.flatnonzero(gone > fading)  # (positions in ``lit``) pixels faded over some bands
-        order = np.argsort(fading[fades].astype(np.int16), kind="stable")
-        self._fade_at, self._fade_from, self._fade_to = fades[order], fading[fades][order], gone[fades][order]
-        self._fade_count = np.searchsorted(self._fade_from, np.arange(n_bands), side="right")  # fading from <= i
-        self._lit = lit
-
-    def at(self, i: int) -> np.ndarray:
-        """The values (uint8, the card's shape) in band i (bands taken in order from 0)."""
-        live = self.live.reshape(-1)
-        live[self._ends[i]] = 0
-        started = self._starts[i]
-        live[started] = self._card[started]
-        n = self._fade_count[i]
-        k = self._fade_at[:n][self._fade_to[:n] > i]  # fading in this band
-        if k.size:
-            fade = np.clip((self._far[k] - self._edges[i + 1]) / self._soft[k] + 1.0, 0.0, 1.0)
-            live[self._lit[k]] = (self._card[self._lit[k]] * fade).astype(np.uint8)
-        return self.live
+def _landing(p0: np.ndarray, p1: np.ndarray, depths: np.ndarray) -> np.ndarray:
+    """(2, n): where content at ``depths`` lands on lines p0 + d p1 (homogeneous, (n, 3))."""
+    p = p0 + depths[:, None] * p1
+    return p[:, :2].T / p[:, 2]
 
 
-def _by_band(items: np.ndarray, band: np.ndarray, n_bands: int) -> list[np.ndarray]:
-    """``items`` grouped by ``band`` (0 .. ``n_bands`` - 1; others dropped): one array per band."""
-    band = band.astype(np.int16)  # (sorted by radix)
-    order = np.argsort(band, kind="stable")
-    bounds = np.searchsorted(band[order], np.arange(n_bands + 1, dtype=np.int16))
-    return [items[order[bounds[i] : bounds[i + 1]]] for i in range(n_bands)]
+def _segments(start: np.ndarray, end: np.ndarray, unit: float) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+    """Spans [start, end] (depths) as segments ``unit`` * 2^j long: each span at least ``unit`` long by two
+    copies of the longest that fits it, one from its start and one ending at its end (together exactly the
+    span); a shorter one by one ``unit`` long from its start. Returns each copy's start, j and span (index)."""
+    length = np.maximum(end - start, 0.0)
+    j = np.floor(np.log2(np.maximum(length, unit) / unit)).astype(np.int64)
+    long = np.flatnonzero(length >= unit)
+    index = np.concatenate([np.arange(start.size), long])
+    starts = np.concatenate([start, end[long] - unit * 2.0 ** j[long]])
+    return starts, j[index], index
 
 
 def _sweep_into(out: np.ndarray, part: np.ndarray, origin: np.ndarray, start: np.ndarray, span: np.ndarray) -> None:
