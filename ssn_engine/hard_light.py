@@ -72,6 +72,8 @@ from .host_kit.light_map import GaussianLight, LightMap
 
 DEPTH_SIZE = 128  # pixels: the object's depth is worked out on a copy reduced to about this size
 RADIUS_STEP = 1.25  # ratio of the local radii the depth map tells apart
+FADE_STEP = 3.0  # pixels of shift: a pixel's shadow fades out in steps of falling value at most this long
+MAX_FADE_STEPS = 8
 SWEEP_BLUR_SHARE = 10.0  # percent of a card's rows blurred less than the pixel of the copy its depth is swept on
 SWEEP_SIZE = 400  # pixels: a larger card is swept through its depth on a copy reduced to about this size
 MIN_INCIDENCE = 10.0  # degrees: the card turns just enough that a light's horizontal direction meets it at least so
@@ -645,10 +647,19 @@ def _swept_card(
     value = card.ravel()[lit]
     n, f = near.ravel()[lit], far.ravel()[lit]
     fade = np.minimum(np.broadcast_to(np.maximum(soft, 0.0)[:, None], card.shape).ravel()[lit], top - f)
-    # each span [n, f] drawn whole, then its fade [f, f + fade] at half the value, where that is a pixel or more
+    # each span [n, f] drawn whole, then its fade [f, f + fade] in steps of falling value, each at most
+    # FADE_STEP pixels of shift long (a linear fade's staircase too fine to see), where the fade is a pixel or more
     faded = np.flatnonzero(fade >= unit)
-    spans = [(n, f, np.arange(lit.size), value), (f[faded], f[faded] + fade[faded], faded, value[faded] // 2)]
-    copies = [(at, j, index[of], v[of]) for a, b, index, v in spans for at, j, of in [_segments(a, b, unit)]]
+    count = np.minimum(np.ceil(fade[faded] / (FADE_STEP * unit)), MAX_FADE_STEPS)  # each fading pixel's steps
+    spans = [(n, f, np.arange(lit.size), value)]
+    for m in range(int(count.max(initial=0))):
+        now = count > m
+        pixel, parts = faded[now], count[now]
+        a, b = (f[pixel] + fade[pixel] * (x / parts) for x in (m, m + 1))
+        spans.append((a, b, pixel, (value[pixel] * (1.0 - (m + 0.5) / parts)).astype(np.uint8)))
+    copies = [(at, j, index[of], v[of]) for a, b, index, v in spans[:1] for at, j, of in [_segments(a, b, unit)]]
+    for a, b, index, v in spans[1:]:  # a fade's step: one copy from its start, at least as long (the next is paler)
+        copies.append((a, np.ceil(np.log2(np.maximum(b - a, unit) / unit)).astype(np.int64), index, v))
     starts, lengths, which, values = (np.concatenate(x) for x in zip(*copies, strict=True))
     p0, p1 = lines(rows.astype(np.float64), cols.astype(np.float64))
     # where each copy starts (pixels of the card, rounded): its pixel's content at the copy's start depth

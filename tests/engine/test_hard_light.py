@@ -320,3 +320,46 @@ def test_a_surface_read_behind_the_card_casts_from_where_it_stands(post, back):
     length = np.hypot(*(tip - (centre, FOOT - back)))
     assert length > 100
     assert np.hypot(*(measured - tip)) < 0.03 * length, (measured, tip)
+
+
+def test_each_span_of_depth_is_covered_by_its_copies_from_its_start_to_its_end():
+    """A pixel's span of depth is drawn as one or two copies of a segment a power of two long: together they
+    start at its start and end at its end, with no gap (a span shorter than a unit: one unit from its start)."""
+    rng = np.random.default_rng(3)
+    start = rng.uniform(0, 50, 400)
+    end = start + np.concatenate([rng.uniform(0, 1, 100), rng.uniform(1, 300, 300)])
+    at, j, of = hard_light._segments(start, end, 1.0)
+    stop = at + 2.0**j
+    for i in range(start.size):
+        mine = of == i
+        assert np.isclose(at[mine].min(), start[i])
+        assert np.isclose(stop[mine].max(), max(end[i], start[i] + 1.0))
+        assert at[mine].max() <= stop[mine].min() + 1e-9  # the copies overlap or touch
+
+
+def test_a_pixel_s_shadow_starts_and_ends_where_its_own_depths_say_whatever_the_others():
+    """Pixels whose spans of depth differ, one reaching far deeper than the rest, each cast their copies from
+    their own surface's depth to their own far end, within a pixel (a sweep in bands of the deepest one's depth
+    put every end on a band's edge: a staircase along a shadow's far edge)."""
+    rng = np.random.default_rng(5)
+    k, col = 40, 500
+    near = np.zeros((k, col + 1), np.float32)
+    far = np.zeros((k, col + 1), np.float32)
+    card = np.zeros((k, col + 1), np.uint8)
+    card[:, col] = 255
+    near[:, col] = rng.uniform(0, 60, k)
+    far[:, col] = near[:, col] + rng.uniform(0, 120, k)
+    far[0, col] = near[0, col] + 440  # the deepest
+    step = np.array([1.0, 0.0])  # a pixel of depth moves a copy a pixel to the left
+
+    def lines(rows: np.ndarray, cols: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+        p0 = np.stack([cols, rows, np.ones_like(cols)], axis=1)
+        return p0, np.tile([1.0, 0.0, 0.0], (cols.size, 1))
+
+    cells = [(0, k, 0, col + 1, step)]
+    out, (ox, oy) = hard_light._swept_card(card, near, far, np.zeros(k), cells, step[None], lines)
+    for r in range(k):
+        covered = np.flatnonzero(out[r + oy] > 0) - ox
+        assert covered.size == covered[-1] - covered[0] + 1  # one run, no holes
+        assert abs(covered[-1] - (col - near[r, col])) <= 1.0
+        assert abs(covered[0] - (col - far[r, col])) <= 1.5
