@@ -73,7 +73,7 @@ from .host_kit.light_map import GaussianLight, LightMap
 DEPTH_SIZE = 128  # pixels: the object's depth is worked out on a copy reduced to about this size
 RADIUS_STEP = 1.25  # ratio of the local radii the depth map tells apart
 FADE_STEP = 3.0  # pixels of shift: a pixel's shadow fades out in steps of falling value at most this long
-MAX_FADE_STEPS = 8
+MAX_FADE_STEPS = 8  # steps at most (a long fade's are longer)
 SWEEP_BLUR_SHARE = 10.0  # percent of a card's rows blurred less than the pixel of the copy its depth is swept on
 SWEEP_SIZE = 400  # pixels: a larger card is swept through its depth on a copy reduced to about this size
 MIN_INCIDENCE = 10.0  # degrees: the card turns just enough that a light's horizontal direction meets it at least so
@@ -622,8 +622,9 @@ def _swept_card(
     lines: Callable[[np.ndarray, np.ndarray], tuple[np.ndarray, np.ndarray]],
 ) -> tuple[np.ndarray, tuple[int, int]]:
     """``card`` (uint8) with each pixel repeated at ``-step * d`` for every depth d from ``near`` to ``far``
-    there (pixels), then at half its value on over ``soft`` pixels of depth (given per row: where the shadow
-    ends, as blurred as the card's row); and the (x, y) of the card's pixel (0, 0) in the result.
+    there (pixels), then fading linearly to nothing over ``soft`` pixels of depth (given per row: where the
+    shadow ends, as blurred as the card's row; in steps of at most ``FADE_STEP`` pixels of shift); and the (x, y)
+    of the card's pixel (0, 0) in the result.
     ``lines(rows, cols)`` gives where pixels' copies lie ((n, 3) p0 and p1: at depth d, at
     (p0 + d p1)[:2] / (p0 + d p1)[2], pixels of ``card``), which places each copy's start; it reaches on along
     the step of the cell (r0, r1, c0, c1, step) of ``cells`` the pixel lies in; ``steps`` ((n, 2)) bound every
@@ -678,7 +679,7 @@ def _swept_card(
     key = (cell.ravel()[lit][which] * 64 + lengths).astype(np.int16)  # (sorted by radix)
     order = np.argsort(key, kind="stable")
     bounds = np.flatnonzero(np.diff(key[order], prepend=-1, append=-1))
-    groups = []  # each segment's copies: (their starts, their values, the segment, its box x0, y0, x1, y1)
+    groups = []  # each segment's copies: their starts (x, y), their values, the segment, their box x0, y0, x1, y1
     for a, b in zip(bounds[:-1], bounds[1:], strict=True):
         group = order[a:b]
         c, j = divmod(int(key[group[0]]), 64)
@@ -687,9 +688,9 @@ def _swept_card(
         box = (int(gx.min()), int(gy.min()), int(gx.max()) + 1, int(gy.max()) + 1)
         groups.append((gx, gy, values[group], span, box))
     boxes = np.array([g[4] for g in groups] + [(0, 0, wd, h)], float)
-    spans = np.array([g[3] for g in groups] + [(0.0, 0.0)])
-    lo = np.floor(np.minimum(boxes[:, :2], boxes[:, :2] + spans).min(axis=0)).astype(int) - 1
-    hi = np.ceil(np.maximum(boxes[:, 2:], boxes[:, 2:] + spans).max(axis=0)).astype(int) + 1
+    reaches = np.array([g[3] for g in groups] + [(0.0, 0.0)])  # each segment's, from its copies' starts
+    lo = np.floor(np.minimum(boxes[:, :2], boxes[:, :2] + reaches).min(axis=0)).astype(int) - 1
+    hi = np.ceil(np.maximum(boxes[:, 2:], boxes[:, 2:] + reaches).max(axis=0)).astype(int) + 1
     out = np.zeros((hi[1] - lo[1], hi[0] - lo[0]), np.uint8)
     for gx, gy, v, span, (x0, y0, x1, y1) in groups:
         placed = np.zeros((y1 - y0, x1 - x0), np.uint8)
