@@ -652,15 +652,15 @@ def _swept_card(
     # FADE_STEP pixels of shift long (a linear fade's staircase too fine to see), where the fade is a pixel or more
     faded = np.flatnonzero(fade >= unit)
     count = np.minimum(np.ceil(fade[faded] / (FADE_STEP * unit)), MAX_FADE_STEPS)  # each fading pixel's steps
-    spans = [(n, f, np.arange(lit.size), value)]
+    first, j, of = _segments(n, f, unit)
+    copies = [(first, j, of, value[of])]
+    # a fade's step: one copy from its start, at least as long (the next step is paler)
     for m in range(int(count.max(initial=0))):
         now = count > m
         pixel, parts = faded[now], count[now]
         a, b = (f[pixel] + fade[pixel] * (x / parts) for x in (m, m + 1))
-        spans.append((a, b, pixel, (value[pixel] * (1.0 - (m + 0.5) / parts)).astype(np.uint8)))
-    copies = [(at, j, index[of], v[of]) for a, b, index, v in spans[:1] for at, j, of in [_segments(a, b, unit)]]
-    for a, b, index, v in spans[1:]:  # a fade's step: one copy from its start, at least as long (the next is paler)
-        copies.append((a, np.ceil(np.log2(np.maximum(b - a, unit) / unit)).astype(np.int64), index, v))
+        j = np.ceil(np.log2(np.maximum(b - a, unit) / unit)).astype(np.int64)
+        copies.append((a, j, pixel, (value[pixel] * (1.0 - (m + 0.5) / parts)).astype(np.uint8)))
     starts, lengths, which, values = (np.concatenate(x) for x in zip(*copies, strict=True))
     p0, p1 = lines(rows.astype(np.float64), cols.astype(np.float64))
     # where each copy starts (pixels of the card, rounded): its pixel's content at the copy's start depth
@@ -695,7 +695,7 @@ def _swept_card(
     for gx, gy, v, span, (x0, y0, x1, y1) in groups:
         placed = np.zeros((y1 - y0, x1 - x0), np.uint8)
         np.maximum.at(placed, (gy - y0, gx - x0), v)
-        _sweep_into(out, placed, np.array([x0, y0]) - lo, np.zeros(2), span)
+        _sweep_into(out, placed, np.array([x0, y0]) - lo, span)
     return out, (int(-lo[0]), int(-lo[1]))
 
 
@@ -717,9 +717,9 @@ def _segments(start: np.ndarray, end: np.ndarray, unit: float) -> tuple[np.ndarr
     return starts, j[index], index
 
 
-def _sweep_into(out: np.ndarray, part: np.ndarray, origin: np.ndarray, start: np.ndarray, span: np.ndarray) -> None:
-    """``out`` = max(``out``, ``part`` placed at ``origin`` + ``start`` + t ``span`` for t in [0, 1]), the segment
-    made by doubling (log2 of its length in pixels copies)."""
+def _sweep_into(out: np.ndarray, part: np.ndarray, origin: np.ndarray, span: np.ndarray) -> None:
+    """``out`` = max(``out``, ``part`` placed at ``origin`` + t ``span`` for t in [0, 1]), the segment made by
+    doubling (log2 of its length in pixels copies)."""
     length = float(np.hypot(*span))
     n = max(1, math.ceil(length))
     unit = span / n if length > 0 else np.zeros(2)
@@ -735,7 +735,7 @@ def _sweep_into(out: np.ndarray, part: np.ndarray, origin: np.ndarray, start: np
         view = grown[d[1] - lo[1] : d[1] - lo[1] + h, d[0] - lo[0] : d[0] - lo[0] + w]
         np.maximum(view, cur, out=view)
         cur, off, covered = grown, off + lo, covered + add
-    at = origin + np.round(start).astype(int) + off
+    at = origin + off
     y0, x0 = max(0, at[1]), max(0, at[0])
     y1, x1 = min(out.shape[0], at[1] + cur.shape[0]), min(out.shape[1], at[0] + cur.shape[1])
     if y1 > y0 and x1 > x0:

@@ -162,9 +162,8 @@ def _check(config: ModelConfig) -> None:
         raise ModelConfigError(
             f"card_blur must be a number of pixels in [0, {MAX_CARD_BLUR}], got {config.card_blur!r}"
         )
-    for name in ("aop", "sr", "aop_camera", "camera", "surface"):
+    optional = ("aop_camera", "camera", "surface")
+    for name in ("aop", "sr", *optional):
         value = getattr(config, name)
-        if not (value is None and name in ("aop_camera", "camera", "surface")) and (
-            not isinstance(value, str) or not value
-        ):
+        if not (value is None and name in optional) and (not isinstance(value, str) or not value):
             raise ModelConfigError(f"{name} must name a graph file, got {value!r}")
