@@ -27,7 +27,8 @@ Depth: a card alone casts a line under a light from its side, and nothing of
 a body that reaches away from the camera. Each pixel shows a surface on its
 card, or, with a model's pixel heights (:func:`foot_rows`: how far below
 each pixel the image of the ground under its surface lies), that far behind
-the card along its camera ray; from there it reaches deeper by a depth
+the card along its camera ray (or in front of it, by at most its own depth:
+a ball's front, a lowered head); from there it reaches deeper by a depth
 (:func:`depth_map`): the chord of a round cross-section as wide as the part
 it lies in (a body as deep as it is wide, a leg thin; never below the
 ground). The card is swept through that span before the homography: each
@@ -237,8 +238,13 @@ class CardTracer:
         thick = np.zeros(alpha.shape, np.float32) if thickness is None else np.asarray(thickness, np.float32)
         near = np.zeros(alpha.shape, np.float32) if feet is None else self._surface_depth(feet, framing, y0, base)
         near = np.pad(near[: rows[-1] + 1], ((0, foot - rows[-1] - 1), (0, 0)))
-        thick = near + np.pad(thick[: rows[-1] + 1], ((0, foot - rows[-1] - 1), (0, 0)))  # from here on: the far end
+        thick = np.pad(thick[: rows[-1] + 1], ((0, foot - rows[-1] - 1), (0, 0)))
+        # a surface in front of its card (a ball's, a lowered head's) lies no farther in front than its own depth:
+        # every part reaches back to the card's plane (the surface model's pixel heights are noisy)
+        near = np.maximum(near, -thick)
+        thick = near + thick  # from here on: the far end
         self.depth = float(thick.max()) * self._world_per_pixel  # world units the object reaches behind the card
+        self.front = float(-near.min()) * self._world_per_pixel  # and in front of it
         alpha = alpha[: rows[-1] + 1]
         solid = np.flatnonzero((alpha > SOLID).any(axis=1))
         if solid.size:  # the card reaches the ground: below its lowest solid row it continues that row
@@ -365,14 +371,15 @@ class CardTracer:
         xs = [(c - half) * d / float(cam.focal) for c in self._x_cols for d in depths]
         ax, az = self._card_axis(w)
         dx, dz = -w[0] / w[1], -w[2] / w[1]
-        deep = self.depth * self._depth_ray()  # the object's far side (its shadow lies no farther for its drop)
+        ray = self._depth_ray()
+        deep, ahead = self.depth * ray, -self.front * ray  # its far and near sides (shadows no farther for the drop)
         corners = []
         for x in (min(xs), max(xs)):
             for h in (0.0, self.height):
                 gx, gz = x * ax + h * dx, x * az + h * dz
                 grow = reach * h / self.height
                 for ex, ez in ((0, 0), (grow, 0), (-grow, 0), (0, grow), (0, -grow)):
-                    corners += [(gx + ex, 0.0, gz + ez), (gx + ex + deep[0], 0.0, gz + ez + deep[2])]
+                    corners += [(gx + ex + d[0], 0.0, gz + ez + d[2]) for d in (np.zeros(3), deep, ahead)]
         uv = self._ground_to_output(np.array(corners), framing)
         width, height = framing.canvas_width, framing.canvas_height
         margin = (UNCLIPPED_MARGIN * width, UNCLIPPED_MARGIN * height) if not clip else (0.0, 0.0)
@@ -455,11 +462,11 @@ class CardTracer:
         return (_landing(p0, p1, np.ones(len(p0))) - _landing(p0, p1, np.zeros(len(p0)))).T / source.scale
 
     def _step_cells(self, source: _Source, w: np.ndarray, k: int, depth: float) -> tuple[list[Cell], np.ndarray]:
-        """For a copy of the source reduced ``k`` times, swept to ``depth`` (its pixels): its cells (r0, r1, c0,
-        c1, step), over each of which one depth step (:meth:`_depth_steps`, at the cell's centre) draws a
-        segment of depth within ``STEP_TOLERANCE`` pixels of where each pixel's own step puts it (at most
-        ``MAX_STEP_CELLS`` down and across), and the steps at the copy's corners and between (they bound the
-        others)."""
+        """For a copy of the source reduced ``k`` times, swept to ``depth`` (its pixels, either side of the card):
+        its cells (r0, r1, c0, c1, step), over each of which one depth step (:meth:`_depth_steps`, at the cell's
+        centre) draws a segment of depth within ``STEP_TOLERANCE`` pixels of where each pixel's own step puts it
+        (at most ``MAX_STEP_CELLS`` down and across), and the steps at the copy's corners and between (they bound
+        the others)."""
         h, wd = source.alpha.shape
         probe = np.linspace(0.0, 1.0, 5)
         pc, pr = np.meshgrid(probe * (wd - 1), probe * (h - 1))
@@ -490,7 +497,7 @@ class CardTracer:
         (:func:`_sweep_reduction`; k > 1: without the card itself at full resolution); and the (x, y) in the
         result's pixels of the card's pixel (0, 0)."""
         near, far = self._sweep_depths(source, k)
-        cells, steps = self._step_cells(source, w, k, float(far.max()))
+        cells, steps = self._step_cells(source, w, k, max(float(far.max()), -float(near.min())))
 
         def lines(rows: np.ndarray, cols: np.ndarray) -> tuple[np.ndarray, np.ndarray]:  # in the reduced copy
             p0, p1 = self._depth_lines(source, w, cols * k + 0.5 * (k - 1), rows * k + 0.5 * (k - 1))
@@ -538,8 +545,9 @@ class CardTracer:
     def _surface_depth(self, feet: np.ndarray, framing: Framing, y0: int, base: float) -> np.ndarray:
         """How deep (pixels of ``alpha``) behind the card each pixel's surface lies, from its foot's row
         (``feet``, rows of ``alpha``, whose row 0 lies at canvas row ``y0``): the ground's distance from the
-        camera at the foot's row less at the card's foot (frame row ``base``), along the card's depth ray; 0
-        in front of the card, at most ``MAX_SURFACE_DEPTH`` times the cutout's size."""
+        camera at the foot's row less at the card's foot (frame row ``base``), along the card's depth ray (negative
+        where the foot lies nearer: a surface in front of the card), at most ``MAX_SURFACE_DEPTH`` times the
+        cutout's size either way."""
         cam, s = self.camera, framing.scale
         h, w = feet.shape
         k = max(1, math.ceil(max(h, w) / DEPTH_SIZE))  # worked out on a reduced copy (it is smooth) and enlarged
@@ -547,7 +555,8 @@ class CardTracer:
         rows = np.maximum((np.asarray(feet[::k, ::k], np.float64) + y0) * s + framing.offset_y, lowest)
         ahead = self._ground_ahead(rows) - self._ground_ahead(np.array([max(base, lowest)]))[0]
         along = abs(float(self._depth_ray() @ FORWARD))  # the depth ray's unit horizontal length, ahead
-        pixels = np.clip(ahead / max(along, 1e-9) / self._world_per_pixel, 0.0, MAX_SURFACE_DEPTH * max(h, w))
+        most = MAX_SURFACE_DEPTH * max(h, w)
+        pixels = np.clip(ahead / max(along, 1e-9) / self._world_per_pixel, -most, most)
         return _enlarged(pixels, k, (h, w))
 
     def _ground_ahead(self, rows: np.ndarray) -> np.ndarray:
@@ -591,7 +600,7 @@ class CardTracer:
         card = self._blurred(source, sigma_rows)
         to_card = self._homography(w, framing, source, (x0, y0)) @ np.diag([1.0 / fine, 1.0 / fine, 1.0])
         size = ((x1 - x0) * fine, (y1 - y0) * fine)
-        if self.depth > 0:
+        if self.depth > 0 or self.front > 0:
             k = _sweep_reduction(card, sigma_rows)
             swept, (sx, sy) = self._swept(card, source, w, 2.0 * sigma_rows, k)
             values = _warp(swept, np.array([[1.0 / k, 0, sx], [0, 1.0 / k, sy], [0, 0, 1.0]]) @ to_card, size)
@@ -669,9 +678,9 @@ def _swept_card(
     at = c0 + depth * c1
     ix = cols[which] + np.rint(a0 / c0 - (a0 + depth * a1) / at).astype(np.int32)
     iy = rows[which] + np.rint(b0 / c0 - (b0 + depth * b1) / at).astype(np.int32)
-    # kept within the card's size beyond where the steps at depth 0 would take the deepest (the card's top seen
-    # from a low sun can project towards the horizon)
-    reach = -np.asarray(steps) * top
+    # kept within the card's size beyond where the steps at depth 0 would take the deepest and the nearest (the
+    # card's top seen from a low sun can project towards the horizon)
+    reach = np.concatenate([-np.asarray(steps) * top, -np.asarray(steps) * min(float(near.min()), 0.0)])
     lo_cap = np.floor(np.minimum(reach.min(axis=0), 0)).astype(int) - (wd, h)
     hi_cap = np.ceil(np.maximum(reach.max(axis=0), 0)).astype(int) + (2 * wd, 2 * h)
     kept = (ix >= lo_cap[0]) & (ix < hi_cap[0]) & (iy >= lo_cap[1]) & (iy < hi_cap[1])

@@ -322,6 +322,49 @@ def test_a_surface_read_behind_the_card_casts_from_where_it_stands(post, back):
     assert np.hypot(*(measured - tip)) < 0.03 * length, (measured, tip)
 
 
+def test_a_surface_read_in_front_of_the_card_casts_from_there_within_its_own_depth(post):
+    """A surface whose foot lies below the card's (a ball's front: nearer the camera than where the object
+    touches the ground, with air beneath it) casts its shadow from where it stands: the post read as standing
+    20 rows in front of its lowest row, deep enough to reach back to its card, casts its lowest pixel's shadow
+    where that pixel's point (on its ray above that nearer foot) casts it along the light, nearer the camera
+    than the card's shadow starts; with no depth it stays on its card (a part reaches back to the card)."""
+    _, framing = frame_alpha(post, 256)
+    x0, y0, x1, y1 = framing.bbox
+    crop = post[y0:y1, x0:x1].astype(np.float32) / 255
+    u, v = 0.1, 0.6  # from behind the camera and its left: the shadow falls away, up the canvas
+    feet = np.full(crop.shape, FOOT - y0 + 20, np.float32)
+
+    def shadow(card: CardTracer) -> np.ndarray:
+        values, x, y = card.shadow(u, v, 0.53, framing)
+        s = np.zeros((H, W), np.float32)
+        s[y : y + values.shape[0], x : x + values.shape[1]] = values
+        return s
+
+    flat = shadow(CardTracer(crop, framing, None))
+    card = CardTracer(crop, framing, None, thickness=np.full(crop.shape, 200.0, np.float32), feet=feet)
+    front = shadow(card)
+    cam, ahead = card.camera, hard_light.FORWARD
+    centre = 0.5 * (LEFT + RIGHT)
+    ray = cam.rays(*[np.array([c]) for c in framing.to_frame(centre, FOOT + 20)])[0]
+    distance = (cam.centre - cam.centre[1] / ray[1] * ray) @ ahead
+    lowest = cam.rays(*[np.array([c]) for c in framing.to_frame(centre, FOOT - 0.5)])[0]
+    point = cam.centre + (distance - cam.centre @ ahead) / (lowest @ ahead) * lowest
+    w = hard_light.light_direction(u, v)
+    ground = point - point[1] / w[1] * w
+    start = framing.to_canvas(*[float(c[0]) for c in cam.project_xyz(*[np.array([g]) for g in ground])])[1]
+    column = slice(int(centre) - 2, int(centre) + 3)
+
+    def near_end(s: np.ndarray) -> float:  # one past the shadow's row nearest the camera, down the post's centre
+        return np.flatnonzero((s[:, column] > 0.5).any(axis=1)).max() + 1.0
+
+    assert near_end(flat) == FOOT
+    assert start > FOOT + 5
+    assert abs(near_end(front) - start) < 1.5, (near_end(front), start)
+    assert card.front > 0
+    thin = shadow(CardTracer(crop, framing, None, feet=feet))  # no depth: on the card
+    assert np.abs(thin - flat).max() < 2 / 255
+
+
 def test_each_span_of_depth_is_covered_by_its_copies_from_its_start_to_its_end():
     """A pixel's span of depth is drawn as one or two copies of a segment a power of two long: together they
     start at its start and end at its end, with no gap (a span shorter than a unit: one unit from its start)."""
