@@ -235,27 +235,37 @@ class CardTracer:
         horizon, focal = camera if camera is not None else (None, None)
         self.camera, self.height = camera_for_span(framing.n, top, base, horizon, focal)
         self._world_per_pixel = s * self._mid_depth() / float(self.camera.focal)  # at the card, per alpha pixel
-        thick = np.zeros(alpha.shape, np.float32) if thickness is None else np.asarray(thickness, np.float32)
-        near = np.zeros(alpha.shape, np.float32) if feet is None else self._surface_depth(feet, framing, y0, base)
-        near = np.pad(near[: rows[-1] + 1], ((0, foot - rows[-1] - 1), (0, 0)))
-        thick = np.pad(thick[: rows[-1] + 1], ((0, foot - rows[-1] - 1), (0, 0)))
+        lowest, width = int(rows[-1]) + 1, alpha.shape[1]
+        thick = (
+            np.zeros((lowest, width), np.float32) if thickness is None else np.asarray(thickness[:lowest], np.float32)
+        )
+        near = (
+            np.zeros((lowest, width), np.float32)
+            if feet is None
+            else self._surface_depth(feet, framing, y0, base)[:lowest]
+        )
         # a surface in front of its card (a ball's, a lowered head's) lies no farther in front than its own depth:
         # every part reaches back to the card's plane (the surface model's pixel heights are noisy)
         near = np.maximum(near, -thick)
-        thick = near + thick  # from here on: the far end
-        self.depth = float(thick.max()) * self._world_per_pixel  # world units the object reaches behind the card
-        self.front = float(-near.min()) * self._world_per_pixel  # and in front of it
-        alpha = alpha[: rows[-1] + 1]
+        far = near + thick
+        self.depth = max(float(far.max()), 0.0) * self._world_per_pixel  # world units it reaches behind the card
+        self.front = max(float(-near.min()), 0.0) * self._world_per_pixel  # and in front of it
+        alpha = alpha[:lowest]
         solid = np.flatnonzero((alpha > SOLID).any(axis=1))
         if solid.size:  # the card reaches the ground: below its lowest solid row it continues that row
             alpha[solid[-1] + 1 :] = alpha[solid[-1]]
-        alpha = np.pad(alpha, ((0, foot - alpha.shape[0]), (0, 0)))  # a card standing behind its lowest row
         cols = np.flatnonzero((alpha > 0).any(axis=0))
         self._x_cols = (cols[0] * s + framing.offset_x + x0 * s, (cols[-1] + 1) * s + framing.offset_x + x0 * s)
-        pad = math.ceil(PAD * max(alpha.shape))  # room for the blur above and beside the cutout (not below: ground)
-        alpha = np.pad(alpha, ((pad, 0), (pad, pad)))
-        self._far = {1: np.pad(thick, ((pad, 0), (pad, pad)))}  # per reduction: depth behind the card, its pixels
-        self._near = {1: np.pad(near, ((pad, 0), (pad, pad)))}  # the same of the surface the pixel shows
+        pad = math.ceil(PAD * max(foot, width))  # room for the blur above and beside the cutout (not below: ground)
+
+        def padded(values: np.ndarray) -> np.ndarray:  # with the pad, and zeros down to the foot (a card standing
+            out = np.zeros((pad + foot, width + 2 * pad), np.float32)  # behind its lowest row)
+            out[pad : pad + lowest, pad : pad + width] = values
+            return out
+
+        alpha = padded(alpha)
+        self._far = {1: padded(far)}  # per reduction: depth behind the card, its pixels
+        self._near = {1: padded(near)}  # the same of the surface the pixel shows
         self._full = _Source(alpha, s, framing.offset_x + (x0 - pad) * s, framing.offset_y + (y0 - pad) * s)
         self._sources: dict[int, _Source] = {}
         self._swept_depths: dict[tuple[int, int], tuple[np.ndarray, np.ndarray]] = {}  # per reduction and sweep's
