@@ -7,15 +7,19 @@ import shutil
 import sys
 from dataclasses import replace
 from pathlib import Path
+from typing import Any, cast
 
 import numpy as np
 import pytest
 from PIL import Image
 from scipy import ndimage
 
+from ssn_engine.framing import CanvasShadow
 from ssn_engine.hemisphere import direction
 from ssn_engine.host_kit.light_map import LightMap
 from ssn_engine.hard_light import light_direction
+from ssn_engine.methods import load_method
+from ssn_engine.session import ShadowSession
 from training.canvas_eval import cases, disk, metrics, oracle, render, score, sheet
 from training.canvas_eval.render_set import render_set
 from training.data import meshes, procedural
@@ -379,3 +383,29 @@ def test_the_oracle_casts_the_true_solid_as_the_renderer_does():
     assert truth[ground].sum() > 500  # a shadow worth comparing lies on the visible ground
     assert metrics.region_zncc(solid, truth, ground) > 0.95
     assert solid[ground].sum() == pytest.approx(truth[ground].sum(), rel=0.1)
+
+
+def test_the_product_given_the_true_pixel_heights_casts_the_renderer_s_shadow():
+    """The oracle's true pixel heights (each frame pixel's visible surface's foot less its row) of a box on the
+    ground: its lowest pixels stand on their own rows, its top's feet lie below them; the product's tracer given
+    them casts the renderer's own shadow under a 0.53-degree sun."""
+    mesh = _box_on_ground()
+    v = np.ascontiguousarray(meshes.yawed(mesh.vertices, 20.0))
+    canvas = render.canvas_camera(v, 320, 240, 15.0)
+    w = light_direction((150.0 + 180.0) / 360.0, 1.0 - 35.0 / 90.0)  # elevation 35, azimuth 150: behind the camera
+    truth = render.disk_shadow(v, mesh.faces, meshes.topology(mesh), canvas, w[None])
+    mask = render.canvas_mask(v, mesh.faces, meshes.topology(mesh), canvas)
+    alpha = np.round(mask * 255).astype(np.uint8)
+    session = ShadowSession(alpha, load_method("ssn").method, canvas.horizon, canvas.fov)
+    heights = oracle.true_heights(v, mesh.faces, canvas.camera, (240, 320), session)
+    covered = session.mask > 0.5
+    rows = np.flatnonzero(covered.any(axis=1))
+    lowest = covered[rows[-1] - 1]
+    assert np.abs(heights[rows[-1] - 1][lowest]).max() < 2.0  # frame rows: on the ground
+    assert heights[rows[0] + 1][covered[rows[0] + 1]].min() > 5.0  # the top stands above its feet
+    given = ShadowSession(alpha, cast(Any, oracle.GivenHeights(session.method, heights)), canvas.horizon, canvas.fov)
+    u, v_ = (150.0 + 180.0) / 360.0, 1.0 - 35.0 / 90.0
+    shadow = oracle.on_canvas(CanvasShadow(*given.tracer.shadow(u, v_, 0.53, given.framing)), (240, 320))
+    ground = metrics.ground_region(mask, canvas.horizon)
+    assert truth[ground].sum() > 500
+    assert metrics.region_zncc(shadow, truth, ground) > 0.9

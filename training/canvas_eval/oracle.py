@@ -16,7 +16,16 @@ score says how much of the error is in each guess:
 - ``column's surface, round depth``: one distance a column (the median of the true surface's), as a card a
   column standing at the truth's own place would be (the best the contact line's cards can do), as deep.
 
-Each variant is a hard shadow (no penumbra: compare it with the 0.53-degree truths), splatted from
+And the product's own tracer (the shipped model, the true camera, the cutout as one object), each pixel's
+surface placed by pixel heights (how far below a pixel the image of the ground under its surface lies), traced
+as the product traces a 0.53-degree sun (:class:`ssn_engine.hard_light.ContactTracer`):
+
+- ``traced, model's heights``: the traced part alone, at the surface model's reading (what ships);
+- ``traced, true heights``: the traced part alone, at the mesh's visible surface's pixel heights;
+- ``product, true heights``: the whole shadow (the traced part with the network's, as the CLI gives it) at
+  the true pixel heights: what a perfect surface model would give.
+
+Each splatted variant is a hard shadow (no penumbra: compare it with the 0.53-degree truths), splatted from
 ``SUPERSAMPLE`` x ``SUPERSAMPLE`` rays a pixel and ``SAMPLES`` points along each, the holes between splats
 closed over a pixel or two, scored as ``score`` scores the CLI (ZNCC on the visible ground; the fine
 metrics, band-pass ZNCC and gradient energy, beside it).
@@ -26,6 +35,7 @@ from __future__ import annotations
 
 import json
 import math
+import typing
 from pathlib import Path
 
 import numba
@@ -33,8 +43,13 @@ import numpy as np
 from scipy import ndimage
 
 from ssn_engine.camera import FORWARD, RIGHT, Camera
+from ssn_engine.frames import nearest_fill
+from ssn_engine.framing import CanvasShadow
 from ssn_engine.hard_light import depth_map, light_direction
 from ssn_engine.host_kit.light_map import LightMap
+from ssn_engine.imageio import load_image
+from ssn_engine.methods import ShadowMethod, load_method
+from ssn_engine.session import ShadowSession
 
 from . import cases, metrics, render_set
 from .sheet import default_groups, panel_sheet
@@ -49,6 +64,7 @@ VARIANTS = (
     "smooth surface, round depth",
     "column's surface, round depth",
 )
+TRACED = ("traced, model's heights", "traced, true heights", "product, true heights")  # the product's tracer
 FINE_METRICS = ("bandpass_zncc", "gradient_energy")  # scored beside ZNCC: "<variant>, <metric>"
 
 
@@ -185,12 +201,80 @@ def hard_shadows(group: cases.Group, alpha: np.ndarray, w: np.ndarray, ss: int =
     return {name: cast(cam, cols, rows, t0, t1, w, size) for name, (t0, t1) in segments.items()}
 
 
+def true_heights(
+    vertices: np.ndarray, faces: np.ndarray, cam: Camera, size: tuple[int, int], session: ShadowSession
+) -> np.ndarray:
+    """The pixel heights (N, N) on ``session``'s frame of the mesh seen by ``cam`` on a canvas of ``size``
+    (height, width): at each frame pixel its visible surface's foot (the image of the ground straight below
+    it) less its own row, frame rows (off the mesh, its nearest covered pixel's)."""
+    height, width = size
+    front, _ = surface_depths(vertices, faces, cam, width, height, 1)
+    n, framing = session.mask.shape[0], session.framing
+    fy, fx = np.mgrid[0:n, 0:n] + 0.5
+    cx, cy = framing.to_canvas(fx, fy)
+    t = front[np.clip(cy.astype(int), 0, height - 1), np.clip(cx.astype(int), 0, width - 1)]
+    hit = np.isfinite(t) & (cx >= 0) & (cy >= 0) & (cx < width) & (cy < height)
+    points = cam.centre + t[hit][:, None] * cam.rays(cx[hit], cy[hit])
+    _, foot = cam.project_xyz(points[:, 0], np.zeros(len(points)), points[:, 2])  # canvas rows
+    heights = np.zeros((n, n), np.float32)
+    heights[hit] = framing.to_frame(0.0, foot)[1] - fy[hit]
+    return nearest_fill(heights, hit)
+
+
+def traced_shadows(
+    data: Path, group: cases.Group, method: ShadowMethod, light: LightMap, angle: float
+) -> dict[str, np.ndarray]:
+    """The product tracer's shadows (H, W) of ``group``'s cutout under ``light`` (one disk of ``angle``
+    degrees), with the true camera: :data:`TRACED`."""
+    cutout = load_image(str(cases.cutout_path(data, group)))[0][..., 3]
+    session = ShadowSession(cutout, method, group.horizon, group.fov)
+    u, v = light.lights[0].u, light.lights[0].v
+    vertices, mesh, _, canvas = render_set.group_scene(group)
+    heights = true_heights(vertices, mesh.faces, canvas.camera, (group.height, group.width), session)
+    given = typing.cast(ShadowMethod, GivenHeights(method, heights))
+    truth = ShadowSession(cutout, given, group.horizon, group.fov)
+    shown = {
+        TRACED[0]: CanvasShadow(*session.tracer.shadow(u, v, angle, session.framing)),
+        TRACED[1]: CanvasShadow(*truth.tracer.shadow(u, v, angle, truth.framing)),
+        TRACED[2]: truth.render(light),
+    }
+    return {k: on_canvas(v, (group.height, group.width)) for k, v in shown.items()}
+
+
+class GivenHeights:
+    """``method``, reading ``heights`` (N, N) as every mask's pixel heights."""
+
+    def __init__(self, method: ShadowMethod, heights: np.ndarray) -> None:
+        self._method, self._heights = method, heights
+
+    def __getattr__(self, name: str) -> object:
+        return getattr(self._method, name)
+
+    def pixel_heights(self, masks: np.ndarray, cameras: np.ndarray | None) -> np.ndarray:
+        return np.repeat(self._heights[None], len(masks), 0)
+
+
+def on_canvas(shadow: CanvasShadow, size: tuple[int, int]) -> np.ndarray:
+    """``shadow`` on a zero canvas of ``size`` (height, width), in 8 bits as the CLI writes it."""
+    out = np.zeros(size, np.float32)
+    if not shadow.is_empty:
+        h, w = shadow.shape
+        ys, xs = max(0, shadow.y), max(0, shadow.x)
+        ye, xe = min(size[0], shadow.y + h), min(size[1], shadow.x + w)
+        if ye > ys and xe > xs:
+            out[ys:ye, xs:xe] = shadow.values[ys - shadow.y : ye - shadow.y, xs - shadow.x : xe - shadow.x]
+    return np.round(np.clip(out, 0.0, 1.0) * 255) / 255
+
+
 SHORT = {  # the sheet's captions
     VARIANTS[0]: "true solid",
     VARIANTS[1]: "true surface, round",
     VARIANTS[2]: "true surface only",
     VARIANTS[3]: "smooth surface, round",
     VARIANTS[4]: "column's surface, round",
+    TRACED[0]: "traced, model",
+    TRACED[1]: "traced, true heights",
+    TRACED[2]: "product, true heights",
 }
 
 
@@ -205,18 +289,20 @@ def run_oracle(
     line a group and the means, and writes them to ``out`` (json) when given; ``sheet``: a picture of the truth
     and every variant for four groups spread over the set (:func:`sheet.default_groups`)."""
     groups = [g for g in cases.read_groups(data) if not names or g.name in names]
+    method = load_method("ssn").method
     pictured = set(default_groups(groups, min(4, len(groups)))) if sheet is not None else set()
     panels = []
     rows = []
     for g in groups:
         alpha = cases.read_mask(data, g).astype(np.float32)
         truth = cases.read_truth(data, g, cases.ANGLES[0])
-        light = LightMap.from_json(cases.light_path(data, g, cases.ANGLES[0]).read_text()).lights[0]
-        shadows = hard_shadows(g, alpha, light_direction(light.u, light.v))
+        light = LightMap.from_json(cases.light_path(data, g, cases.ANGLES[0]).read_text())
+        shadows = hard_shadows(g, alpha, light_direction(light.lights[0].u, light.lights[0].v))
+        shadows.update(traced_shadows(data, g, method, light, cases.ANGLES[0]))
         scores = {k: metrics.score_case(v, truth, alpha, g.horizon) for k, v in shadows.items()}
-        row = {"group": g.name, **{k: scores[k]["zncc"] for k in VARIANTS}}
-        row.update({f"{k}, {m}": scores[k][m] for k in VARIANTS for m in FINE_METRICS})
-        log(g.name + "  " + "  ".join(f"{k}: {row[k]:.3f}" for k in VARIANTS))
+        row = {"group": g.name, **{k: scores[k]["zncc"] for k in shadows}}
+        row.update({f"{k}, {m}": scores[k][m] for k in shadows for m in FINE_METRICS})
+        log(g.name + "  " + "  ".join(f"{k}: {row[k]:.3f}" for k in shadows))
         if g.name in pictured:
             shown = [(f"{g.name}: truth", truth)] + [(f"{SHORT[k]} {row[k]:.2f}", v) for k, v in shadows.items()]
             panels.append([(caption, s, alpha) for caption, s in shown])
@@ -232,4 +318,15 @@ def run_oracle(
     return result
 
 
-__all__ = ["VARIANTS", "cast", "hard_shadows", "run_oracle", "surface_depths"]
+__all__ = [
+    "TRACED",
+    "VARIANTS",
+    "GivenHeights",
+    "cast",
+    "hard_shadows",
+    "on_canvas",
+    "run_oracle",
+    "surface_depths",
+    "traced_shadows",
+    "true_heights",
+]
