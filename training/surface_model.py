@@ -23,6 +23,7 @@ from ssn_engine.model_config import ModelConfig
 
 from .data.surface_views import R, load
 from .model_card import put_section
+from .model.mirror import MirrorAverage
 from .model.unet import AOPNet, UNetConfig
 from .onnx_graphs import export_graph, half_weights, session
 
@@ -181,8 +182,9 @@ def install(checkpoint: Path, models: Path) -> float:
     meta.write_text(dataclasses.replace(config, surface="surface.onnx", surface_training=training).to_json())
     section = (
         f"{CARD_SECTION}\n\n`surface.onnx` reads each pixel's pixel height (how far below it the image of the ground "
-        "straight below the surface it shows lies) from the mask and the camera input; the hard-light tracer "
-        "places each pixel's surface with it (docs/hard_light.md). Trained by `python -m training.surface` "
+        "straight below the surface it shows lies) from the mask and the camera input, mirror-averaged (run on the "
+        "mask and on its mirror image, the two readings averaged); the hard-light tracer places each pixel's "
+        "surface with it (docs/hard_light.md). Trained by `python -m training.surface` "
         f"(training/reproduce.sh, stage 7): {training}.\n\n"
     )
     put_section(models / "MODEL_CARD.md", CARD_SECTION, section)
@@ -191,9 +193,11 @@ def install(checkpoint: Path, models: Path) -> float:
 
 def export(checkpoint: Path, out: Path) -> float:
     """Write the checkpoint's network as ONNX ("mask" [b, 1, R, R], "camera" [b, 2] -> "height" [b, 1, R, R],
-    frames, clamped to [0, 1]; the weights stored in half precision); returns the largest difference of
-    onnxruntime's output to torch's."""
-    net = load_checkpoint(checkpoint)
+    frames, clamped to [0, 1]; the weights stored in half precision), mirror-averaged (:class:`MirrorAverage`:
+    run on the mask and on its mirror image, the second reading mirrored back and the two averaged: the
+    camera has no roll, so the mirrored scene is as likely, and the average is nearer the truth); returns the
+    largest difference of onnxruntime's output to torch's."""
+    net = MirrorAverage(load_checkpoint(checkpoint)).eval()
     out.parent.mkdir(parents=True, exist_ok=True)
     export_graph(net, "aop", R, out, output="height")
     half_weights(out)  # the weights were trained and kept in half precision (:func:`_save`)

@@ -215,18 +215,14 @@ class OnnxSSN:
 
     def pixel_heights(self, masks: np.ndarray, cameras: np.ndarray | None) -> np.ndarray | None:
         """Each frame pixel's pixel height (b, N, N), frame rows, read by the surface model from the masks and
-        the camera inputs (the given ones, else the estimator's reading), averaged with its reading of the masks
-        mirrored left to right (the camera has no roll, so the mirror image is as likely a scene; the model is
-        not exactly symmetric, and the average is nearer the truth: docs/hard_light.md); off the mask, its
-        nearest covered pixel's. None for a model without a surface model, or with no camera to read it with."""
+        the camera inputs (the given ones, else the estimator's reading); off the mask, its nearest covered
+        pixel's. None for a model without a surface model, or with no camera to read it with."""
         cameras = self.cameras_for(masks, cameras)
         if self._surface is None or cameras is None:
             return None
         m = (resample_frames(masks, self.model_resolution) > 0.5).astype(np.float32)
         frames = (np.asarray(cameras, np.float64) / FRAME).astype(np.float32)
-        both = np.concatenate([m, m[..., ::-1]])[:, None]
-        read = _run(self._surface, "height", {"mask": both, "camera": np.concatenate([frames, frames])})[:, 0]
-        heights = 0.5 * (read[: len(m)] + read[len(m) :, :, ::-1])
+        heights = _run(self._surface, "height", {"mask": m[:, None], "camera": frames})[:, 0]
         for b in range(len(heights)):
             heights[b] = nearest_fill(heights[b], m[b] > 0)
         return resample_frames(heights, FRAME) * FRAME

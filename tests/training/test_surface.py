@@ -60,6 +60,7 @@ def test_views_travel_packed_and_come_back(tmp_path):
 def test_a_short_training_run_installs_into_a_model_folder(tmp_path, monkeypatch):
     """A few steps on the CPU, then installed: the graph within 1e-4 of torch, model.json naming it, the engine
     reading pixel heights through it."""
+    from training.onnx_graphs import session
     from training.surface_model import install, train
 
     rng = np.random.default_rng(1)
@@ -78,6 +79,13 @@ def test_a_short_training_run_installs_into_a_model_folder(tmp_path, monkeypatch
     models = tmp_path / "models"
     shutil.copytree(ROOT / "ssn_engine" / "models", models)
     assert install(tmp_path / "run" / "last.pt", models) < 1e-4
+    # mirror-averaged: a mirrored mask, the same camera, reads as the mirror image of the mask's reading
+    graph = session(models / "surface.onnx")
+    mask = (rng.random((1, 1, R, R)) > 0.5).astype(np.float32)
+    camera = np.array([[0.3, 1.1]], np.float32)
+    direct = graph.run(None, {"mask": mask, "camera": camera})[0]
+    mirrored = graph.run(None, {"mask": np.ascontiguousarray(mask[..., ::-1]), "camera": camera})[0]
+    assert np.abs(mirrored[..., ::-1] - direct).max() < 1e-5
     card = json.loads((models / "model.json").read_text())
     assert card["surface"] == "surface.onnx" and "steps of 2 views" in card["surface_training"]
     assert (models / "MODEL_CARD.md").read_text().count("## Surface model") == 1
