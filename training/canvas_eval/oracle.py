@@ -211,13 +211,13 @@ def true_heights(
     front, _ = surface_depths(vertices, faces, cam, width, height, 1)
     n, framing = session.mask.shape[0], session.framing
     fy, fx = np.mgrid[0:n, 0:n] + 0.5
-    cx, cy = framing.to_canvas(fx, fy)
+    cx, cy = (fx - framing.offset_x) / framing.scale, (fy - framing.offset_y) / framing.scale  # canvas points
     t = front[np.clip(cy.astype(int), 0, height - 1), np.clip(cx.astype(int), 0, width - 1)]
     hit = np.isfinite(t) & (cx >= 0) & (cy >= 0) & (cx < width) & (cy < height)
     points = cam.centre + t[hit][:, None] * cam.rays(cx[hit], cy[hit])
     _, foot = cam.project_xyz(points[:, 0], np.zeros(len(points)), points[:, 2])  # canvas rows
     heights = np.zeros((n, n), np.float32)
-    heights[hit] = framing.to_frame(0.0, foot)[1] - fy[hit]
+    heights[hit] = foot * framing.scale + framing.offset_y - fy[hit]
     return nearest_fill(heights, hit)
 
 
