@@ -543,8 +543,9 @@ class CardTracer:
         return (heights / np.maximum(drop, 1e-9))[:, None]
 
     def _at_card(self, card: np.ndarray, source: _Source) -> np.ndarray:
-        """``card`` (of ``source``) where its pixels' surfaces lie within a pixel of the card (all of it where
-        every one does)."""
+        """``card`` (of ``source``) where its pixels' surfaces lie within a pixel behind the card or in front of
+        it (their spans reach the card's plane: a part in front reaches back to it), all of it where every one
+        does."""
         k = round(source.scale / self._full.scale)
         if k not in self._on_card:
             near = self._near[k]
