@@ -215,16 +215,19 @@ class OnnxSSN:
 
     def pixel_heights(self, masks: np.ndarray, cameras: np.ndarray | None) -> np.ndarray | None:
         """Each frame pixel's pixel height (b, N, N), frame rows, read by the surface model from the masks and
-        the camera inputs (the given ones, else the estimator's reading); off the mask, its nearest covered
-        pixel's. None for a model without a surface model, or with no camera to read it with."""
+        the camera inputs (the given ones, else the estimator's reading); off the mask, the height that puts
+        its foot on its nearest covered pixel's (a pixel the cutout's blur or fringe reaches stands on the
+        surface beside it, not that many rows higher). None for a model without a surface model, or with no
+        camera to read it with."""
         cameras = self.cameras_for(masks, cameras)
         if self._surface is None or cameras is None:
             return None
         m = (resample_frames(masks, self.model_resolution) > 0.5).astype(np.float32)
         frames = (np.asarray(cameras, np.float64) / FRAME).astype(np.float32)
         heights = _run(self._surface, "height", {"mask": m[:, None], "camera": frames})[:, 0]
+        rows = ((np.arange(heights.shape[1], dtype=np.float32) + 0.5) / heights.shape[1])[:, None]
         for b in range(len(heights)):
-            heights[b] = nearest_fill(heights[b], m[b] > 0)
+            heights[b] = nearest_fill(heights[b] + rows, m[b] > 0) - rows  # the feet filled, not the heights
         return resample_frames(heights, FRAME) * FRAME
 
     def predict_ao(self, masks: np.ndarray, cameras: np.ndarray | None = None) -> np.ndarray:

@@ -379,7 +379,7 @@ def test_a_mirrored_cutout_is_read_as_the_mirror_image_of_its_surface():
     heights = method.pixel_heights(mask, camera)
     mirrored = method.pixel_heights(mask[..., ::-1].copy(), camera)
     assert heights is not None and mirrored is not None
-    # (off the mask, and where the enlarging reaches off it, a pixel takes its nearest covered pixel's, ties
+    # (off the mask, and where the enlarging reaches off it, a pixel stands on its nearest covered pixel's foot, ties
     # broken one way)
     inside = ndimage.binary_erosion(mask[0] > 0, iterations=4)
     assert np.abs(mirrored - heights[..., ::-1])[0][inside].max() < 0.5  # rows (a lone reading: 21 off here)
@@ -388,7 +388,7 @@ def test_a_mirrored_cutout_is_read_as_the_mirror_image_of_its_surface():
 def test_the_surface_model_reads_a_post_as_standing_on_its_lowest_row(tmp_path, monkeypatch):
     """The shipped surface model's pixel heights of an upright post, camera given: each pixel's foot on (about)
     the post's lowest row, so the height falls from the post's height at its top to 0 at its foot; off the
-    mask, its nearest covered pixel's. A model without a surface graph reads none."""
+    mask, its nearest covered pixel's foot. A model without a surface graph reads none."""
     method = load_method("ssn").method
     assert isinstance(method, OnnxSSN)
     mask = np.zeros((1, 256, 256), np.float32)
@@ -399,7 +399,8 @@ def test_the_surface_model_reads_a_post_as_standing_on_its_lowest_row(tmp_path, 
     rows = np.arange(256) + 0.5
     feet = heights[0, 60:220, 118:138] + rows[60:220, None]
     assert np.median(np.abs(feet - 220.0)) < 8.0  # within 5 % of the post's height
-    assert abs(heights[0, 10, 10] - heights[0, 60, 118]) < 1.0  # the corner takes the top's value
+    # off the mask, a pixel stands on its nearest covered pixel's foot: the corner on the top's
+    assert abs((heights[0, 10, 10] + 10.5) - (heights[0, 60, 118] + 60.5)) < 1.0
     monkeypatch.setenv("SSN_SHADOW_MODEL_DIR", str(make_model_dir(tmp_path / "m")))
     plain = load_method("ssn").method
     assert isinstance(plain, OnnxSSN) and plain.pixel_heights(mask, camera) is None

@@ -206,7 +206,7 @@ def true_heights(
 ) -> np.ndarray:
     """The pixel heights (N, N) on ``session``'s frame of the mesh seen by ``cam`` on a canvas of ``size``
     (height, width): at each frame pixel its visible surface's foot (the image of the ground straight below
-    it) less its own row, frame rows (off the mesh, its nearest covered pixel's)."""
+    it) less its own row, frame rows (off the mesh, standing on its nearest covered pixel's foot)."""
     height, width = size
     front, _ = surface_depths(vertices, faces, cam, width, height, 1)
     n, framing = session.mask.shape[0], session.framing
@@ -216,9 +216,9 @@ def true_heights(
     hit = np.isfinite(t) & (cx >= 0) & (cy >= 0) & (cx < width) & (cy < height)
     points = cam.centre + t[hit][:, None] * cam.rays(cx[hit], cy[hit])
     _, foot = cam.project_xyz(points[:, 0], np.zeros(len(points)), points[:, 2])  # canvas rows
-    heights = np.zeros((n, n), np.float32)
-    heights[hit] = foot * framing.scale + framing.offset_y - fy[hit]
-    return nearest_fill(heights, hit)
+    feet = np.zeros((n, n), np.float32)
+    feet[hit] = foot * framing.scale + framing.offset_y  # frame rows
+    return nearest_fill(feet, hit) - fy
 
 
 def traced_shadows(
