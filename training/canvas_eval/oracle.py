@@ -232,11 +232,11 @@ def traced_shadows(
     vertices, mesh, _, canvas = render_set.group_scene(group)
     heights = true_heights(vertices, mesh.faces, canvas.camera, (group.height, group.width), session)
     given = typing.cast(ShadowMethod, GivenHeights(method, heights))
-    truth = ShadowSession(cutout, given, group.horizon, group.fov)
+    standing = ShadowSession(cutout, given, group.horizon, group.fov)  # on the true surface
     shown = {
         TRACED[0]: CanvasShadow(*session.tracer.shadow(u, v, angle, session.framing)),
-        TRACED[1]: CanvasShadow(*truth.tracer.shadow(u, v, angle, truth.framing)),
-        TRACED[2]: truth.render(light),
+        TRACED[1]: CanvasShadow(*standing.tracer.shadow(u, v, angle, standing.framing)),
+        TRACED[2]: standing.render(light),
     }
     return {k: on_canvas(v, (group.height, group.width)) for k, v in shown.items()}
 
@@ -255,15 +255,9 @@ class GivenHeights:
 
 
 def on_canvas(shadow: CanvasShadow, size: tuple[int, int]) -> np.ndarray:
-    """``shadow`` on a zero canvas of ``size`` (height, width), in 8 bits as the CLI writes it."""
-    out = np.zeros(size, np.float32)
-    if not shadow.is_empty:
-        h, w = shadow.shape
-        ys, xs = max(0, shadow.y), max(0, shadow.x)
-        ye, xe = min(size[0], shadow.y + h), min(size[1], shadow.x + w)
-        if ye > ys and xe > xs:
-            out[ys:ye, xs:xe] = shadow.values[ys - shadow.y : ye - shadow.y, xs - shadow.x : xe - shadow.x]
-    return np.round(np.clip(out, 0.0, 1.0) * 255) / 255
+    """``shadow`` (clipped to the canvas) on a zero canvas of ``size`` (height, width), in 8 bits as the CLI
+    writes it."""
+    return np.round(np.clip(shadow.full_canvas(size[1], size[0]), 0.0, 1.0) * 255) / 255
 
 
 SHORT = {  # the sheet's captions
