@@ -46,12 +46,27 @@ def tracer(post) -> tuple[ContactTracer, Framing]:
     return ContactTracer(post[y0:y1, x0:x1].astype(np.float32) / 255, framing, None), framing
 
 
-def _canvas(tracer: tuple[ContactTracer, Framing], u: float, v: float, angle: float) -> np.ndarray:
+def _canvas(tracer: tuple[ContactTracer | CardTracer, Framing], u: float, v: float, angle: float) -> np.ndarray:
     """The shadow of a disk light on the whole canvas."""
     values, x, y = tracer[0].shadow(u, v, angle, tracer[1])
     out = np.zeros((H, W), np.float32)
     out[y : y + values.shape[0], x : x + values.shape[1]] = values
     return out
+
+
+def _cast_at(card: CardTracer, framing: Framing, foot: float, row: float, u: float, v: float) -> np.ndarray:
+    """Where (canvas x, y) the point that the post's centre pixel at canvas ``row`` shows, standing above the
+    ground seen at canvas row ``foot`` (on that pixel's camera ray, as far ahead), casts its shadow along the
+    light at map point (``u``, ``v``)."""
+    cam, ahead = card.camera, hard_light.FORWARD
+    centre = 0.5 * (LEFT + RIGHT)
+    ray = cam.rays(*[np.array([c]) for c in framing.to_frame(centre, foot)])[0]
+    distance = (cam.centre - cam.centre[1] / ray[1] * ray) @ ahead
+    pixel = cam.rays(*[np.array([c]) for c in framing.to_frame(centre, row)])[0]
+    point = cam.centre + (distance - cam.centre @ ahead) / (pixel @ ahead) * pixel
+    w = hard_light.light_direction(u, v)
+    ground = point - point[1] / w[1] * w
+    return np.array(framing.to_canvas(*[float(c[0]) for c in cam.project_xyz(*[np.array([g]) for g in ground])]))
 
 
 def _edge_width(row: np.ndarray) -> float:
@@ -295,25 +310,12 @@ def test_a_surface_read_behind_the_card_casts_from_where_it_stands(post, back):
     crop = post[y0:y1, x0:x1].astype(np.float32) / 255
     u, v = 0.1, 0.6  # from behind the camera and its left: the shadow falls away, up the canvas
     card = CardTracer(crop, framing, None, feet=np.full(crop.shape, FOOT - y0 - back, np.float32))
-    values, x, y = card.shadow(u, v, 0.53, framing)
-    s = np.zeros((H, W), np.float32)
-    s[y : y + values.shape[0], x : x + values.shape[1]] = values
+    s = _canvas((card, framing), u, v, 0.53)
     if back == 0:
-        flat, fx0, fy0 = CardTracer(crop, framing, None).shadow(u, v, 0.53, framing)
-        t = np.zeros((H, W), np.float32)
-        t[fy0 : fy0 + flat.shape[0], fx0 : fx0 + flat.shape[1]] = flat
-        assert np.abs(s - t).max() < 2 / 255
+        assert np.abs(s - _canvas((CardTracer(crop, framing, None), framing), u, v, 0.53)).max() < 2 / 255
     # where the top's shadow lies: the ground below the foot's row, the top pixel's ray at its distance
-    cam, ahead = card.camera, hard_light.FORWARD
     centre = 0.5 * (LEFT + RIGHT)
-    foot_x, foot_y = framing.to_frame(centre, FOOT - back)
-    ray = cam.rays(np.array([foot_x]), np.array([foot_y]))[0]
-    distance = (cam.centre - cam.centre[1] / ray[1] * ray) @ ahead
-    top = cam.rays(*[np.array([c]) for c in framing.to_frame(centre, FOOT - 300 + 0.5)])[0]
-    point = cam.centre + (distance - cam.centre @ ahead) / (top @ ahead) * top
-    w = hard_light.light_direction(u, v)
-    ground = point - point[1] / w[1] * w
-    tip = np.array(framing.to_canvas(*[float(c[0]) for c in cam.project_xyz(*[np.array([g]) for g in ground])]))
+    tip = _cast_at(card, framing, FOOT - back, FOOT - 300 + 0.5, u, v)
     yy, xx = np.nonzero(s > 0.5)
     end = yy <= yy.min() + 2  # the far end, up the canvas: the shadow of the post's top edge
     measured = np.array([xx[end].mean(), yy.min() + 0.5])
@@ -333,25 +335,11 @@ def test_a_surface_read_in_front_of_the_card_casts_from_there_within_its_own_dep
     crop = post[y0:y1, x0:x1].astype(np.float32) / 255
     u, v = 0.1, 0.6  # from behind the camera and its left: the shadow falls away, up the canvas
     feet = np.full(crop.shape, FOOT - y0 + 20, np.float32)
-
-    def shadow(card: CardTracer) -> np.ndarray:
-        values, x, y = card.shadow(u, v, 0.53, framing)
-        s = np.zeros((H, W), np.float32)
-        s[y : y + values.shape[0], x : x + values.shape[1]] = values
-        return s
-
-    flat = shadow(CardTracer(crop, framing, None))
+    flat = _canvas((CardTracer(crop, framing, None), framing), u, v, 0.53)
     card = CardTracer(crop, framing, None, thickness=np.full(crop.shape, 200.0, np.float32), feet=feet)
-    front = shadow(card)
-    cam, ahead = card.camera, hard_light.FORWARD
+    front = _canvas((card, framing), u, v, 0.53)
+    start = _cast_at(card, framing, FOOT + 20, FOOT - 0.5, u, v)[1]
     centre = 0.5 * (LEFT + RIGHT)
-    ray = cam.rays(*[np.array([c]) for c in framing.to_frame(centre, FOOT + 20)])[0]
-    distance = (cam.centre - cam.centre[1] / ray[1] * ray) @ ahead
-    lowest = cam.rays(*[np.array([c]) for c in framing.to_frame(centre, FOOT - 0.5)])[0]
-    point = cam.centre + (distance - cam.centre @ ahead) / (lowest @ ahead) * lowest
-    w = hard_light.light_direction(u, v)
-    ground = point - point[1] / w[1] * w
-    start = framing.to_canvas(*[float(c[0]) for c in cam.project_xyz(*[np.array([g]) for g in ground])])[1]
     column = slice(int(centre) - 2, int(centre) + 3)
 
     def near_end(s: np.ndarray) -> float:  # one past the shadow's row nearest the camera, down the post's centre
@@ -361,7 +349,7 @@ def test_a_surface_read_in_front_of_the_card_casts_from_there_within_its_own_dep
     assert start > FOOT + 5
     assert abs(near_end(front) - start) < 1.5, (near_end(front), start)
     assert card.front > 0
-    thin = shadow(CardTracer(crop, framing, None, feet=feet))  # no depth: on the card
+    thin = _canvas((CardTracer(crop, framing, None, feet=feet), framing), u, v, 0.53)  # no depth: on the card
     assert np.abs(thin - flat).max() < 2 / 255
 
 
