@@ -14,6 +14,7 @@ import argparse
 from pathlib import Path
 
 from .data.surface_views import make
+from .data.sources import SOURCES
 from .data.views import add_split_arguments
 from .surface_model import WIDTHS, install, train
 
@@ -23,6 +24,7 @@ def parse_args(argv: list[str] | None = None) -> argparse.Namespace:
     sub = p.add_subparsers(dest="command", required=True)
     m = sub.add_parser("make", help="masks, camera inputs and pixel heights of a split's views")
     add_split_arguments(m)
+    m.add_argument("--sources", nargs="+", choices=SOURCES, default=list(SOURCES), help="the kinds of items viewed")
     t = sub.add_parser("train", help="train the surface model on a folder's train.npz, scored on its val.npz")
     t.add_argument("--data", required=True)
     t.add_argument("--sets", nargs="+", help="the training files' names in --data (default: every train*.npz)")
@@ -43,7 +45,7 @@ def parse_args(argv: list[str] | None = None) -> argparse.Namespace:
 def main(argv: list[str] | None = None) -> None:
     args = parse_args(argv)
     if args.command == "make":
-        make(args.split, args.cameras, Path(args.out), args.seed)
+        make(args.split, args.cameras, Path(args.out), args.seed, tuple(args.sources))
     elif args.command == "train":
         widths = tuple(args.widths) if args.widths else WIDTHS
         init = Path(args.init) if args.init else None

@@ -13,7 +13,9 @@ import pytest
 from ssn_engine.camera import Camera
 from ssn_engine.methods import load_method
 from ssn_engine.methods.onnx_ssn import OnnxSSN
-from training.data.surface_views import R, load, pixel_heights, save
+from training.data.procedural import procedural_items
+from training.data.surface_views import R, load, make, pixel_heights, save
+from training.data.views import VIEWS
 
 pytest.importorskip("torch")
 
@@ -55,6 +57,15 @@ def test_views_travel_packed_and_come_back(tmp_path):
     assert back["mask"].shape == (2, R, R) and np.array_equal(back["mask"][1], mask)
     assert np.abs(back["height"][0] - np.nan_to_num(height)).max() <= 0.25  # half rows, rounded
     assert np.allclose(back["camera"][0], np.array([10.0, 150.0]) / R) and list(back["pitch"]) == [15.0, 20.0]
+
+
+def test_a_set_of_one_source_holds_its_items_views_alone(tmp_path):
+    """``make --sources procedural``: the split's procedural shapes, every view of each, no meshes or people."""
+    make("val", ["continuous"], tmp_path / "p.npz", seed=3, sources=("procedural",))
+    views = load([tmp_path / "p.npz"])
+    shapes = [it for it in procedural_items(36, 3) if it.split == "val"]
+    assert len(shapes) >= 2 and len(views["mask"]) == len(shapes) * VIEWS
+    assert (views["mask"].sum(axis=(1, 2)) > 50).all() and (views["height"] > 0).any()
 
 
 def test_a_short_training_run_installs_into_a_model_folder(tmp_path, monkeypatch):

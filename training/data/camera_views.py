@@ -24,7 +24,7 @@ from .generate import view_rng
 from .meshes import yawed
 from .render_bases import mask_coverage, view_camera
 from .items import Item
-from .sources import all_items, build_mesh
+from .sources import SOURCES, all_items, build_mesh
 from .views import VIEWS, draw_view
 
 __all__ = ["ESTIMATOR_KEYS", "KEYS", "KIND_NAMES", "R", "load", "make", "split_views", "view_record"]
@@ -54,12 +54,18 @@ def view_record(mesh: meshes.Mesh, topo: meshes.Topology, yaw: float, pitch: flo
 
 
 def split_views(
-    split: str, cameras: list[str], seed: int = 0, procedural: int = 36, humans: int = 48, view_seed: int | None = None
+    split: str,
+    cameras: list[str],
+    seed: int = 0,
+    procedural: int = 36,
+    humans: int = 48,
+    view_seed: int | None = None,
+    sources: tuple[str, ...] = SOURCES,
 ) -> Iterator[tuple[Item, meshes.Mesh, meshes.Topology, tuple[float, float, float]]]:
-    """Every view of ``split``'s items under each camera set, drawn as ``training.make_dataset`` draws them
-    (``view_seed``, default ``seed``: other views of the same items): (item, mesh, its topology, (yaw, pitch,
-    fov)), with a progress line."""
-    items = [it for it in all_items(("mesh", "procedural", "anny"), procedural, humans, seed) if it.split == split]
+    """Every view of ``split``'s items of ``sources`` under each camera set, drawn as ``training.make_dataset``
+    draws them (``view_seed``, default ``seed``: other views of the same items): (item, mesh, its topology, (yaw,
+    pitch, fov)), with a progress line."""
+    items = [it for it in all_items(sources, procedural, humans, seed) if it.split == split]
     prog = Progress(len(items) * len(cameras))
     for c, which in enumerate(cameras):
         for q, item in enumerate(items):

@@ -24,6 +24,7 @@ from ..canvas_eval.oracle import surface_depths
 from . import meshes
 from .camera_views import split_views
 from .meshes import yawed
+from .sources import SOURCES
 from .render_bases import mask_coverage, view_camera
 
 __all__ = ["HEIGHT_STEPS", "R", "load", "make", "pixel_heights", "save", "view_record"]
@@ -59,12 +60,20 @@ def view_record(mesh: meshes.Mesh, topo: meshes.Topology, yaw: float, pitch: flo
     }
 
 
-def make(split: str, cameras: list[str], out: Path, seed: int = 0, procedural: int = 36, humans: int = 48) -> None:
-    """Write every view of ``split`` under each camera set to ``out`` (npz): ``masks`` bit-packed (mask > 0.5,
-    (n, R * R / 8)), ``heights`` uint8 over the masks' set pixels in order (nearest surface's where a set pixel's
-    centre misses the mesh), ``camera`` (n, 2) at R, ``pitch``."""
+def make(
+    split: str,
+    cameras: list[str],
+    out: Path,
+    seed: int = 0,
+    sources: tuple[str, ...] = SOURCES,
+    procedural: int = 36,
+    humans: int = 48,
+) -> None:
+    """Write every view of ``split``'s items of ``sources`` under each camera set to ``out`` (npz): ``masks``
+    bit-packed (mask > 0.5, (n, R * R / 8)), ``heights`` uint8 over the masks' set pixels in order (nearest
+    surface's where a set pixel's centre misses the mesh), ``camera`` (n, 2) at R, ``pitch``."""
     views, pitches = [], []
-    for _, mesh, topo, (yaw, pitch, fov) in split_views(split, cameras, seed, procedural, humans):
+    for _, mesh, topo, (yaw, pitch, fov) in split_views(split, cameras, seed, procedural, humans, sources=sources):
         views.append(view_record(mesh, topo, yaw, pitch, fov))
         pitches.append(pitch)
     save(out, views, pitches)
