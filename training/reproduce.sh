@@ -90,6 +90,6 @@ done
 run python -m training.surface make --split val --cameras continuous paper --out "$SURFACE/val.npz"
 run python -m training.surface train --data "$SURFACE" --sets train --run "$RUNS/surface_b" --minutes 7.3 \
     --batch 64 --lr 2e-3 --widths 16 32 64 128 192 256 --device "${SURFACE_DEVICE:-cuda}"
-run python -m training.surface train --data "$SURFACE" --run "$RUNS/surface_c" --minutes 4.1 --batch 64 \
-    --lr 1e-3 --init "$RUNS/surface_b/last.pt" --device "${SURFACE_DEVICE:-cuda}"
+run python -m training.surface train --data "$SURFACE" --sets train train_s1 train_s2 --run "$RUNS/surface_c" \
+    --minutes 4.1 --batch 64 --lr 1e-3 --init "$RUNS/surface_b/last.pt" --device "${SURFACE_DEVICE:-cuda}"
 run python -m training.surface install "$RUNS/surface_c/last.pt" --models "$OUT"
