@@ -130,6 +130,14 @@ def test_pick_shapes_prefers_distinct_categories_then_fills_each_kind():
     assert all(it.split == "test" for it in picked)
 
 
+def test_a_validation_set_picks_the_validation_shapes_alone():
+    """``render --split val``: a set to choose models by, of shapes the test set never shows."""
+    items = [_item("t1", "object", "box"), _item("v1", "object", "box", "val"), _item("v2", "animal", "cat", "val")]
+    picked = cases.pick_shapes(items, {"animal": 1, "object": 1}, split="val")
+    assert sorted(it.id for it in picked) == ["v1", "v2"]
+    assert [it.id for it in cases.pick_shapes(items, {"animal": 1, "object": 1})] == ["t1"]
+
+
 def test_groups_cycle_the_pitches_and_keep_lights_in_range():
     items = [_item(f"s{i}", "object", f"c{i}") for i in range(3)]
     groups = cases.make_groups(items, 2, 1024, 768)

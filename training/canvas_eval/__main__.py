@@ -27,7 +27,7 @@ DEFAULT_DATA = Path("data/canvas_test")
 
 def _render(args: argparse.Namespace) -> int:
     render_bases.set_threads(args.threads)
-    render_set(args.out, args.width, args.height, args.shapes, args.lights, args.seed)
+    render_set(args.out, args.width, args.height, args.shapes, args.lights, args.seed, split=args.split)
     return 0
 
 
@@ -65,6 +65,12 @@ def build_parser() -> argparse.ArgumentParser:
     r.add_argument("--lights", type=int, default=2, help="light directions per shape (default %(default)s)")
     r.add_argument("--seed", type=int, default=0)
     r.add_argument("--threads", type=int, default=1)
+    r.add_argument(
+        "--split",
+        choices=["test", "val"],
+        default="test",
+        help="whose shapes: the test set's, or the validation shapes' (a set to choose models by)",
+    )
     r.set_defaults(func=_render)
 
     s = sub.add_parser("score", help="render every case through the CLI and score it against the truth")

@@ -14,9 +14,11 @@ from training.data.items import stable_hash
 from . import cases, disk, render
 
 
-def planned_groups(width: int, height: int, shapes: int | None, lights: int, seed: int) -> list[cases.Group]:
-    """The test set's groups: the picked held-out shapes (the first ``shapes`` of them, None: all)."""
-    items = cases.pick_shapes(sources.manifest_items())
+def planned_groups(
+    width: int, height: int, shapes: int | None, lights: int, seed: int, split: str = "test"
+) -> list[cases.Group]:
+    """The set's groups: the picked held-out shapes of ``split`` (the first ``shapes`` of them, None: all)."""
+    items = cases.pick_shapes(sources.manifest_items(), split=split)
     return cases.make_groups(items[:shapes], lights, width, height, seed)
 
 
@@ -69,8 +71,10 @@ def render_set(
     seed: int = 0,
     angles: tuple[float, ...] = cases.ANGLES,
     log=print,
+    split: str = "test",
 ) -> list[cases.Group]:
-    """Render (or finish rendering) the test set under ``root``; returns its groups.
+    """Render (or finish rendering) the set of ``split``'s shapes under ``root`` (the test set; "val": the same
+    of the validation shapes, to choose models by without looking at the test set); returns its groups.
 
     Raises
     ------
@@ -78,7 +82,7 @@ def render_set(
         ``root`` holds a test set planned with other settings.
     """
     root = Path(root)
-    plan = planned_groups(width, height, shapes, lights, seed)
+    plan = planned_groups(width, height, shapes, lights, seed, split)
     if (root / "cases.json").is_file():
         done = cases.read_groups(root)
         if len(done) != len(plan) or not all(_same_plan(a, b) for a, b in zip(done, plan, strict=True)):
