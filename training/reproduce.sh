@@ -9,7 +9,8 @@
 #   7. the surface model (the hard-light tracer's pixel heights): its data, training on a GPU, then installed in OUT
 # On this project's 2-core CPU machine the stages took about: datasets 1 to 2 worker-hours each, AOPs 45 and
 # 42 min, SR 59 + 85 + 27 + 42 min, the camera AOPs 28 min side by side, the estimator 35 min (docs/training.md);
-# the surface model's data about 3 minutes a set, its training 7.3 + 4.1 minutes on one H200 GPU (SURFACE_DEVICE).
+# the surface model's data about 3 minutes a set (the later sets 1 minute, or 25 s of people), its training
+# 7.3 + 4.1 + 5.6 minutes on one H200 GPU (SURFACE_DEVICE).
 # Every training stage resumes from its run's last.pt, so re-running the script continues a stopped stage.
 # Install the result with: cp OUT/*.onnx OUT/model.json OUT/MODEL_CARD.md ssn_engine/models/
 # Usage: training/reproduce.sh [DATA] [RUNS] [OUT]   (env: DRY_RUN=1 prints the commands without running them)
@@ -80,7 +81,7 @@ run python -m training.camera_estimator --out "$RUNS/camera" --minutes 0 --insta
 
 # 7. The surface model (docs/hard_light.md, "Where each pixel's surface lies"): pixel heights of three sets of
 # training views (other procedural shapes, people and views with each seed), trained on a GPU, then fine-tuned on
-# all three sets.
+# all three sets, then on 30 more sets of views of the meshes and procedural shapes and 20 of people.
 SURFACE="$DATA/surface128"
 for seed in 0 1 2; do
     name=train$([ "$seed" = 0 ] || echo "_s$seed")
@@ -92,4 +93,14 @@ run python -m training.surface train --data "$SURFACE" --sets train --run "$RUNS
     --batch 64 --lr 2e-3 --widths 16 32 64 128 192 256 --device "${SURFACE_DEVICE:-cuda}"
 run python -m training.surface train --data "$SURFACE" --sets train train_s1 train_s2 --run "$RUNS/surface_c" \
     --minutes 4.1 --batch 64 --lr 1e-3 --init "$RUNS/surface_b/last.pt" --device "${SURFACE_DEVICE:-cuda}"
-run python -m training.surface install "$RUNS/surface_c/last.pt" --models "$OUT"
+for seed in $(seq 3 32); do
+    run python -m training.surface make --split train --cameras continuous --seed "$seed" --sources mesh procedural \
+        --out "$SURFACE/train_d$seed.npz"
+done
+for seed in $(seq 3 22); do
+    run python -m training.surface make --split train --cameras continuous --seed "$seed" --sources anny \
+        --out "$SURFACE/train_h$seed.npz"
+done
+run python -m training.surface train --data "$SURFACE" --run "$RUNS/surface_d" --minutes 5.6 --batch 128 \
+    --lr 1e-3 --init "$RUNS/surface_c/last.pt" --device "${SURFACE_DEVICE:-cuda}"
+run python -m training.surface install "$RUNS/surface_d/last.pt" --models "$OUT"
