@@ -24,8 +24,8 @@ from ..canvas_eval.oracle import surface_depths
 from . import meshes
 from .camera_views import split_views
 from .meshes import yawed
-from .sources import SOURCES
 from .render_bases import mask_coverage, view_camera
+from .sources import SOURCES
 
 __all__ = ["HEIGHT_STEPS", "R", "load", "make", "pixel_heights", "save", "view_record"]
 
