@@ -5,7 +5,8 @@ user's edits of it, are kept. A shadow that reaches the frame's border is
 continued beyond it by the geometric card (:mod:`ssn_engine.long_shadow`).
 Small lights (:func:`ssn_engine.hard_light.split_lights`) are traced at the
 output's resolution instead (:mod:`ssn_engine.hard_light`), kept no lighter
-than the network's shadow of them as Gaussians; the network renders the rest,
+than the network's shadow of them as Gaussians (half of it where the camera is
+given: ``GIVEN_CAMERA_HEDGE``); the network renders the rest,
 and the parts add up in their shares of the ground's unoccluded irradiance
 E0: s = sum_i (E0_i / E0) s_i.
 """
@@ -33,6 +34,10 @@ from .methods.geometric import camera_at
 from .stripes import thread_pool
 
 NETWORK_THREAD = "ssn-network"  # the thread the network's frames render on while the caller traces
+# How much of the network's shadow of the traced lights the traced shadow is kept no lighter than, where the camera
+# is given (the model's own reading of it: all). The network's soft shadow hedges against the traced geometry's
+# errors; a given camera leaves fewer (docs/hard_light.md, "Which lights are traced, and how the parts combine").
+GIVEN_CAMERA_HEDGE = 0.5
 
 
 def camera_input(framing: Framing, horizon: float, fov: float = DEFAULT_FOV) -> tuple[float, float]:
@@ -161,8 +166,8 @@ class ShadowSession:
 
         The broad lights' frame is enlarged. The small lights are traced on the canvas's pixels, added in their
         shares of E0, and where the network's shadow of them as Gaussians is darker (the object's extent in
-        depth, its contact), that is kept: s_small = max(traced, network). The two parts add up in their
-        shares of E0."""
+        depth, its contact), that is kept: s_small = max(traced, h network), h = ``GIVEN_CAMERA_HEDGE`` where
+        the camera is given, else 1. The two parts add up in their shares of E0."""
         return self._on_canvas(lambda: frames, light_map, clip, framing or self.framing)
 
     def _on_canvas(
@@ -174,7 +179,13 @@ class ShadowSession:
         shares = _shares(traced, broad)
         parts = self._traced(traced, shares, clip, framing)
         nets = self._network_shadows(frames(), traced, broad, clip, framing)
-        return _combined(nets, parts, shares, len(traced), broad.is_dark)
+        return _combined(nets, parts, shares, len(traced), broad.is_dark, self.hedge)
+
+    @property
+    def hedge(self) -> float:
+        """The share h of the network's shadow of the traced lights that their traced shadow is kept no lighter
+        than (:meth:`to_canvas`)."""
+        return GIVEN_CAMERA_HEDGE if self.cameras is not None else 1.0
 
     def _network_shadows(
         self, frames: np.ndarray, traced: list[GaussianLight], broad: LightMap, clip: bool, framing: Framing
@@ -246,17 +257,20 @@ def _combined(
     shares: np.ndarray,
     n_traced: int,
     broad_dark: bool,
+    hedge: float,
 ) -> CanvasShadow:
     """:meth:`ShadowSession.to_canvas` from the network's shadows (``_network_shadows``), the traced ``parts``
     (``_traced``) and every light's share of E0 (:func:`_shares`: the first ``n_traced`` traced; ``broad_dark``:
-    the others give no light)."""
+    the others give no light); the traced parts kept no lighter than ``hedge`` times the network's shadow of
+    them."""
     wide, net = nets
     if net is None:
         return wide
     if not shares.any():
         return CanvasShadow.nothing()
     small = float(shares[:n_traced].sum())
-    values, x, y = placed_sum(parts, (net.values, net.x, net.y))
+    darker = net.values if hedge == 1.0 else net.values * np.float32(hedge)
+    values, x, y = placed_sum(parts, (darker, net.x, net.y))
     if broad_dark:
         return CanvasShadow(values, x, y)
     return CanvasShadow(*placed_sum([(small, values, x, y), (1.0 - small, wide.values, wide.x, wide.y)]))

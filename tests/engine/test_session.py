@@ -165,6 +165,31 @@ def test_a_small_and_a_broad_light_render_the_same_shadow_while_the_network_runs
         assert together.values.max() > 0.5
 
 
+class BlanketMethod(CountingMethod):
+    """The card's AO, and a network whose shadow of any light is 0.8 over the middle of its frame."""
+
+    def render(self, masks, ao, elms, cameras=None):
+        out = np.zeros(masks.shape, np.float32)
+        n = masks.shape[-1]
+        out[:, n // 4 : 3 * n // 4, n // 4 : 3 * n // 4] = 0.8
+        return out
+
+
+def test_a_given_camera_keeps_a_traced_sun_crisp_against_half_the_network_s_soft_shadow():
+    """The network's soft shadow of a traced sun hedges against the traced geometry's errors: the traced shadow is
+    kept no lighter than all of it when the model reads the camera, and than half of it when the camera is given
+    (``GIVEN_CAMERA_HEDGE``); the traced umbra stays fully dark either way."""
+    alpha = drawn_alpha(200, 150)
+    sun = LightMap([GaussianLight.disk(0.3, 0.6, 0.53, 1.0)])
+    method = BlanketMethod(GeometricCard(resolution=128))
+    for session, hedge in ((ShadowSession(alpha, method), 1.0), (ShadowSession(alpha, method, 40.0, 45.0), 0.5)):
+        values = session.render(sun).values
+        assert values.max() > 0.99  # the traced umbra
+        blanket = np.isclose(values, 0.8 * hedge, atol=0.01).mean()
+        assert blanket > 0.1, (hedge, blanket)  # the network's shadow where the traced one is lighter
+        assert np.isclose(values, 0.8 * (1.5 - hedge), atol=0.01).mean() < 0.01  # not the other's
+
+
 def test_a_canvas_joins_only_the_part_of_a_long_shadow_it_sees():
     """The frame's shadow joined to the card's over a window (a clipped canvas's) is the whole join, cropped."""
     rng = np.random.default_rng(5)
