@@ -115,7 +115,8 @@ class LayerSession:
             horizon, fov = read["horizon"], read["fov"]
         # one object's canvas-sized alpha at a time
         others = (
-            ShadowSession(objects.alpha_of(i, alpha), method, horizon, fov) for i in range(1, len(objects.objects))
+            ShadowSession(objects.alpha_of(i, alpha), method, horizon, fov, read is not None)
+            for i in range(1, len(objects.objects))
         )
         self.parts = [main, *others]
         self.edits: list[dict[str, Any]] = []
@@ -130,7 +131,7 @@ class LayerSession:
         if read is not None:
             horizon, fov = read["horizon"], read["fov"]
         for part in others:
-            part.set_camera(horizon, fov)
+            part.set_camera(horizon, fov, read is not None)
         self._analysed(read)
 
     def _analysed(self, read: dict[str, float] | None) -> None:

@@ -71,10 +71,16 @@ def no_shadow_reason(light_map: LightMap, shadow: CanvasShadow) -> str | None:
 
 class ShadowSession:
     """Shadow rendering for one canvas alpha with one method; ``horizon`` (a canvas row) and ``fov`` (the
-    canvas's vertical field of view, degrees) give the camera, else the method assumes the default one."""
+    canvas's vertical field of view, degrees) give the camera, else the method assumes the default one; ``read``:
+    the camera given is a model's reading (another object's in the same layer), not the artist's."""
 
     def __init__(
-        self, alpha: np.ndarray, method: ShadowMethod, horizon: float | None = None, fov: float | None = None
+        self,
+        alpha: np.ndarray,
+        method: ShadowMethod,
+        horizon: float | None = None,
+        fov: float | None = None,
+        read: bool = False,
     ) -> None:
         self.method = method
         self.mask, self.framing = frame_alpha(alpha, method.resolution)
@@ -86,12 +92,13 @@ class ShadowSession:
         self.opacity = float(as_unit_float(self._cutout).max()) if self._cutout.size else 0.0
         self.edits: list[dict[str, Any]] = []
         self._card: GeometricCard | None = None  # traces long shadows for methods without a card of their own
-        self.set_camera(horizon, fov)
+        self.set_camera(horizon, fov, read)
 
-    def set_camera(self, horizon: float | None = None, fov: float | None = None) -> None:
-        """Change the camera (as in the constructor; None: the method's reading or default one): the AO is
-        predicted again with it and the AO edits are applied to it again. The camera the method uses is resolved
-        here, once per camera (``used_cameras``), so that a light change resolves none."""
+    def set_camera(self, horizon: float | None = None, fov: float | None = None, read: bool = False) -> None:
+        """Change the camera (as in the constructor; None: the method's reading or default one; ``read``: the
+        one given is a model's reading, another object's, not the artist's): the AO is predicted again with it
+        and the AO edits are applied to it again. The camera the method uses is resolved here, once per camera
+        (``used_cameras``), so that a light change resolves none."""
         self._tracer: ContactTracer | None = None  # made with the camera, on first use
         cameras = None
         if horizon is not None:
@@ -99,6 +106,8 @@ class ShadowSession:
         elif fov is not None:
             raise ValueError("field of view: give the horizon row too (the camera input needs both)")
         self.cameras = cameras
+        # the share of the network's shadow a traced light's shadow is kept no lighter than (:meth:`to_canvas`)
+        self.hedge = GIVEN_CAMERA_HEDGE if cameras is not None and not read else 1.0
         self.predicted_ao = self.method.predict_ao(self.mask[None], cameras)[0]
         resolve = getattr(self.method, "cameras_for", None)  # a model's own reading of a blind call's camera
         self.used_cameras = resolve(self.mask[None], cameras) if resolve is not None else cameras
@@ -180,12 +189,6 @@ class ShadowSession:
         parts = self._traced(traced, shares, clip, framing)
         nets = self._network_shadows(frames(), traced, broad, clip, framing)
         return _combined(nets, parts, shares, len(traced), broad.is_dark, self.hedge)
-
-    @property
-    def hedge(self) -> float:
-        """The share h of the network's shadow of the traced lights that their traced shadow is kept no lighter
-        than (:meth:`to_canvas`)."""
-        return GIVEN_CAMERA_HEDGE if self.cameras is not None else 1.0
 
     def _network_shadows(
         self, frames: np.ndarray, traced: list[GaussianLight], broad: LightMap, clip: bool, framing: Framing

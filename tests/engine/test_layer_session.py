@@ -11,7 +11,7 @@ from ssn_engine.framing import CanvasShadow
 from ssn_engine.layer_session import LayerSession, combine_shadows, open_session
 from ssn_engine.host_kit.light_map import preset
 from ssn_engine.methods import load_method
-from ssn_engine.session import ShadowSession
+from ssn_engine.session import GIVEN_CAMERA_HEDGE, ShadowSession
 
 W, H = 1400, 900
 TWO = [(560, 820, 330), (300, 700, 1030)]  # (height, base row, centre column): a near pawn and a far one
@@ -32,11 +32,12 @@ def test_each_object_casts_the_shadow_it_casts_alone(method, pawns, camera):
     alphas = pawn_scene(W, H, pawns)
     session = open_session(np.maximum.reduce(alphas), method, *camera)
     assert isinstance(session, LayerSession) and len(session.parts) == len(pawns)
-    if camera == (None, None):  # blind: every object uses the camera read for the image
+    blind = camera == (None, None)
+    if blind:  # every object uses the camera read for the image
         read = session.camera_read
         assert read is not None
         camera = (read["horizon"], read["fov"])
-    alone = [ShadowSession(alpha, method, *camera) for alpha in alphas]
+    alone = [ShadowSession(alpha, method, *camera, read=blind) for alpha in alphas]
     for light in map(preset, ("low-sun-left", "high-sun", "overcast")):
         layer = session.render(light).full_canvas(W, H)
         for alpha, single in zip(alphas, alone, strict=True):
@@ -59,15 +60,18 @@ def test_a_layer_of_one_object_is_the_single_session(method):
 
 
 def test_one_camera_for_all_objects(method):
-    """Blind, the largest object reads the camera and the others use it: one horizon on the canvas."""
+    """Blind, the largest object reads the camera and the others use it: one horizon on the canvas; and as a
+    reading, not an artist's camera, so their traced lights keep the network's whole hedge."""
     alphas = pawn_scene(W, H, TWO)
     session = open_session(np.maximum.reduce(alphas), method)
     assert isinstance(session, LayerSession)
     main = ShadowSession(alphas[0], method)
     assert session.camera_read == main.camera_read
     assert [p.camera_read for p in session.parts] == [main.camera_read, None]  # the other is given it
+    assert [p.hedge for p in session.parts] == [1.0, 1.0]
     given = open_session(np.maximum.reduce(alphas), method, *CAMERA)
-    assert given.camera_read is None
+    assert isinstance(given, LayerSession)
+    assert given.camera_read is None and [p.hedge for p in given.parts] == [GIVEN_CAMERA_HEDGE] * 2
 
 
 def test_a_camera_change_reaches_every_object(method):
@@ -81,13 +85,14 @@ def test_a_camera_change_reaches_every_object(method):
     session.set_ao_edits(edits)
     session.set_camera(*CAMERA)
     assert session.camera_read is None and all(p.cameras is not None for p in session.parts)
+    assert all(p.hedge == GIVEN_CAMERA_HEDGE for p in session.parts)
     fresh = open_session(layer, method, *CAMERA)
     fresh.set_ao_edits(edits)
     np.testing.assert_allclose(session.ao, fresh.ao, atol=1e-6)
     light = preset("low-sun-left")
     np.testing.assert_allclose(session.render(light).values, fresh.render(light).values, atol=1e-6)
     session.set_camera()
-    assert session.camera_read == read
+    assert session.camera_read == read and all(p.hedge == 1.0 for p in session.parts)
 
 
 def test_shadows_combine_as_light_does():
