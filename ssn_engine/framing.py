@@ -31,6 +31,8 @@ MIN_CUTOUT = 3  # pixels on the cutout's longer side; a smaller one casts no vis
 SHADOW_FLOOR = 0.5 / 255  # shadow below this is invisible in 8 bits: the layer is cropped to the rest
 EDGE_FADE = 0.04  # share of the frame over which a shadow fades out at the frame's edges
 HAZE, HAZE_BAND = 0.04, 0.12  # faint values removed near the frame's edges, and over what share of the frame
+BODY_QUANTILE = 0.9  # a cutout's opacity is this quantile of its visible mask: its body's, not a stray pixel's
+OPAQUE = 0.98  # an opacity at or above this is an opaque cutout's (its antialiased edge resampled)
 
 
 class EmptyAlphaError(ValueError):
@@ -268,6 +270,17 @@ def frame_alpha(alpha: np.ndarray, n: int = 256) -> tuple[np.ndarray, Framing]:
     mask = np.zeros((n, n), np.float32)
     mask[row0 : row0 + fh, col0 : col0 + fw] = np.clip(np.asarray(resized), 0.0, 1.0)
     return mask, framing
+
+
+def cutout_opacity(mask: np.ndarray) -> float:
+    """How opaque a framed cutout's body is (in (0, 1]): the ``BODY_QUANTILE`` of its visible mask values, 1 where
+    that reads opaque (``OPAQUE``). A half-transparent cutout (a layer's opacity times its alpha) casts the
+    shadow of its opaque shape, this much as dark; its edges and a few denser pixels do not decide it."""
+    visible = mask[mask > ALPHA_THRESHOLD]
+    if visible.size == 0:
+        return 0.0
+    level = float(np.quantile(visible, BODY_QUANTILE))
+    return 1.0 if level >= OPAQUE else level
 
 
 @functools.lru_cache(maxsize=8)

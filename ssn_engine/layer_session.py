@@ -5,9 +5,11 @@ gets a plain :class:`ShadowSession` of the whole alpha (the same pixels as ever)
 :class:`LayerSession`, which frames, reads and shadows each object on its own and offers the worker and the
 command line the same calls as a single session (docs/engine.md, "Several objects on one layer"):
 
-- **Camera.** One photograph has one camera. A given horizon row and field of view apply to every object. Without
-  them the largest object's session reads the camera from its outline, as it would alone, and the other objects
-  get that reading as their camera, so that all stand on one ground under one horizon (``camera_read`` is it).
+- **Camera.** One photograph has one camera. A given horizon row and field of view apply to every object (checked
+  on the largest; a smaller one whose model does not take that horizon gets the nearest it takes). Without them
+  the largest object's session reads the camera from its outline, as it would alone, and the other objects get
+  that reading as their camera, so that all stand on one ground under one horizon (``camera_read`` is it). The
+  specks left out of every object (:mod:`ssn_engine.objects`) change no object's frame or camera.
 - **Shadows** combine as light does. Under one small light a ground point in two shadows is as dark as in the
   darker one (both block the same light): the maximum. Under a broad sky each object blocks its own part of the
   sky and the blocked parts add up: ``1 - prod(1 - s_i)``, exact where the parts do not overlap. A light map is
@@ -65,8 +67,10 @@ def open_session(
     ShadowSession or LayerSession
     """
     layer = split_objects(alpha) if split else None
-    if layer is None or len(layer.objects) == 1:
+    if layer is None:
         return ShadowSession(alpha, method, horizon, fov)
+    if len(layer.objects) == 1:  # without the specks left out: they would change its frame and camera
+        return ShadowSession(layer.alpha_of(0, alpha) if layer.left_out else alpha, method, horizon, fov)
     return LayerSession(layer, alpha, method, horizon, fov)
 
 
@@ -115,7 +119,7 @@ class LayerSession:
             horizon, fov = read["horizon"], read["fov"]
         # one object's canvas-sized alpha at a time
         others = (
-            ShadowSession(objects.alpha_of(i, alpha), method, horizon, fov, read is not None)
+            ShadowSession(objects.alpha_of(i, alpha), method, horizon, fov, read is not None, clamp=True)
             for i in range(1, len(objects.objects))
         )
         self.parts = [main, *others]
@@ -131,7 +135,7 @@ class LayerSession:
         if read is not None:
             horizon, fov = read["horizon"], read["fov"]
         for part in others:
-            part.set_camera(horizon, fov, read is not None)
+            part.set_camera(horizon, fov, read is not None, clamp=True)
         self._analysed(read)
 
     def _analysed(self, read: dict[str, float] | None) -> None:

@@ -53,12 +53,13 @@ class LayerObject:
 class LayerObjects:
     """A layer split into objects: ``objects`` largest first, and the object index of each grid cell
     (``cells`` (h, w) int, -1 for none) of ``cell`` canvas pixels a side, whose top-left corner lies at canvas
-    point ``origin`` (x, y)."""
+    point ``origin`` (x, y); ``left_out``: whether specks were left out of every object."""
 
     objects: tuple[LayerObject, ...]
     cells: np.ndarray
     cell: int
     origin: tuple[int, int]
+    left_out: bool = False
 
     def alpha_of(self, index: int, alpha: np.ndarray) -> np.ndarray:
         """The canvas alpha of object ``index`` alone: ``alpha`` where its cells lie, 0 elsewhere."""
@@ -156,6 +157,7 @@ def split_objects(alpha: np.ndarray) -> LayerObjects:
     for index, group in enumerate(groups):
         lookup[group.labels] = index
     cells = lookup[labels]
+    left_out = bool(np.any(lookup[1:] < 0))
     x0, y0, x1, y1 = bbox
     objects = []
     for group in groups:
@@ -166,7 +168,7 @@ def split_objects(alpha: np.ndarray) -> LayerObjects:
             min(y1, y0 + group.r1 * cell),
         )
         objects.append(LayerObject(box, group.area))
-    return LayerObjects(tuple(objects), cells, cell, (x0, y0))
+    return LayerObjects(tuple(objects), cells, cell, (x0, y0), left_out)
 
 
 def _attach(

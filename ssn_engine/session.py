@@ -21,7 +21,15 @@ import numpy as np
 
 from . import long_shadow
 from .ao_edit import apply_edits
-from .framing import CanvasShadow, Framing, as_unit_float, frame_alpha, placed_sum, shadow_to_canvas
+from .framing import (
+    CanvasShadow,
+    Framing,
+    as_unit_float,
+    cutout_opacity,
+    frame_alpha,
+    placed_sum,
+    shadow_to_canvas,
+)
 from .hard_light import ContactTracer, as_gaussians, split_lights
 from .hemisphere import light_power, render_light_map
 from .host_kit.camera_rules import DEFAULT_FOV, FOV_RANGE
@@ -40,26 +48,34 @@ NETWORK_THREAD = "ssn-network"  # the thread the network's frames render on whil
 GIVEN_CAMERA_HEDGE = 0.5
 
 
-def camera_input(framing: Framing, horizon: float, fov: float = DEFAULT_FOV) -> tuple[float, float]:
-    """The frame's camera input for the canvas camera (``horizon`` a canvas row, ``fov`` degrees); a ValueError
-    in those terms (canvas rows, degrees) where it lies outside what the methods take (:func:`camera_limits`)."""
+def camera_input(framing: Framing, horizon: float, fov: float = DEFAULT_FOV, clamp: bool = False) -> tuple[float, float]:
+    """The frame's camera input for the canvas camera (``horizon`` a canvas row, ``fov`` degrees).
+
+    A field of view in :data:`FOV_RANGE` is always taken: where the cutout is so small on its canvas that the
+    frame's focal length passes what the model takes (a frame field of view under 1 degree, all but parallel
+    projection), the nearest it takes is used. A horizon too far from the cutout for the model is a ValueError
+    in canvas rows, unless ``clamp``: a camera checked on another object of the layer (or read from its
+    outline) is moved to the nearest horizon this object's model takes, never refused."""
     if not math.isfinite(horizon):
         raise ValueError(f"horizon: expected a canvas row (a finite number of pixels from the top), got {horizon}")
     h, f = framing.camera_input(horizon, fov)
     (h_lo, h_hi), (f_lo, f_hi) = camera_limits(framing.n)
-    if not h_lo <= h <= h_hi:
+    if not clamp and not h_lo <= h <= h_hi:
         lo, hi = framing.canvas_camera(h_lo, f)[0], framing.canvas_camera(h_hi, f)[0]
         raise ValueError(
             f"horizon: row {horizon:g} is too far from the cutout for the model; give a canvas row from "
             f"{math.ceil(lo)} to {math.floor(hi)}"
         )
-    if not f_lo <= f <= f_hi:
-        wide, narrow = framing.canvas_camera(h, f_lo)[1], framing.canvas_camera(h, f_hi)[1]
-        raise ValueError(
-            f"field of view: {fov:g} degrees is outside what the model takes for this cutout on this canvas; "
-            f"give {max(FOV_RANGE[0], narrow):.1f} to {min(FOV_RANGE[1], wide):.1f} degrees"
-        )
-    return h, f
+    return float(np.clip(h, h_lo, h_hi)), float(np.clip(f, f_lo, f_hi))
+
+
+def _in_fov_range(framing: Framing, cameras: np.ndarray) -> np.ndarray:
+    """A model's reading (frame camera inputs (1, 2)) moved so that its canvas field of view lies in
+    :data:`FOV_RANGE`: what it reports can be given back (a tiny cutout's frame camera may read wider)."""
+    horizon, fov = framing.canvas_camera(*cameras[0])
+    if FOV_RANGE[0] <= fov <= FOV_RANGE[1]:
+        return cameras
+    return np.array([camera_input(framing, horizon, float(np.clip(fov, *FOV_RANGE)), clamp=True)], cameras.dtype)
 
 
 def no_shadow_reason(light_map: LightMap, shadow: CanvasShadow) -> str | None:
@@ -81,28 +97,34 @@ class ShadowSession:
         horizon: float | None = None,
         fov: float | None = None,
         read: bool = False,
+        clamp: bool = False,
     ) -> None:
         self.method = method
         self.mask, self.framing = frame_alpha(alpha, method.resolution)
         x0, y0, x1, y1 = self.framing.bbox
         self._cutout = alpha[y0:y1, x0:x1].copy()  # the cutout at the canvas's resolution, for the tracer
-        # A cutout is as opaque as its most opaque pixel: a uniformly faint one lets that share of the light
-        # through, so the network's and the card's shadows (of its mask) are scaled by it; the tracer's, of the
-        # alpha itself, already are.
-        self.opacity = float(as_unit_float(self._cutout).max()) if self._cutout.size else 0.0
+        # A half-transparent cutout lets that share of the light through: every part casts the shadow of its
+        # opaque shape (the mask and the cutout divided by the opacity), scaled by the opacity.
+        self.opacity = cutout_opacity(self.mask)
+        if 0.0 < self.opacity < 1.0:
+            self.mask = np.minimum(self.mask / np.float32(self.opacity), 1.0)
         self.edits: list[dict[str, Any]] = []
         self._card: GeometricCard | None = None  # traces long shadows for methods without a card of their own
-        self.set_camera(horizon, fov, read)
+        self.set_camera(horizon, fov, read, clamp)
 
-    def set_camera(self, horizon: float | None = None, fov: float | None = None, read: bool = False) -> None:
+    def set_camera(
+        self, horizon: float | None = None, fov: float | None = None, read: bool = False, clamp: bool = False
+    ) -> None:
         """Change the camera (as in the constructor; None: the method's reading or default one; ``read``: the
-        one given is a model's reading, another object's, not the artist's): the AO is predicted again with it
-        and the AO edits are applied to it again. The camera the method uses is resolved here, once per camera
-        (``used_cameras``), so that a light change resolves none."""
+        one given is a model's reading, another object's, not the artist's; ``clamp``: it was checked on another
+        object, so a horizon this one's model does not take is moved, not refused (:func:`camera_input`)): the AO
+        is predicted again with it and the AO edits are applied to it again. The camera the method uses is
+        resolved here, once per camera (``used_cameras``), so that a light change resolves none."""
         self._tracer: ContactTracer | None = None  # made with the camera, on first use
         cameras = None
         if horizon is not None:
-            cameras = np.array([camera_input(self.framing, horizon, DEFAULT_FOV if fov is None else fov)])
+            fov = DEFAULT_FOV if fov is None else fov
+            cameras = np.array([camera_input(self.framing, horizon, fov, clamp or read)])
         elif fov is not None:
             raise ValueError("field of view: give the horizon row too (the camera input needs both)")
         self.cameras = cameras
@@ -111,6 +133,8 @@ class ShadowSession:
         self.predicted_ao = self.method.predict_ao(self.mask[None], cameras)[0]
         resolve = getattr(self.method, "cameras_for", None)  # a model's own reading of a blind call's camera
         self.used_cameras = resolve(self.mask[None], cameras) if resolve is not None else cameras
+        if cameras is None and self.used_cameras is not None:
+            self.used_cameras = _in_fov_range(self.framing, self.used_cameras)
         self.ao = apply_edits(self.predicted_ao, self.edits) if self.edits else self.predicted_ao
 
     @property
@@ -145,8 +169,11 @@ class ShadowSession:
         reads it, its depth and its cards)."""
         read = getattr(self.method, "pixel_heights", None)
         heights = read(self.mask[None], self.used_cameras) if read is not None else None
+        cutout = as_unit_float(self._cutout)
+        if 0.0 < self.opacity < 1.0:
+            np.minimum(cutout / np.float32(self.opacity), 1.0, out=cutout)
         return ContactTracer(
-            as_unit_float(self._cutout),
+            cutout,
             self.framing,
             camera_at(self.used_cameras, 0),
             None if heights is None else heights[0],
@@ -209,7 +236,7 @@ class ShadowSession:
         if not traced or small <= 0:
             return []
         return [
-            (share / small, *self.tracer.shadow(light.u, light.v, light.size_degrees, framing, clip))
+            (share * self.opacity / small, *self.tracer.shadow(light.u, light.v, light.size_degrees, framing, clip))
             for light, share in zip(traced, shares[: len(traced)], strict=True)
         ]
 
@@ -243,7 +270,7 @@ class ShadowSession:
     def cover(self, framing: Framing) -> np.ndarray:
         """The cutout's alpha (h, w) on ``framing``'s canvas, resampled from the frame: what hides the shadow
         in a preview."""
-        mask = shadow_to_canvas(self.mask, framing, origin=(0.0, 0.0))  # with an origin: no fading at the frame's edges
+        mask = shadow_to_canvas(self.mask * np.float32(self.opacity), framing, origin=(0.0, 0.0))  # with an origin: no fading at the frame's edges
         return mask.full_canvas(framing.canvas_width, framing.canvas_height)
 
 

@@ -14,11 +14,11 @@ returns replies. A worker that is missing, crashes, hangs or speaks another
 protocol raises :class:`WorkerUnavailable` with a message for the user; the
 next request starts a fresh worker.
 
-While a reply is awaited the client asks its ``on_wait`` hook, about every
-:data:`WAIT_STEP` seconds, whether the user has given up (a host shows its
-progress and handles its events there): then the worker is stopped (a shared
-one it started, by its process id) and :class:`Cancelled` raised, within
-one step (:func:`wait_for`).
+While a reply is awaited (a loopback worker's ``auth`` included) the client
+asks its ``on_wait`` hook, about every :data:`WAIT_STEP` seconds, whether
+the user has given up (a host shows its progress and handles its events
+there): then the worker is stopped (a shared one it started, by its process
+id) and :class:`Cancelled` raised, within one step (:func:`wait_for`).
 """
 
 from __future__ import annotations
@@ -37,7 +37,7 @@ from pathlib import Path
 from typing import IO, Any
 
 from .engine_config import EngineConfig, worker_environment
-from .protocol import PROTOCOL_VERSION, Buffer, ProtocolError, encode_header, read_message, write_message
+from .protocol import PROTOCOL_VERSION, Buffer, ProtocolError, encode_header, read_message
 
 __all__ = [
     "Cancelled",
@@ -185,7 +185,8 @@ class EngineClient:
             return self._proc.poll() is None
         return self._sock is not None
 
-    def _start(self) -> None:
+    def _start(self, limit: float) -> None:
+        """Start the worker, or connect to a loopback one and authenticate, within ``limit`` seconds."""
         if self.command is not None:
             try:
                 self._proc = subprocess.Popen(
@@ -205,26 +206,23 @@ class EngineClient:
             self._reader, self._writer = self._proc.stdout, self._proc.stdin
             threading.Thread(target=self._drain, args=(self._proc.stderr,), daemon=True).start()
         else:
-            assert self.address is not None  # __init__: exactly one of command and address
-            try:
-                self._sock = socket.create_connection(self.address, timeout=self.timeout)
-            except OSError as exc:
-                host, port = self.address
-                raise WorkerUnavailable(f"no shadow engine is listening on {host}:{port}: {exc}") from None
-            self._reader, self._writer = self._sock.makefile("rb"), self._sock.makefile("wb")
-            self._authenticate()
-            self._sock.settimeout(None)
+            self._connect(limit)
 
-    def _authenticate(self) -> None:
-        """A loopback worker's first request: ``auth`` with its token (under the connect timeout)."""
-        assert self.address is not None and self._reader is not None and self._writer is not None  # set by _start
+    def _connect(self, limit: float) -> None:
+        """Connect to the loopback worker and send it its token (``auth``), the reply awaited as any other
+        (:meth:`_await`: within ``limit`` seconds, ``on_wait`` asked meanwhile, the worker stopped if it is late or
+        the user gives up). A worker frozen whole still has its port accept the connection (the kernel does), but
+        nothing answers the ``auth``: a blocking read here sat out the socket's timeout (120 s)."""
+        assert self.address is not None  # __init__: exactly one of command and address
         host, port = self.address
-        try:
-            write_message(self._writer, {"id": 0, "cmd": "auth", "token": self.token or ""})
-            reply, _ = read_message(self._reader)
-        except (OSError, EOFError, ProtocolError) as exc:
-            self.close()
-            raise WorkerUnavailable(f"the shadow engine on {host}:{port} did not answer: {exc}") from None
+        try:  # loopback: accepted or refused at once (a frozen worker's kernel accepts for it)
+            sock = socket.create_connection(self.address, timeout=max(0.1, min(limit, self.timeout)))
+        except OSError as exc:
+            raise WorkerUnavailable(f"no shadow engine is listening on {host}:{port}: {exc}") from None
+        sock.settimeout(None)  # the waits are _await's, with their deadline and cancel check
+        self._sock = sock
+        self._reader, self._writer = sock.makefile("rb"), sock.makefile("wb")
+        reply, _ = self._await("auth", [encode_header({"id": 0, "cmd": "auth", "token": self.token or ""})], limit)
         if not reply.get("ok"):
             self.close()
             raise WorkerUnavailable(
@@ -255,9 +253,10 @@ class EngineClient:
                 pass
 
     def _stop_worker(self) -> None:
-        """Stop a worker that is working on a request nobody waits for any more: a spawned one by :meth:`close`,
-        a loopback one this user started (``worker_pid``) by its process id too. Its connection is still open and
-        authenticated, so that process is alive and is the worker this client talks to."""
+        """Stop a worker that is working on a request nobody waits for any more, or is frozen: a spawned one by
+        :meth:`close`, a loopback one this user started (``worker_pid``) by its process id too. Its port accepted
+        this client's connection, which is still open, so that process is alive and listens where it was recorded
+        (:func:`shared_client` names it only after checking its arguments where the system shows them)."""
         pid, self.worker_pid = self.worker_pid, None
         if pid is not None and self._sock is not None:
             try:
@@ -285,7 +284,7 @@ class EngineClient:
                 raise self._died(f"stopped unexpectedly (exit status {self._proc.returncode})")
             if not self.running:
                 self.close()
-                self._start()
+                self._start(self.timeout if timeout is None else timeout)
                 hello, _ = self._exchange("hello", None, timeout, {})
                 try:
                     self.info = check_hello(hello)
@@ -303,15 +302,20 @@ class EngineClient:
     def _exchange(
         self, cmd: str, buffers: dict[str, Buffer] | None, timeout: float | None, params: dict[str, Any]
     ) -> tuple[dict, dict[str, Buffer]]:
-        """One request and its reply, within ``timeout`` (None: the client's); a worker that fails to answer, or
-        whose answer the user stops waiting for (``on_wait``), is stopped (WorkerUnavailable, Cancelled)."""
+        """One request and its reply, within ``timeout`` (None: the client's), as :meth:`_await`."""
         _, chunks = self._requests.encode(cmd, buffers, **params)
+        return self._await(cmd, chunks, self.timeout if timeout is None else timeout)
+
+    def _await(self, cmd: str, chunks: list[bytes | memoryview], limit: float) -> tuple[dict, dict[str, Buffer]]:
+        """Send ``chunks`` (request ``cmd``) and read its reply on a thread, waiting at most ``limit`` seconds and
+        asking ``on_wait`` meanwhile (:func:`wait_for`); a worker that fails to answer, or whose answer the user
+        stops waiting for, is stopped (WorkerUnavailable, Cancelled)."""
+        reader, writer = self._reader, self._writer
+        assert reader is not None and writer is not None  # connected by _start
         result: list = []
         done = threading.Event()
 
         def exchange() -> None:
-            reader, writer = self._reader, self._writer
-            assert reader is not None and writer is not None  # connected by _start
             try:
                 writer.writelines(chunks)
                 writer.flush()
@@ -320,7 +324,6 @@ class EngineClient:
                 result.append(exc)
             done.set()
 
-        limit = self.timeout if timeout is None else timeout
         threading.Thread(target=exchange, daemon=True).start()
         try:
             outcome = wait_for(done, limit, self.on_wait)
@@ -371,10 +374,13 @@ def shared_client(
 
     The record names the worker's process and the process of the call that last took it (this one's). The client
     stops that worker (by its process id) when its user cancels a wait (``on_wait``) or a reply is late. A
-    recorded worker that does not answer is busy with that call's request: it is left alone (and a new one
-    started) while that call's process runs, and stopped when that process has gone (GIMP's own Cancel kills the
-    plug-in while the worker works for it: the next call stops the worker that nobody waits for)."""
+    recorded worker that does not answer, its ``auth`` included (a worker frozen whole answers nothing), is busy
+    with that call's request: it is left alone (and a new one started) after :data:`BUSY_TIMEOUT` while that
+    call's process runs, and stopped after :data:`ORPHAN_TIMEOUT` when that process has gone (GIMP's own Cancel
+    kills the plug-in while the worker works for it: the next call stops the worker that nobody waits for)."""
     state = _read_state(state_path, command)
+    if state is not None and isinstance(state.get("pid"), int) and not _runs_worker(state["pid"], command):
+        state = None  # the recorded worker has exited: its process id may be another program's now
     if state is not None:
         pid = state.get("pid") if isinstance(state.get("pid"), int) else None
         orphaned = pid is not None and not _process_runs(state.get("client"))
@@ -416,7 +422,26 @@ def _process_runs(pid: Any) -> bool:
         return False
     except OSError:  # another user's process: it runs
         return True
-    return True
+    try:  # a zombie (killed, not yet reaped by its parent) runs no more; Linux's /proc tells
+        with open(f"/proc/{pid}/stat", "rb") as f:
+            return f.read().rpartition(b")")[2].split()[:1] != [b"Z"]
+    except OSError:
+        return True
+
+
+def _runs_worker(pid: int, command: Sequence[str]) -> bool:
+    """Whether process ``pid`` runs ``command`` as :func:`_start_detached` started it (its arguments end with
+    ``command``'s, then ``--port 0 --idle-timeout S``), where the system shows a process's arguments (Linux's
+    /proc); True elsewhere. A recorded worker that has exited may have left its process id to another program."""
+    if not os.path.isdir("/proc/self"):
+        return True
+    try:
+        with open(f"/proc/{pid}/cmdline", "rb") as f:
+            argv = f.read().decode("utf-8", "surrogateescape").split("\0")[:-1]
+    except OSError:
+        return False  # no such process
+    tail = [*command[1:], "--port", "0", "--idle-timeout"]  # command[0] may be a script run by its interpreter
+    return len(argv) > len(tail) and argv[-len(tail) - 1 : -1] == tail
 
 
 def _read_state(path: Path, command: Sequence[str]) -> dict | None:

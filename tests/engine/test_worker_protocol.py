@@ -101,24 +101,30 @@ def test_a_float_alpha_must_hold_coverage_from_0_to_1(worker, value):
     assert f"alpha: a float alpha holds coverage from 0 to 1, got {value:g}" in replies[0]["error"]["message"]
 
 
-@pytest.mark.parametrize(
-    "camera, fragment",
-    [
-        ({"horizon": 1e9}, "horizon: row 1e+09 is too far from the cutout for the model; give a canvas row from"),
-        ({"horizon": 900, "fov": 1}, "field of view: 1 degrees is outside what the model takes for this cutout"),
-    ],
-)
-def test_a_camera_out_of_reach_is_answered_in_canvas_rows_and_degrees(worker, camera, fragment):
+def _small_cutout_with(worker, camera: dict) -> dict:
+    """set_cutout's reply for a small cutout on a large canvas (the frame sees it much enlarged) and ``camera``."""
     alpha = np.zeros((1800, 1800), np.uint8)
-    alpha[900:910, 900:905] = 255  # a small cutout on a large canvas: the frame sees it much enlarged
+    alpha[900:910, 900:905] = 255
     replies, _ = converse(
         worker,
         message(
             {"id": 1, "cmd": "set_cutout", "camera": camera, "buffers": [alpha_entry(alpha.shape)]}, alpha.tobytes()
         ),
     )
-    assert replies[0]["error"]["type"] == "BadRequest" and fragment in replies[0]["error"]["message"], replies[0]
-    assert "frame" not in replies[0]["error"]["message"] and "focal" not in replies[0]["error"]["message"]
+    return replies[0]
+
+
+def test_a_horizon_out_of_reach_is_answered_in_canvas_rows(worker):
+    reply = _small_cutout_with(worker, {"horizon": 1e9})
+    fragment = "horizon: row 1e+09 is too far from the cutout for the model; give a canvas row from"
+    assert reply["error"]["type"] == "BadRequest" and fragment in reply["error"]["message"], reply
+    assert "frame" not in reply["error"]["message"] and "focal" not in reply["error"]["message"]
+
+
+@pytest.mark.parametrize("fov", [1, 40, 170])
+def test_any_field_of_view_the_engine_takes_is_taken_for_a_small_cutout(worker, fov):
+    """The image's field of view is the photograph's, not the cutout's: a fragment on a large canvas takes it."""
+    assert _small_cutout_with(worker, {"horizon": 800, "fov": fov})["ok"] is True
 
 
 @pytest.mark.parametrize("cmd", ["get_ao", "render", "release"])
