@@ -48,7 +48,9 @@ NETWORK_THREAD = "ssn-network"  # the thread the network's frames render on whil
 GIVEN_CAMERA_HEDGE = 0.5
 
 
-def camera_input(framing: Framing, horizon: float, fov: float = DEFAULT_FOV, clamp: bool = False) -> tuple[float, float]:
+def camera_input(
+    framing: Framing, horizon: float, fov: float = DEFAULT_FOV, clamp: bool = False
+) -> tuple[float, float]:
     """The frame's camera input for the canvas camera (``horizon`` a canvas row, ``fov`` degrees).
 
     A field of view in :data:`FOV_RANGE` is always taken: where the cutout is so small on its canvas that the
@@ -270,7 +272,8 @@ class ShadowSession:
     def cover(self, framing: Framing) -> np.ndarray:
         """The cutout's alpha (h, w) on ``framing``'s canvas, resampled from the frame: what hides the shadow
         in a preview."""
-        mask = shadow_to_canvas(self.mask * np.float32(self.opacity), framing, origin=(0.0, 0.0))  # with an origin: no fading at the frame's edges
+        # with an origin: no fading at the frame's edges
+        mask = shadow_to_canvas(self.mask * np.float32(self.opacity), framing, origin=(0.0, 0.0))
         return mask.full_canvas(framing.canvas_width, framing.canvas_height)
 
 
