@@ -3,6 +3,7 @@
 from __future__ import annotations
 
 import ast
+import re
 import sys
 import tomllib
 from importlib.metadata import packages_distributions
@@ -124,39 +125,86 @@ def test_host_kit_is_stdlib_only_and_closed():
                 assert dep in sys.stdlib_module_names or dep == "__future__", f"{name} imports {dep}"
 
 
+# the hosts' own modules (Krita ships plugin_importer), and the docker as Krita imports it (the benchmark's in-Krita
+# driver, plugin_krita/bench_driver.py, drives the installed ssn_shadow)
+HOSTS = {"krita", "PyQt5", "gi", "plugin_importer", "ssn_shadow"}
+
+
+def requirement_names(requirements: list[str]) -> set[str]:
+    """The distribution names of requirement strings, normalised (lower case, "-")."""
+    out = set()
+    for req in requirements:
+        for stop in "<>=![ ;":
+            req = req.split(stop)[0]
+        out.add(req.strip().lower().replace("_", "-"))
+    return out
+
+
+def declared() -> tuple[set[str], dict[str, set[str]]]:
+    """pyproject.toml's runtime dependencies and its extras, as distribution names."""
+    project = tomllib.loads((ROOT / "pyproject.toml").read_text())["project"]
+    extras = {k: requirement_names(v) for k, v in project["optional-dependencies"].items()}
+    return requirement_names(project["dependencies"]), extras
+
+
+def third_party(deps: set[str]) -> set[str]:
+    """The top-level third-party modules among ``deps``."""
+    return {d for d in deps if "." not in d and d not in sys.stdlib_module_names and d not in ("__future__", *PACKAGES)}
+
+
+def imported_by_tests() -> set[str]:
+    """The third-party and local top-level modules the tests import, less the tests' own modules."""
+    local = {p.stem for p in (ROOT / "tests").rglob("*.py")} | {p.stem for p in GIMP_DIR.glob("*.py")}
+    found = {d for p in (ROOT / "tests").rglob("*.py") for d in imports(p, p.stem, {})}
+    return third_party(found) - local - set(PACKAGES)
+
+
+def skipped_without() -> set[str]:
+    """The modules a test skips without (``pytest.importorskip("name")``)."""
+    found = set()
+    for path in (ROOT / "tests").rglob("*.py"):
+        for node in ast.walk(ast.parse(path.read_text(encoding="utf-8"))):
+            if (
+                isinstance(node, ast.Call)
+                and isinstance(node.func, ast.Attribute)
+                and node.func.attr == "importorskip"
+                and node.args
+                and isinstance(node.args[0], ast.Constant)
+            ):
+                found.add(str(node.args[0].value).split(".")[0])
+    return found
+
+
+def test_the_readme_test_command_installs_what_the_checks_import():
+    """A fresh machine runs the README's test command: the extras it installs hold every third-party module that
+    pyright resolves (the engine, training, the plug-ins) and that the tests import or skip without, and CI runs
+    that very line in a fresh virtual environment of its own (no system site-packages), so that a package
+    installed by hand on a developer's machine cannot hide a missing install step."""
+    commands = re.findall(
+        r'^pip install -e "\.\[([a-z,]+)\]" && python -m pytest$', (ROOT / "README.md").read_text(), re.M
+    )
+    assert len(commands) == 1, "the README names one test command"
+    ci = (ROOT / ".ci" / "run").read_text().splitlines()
+    assert f'pip install -e ".[{commands[0]}]" && python -m pytest' in ci, ".ci/run runs the README's test command"
+    venv = [line for line in ci if "-m venv" in line]
+    assert venv and not any("system-site-packages" in line for line in venv), ".ci/run makes a fresh environment"
+    runtime, extras = declared()
+    installed = runtime.union(*(extras[name] for name in commands[0].split(",")), {"ssn-shadow"})
+    dists = packages_distributions()
+    g = graph()
+    checked = {d for ds in g.values() for d in ds} | imported_by_tests() | skipped_without()
+    for module in sorted(third_party(checked) - HOSTS - {"tools", KIT_PACKAGE}):
+        names = {d.lower().replace("_", "-") for d in dists.get(module, [module])}
+        assert names & installed, f"{module} ({sorted(names)}) is imported but the README's test command omits it"
+
+
 def test_every_imported_dependency_is_declared():
     """Each third-party import of the engine is a dependency, of training one of the train extra (Mitsuba: the
     reference extra), of the tests one of the dev extra; the plug-ins import only their hosts' modules."""
-    project = tomllib.loads((ROOT / "pyproject.toml").read_text())["project"]
-
-    def names(requirements: list[str]) -> set[str]:
-        out = set()
-        for req in requirements:
-            for stop in "<>=![ ;":
-                req = req.split(stop)[0]
-            out.add(req.strip().lower().replace("_", "-"))
-        return out
-
-    runtime = names(project["dependencies"])
-    extras = {k: names(v) for k, v in project["optional-dependencies"].items()}
+    runtime, extras = declared()
     dists = packages_distributions()
-    # the hosts' own modules (Krita ships plugin_importer), and the docker as Krita imports it (the benchmark's
-    # in-Krita driver, plugin_krita/bench_driver.py, drives the installed ssn_shadow)
-    hosts = {"krita", "PyQt5", "gi", "plugin_importer", "ssn_shadow"}
-
-    def third_party(deps: set[str]) -> set[str]:
-        return {
-            d for d in deps if "." not in d and d not in sys.stdlib_module_names and d not in ("__future__", *PACKAGES)
-        }
-
     g = graph()
-    tests = {
-        d
-        for p in (ROOT / "tests").rglob("*.py")
-        for d in imports(p, p.stem, {})
-        if "." not in d and d not in sys.stdlib_module_names and d != "__future__"
-    }
-    local = {p.stem for p in (ROOT / "tests").rglob("*.py")} | {p.stem for p in GIMP_DIR.glob("*.py")}
+    tests = imported_by_tests()
     for scope, allowed, deps in (
         ("ssn_engine", runtime, {d for n, ds in g.items() if n.startswith("ssn_engine") for d in ds}),
         (
@@ -164,13 +212,13 @@ def test_every_imported_dependency_is_declared():
             runtime | extras["train"] | extras["reference"],
             {d for n, ds in g.items() if n.startswith("training") for d in ds},
         ),
-        ("tests", runtime | extras["train"] | extras["dev"], tests - local - set(PACKAGES)),
+        ("tests", runtime | extras["train"] | extras["dev"], tests),
     ):
-        for module in sorted(third_party(deps) - hosts - {"tools", KIT_PACKAGE}):
-            declared = {d.lower().replace("_", "-") for d in dists.get(module, [module])}
-            assert declared & (allowed | {"ssn-shadow"}), (
-                f"{scope} imports {module} ({sorted(declared)}), not declared for it"
+        for module in sorted(third_party(deps) - HOSTS - {"tools", KIT_PACKAGE}):
+            names = {d.lower().replace("_", "-") for d in dists.get(module, [module])}
+            assert names & (allowed | {"ssn-shadow"}), (
+                f"{scope} imports {module} ({sorted(names)}), not declared for it"
             )
     plugin_deps = {d for n, ds in g.items() if n.startswith(("plugin_krita", "plugin_gimp")) for d in ds}
-    plugin_third = third_party(plugin_deps) - hosts - {KIT_PACKAGE}
+    plugin_third = third_party(plugin_deps) - HOSTS - {KIT_PACKAGE}
     assert not plugin_third, f"the plug-ins import {sorted(plugin_third)}"
