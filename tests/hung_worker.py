@@ -12,17 +12,26 @@ freezes. Over stdio by default; with ``--port 0`` (what
 loopback, prints ``listening HOST:PORT token=TOKEN`` and, as the real
 worker does, authenticates every connection at once but serves one at a time.
 
-usage: python3 hung_worker.py PROTOCOL_VERSION PID_FILE [--port 0 --idle-timeout S]
+With ``--stop`` it freezes whole instead (it stops itself, SIGSTOP): nothing
+answers any more, not even a new connection's ``auth``, as a worker whose
+Python is stuck holding its lock, or a stopped process. Only the first worker
+does: one started after a worker froze (PID_FILE.frozen exists) answers the
+frozen commands with an error, so the call that started it ends at once.
+
+usage: python3 hung_worker.py PROTOCOL_VERSION PID_FILE [--stop] [--port 0 --idle-timeout S]
 """
 
 import json
 import os
+import signal
 import socket
 import sys
 import threading
 import time
 
 ANSWERED = {"auth", "hello", "set_cutout", "set_camera", "edit_ao", "release"}
+WHOLE = "--stop" in sys.argv  # freeze whole (SIGSTOP), the first worker only
+AFTER_A_FROZEN_ONE = "a fresh test worker, started after one froze, does not render"
 
 
 def serve(reader, writer) -> None:
@@ -35,11 +44,15 @@ def serve(reader, writer) -> None:
         for entry in header.get("buffers", []):
             reader.read(entry["nbytes"])
         cmd = header.get("cmd")
-        if cmd not in ANSWERED:
+        reply = {"id": header.get("id"), "ok": True}
+        if cmd not in ANSWERED and WHOLE and os.path.exists(sys.argv[2] + ".frozen"):  # another one froze
+            reply.update(ok=False, error={"type": "Internal", "message": f"{AFTER_A_FROZEN_ONE} ({cmd})"})
+        elif cmd not in ANSWERED:
             with open(sys.argv[2] + ".frozen", "w") as f:
                 f.write(str(cmd))
+            if WHOLE:
+                os.kill(os.getpid(), signal.SIGSTOP)  # frozen whole: not even auth is answered
             time.sleep(3600)  # frozen: no answer
-        reply = {"id": header.get("id"), "ok": True}
         if cmd == "hello":
             reply.update(protocol=int(sys.argv[1]), version="frozen", method="none")
         elif cmd in ("set_cutout", "set_camera"):

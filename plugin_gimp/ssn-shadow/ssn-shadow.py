@@ -92,8 +92,8 @@ class SoftShadow(Gimp.PlugIn):
             return self._run(procedure, run_mode, image, drawables, config)
         except engine_client.Cancelled:
             return procedure.new_return_values(Gimp.PDBStatusType.CANCEL, GLib.Error())
-        except (ShadowError, engine_config.EngineConfigError) as exc:
-            return failure(procedure, str(exc))
+        except (ShadowError, engine_client.EngineError, engine_config.EngineConfigError) as exc:
+            return failure(procedure, str(exc))  # EngineError: from connect (no worker could be had), as written
         except Exception:  # noqa: BLE001 - never crash GIMP; report the bug instead
             return failure(procedure, "Soft Shadow failed unexpectedly (a bug):\n" + traceback.format_exc(limit=6))
 

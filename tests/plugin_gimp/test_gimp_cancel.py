@@ -33,6 +33,7 @@ pytestmark = pytest.mark.gimp
 HUNG_WORKER = Path(__file__).resolve().parents[1] / "hung_worker.py"
 CHECK_SCRIPT = Path(__file__).with_name("gimp_cancel_check.py")
 PROGRESS_SCRIPT = Path(__file__).with_name("gimp_progress_cancel_check.py")
+FROZEN_SCRIPT = Path(__file__).with_name("gimp_frozen_handshake_check.py")
 
 
 @pytest.fixture
@@ -59,7 +60,8 @@ def frozen(chroot):  # noqa: F811 - the imported fixture
 def _run_check(frozen, script: Path, **env: str) -> tuple[dict, str]:
     work, inner, started = frozen
     shutil.copy(script, work / "check.py")
-    code = f'OUT_PATH = "{inner}/out.json"; PID_FILE = "{inner}/worker.pid"; '
+    state = f"{inner}/profile/plug-ins/ssn-shadow/worker.json"
+    code = f'OUT_PATH = "{inner}/out.json"; PID_FILE = "{inner}/worker.pid"; STATE_PATH = "{state}"; '
     result, log = run_check(
         inner, code + _exec_scene_then(work, inner, "check.py"), work / "out.json", "GIMP session", **env
     )
@@ -99,5 +101,30 @@ def test_gimps_progress_cancel_stops_a_frozen_filter_within_a_second(frozen):
         print(f"Cancel clicked to the filter's return: {waited:.2f} s")
         assert 0 < waited < 1.0, json.dumps(result)
     assert second["worker"] != first["worker"] and result["first_worker_alive"] is False, result
+    assert result["layers_after"] == result["layers_before"] == ["Pawn", "Background"]
+    assert result["pawn_unchanged"]
+
+
+def test_the_call_after_a_worker_froze_whole_stops_it_within_seconds(frozen):
+    """The shared worker freezes whole (tests/hung_worker.py --stop: it answers nothing, not even a new
+    connection's auth) and GIMP's Cancel kills the call that took it. The next call (Ctrl+F's run mode) stops that
+    worker and starts a fresh one in seconds. It used to wait out the client's 120 s socket timeout on the auth
+    reply (122 to 124 s, no progress, no Cancel) and leave the frozen worker running."""
+    work = frozen[0]
+    engine_json = work / "profile" / "plug-ins" / "ssn-shadow" / "engine.json"
+    config = json.loads(engine_json.read_text())
+    engine_json.write_text(json.dumps({**config, "args": [*config["args"], "--stop"]}))
+    result, log = _run_check(frozen, FROZEN_SCRIPT)
+    first, second = result["first"], result["second"]
+    assert first.get("frozen_on") == "render" and first["status"] != "success", (result, log[-3000:])
+    took = second["returned_at"] - second["called_at"]
+    print(
+        f"the call after a worker froze whole: {took:.2f} s, its fresh worker started after "
+        f"{second['started_at'] - second['called_at']:.2f} s"
+    )
+    assert took < 20.0, json.dumps(result)
+    assert second["worker"] != first["worker"] and result["first_worker_alive"] is False, result
+    # the fresh worker served the call: after a frozen one, the test's worker answers render with this error
+    assert second["status"] == "execution-error" and "started after one froze" in second["error"], second
     assert result["layers_after"] == result["layers_before"] == ["Pawn", "Background"]
     assert result["pawn_unchanged"]
