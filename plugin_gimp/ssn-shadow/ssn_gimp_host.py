@@ -19,7 +19,7 @@ from gi.repository import Babl, Gegl, Gimp  # noqa: E402
 from ssn_core import Cutout, ShadowError, ShadowLayerData  # noqa: E402
 from ssn_pixels import PixelFormatError, PixelPlan, layer_image_type, plan_for_precision  # noqa: E402
 from ssn_preview import Thumbnail  # noqa: E402
-from ssn_settings import ARGUMENTS, LAYER_PREFIX, image_camera_arguments, image_camera_record  # noqa: E402
+from ssn_settings import ARGUMENTS, image_camera_arguments, image_camera_record  # noqa: E402
 
 SOURCE_PARASITE = "ssn-shadow-source"  # on a shadow layer: the tattoo of the layer it was cast from
 CAMERA_PARASITE = "ssn-shadow-camera"  # on an image: its camera settings (ssn_engine_link.image_camera)
@@ -88,35 +88,25 @@ class GimpHost:
             group = group.get_parent()
 
     def _source_of(self, layer: Gimp.Layer) -> Gimp.Layer | None:
-        """The layer a shadow layer was cast from, or None when ``layer`` is no shadow of this filter. Shadows
-        made before the parasite existed are recognised by name: "Shadow: X" right below a layer "X"."""
+        """The layer a shadow layer was cast from, or None when ``layer`` is no shadow of this filter. Only the
+        filter's parasite makes a shadow: a layer of the user's named "Shadow: X", even right below "X", is the
+        user's, and is cast from (and kept) like any other layer."""
         tattoo = _source_tattoo(layer)
-        if tattoo is not None:
-            source = self.image.get_layer_by_tattoo(tattoo)
-            if source is None:
-                raise ShadowError(
-                    f'"{layer.get_name()}" is a shadow whose layer is no longer in the image: select the layer '
-                    "to cast a shadow from."
-                )
-            return source
-        name = layer.get_name()
-        if not name.startswith(LAYER_PREFIX):
+        if tattoo is None:
             return None
-        siblings = _siblings(self.image, layer)
-        index = next(i for i, item in enumerate(siblings) if item.get_id() == layer.get_id())
-        above = siblings[index - 1] if index > 0 else None
-        return above if above is not None and above.get_name() == name[len(LAYER_PREFIX) :] else None
+        source = self.image.get_layer_by_tattoo(tattoo)
+        if source is None:
+            raise ShadowError(
+                f'"{layer.get_name()}" is a shadow whose layer is no longer in the image: select the layer '
+                "to cast a shadow from."
+            )
+        return source
 
     def _shadow_of(self, source: Gimp.Layer) -> Gimp.Layer | None:
-        """The shadow layer this filter cast from ``source`` earlier, if it is still beside it."""
-        tattoo, siblings = source.get_tattoo(), _siblings(self.image, source)
-        found = next((lay for lay in siblings if _source_tattoo(lay) == tattoo), None)
-        if found is not None:
-            return found
-        index = next(i for i, item in enumerate(siblings) if item.get_id() == source.get_id())
-        below = siblings[index + 1] if index + 1 < len(siblings) else None
-        named = below is not None and below.get_name() == LAYER_PREFIX + source.get_name()
-        return below if named and _source_tattoo(below) is None else None
+        """The shadow layer this filter cast from ``source`` earlier (its parasite names ``source``), if it is still
+        beside it. Never a layer by its name alone: a re-run replaces (deletes) the layer it finds."""
+        tattoo = source.get_tattoo()
+        return next((lay for lay in _siblings(self.image, source) if _source_tattoo(lay) == tattoo), None)
 
     def target_note(self) -> str:
         """Which layer the filter casts from and which shadow it replaces, for the dialog."""
@@ -196,26 +186,39 @@ class GimpHost:
         data = self._visible_alpha().get(rect, 1.0, plan.layer_alpha_format, Gegl.AbyssPolicy.NONE)
         return Cutout(width, height, plan.alpha_dtype, bytes(data), f'the layer "{self.drawable.get_name()}"')
 
+    def shown_opacity(self) -> float:
+        """The layer's opacity times its groups' (0..1): how strongly its pixels show."""
+        opacity, item = 1.0, self.drawable
+        while item is not None:
+            opacity *= min(max(item.get_opacity() / 100.0, 0.0), 1.0)
+            item = item.get_parent()
+        return opacity
+
     def _visible_alpha(self) -> Gegl.Buffer:
-        """The layer's pixels as they show: with an active layer mask, multiplied by it (a GEGL graph, so the
-        user's layer and mask are only read)."""
+        """The layer's pixels as they show: their alpha times the layer's opacity (and its groups'; a 50 % layer
+        casts a shadow half as dark) and, with an active layer mask, times the mask (a GEGL graph, so the user's
+        layer and mask are only read)."""
         buffer = self.drawable.get_buffer()
         mask = self.drawable.get_mask()
-        if mask is None or not self.drawable.get_apply_mask():
+        masked = mask is not None and self.drawable.get_apply_mask()
+        opacity = self.shown_opacity()
+        if not masked and opacity >= 1.0:
             return buffer
         graph = Gegl.Node()
         source = graph.create_child("gegl:buffer-source")
         source.set_property("buffer", buffer)
-        aux = graph.create_child("gegl:buffer-source")
-        aux.set_property("buffer", mask.get_buffer())
-        masked = graph.create_child("gegl:opacity")
-        source.connect_to("output", masked, "input")
-        aux.connect_to("output", masked, "aux")
+        shown = graph.create_child("gegl:opacity")  # input x aux (if connected) x value
+        shown.set_property("value", opacity)
+        source.connect_to("output", shown, "input")
+        if mask is not None and masked:
+            aux = graph.create_child("gegl:buffer-source")
+            aux.set_property("buffer", mask.get_buffer())
+            aux.connect_to("output", shown, "aux")
         extent = buffer.get_extent()
         out = Gegl.Buffer.new("RGBA float", extent.x, extent.y, extent.width, extent.height)
         sink = graph.create_child("gegl:write-buffer")
         sink.set_property("buffer", out)
-        masked.connect_to("output", sink, "input")
+        shown.connect_to("output", sink, "input")
         sink.process()
         return out
 
