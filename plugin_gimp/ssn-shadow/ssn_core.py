@@ -15,11 +15,8 @@ from typing import Any, Protocol
 
 from ssn_engine_link import client as engine_client
 from ssn_engine_link import protocol, shadow_notes
-from ssn_pixels import BYTES_PER_SAMPLE, PixelPlan, is_blank, max_alpha
+from ssn_pixels import BYTES_PER_SAMPLE, PixelPlan, is_blank
 from ssn_settings import ARG_BY_NAME, LAYER_PREFIX, SettingsError, ShadowSettings
-
-
-FAINT = 0.5  # a cutout no more opaque than this that casts no visible shadow is called almost transparent
 
 
 class ShadowError(RuntimeError):
@@ -166,12 +163,6 @@ def compute_shadow(host: Host, engine: Engine, settings: ShadowSettings) -> tupl
     finally:
         release(engine, cutout_id)
     if shadow.width == 0:
-        strongest = max_alpha(cutout.data, cutout.dtype)
-        if strongest < FAINT:
-            raise ShadowError(
-                f"Nothing to cast a shadow from: {cutout.source} is almost transparent (its most opaque pixel is "
-                f"{strongest:.0%} opaque). Cast from an opaque cutout, or select the object."
-            )
         raise ShadowError(shadow_notes.no_shadow_note(shadow.no_shadow))
     return shadow, plan
 

@@ -90,17 +90,3 @@ def is_blank(data: bytes | bytearray | memoryview) -> bool:
     """True when every byte is zero (an all-transparent alpha in any unsigned or float dtype)."""
     view = memoryview(data).cast("B")
     return not view.tobytes().strip(b"\0") if len(view) else True
-
-
-def max_alpha(data: bytes | bytearray | memoryview, dtype: str) -> float:
-    """The most opaque value of an alpha buffer of protocol ``dtype`` (uint8, uint16 or float32), in [0, 1]."""
-    view = memoryview(data).cast("B")
-    if not len(view):
-        return 0.0
-    if dtype == "uint8":
-        return max(view) / 255.0
-    if dtype == "uint16":
-        return max(view.cast("H")) / 65535.0
-    if dtype == "float32":
-        return min(max(0.0, max(view.cast("f"))), 1.0)
-    raise PixelFormatError(f"unsupported alpha dtype {dtype!r}")
