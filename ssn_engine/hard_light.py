@@ -69,7 +69,7 @@ from .frames import nearest_fill
 from .framing import Framing, placed_sum
 from .hemisphere import direction
 from .stripes import for_each_stripe
-from .host_kit.light_map import GaussianLight, LightMap
+
 
 DEPTH_SIZE = 128  # pixels: the object's depth is worked out on a copy reduced to about this size
 RADIUS_STEP = 1.25  # ratio of the local radii the depth map tells apart
@@ -84,13 +84,11 @@ __all__ = [
     "TRACED_MAX_ANGLE",
     "CardTracer",
     "ContactTracer",
-    "as_gaussians",
     "contact_bands",
     "contact_line",
     "depth_map",
     "footprint_rise",
     "light_direction",
-    "split_lights",
     "traced_share",
 ]
 
@@ -131,26 +129,6 @@ def traced_share(angle: float) -> float:
     from ``TRACED_MAX_ANGLE``, linearly between (the rest goes to the network), so that resizing a light never
     makes its shadow jump."""
     return min(1.0, max(0.0, (TRACED_MAX_ANGLE - angle) / (TRACED_MAX_ANGLE - TRACED_FULL_ANGLE)))
-
-
-def split_lights(light_map: LightMap) -> tuple[list[GaussianLight], LightMap]:
-    """The lights to trace and the light map of the rest (the network's broad light): each light with
-    intensity split by :func:`traced_share` of its size (:attr:`GaussianLight.size_degrees`), its intensity
-    scaled by each part's share."""
-    traced, broad = [], []
-    for light in light_map:
-        share = traced_share(light.size_degrees) if light.intensity > 0 else 0.0
-        if share > 0:
-            traced.append(light if share == 1 else replace(light, intensity=light.intensity * share))
-        if share < 1:
-            broad.append(light if share == 0 else replace(light, intensity=light.intensity * (1 - share)))
-    return traced, LightMap(broad)
-
-
-def as_gaussians(lights: list[GaussianLight]) -> LightMap:
-    """The lights as Gaussians as wide (a disk's :func:`ssn_engine.host_kit.light_map.angle_softness`), for the
-    network."""
-    return LightMap([GaussianLight(light.u, light.v, light.softness, light.intensity) for light in lights])
 
 
 @dataclass(frozen=True)

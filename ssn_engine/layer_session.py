@@ -32,9 +32,8 @@ from scipy import ndimage
 
 from .ao_edit import MAX_GROW, apply_edits
 from .framing import CanvasShadow, Framing, frame_alpha, union_box
-from .hemisphere import render_light_map
 from .host_kit.light_map import LightMap
-from .host_kit.sky_map import NETWORK_SHAPE
+from .light_plan import LightPlan
 from .methods import ShadowMethod
 from .methods.onnx_ssn import small_lights_share
 from .objects import LayerObjects, split_objects
@@ -221,9 +220,9 @@ class LayerSession:
     def render(self, light_map: LightMap, framing: Framing | None = None, clip: bool = True) -> CanvasShadow:
         """The combined shadow at canvas resolution, or on ``framing``'s canvas (each object's
         :meth:`ShadowSession.render`, combined as the module docstring says)."""
-        shadows = [part.render(light_map, self._part_framing(part, framing), clip) for part in self.parts]
-        elm = render_light_map(light_map, NETWORK_SHAPE[0])
-        return combine_shadows(shadows, float(small_lights_share(elm[None])[0]))
+        plan = LightPlan.of(light_map)
+        shadows = [part.render_plan(plan, self._part_framing(part, framing), clip) for part in self.parts]
+        return combine_shadows(shadows, float(small_lights_share(plan.elm[None])[0]))
 
     def cover(self, framing: Framing) -> np.ndarray:
         """The layer's alpha (h, w) on ``framing``'s canvas, resampled from the objects' frames."""

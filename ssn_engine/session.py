@@ -3,12 +3,13 @@
 Moving a light re-runs only the shadow renderer (SR); the AO map, and the
 user's edits of it, are kept. A shadow that reaches the frame's border is
 continued beyond it by the geometric card (:mod:`ssn_engine.long_shadow`).
-Small lights (:func:`ssn_engine.hard_light.split_lights`) are traced at the
-output's resolution instead (:mod:`ssn_engine.hard_light`), kept no lighter
-than the network's shadow of them as Gaussians (half of it where the camera is
-given: ``GIVEN_CAMERA_HEDGE``); the network renders the rest,
-and the parts add up in their shares of the ground's unoccluded irradiance
-E0: s = sum_i (E0_i / E0) s_i.
+A render splits its light map once (:class:`ssn_engine.light_plan.LightPlan`)
+and hands the plan down: small lights are traced at the output's resolution
+(:mod:`ssn_engine.hard_light`), kept no lighter than the network's shadow of
+them as Gaussians (half of it where the camera is given:
+``GIVEN_CAMERA_HEDGE``); the network renders the rest, and the parts add up
+in their shares of the ground's unoccluded irradiance E0:
+s = sum_i (E0_i / E0) s_i.
 """
 
 from __future__ import annotations
@@ -30,12 +31,13 @@ from .framing import (
     placed_sum,
     shadow_to_canvas,
 )
-from .hard_light import ContactTracer, as_gaussians, split_lights
-from .hemisphere import light_power, render_light_map
+from .hard_light import ContactTracer
+from .hemisphere import render_light_map
 from .host_kit.camera_rules import DEFAULT_FOV, FOV_RANGE
-from .host_kit.light_map import GaussianLight, LightMap
+from .host_kit.light_map import LightMap
 from .host_kit.shadow_notes import HIDDEN, NO_LIGHT
 from .host_kit.sky_map import NETWORK_SHAPE
+from .light_plan import LightPlan
 from .methods import GeometricCard, ShadowMethod
 from .methods.base import camera_limits
 from .methods.geometric import camera_at
@@ -181,12 +183,11 @@ class ShadowSession:
             None if heights is None else heights[0],
         )
 
-    def render_frame(self, light_map: LightMap) -> np.ndarray:
-        """The network's frame shadows (2, N, N) of the light map: of its broad lights (those not traced), and of
-        its small lights as Gaussians as wide (:func:`ssn_engine.hard_light.as_gaussians`), which give the traced
-        shadow the object's extent and contact (:meth:`to_canvas`); zeros for a part without light."""
-        traced, broad = split_lights(light_map)
-        maps = [broad, as_gaussians(traced)]
+    def render_frame(self, plan: LightPlan) -> np.ndarray:
+        """The network's frame shadows (2, N, N) of a light plan: of its broad lights (those not traced), and of
+        its small lights as Gaussians as wide (:attr:`LightPlan.gaussians`), which give the traced shadow the
+        object's extent and contact (:meth:`to_canvas`); zeros for a part without light."""
+        maps = [plan.broad, plan.gaussians]
         out = np.zeros((2, *self.mask.shape), np.float32)
         lit = [i for i, part in enumerate(maps) if not part.is_dark]
         if lit:
@@ -197,49 +198,46 @@ class ShadowSession:
         return out
 
     def to_canvas(
-        self, frames: np.ndarray, light_map: LightMap, clip: bool = True, framing: Framing | None = None
+        self, frames: np.ndarray, plan: LightPlan, clip: bool = True, framing: Framing | None = None
     ) -> CanvasShadow:
-        """The shadow of ``light_map`` at canvas resolution (or on ``framing``'s canvas: a preview's, from
+        """The shadow of a light plan at canvas resolution (or on ``framing``'s canvas: a preview's, from
         :meth:`Framing.scaled`), cropped to its visible part, from the network's frames of :meth:`render_frame`.
 
         The broad lights' frame is enlarged. The small lights are traced on the canvas's pixels, added in their
         shares of E0, and where the network's shadow of them as Gaussians is darker (the object's extent in
         depth, its contact), that is kept: s_small = max(traced, h network), h = ``GIVEN_CAMERA_HEDGE`` where
         the camera is given, else 1. The two parts add up in their shares of E0."""
-        return self._on_canvas(lambda: frames, light_map, clip, framing or self.framing)
+        return self._on_canvas(lambda: frames, plan, clip, framing or self.framing)
 
     def _on_canvas(
-        self, frames: Callable[[], np.ndarray], light_map: LightMap, clip: bool, framing: Framing
+        self, frames: Callable[[], np.ndarray], plan: LightPlan, clip: bool, framing: Framing
     ) -> CanvasShadow:
         """:meth:`to_canvas`, the network's frames taken from ``frames()`` once the small lights are traced (so
-        that :meth:`render` can make them meanwhile)."""
-        traced, broad = split_lights(light_map)
-        shares = _shares(traced, broad)
-        parts = self._traced(traced, shares, clip, framing)
-        nets = self._network_shadows(frames(), traced, broad, clip, framing)
-        return _combined(nets, parts, shares, len(traced), broad.is_dark, self.hedge)
+        that :meth:`render_plan` can make them meanwhile)."""
+        parts = self._traced(plan, clip, framing)
+        nets = self._network_shadows(frames(), plan, clip, framing)
+        return _combined(nets, parts, plan, self.hedge)
 
     def _network_shadows(
-        self, frames: np.ndarray, traced: list[GaussianLight], broad: LightMap, clip: bool, framing: Framing
+        self, frames: np.ndarray, plan: LightPlan, clip: bool, framing: Framing
     ) -> tuple[CanvasShadow, CanvasShadow | None]:
-        """The network's frames on ``framing``'s canvas: of the ``broad`` lights (without ``traced`` ones, the
-        whole shadow), and of the traced lights as Gaussians (None without them)."""
-        if not traced:
-            return self._network_canvas(frames[0], broad, clip, framing), None
+        """The network's frames on ``framing``'s canvas: of the broad lights (without traced ones, the whole
+        shadow), and of the traced lights as Gaussians (None without them)."""
+        if not plan.traced:
+            return self._network_canvas(frames[0], plan.broad, clip, framing), None
+        broad = plan.broad
         wide = CanvasShadow.nothing() if broad.is_dark else self._network_canvas(frames[0], broad, clip, framing)
-        return wide, self._network_canvas(frames[1], as_gaussians(traced), clip, framing)
+        return wide, self._network_canvas(frames[1], plan.gaussians, clip, framing)
 
-    def _traced(
-        self, traced: list[GaussianLight], shares: np.ndarray, clip: bool, framing: Framing
-    ) -> list[tuple[float, np.ndarray, int, int]]:
-        """The ``traced`` lights' shadows on ``framing``'s canvas, each with its share of their E0 (``shares``:
-        every light's share of E0, the traced ones first: :func:`_shares`)."""
-        small = float(shares[: len(traced)].sum())
-        if not traced or small <= 0:
+    def _traced(self, plan: LightPlan, clip: bool, framing: Framing) -> list[tuple[float, np.ndarray, int, int]]:
+        """The traced lights' shadows on ``framing``'s canvas, each with its share of their E0, scaled by the
+        cutout's opacity."""
+        small = plan.traced_share
+        if not plan.traced or small <= 0:
             return []
         return [
             (share * self.opacity / small, *self.tracer.shadow(light.u, light.v, light.size_degrees, framing, clip))
-            for light, share in zip(traced, shares[: len(traced)], strict=True)
+            for light, share in zip(plan.traced, plan.shares[: len(plan.traced)], strict=True)
         ]
 
     def _network_canvas(self, frame: np.ndarray, light_map: LightMap, clip: bool, framing: Framing) -> CanvasShadow:
@@ -260,14 +258,19 @@ class ShadowSession:
         return shadow_to_canvas(values, framing, origin, clip)
 
     def render(self, light_map: LightMap, framing: Framing | None = None, clip: bool = True) -> CanvasShadow:
-        """The shadow at canvas resolution, or on ``framing``'s canvas: :meth:`to_canvas` of :meth:`render_frame`,
-        the network's frames rendered on a thread of their own while the small lights are traced (both release
-        the GIL: a sun's shadow costs about the longer of the two, not their sum)."""
+        """The shadow of ``light_map`` at canvas resolution, or on ``framing``'s canvas: :meth:`render_plan` of
+        its :class:`LightPlan`."""
+        return self.render_plan(LightPlan.of(light_map), framing, clip)
+
+    def render_plan(self, plan: LightPlan, framing: Framing | None = None, clip: bool = True) -> CanvasShadow:
+        """:meth:`to_canvas` of :meth:`render_frame` for a light plan made once by the caller, the network's
+        frames rendered on a thread of their own while the small lights are traced (both release the GIL: a
+        sun's shadow costs about the longer of the two, not their sum)."""
         framing = framing or self.framing
-        if not split_lights(light_map)[0]:
-            return self.to_canvas(self.render_frame(light_map), light_map, clip, framing)
-        frames = thread_pool(NETWORK_THREAD, 1).submit(self.render_frame, light_map)
-        return self._on_canvas(frames.result, light_map, clip, framing)
+        if not plan.traced:
+            return self.to_canvas(self.render_frame(plan), plan, clip, framing)
+        frames = thread_pool(NETWORK_THREAD, 1).submit(self.render_frame, plan)
+        return self._on_canvas(frames.result, plan, clip, framing)
 
     def cover(self, framing: Framing) -> np.ndarray:
         """The cutout's alpha (h, w) on ``framing``'s canvas, resampled from the frame: what hides the shadow
@@ -277,33 +280,23 @@ class ShadowSession:
         return mask.full_canvas(framing.canvas_width, framing.canvas_height)
 
 
-def _shares(traced: list[GaussianLight], broad: LightMap) -> np.ndarray:
-    """Each light's share of the ground's unoccluded irradiance E0, the ``traced`` lights first, then the
-    ``broad`` ones (zeros where nothing lights)."""
-    power = light_power(LightMap([*traced, *broad.lights]))
-    return power / power.sum() if power.sum() > 0 else np.zeros_like(power)
-
-
 def _combined(
     nets: tuple[CanvasShadow, CanvasShadow | None],
     parts: list[tuple[float, np.ndarray, int, int]],
-    shares: np.ndarray,
-    n_traced: int,
-    broad_dark: bool,
+    plan: LightPlan,
     hedge: float,
 ) -> CanvasShadow:
     """:meth:`ShadowSession.to_canvas` from the network's shadows (``_network_shadows``), the traced ``parts``
-    (``_traced``) and every light's share of E0 (:func:`_shares`: the first ``n_traced`` traced; ``broad_dark``:
-    the others give no light); the traced parts kept no lighter than ``hedge`` times the network's shadow of
-    them."""
+    (``_traced``) and the plan's shares of E0; the traced parts kept no lighter than ``hedge`` times the
+    network's shadow of them."""
     wide, net = nets
     if net is None:
         return wide
-    if not shares.any():
+    if not plan.shares.any():
         return CanvasShadow.nothing()
-    small = float(shares[:n_traced].sum())
+    small = plan.traced_share
     darker = net.values if hedge == 1.0 else net.values * np.float32(hedge)
     values, x, y = placed_sum(parts, (darker, net.x, net.y))
-    if broad_dark:
+    if plan.broad.is_dark:
         return CanvasShadow(values, x, y)
     return CanvasShadow(*placed_sum([(small, values, x, y), (1.0 - small, wide.values, wide.x, wide.y)]))

@@ -19,10 +19,10 @@ from ssn_engine.hard_light import (
     contact_line,
     depth_map,
     footprint_rise,
-    split_lights,
     traced_share,
 )
 from ssn_engine.host_kit.light_map import GaussianLight, LightMap, disk_directions
+from ssn_engine.light_plan import LightPlan
 from training.metrics import zncc
 
 W, H = 1024, 768
@@ -216,15 +216,16 @@ def test_under_a_light_from_the_side_a_deep_object_shades_a_band_as_deep_as_itse
 def test_small_lights_are_traced_and_broad_ones_left_to_the_network():
     sun, haze = GaussianLight.disk(0.3, 0.6, 0.53), GaussianLight(0.5, 0.2, 0.0004)
     sky = GaussianLight(0.5, 0.2, 0.05)
-    traced, broad = split_lights(LightMap([sun, haze, sky]))
-    assert traced == [sun, haze] and broad.lights == [sky]
-    assert split_lights(LightMap([GaussianLight.disk(0.3, 0.6, 0.53, 0.0)]))[0] == []  # no light, nothing to trace
+    plan = LightPlan.of(LightMap([sun, haze, sky]))
+    assert plan.traced == (sun, haze) and plan.broad.lights == [sky]
+    assert LightPlan.of(LightMap([GaussianLight.disk(0.3, 0.6, 0.53, 0.0)])).traced == ()  # no light, no trace
 
 
 def test_a_light_between_small_and_broad_is_shared_so_that_resizing_it_never_jumps():
     """A 16-degree disk: half traced, half the network's, the power kept; the share falls steadily with size."""
     softbox = GaussianLight.disk(0.5, 0.3, 16.0, 2.0)
-    (traced,), broad = split_lights(LightMap([softbox]))
+    plan = LightPlan.of(LightMap([softbox]))
+    (traced,), broad = plan.traced, plan.broad
     assert traced.intensity == pytest.approx(1.0) and broad.lights[0].intensity == pytest.approx(1.0)
     assert traced.angle == broad.lights[0].angle == 16.0
     shares = [traced_share(a) for a in np.linspace(0.1, 40.0, 400)]

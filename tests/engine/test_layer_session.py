@@ -10,6 +10,7 @@ from ssn_engine.ao_edit import AOEditError
 from ssn_engine.framing import CanvasShadow
 from ssn_engine.layer_session import LayerSession, combine_shadows, open_session
 from ssn_engine.host_kit.light_map import preset
+from ssn_engine.light_plan import LightPlan
 from ssn_engine.methods import load_method
 from ssn_engine.session import GIVEN_CAMERA_HEDGE, ShadowSession
 
@@ -57,6 +58,17 @@ def test_a_layer_of_one_object_is_the_single_session(method):
         before = ShadowSession(alpha, method).render(light)
         after = session.render(light)
         assert (after.x, after.y) == (before.x, before.y) and np.array_equal(after.values, before.values)
+
+
+def test_a_render_splits_its_light_map_once(method, monkeypatch):
+    """One render, one plan: a layer of three objects under a sun and a sky splits the light map once and hands
+    the plan to every object (its tracer, its network frames, the sum of the parts, the layer's combination)."""
+    session = open_session(np.maximum.reduce(pawn_scene(W, H, THREE)), method, *CAMERA)
+    made = []
+    plan_of = LightPlan.of
+    monkeypatch.setattr(LightPlan, "of", lambda light_map: made.append(light_map) or plan_of(light_map))
+    shadow = session.render(preset("sun")).full_canvas(W, H)
+    assert shadow.max() > 0.5 and len(made) == 1
 
 
 def test_one_camera_for_all_objects(method):

@@ -9,6 +9,7 @@ from engine_helpers import drawn_alpha, one_light
 from ssn_engine import long_shadow
 from ssn_engine.framing import EmptyAlphaError
 from ssn_engine.host_kit.light_map import GaussianLight, LightMap, preset
+from ssn_engine.light_plan import LightPlan
 from ssn_engine.methods import GeometricCard
 from ssn_engine.session import ShadowSession
 
@@ -98,7 +99,7 @@ def test_render_frame_and_canvas_shadow(counting):
     alpha = drawn_alpha(200, 150)
     session = ShadowSession(alpha, counting)
     broad = one_light(0.5, 0.7, 0.01)  # 36 degrees across: left to the network
-    frames = session.render_frame(broad)  # the broad light's, and the small lights' (none)
+    frames = session.render_frame(LightPlan.of(broad))  # the broad light's, and the small lights' (none)
     assert frames.shape == (2, 128, 128) and frames.dtype == np.float32
     assert frames[0].max() > 0.2 and frames[1].max() == 0
     shadow = session.render(broad)
@@ -139,8 +140,9 @@ def test_an_unclipped_shadow_reaches_past_the_canvas():
     alpha[100:260, 330:390] = drawn_alpha(60, 160)  # near the right edge
     session = ShadowSession(alpha, GeometricCard())
     sun = one_light(0.25, 0.92, 0.01)  # a long shadow to the right, of a broad light (the network's)
-    frame = session.render_frame(sun)
-    clipped, whole = session.to_canvas(frame, sun), session.to_canvas(frame, sun, clip=False)
+    plan = LightPlan.of(sun)
+    frame = session.render_frame(plan)
+    clipped, whole = session.to_canvas(frame, plan), session.to_canvas(frame, plan, clip=False)
     assert clipped.x + clipped.values.shape[1] <= 400  # cut at the canvas
     assert whole.x + whole.values.shape[1] > 450  # kept whole past it
     inside = whole.values[
@@ -159,7 +161,8 @@ def test_a_small_and_a_broad_light_render_the_same_shadow_while_the_network_runs
     lights = LightMap([GaussianLight.disk(0.3, 0.7, 0.53, 1.0), GaussianLight(0.6, 0.3, 0.05, 0.5)])
     for clip in (True, False):
         together = session.render(lights, clip=clip)
-        in_turn = session.to_canvas(session.render_frame(lights), lights, clip)
+        plan = LightPlan.of(lights)
+        in_turn = session.to_canvas(session.render_frame(plan), plan, clip)
         assert (together.x, together.y) == (in_turn.x, in_turn.y)
         np.testing.assert_array_equal(together.values, in_turn.values)
         assert together.values.max() > 0.5
@@ -272,7 +275,8 @@ def test_set_camera_analyses_again_and_keeps_the_ao_edits(counting):
     fresh = ShadowSession(alpha, counting, 40.0, 50.0)
     fresh.set_ao_edits(edits)
     assert np.array_equal(session.ao, fresh.ao) and session.cameras is not None
-    assert np.array_equal(session.render_frame(preset("softbox")), fresh.render_frame(preset("softbox")))
+    softbox = LightPlan.of(preset("softbox"))
+    assert np.array_equal(session.render_frame(softbox), fresh.render_frame(softbox))
     session.set_camera(None)
     assert session.cameras is None and session.edits == edits
 

@@ -1,0 +1,68 @@
+"""One render's light map split once: what is traced, what the network renders, and the shares of each.
+
+A small light's shadow is traced at the output's resolution (:mod:`ssn_engine.hard_light`); a broad light's
+comes from the network, which also renders the traced lights as Gaussians as wide, to hedge the traced shadow
+(:mod:`ssn_engine.session`). :class:`LightPlan` makes that split once per render and is handed down to every
+step (the network's frames, the tracer, the sum of the parts in their shares of E0, a layer's combination of
+its objects' shadows), so that no step splits the light map again.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass, replace
+from functools import cached_property
+
+import numpy as np
+
+from .hard_light import traced_share
+from .hemisphere import light_power, render_light_map
+from .host_kit.light_map import GaussianLight, LightMap
+from .host_kit.sky_map import NETWORK_SHAPE
+
+
+@dataclass(frozen=True)
+class LightPlan:
+    """A light map (``light_map``) split into the lights to trace (``traced``) and the network's broad light
+    (``broad``): each light's intensity split by :func:`ssn_engine.hard_light.traced_share` of its size."""
+
+    light_map: LightMap
+    traced: tuple[GaussianLight, ...]
+    broad: LightMap
+
+    @classmethod
+    def of(cls, light_map: LightMap) -> LightPlan:
+        """The plan of ``light_map``."""
+        traced, broad = [], []
+        for light in light_map:
+            share = traced_share(light.size_degrees) if light.intensity > 0 else 0.0
+            if share > 0:
+                traced.append(light if share == 1 else replace(light, intensity=light.intensity * share))
+            if share < 1:
+                broad.append(light if share == 0 else replace(light, intensity=light.intensity * (1 - share)))
+        return cls(light_map, tuple(traced), LightMap(broad))
+
+    @cached_property
+    def gaussians(self) -> LightMap:
+        """The traced lights as Gaussians as wide (a disk's
+        :func:`ssn_engine.host_kit.light_map.angle_softness`): the network's view of them."""
+        return LightMap([GaussianLight(light.u, light.v, light.softness, light.intensity) for light in self.traced])
+
+    @cached_property
+    def shares(self) -> np.ndarray:
+        """Each light's share of the ground's unoccluded irradiance E0, the traced lights first, then the broad
+        ones (zeros where nothing lights)."""
+        power = light_power(LightMap([*self.traced, *self.broad.lights]))
+        return power / power.sum() if power.sum() > 0 else np.zeros_like(power)
+
+    @property
+    def traced_share(self) -> float:
+        """The traced lights' share of E0."""
+        return float(self.shares[: len(self.traced)].sum())
+
+    @cached_property
+    def elm(self) -> np.ndarray:
+        """The whole light map on the network's ELM grid (16 x 32)."""
+        return render_light_map(self.light_map, NETWORK_SHAPE[0])
+
+
+__all__ = ["LightPlan"]
