@@ -2,16 +2,19 @@
 
 Map coordinates as in :mod:`light_map`: ``u`` across (0.5 = behind the
 object), ``v`` down from the zenith. Gestures: a press on empty sky adds a
-light, a press on a light selects it and dragging moves it (keeping the grab
+light of the loaded map's kind (:func:`new_light_angle`: a disk of the sun's
+0.53 degrees after the sun preset, a Gaussian after a preset of Gaussians), a
+press on a light selects it and dragging moves it (keeping the grab
 offset); the wheel changes the size of the light under the pointer or else of
 the selected one (a Gaussian's softness, a disk light's angle in degrees, as
 :mod:`light_size` steps it), with Shift its intensity; right-click or Delete
-removes a light. A Size box sets the selected light's diameter in degrees.
+removes a light. A Size box sets the selected light's diameter in degrees, an
+Intensity box its intensity.
 
 After every change ``on_change(live, new_stroke)`` is called: ``live`` while
 a light is being dragged or a slider moved (redraw, preview at once), not
 when an edit is complete (a press that added a light, a release after a drag,
-a wheel notch, a size set, a removal, a new map); ``new_stroke`` when the change starts a
+a wheel notch, a size or intensity typed, a removal, a new map); ``new_stroke`` when the change starts a
 new undo step. ``on_select(index)`` follows a change of the selected light
 (None: no light selected).
 """
@@ -24,14 +27,25 @@ from collections.abc import Callable
 
 from . import light_map, light_size
 
-NEW_SOFTNESS = 0.01
+NEW_SOFTNESS = 0.01  # a new light's softness where the map's lights are Gaussians (about 36 degrees wide)
 NEW_INTENSITY = 2.0
+INTENSITY_DECIMALS = 2  # an Intensity box shows (and sets) this many decimals
 SOFTNESS_STEP = 1.25  # per wheel notch, multiplicative
 INTENSITY_STEP = 0.1  # per wheel notch with Shift
-STROKE_GAP_S = 0.6  # wheel notches (or size steps) further apart than this start a new undo step
+STROKE_GAP_S = 0.6  # wheel notches (or size or intensity steps) further apart than this start a new undo step
 
 OnChange = Callable[[bool, bool], None]
 OnSelect = Callable[[int | None], None]
+
+
+def new_light_angle(lights: light_map.LightMap, before: float | None) -> float | None:
+    """The diameter in degrees of the disk light a click on empty sky adds once ``lights`` are loaded (a preset
+    chosen, a file read), or None for a Gaussian of ``NEW_SOFTNESS``: the map's first disk light's angle (the sun
+    preset: 0.53; the softbox: 16); None where its lights are all Gaussians (an older file, the overcast preset);
+    ``before`` where it has no lights."""
+    if not len(lights):
+        return before
+    return next((light.angle for light in lights if light.angle is not None), None)
 
 
 class LightMapEditor:
@@ -47,6 +61,8 @@ class LightMapEditor:
         self.lights = lights if lights is not None else light_map.preset(light_map.DEFAULT_PRESET)
         self.on_change, self.on_select, self._clock = on_change, on_select, clock
         self.selected: int | None = 0 if len(self.lights) else None
+        default = new_light_angle(light_map.preset(light_map.DEFAULT_PRESET), None)
+        self.new_angle = new_light_angle(self.lights, default)  # the lights a click adds (None: a Gaussian)
         self._grab: tuple[float, float] | None = None  # pointer offset from the dragged light's centre
         self._dragged = False  # the grabbed light has moved since the press
         self._stroke_open = False  # the next move continues the undo step a press started
@@ -77,7 +93,7 @@ class LightMapEditor:
         added = hit is None
         if hit is None:
             try:
-                hit = self.lights.add(u, v, NEW_SOFTNESS, NEW_INTENSITY)
+                hit = self.lights.add(u, v, NEW_SOFTNESS, NEW_INTENSITY, self.new_angle)
             except light_map.LightMapError as exc:
                 self.message = str(exc)
                 self.select(None)
@@ -164,10 +180,26 @@ class LightMapEditor:
             self.lights.reweight(self.selected, intensity)
             self._changed(True, new_stroke)
 
+    def enter_intensity(self, intensity: float) -> None:
+        """The selected light's intensity typed or stepped in an Intensity box, to ``INTENSITY_DECIMALS``
+        decimals within ``INTENSITY_RANGE``: a complete edit (as :meth:`set_size`). Nothing happens if the light
+        shows that intensity already, so a box that shows a light's intensity does not edit it. Steps in quick
+        succession are one undo step."""
+        if self.selected is None:
+            return
+        lo, hi = light_map.INTENSITY_RANGE
+        intensity = round(min(max(intensity, lo), hi), INTENSITY_DECIMALS)
+        if round(self.lights.lights[self.selected].intensity, INTENSITY_DECIMALS) == intensity:
+            return
+        self.lights.reweight(self.selected, intensity)
+        self._step_done()
+
     # -- whole map ---------------------------------------------------------------
     def load(self, lights: light_map.LightMap) -> None:
-        """Replace the map (a preset was chosen, or the settings were reset): one new undo step."""
+        """Replace the map (a preset was chosen, or the settings were reset): one new undo step. A click then adds
+        a light of its kind (:func:`new_light_angle`)."""
         self.lights, self._grab = lights, None
+        self.new_angle = new_light_angle(lights, self.new_angle)
         self.select(0 if len(lights) else None)
         self._changed(False, True)
 

@@ -5,7 +5,7 @@ import pytest
 
 from ssn_engine.host_kit import light_map
 from ssn_engine.hemisphere import render_light_map
-from ssn_engine.host_kit.light_editor import STROKE_GAP_S, LightMapEditor
+from ssn_engine.host_kit.light_editor import NEW_INTENSITY, NEW_SOFTNESS, STROKE_GAP_S, LightMapEditor
 from ssn_engine.host_kit.light_map_picture import map_rgb, overlay_markers
 
 
@@ -103,6 +103,45 @@ def test_controls_and_loading_a_map():
     assert light_map.LightMap.from_json(ed.to_json()) == ed.lights and len(ed.lights) == 2
     ed.load(light_map.preset("overcast"))
     assert len(ed.lights) == 5 and ed.selected == 0 and changes[-1] == (False, True)
+
+
+def test_a_click_on_empty_sky_adds_a_light_of_the_presets_kind():
+    """Not the old 36-degree Gaussian whatever the map: after a preset of disk lights, a disk of its angle (the
+    sun's 0.53 degrees); after a preset of Gaussians, a Gaussian; a map with no lights keeps the kind before it."""
+    ed = LightMapEditor(light_map.preset("sun"))
+    ed.press(0.8, 0.3)
+    added = ed.lights.lights[ed.selected]
+    assert (added.angle, added.intensity) == (light_map.SUN, NEW_INTENSITY)
+    ed.load(light_map.preset("hazy-sun"))
+    ed.press(0.8, 0.3)
+    assert ed.lights.lights[ed.selected].angle == light_map.HAZY_SUN
+    ed.load(light_map.preset("overcast"))
+    ed.press(0.1, 0.9)
+    added = ed.lights.lights[ed.selected]
+    assert (added.angle, added.softness) == (None, NEW_SOFTNESS)
+    ed.load(light_map.preset("softbox"))
+    ed.load(light_map.LightMap())  # every light removed: still the softbox's kind
+    ed.press(0.5, 0.5)
+    assert ed.lights.lights[0].angle == light_map.SOFTBOX
+    assert LightMapEditor().new_angle == light_map.SOFTBOX  # the default preset's
+    assert LightMapEditor(light_map.LightMap()).new_angle == light_map.SOFTBOX
+
+
+def test_the_intensity_box_sets_the_selected_lights_intensity():
+    """An Intensity box (GIMP's dialog): a complete edit, to its two decimals within the range; showing the
+    light's own intensity edits nothing; quick steps are one undo step."""
+    now = [0.0]
+    ed, changes = editor(clock=lambda: now[0])
+    ed.enter_intensity(1.0)  # what the box shows of this light: no edit
+    assert changes == []
+    ed.enter_intensity(2.345)
+    assert ed.lights.lights[0].intensity == 2.35 and changes == [(False, True)]
+    now[0] += STROKE_GAP_S / 2
+    ed.enter_intensity(9.0)
+    assert ed.lights.lights[0].intensity == light_map.INTENSITY_RANGE[1] and changes[-1] == (False, False)
+    ed.select(None)
+    ed.enter_intensity(0.5)
+    assert ed.lights.lights[0].intensity == light_map.INTENSITY_RANGE[1] and len(changes) == 2
 
 
 def test_overlay_draws_rings_and_guides():
