@@ -78,6 +78,22 @@ def shadow_layer_name(source_name: str) -> str:
     return f"{LAYER_PREFIX}{source_name}"
 
 
+def target_note(layer: str, replacing: str | None, selection: tuple[int, int] | None) -> str:
+    """What the dialog says the filter casts, as :meth:`Host.read_cutout` does: the selection where there is one
+    (``selection``: the width and height of its bounds; the layer ``layer`` only takes the shadow), else the
+    layer's alpha; and the shadow layer it replaces (``replacing``), if any."""
+    if selection is None:
+        note = f'Casting the shadow of the layer "{layer}"'
+    else:
+        note = f'Casting the shadow of the selection ({selection[0]} x {selection[1]} pixels) in "{layer}"'
+    if replacing is not None:
+        note += f', replacing "{replacing}"'
+    note += "."
+    if selection is not None:
+        note += " To cast the layer's own outline, choose Select > None first."
+    return note
+
+
 def engine_call(engine: Engine, cmd: str, buffers: dict | None = None, **params: Any) -> tuple[dict, dict]:
     """``engine.request``, its failures as :class:`ShadowError`; the user's Cancel passes as it is
     (:class:`~ssn_engine.host_kit.client.Cancelled`: no error to show)."""

@@ -27,6 +27,7 @@ from ssn_core import ShadowError, release, set_camera, settings_from_arguments, 
 from ssn_engine_link import camera_rules, light_editor, light_map, shadow_notes  # noqa: E402
 from ssn_engine_link import client as engine_client  # noqa: E402
 from ssn_gimp_host import config_values  # noqa: E402
+from ssn_layout import Layout, choose_layout  # noqa: E402
 from ssn_light_area import LightMapArea  # noqa: E402
 from ssn_preview import PREVIEW_HEIGHT, PREVIEW_SIZE, render_preview  # noqa: E402
 from ssn_progress import EngineWait  # noqa: E402
@@ -270,11 +271,15 @@ def run_dialog(procedure: Gimp.Procedure, config: Gimp.ProcedureConfig, host, en
 
     # The light map (the main control) above colour, opacity, AO and camera, beside the preview: the dialog then
     # fits a 1366 x 768 screen (stacked, it was 814 px tall; with the fields under both, 774 for a portrait image).
+    # On a narrow screen (768 x 1366) the preview goes under the light map instead (_fit_to_screen).
     lights_box = Gtk.Box(orientation=Gtk.Orientation.VERTICAL, spacing=6)
     row = Gtk.Box(spacing=6)
     row.pack_start(Gtk.Label(label="Preset:"), False, False, 0)
     row.pack_start(presets, True, True, 0)
     row.pack_start(area.size_box, False, False, 0)  # the selected light's size, beside the preset: no taller
+    lights_box.pack_start(row, False, False, 0)
+    row = Gtk.Box(spacing=6)  # and its intensity, under the size (beside it, the dialog was 965 px wide)
+    row.pack_end(area.intensity_box, False, False, 0)
     lights_box.pack_start(row, False, False, 0)
     lights_box.pack_start(_axes(area), False, False, 0)
     lights_box.pack_start(
@@ -317,6 +322,7 @@ def run_dialog(procedure: Gimp.Procedure, config: Gimp.ProcedureConfig, host, en
     content.reorder_child(box, 0)  # above GIMP's Load Saved Settings and Save Settings
     config.connect("notify", lambda *_: preview.schedule(values))
     box.show_all()
+    layout = _fit_to_screen(dialog, box)
     waiting = engine.on_wait if isinstance(engine.on_wait, EngineWait) else None
     if waiting is not None:  # a frozen worker leaves the dialog working, and closing it stops the wait
         waiting.handle_events = _handle_events
@@ -327,7 +333,9 @@ def run_dialog(procedure: Gimp.Procedure, config: Gimp.ProcedureConfig, host, en
     if selftest == "1":
         GLib.timeout_add(300, _selftest, dialog, area, preview, values, config)
     elif selftest.endswith(".py"):
-        parts = SimpleNamespace(dialog=dialog, config=config, host=host, preview=preview, area=area, presets=presets)
+        parts = SimpleNamespace(
+            dialog=dialog, config=config, host=host, preview=preview, area=area, presets=presets, layout=layout
+        )
         GLib.timeout_add(300, _run_test_script, selftest, parts)
     try:
         ok = dialog.run()
@@ -339,6 +347,45 @@ def run_dialog(procedure: Gimp.Procedure, config: Gimp.ProcedureConfig, host, en
             waiting.handle_events = None
         preview.close()
         dialog.destroy()
+
+
+def _fit_to_screen(dialog: Gtk.Dialog, box: Gtk.Box) -> Layout:
+    """Lay the dialog's two columns (``box``) out for the screen's work area (:func:`ssn_layout.choose_layout`):
+    side by side, or stacked (the preview under the light map) where the screen is too narrow for that, or
+    scrolled where even that does not fit. Returns the layout chosen."""
+    side = dialog.get_preferred_size()[1]
+    box.set_orientation(Gtk.Orientation.VERTICAL)
+    stacked = dialog.get_preferred_size()[1]
+    area = _work_area(dialog)
+    layout = choose_layout((side.width, side.height), (stacked.width, stacked.height), area)
+    if not layout.stacked:
+        box.set_orientation(Gtk.Orientation.HORIZONTAL)
+    if layout.scrolled:
+        whole, inner = dialog.get_preferred_size()[1], box.get_preferred_size()[1]
+        content = dialog.get_content_area()
+        content.remove(box)
+        scrolled = Gtk.ScrolledWindow()
+        scrolled.set_policy(Gtk.PolicyType.AUTOMATIC, Gtk.PolicyType.AUTOMATIC)
+        scrolled.set_propagate_natural_width(True)
+        scrolled.set_propagate_natural_height(True)
+        scrolled.set_max_content_width(max(100, layout.max_width - (whole.width - inner.width)))
+        scrolled.set_max_content_height(max(100, layout.max_height - (whole.height - inner.height)))
+        scrolled.add(box)
+        content.pack_start(scrolled, True, True, 6)
+        content.reorder_child(scrolled, 0)
+        scrolled.show_all()
+    return layout
+
+
+def _work_area(dialog: Gtk.Dialog) -> tuple[int, int]:
+    """The width and height of the work area (the monitor less its panels) of the screen the dialog opens on."""
+    display = dialog.get_display()
+    monitor = display.get_primary_monitor() or display.get_monitor(0)
+    if monitor is None:  # no monitor known: as large as the screen
+        screen = dialog.get_screen()
+        return screen.get_width(), screen.get_height()
+    rect = monitor.get_workarea()
+    return rect.width, rect.height
 
 
 def _handle_events() -> None:
@@ -386,7 +433,8 @@ def _wrap(label: Gtk.Label) -> Gtk.Label:
 
 def _run_test_script(path: str, parts: SimpleNamespace) -> bool:
     """For the integration tests (SSN_SHADOW_DIALOG_SELFTEST=<script.py>): run the test's script with the dialog's
-    parts (``parts``: dialog, config, host, preview, area, presets); the script presses OK or Cancel itself."""
+    parts (``parts``: dialog, config, host, preview, area, presets and the ``layout`` chosen); the script presses OK
+    or Cancel itself."""
     with open(path, encoding="utf-8") as script:
         exec(compile(script.read(), path, "exec"), {"__file__": path, "parts": parts})  # noqa: S102 - a test's own
     return False

@@ -16,7 +16,7 @@ gi.require_version("Gegl", "0.4")
 gi.require_version("Babl", "0.1")
 from gi.repository import Babl, Gegl, Gimp  # noqa: E402
 
-from ssn_core import Cutout, ShadowError, ShadowLayerData  # noqa: E402
+from ssn_core import Cutout, ShadowError, ShadowLayerData, target_note  # noqa: E402
 from ssn_pixels import PixelFormatError, PixelPlan, layer_image_type, plan_for_precision  # noqa: E402
 from ssn_preview import Thumbnail  # noqa: E402
 from ssn_settings import ARGUMENTS, image_camera_arguments, image_camera_record  # noqa: E402
@@ -109,11 +109,17 @@ class GimpHost:
         return next((lay for lay in _siblings(self.image, source) if _source_tattoo(lay) == tattoo), None)
 
     def target_note(self) -> str:
-        """Which layer the filter casts from and which shadow it replaces, for the dialog."""
-        note = f'Casting the shadow of the layer "{self.drawable.get_name()}"'
-        if self.replacing is not None:
-            note += f', replacing "{self.replacing.get_name()}"'
-        return note + "."
+        """What the filter casts (the selection, with its size, or the layer) and which shadow it replaces, for
+        the dialog: the choice :meth:`read_cutout` makes."""
+        replacing = self.replacing.get_name() if self.replacing is not None else None
+        bounds = self.selection_bounds()
+        return target_note(self.drawable.get_name(), replacing, (bounds[2], bounds[3]) if bounds else None)
+
+    def selection_bounds(self) -> tuple[int, int, int, int] | None:
+        """The selection's bounds on the canvas (x, y, width, height), or None when nothing is selected: then
+        the filter casts the layer's alpha, else the selection."""
+        _, non_empty, x1, y1, x2, y2 = Gimp.Selection.bounds(self.image)
+        return (x1, y1, x2 - x1, y2 - y1) if non_empty else None
 
     def horizontal_guides(self) -> list[float]:
         """The image's horizontal guides (canvas rows), in GIMP's order."""
@@ -140,7 +146,7 @@ class GimpHost:
 
     def hidden_reason(self) -> str | None:
         """Why the source layer shows nothing (hidden, or at opacity 0), or None; a selection casts regardless."""
-        if Gimp.Selection.bounds(self.image)[1]:
+        if self.selection_bounds() is not None:
             return None
         name = self.drawable.get_name()
         item = self.drawable
@@ -172,8 +178,7 @@ class GimpHost:
     def read_cutout(self, plan: PixelPlan) -> Cutout:
         """The selection if there is one, else the layer's alpha, as a canvas-sized buffer."""
         width, height = self.image.get_width(), self.image.get_height()
-        _, non_empty, *_ = Gimp.Selection.bounds(self.image)
-        if non_empty:
+        if self.selection_bounds() is not None:
             buffer = self.image.get_selection().get_buffer()
             rect = Gegl.Rectangle.new(0, 0, width, height)
             data = buffer.get(rect, 1.0, plan.selection_format, Gegl.AbyssPolicy.NONE)

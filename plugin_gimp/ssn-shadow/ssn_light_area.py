@@ -3,7 +3,8 @@
 The editor, the map picture and the light markers are the host kit's (the
 same as Krita's); the widget is a Gtk.Image in a Gtk.EventBox, so it needs no
 pycairo (GIMP's Python does not ship it). Its Size box (:class:`LightSizeBox`)
-shows and sets the selected light's size in degrees.
+shows and sets the selected light's size in degrees, its Intensity box
+(:class:`LightIntensityBox`) the selected light's intensity.
 """
 
 from __future__ import annotations
@@ -15,7 +16,7 @@ gi.require_version("Gdk", "3.0")
 gi.require_version("GdkPixbuf", "2.0")
 from gi.repository import Gdk, GdkPixbuf, GLib, Gtk  # noqa: E402
 
-from ssn_engine_link import light_editor, light_map_picture, light_size  # noqa: E402
+from ssn_engine_link import light_editor, light_map, light_map_picture, light_size  # noqa: E402
 
 MAP_WIDTH = 384  # the map is 2:1
 
@@ -30,6 +31,7 @@ class LightMapArea(Gtk.EventBox):
         self.image = Gtk.Image()
         self.add(self.image)
         self.size_box = LightSizeBox(editor)
+        self.intensity_box = LightIntensityBox(editor)
         # exactly the picture's size, so event coordinates are picture coordinates
         self.set_halign(Gtk.Align.CENTER)
         self.set_valign(Gtk.Align.CENTER)
@@ -78,6 +80,7 @@ class LightMapArea(Gtk.EventBox):
         )
         self.image.set_from_pixbuf(pixbuf)
         self.size_box.show_selected()
+        self.intensity_box.show_selected()
 
     def _on_press(self, _widget, event) -> bool:
         self.grab_focus()
@@ -159,3 +162,44 @@ class LightSizeBox(Gtk.Box):
     def _on_value(self, spin: Gtk.SpinButton) -> None:
         if not self._showing:  # the editor's change redraws the map, which shows the new size here
             self.editor.set_size(spin.get_value())
+
+
+class LightIntensityBox(Gtk.Box):
+    """ "Intensity" and a spin button: the selected light's peak intensity (0 to 3, what Shift+wheel changes);
+    setting it is one edit (:meth:`light_editor.LightMapEditor.enter_intensity`)."""
+
+    def __init__(self, editor: light_editor.LightMapEditor) -> None:
+        super().__init__(spacing=4)
+        self.editor = editor
+        lo, hi = light_map.INTENSITY_RANGE
+        step = light_editor.INTENSITY_STEP
+        digits = light_editor.INTENSITY_DECIMALS
+        self.spin = Gtk.SpinButton.new(Gtk.Adjustment.new(lo, lo, hi, step, 5 * step, 0.0), step, digits)
+        self.spin.set_numeric(True)
+        self.spin.set_tooltip_text(
+            "The selected light's intensity, 0 (off) to 3: the brighter a light beside the others, the darker its "
+            "shadow. Shift+wheel over the map changes it too."
+        )
+        self.pack_start(Gtk.Label(label="Intensity:"), False, False, 0)
+        self.pack_start(self.spin, False, False, 0)
+        self._showing = False
+        self.spin.connect("value-changed", self._on_value)
+        self.show_selected()
+
+    def show_selected(self) -> None:
+        """Show the selected light's intensity (insensitive when no light is selected)."""
+        index = self.editor.selected
+        lights = self.editor.lights.lights
+        light = lights[index] if index is not None and index < len(lights) else None
+        self.set_sensitive(light is not None)
+        if light is None:
+            return
+        self._showing = True
+        try:
+            self.spin.set_value(light.intensity)
+        finally:
+            self._showing = False
+
+    def _on_value(self, spin: Gtk.SpinButton) -> None:
+        if not self._showing:  # the editor's change redraws the map, which shows the new intensity here
+            self.editor.enter_intensity(spin.get_value())

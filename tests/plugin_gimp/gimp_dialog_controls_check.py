@@ -1,7 +1,8 @@
 """Runs INSIDE GIMP 3 under Xvfb (python-fu-eval) for test_gimp_dialog_controls.py: the dialog's controls.
 
-Opens the filter's dialog (RunMode.INTERACTIVE) once per run of ``RUNS`` below, each time on the image the run
-names; before each it writes the run to ``steps.json`` beside this script, where the plug-in's side of the test
+Opens the filter's dialog (RunMode.INTERACTIVE) once per run of ``wide()`` below (of ``narrow()`` where the code
+before this script sets ``RUN_SET = "narrow"``), each time on the image the run names; before each it writes the
+run to ``steps.json`` beside this script, where the plug-in's side of the test
 (gimp_dialog_steps.py, started by SSN_SHADOW_DIALOG_SELFTEST) reads what to do; that side appends what it saw to
 ``out/steps.jsonl``. This side appends each run's outcome (status, layers, the image's camera record) to
 ``out/runs.jsonl``.
@@ -58,22 +59,42 @@ def run(name, image, layer, **task):
         f.write(json.dumps(out) + "\n")
 
 
-pawn, pawn_layer = make_image(320, 240)
-run("reset", pawn, pawn_layer)
+def narrow():
+    """On a 768 x 1366 portrait screen: the layout runs alone."""
+    portrait, portrait_layer = make_image(480, 640)
+    run("layout", portrait, portrait_layer)
+    landscape, landscape_layer = make_image(640, 480)
+    run("layout", landscape, landscape_layer)
 
-portrait, portrait_layer = make_image(480, 640)
-run("layout", portrait, portrait_layer)
-landscape, landscape_layer = make_image(640, 480)
-run("layout", landscape, landscape_layer)
-faint, faint_layer = make_image(480, 640, LONG_NAME, opaque=False)
-run("layout", faint, faint_layer)
 
-# the horizon: from a guide and by clicking the preview on one image, not carried to another, kept (and scaled)
-# with the first
-first, first_layer = make_image(640, 480)
-first.add_hguide(300)
-run("horizon-first", first, first_layer)
-second, second_layer = make_image(1600, 1200)
-run("horizon-second", second, second_layer)
-first.scale(1280, 960)
-run("horizon-again", first, first_layer)
+def wide():
+    """On a 1366 x 768 screen: every run."""
+    pawn, pawn_layer = make_image(320, 240)
+    run("reset", pawn, pawn_layer)
+    run("lights", pawn, pawn_layer)
+    selected, selected_layer = make_image(320, 240)
+    selected.select_rectangle(Gimp.ChannelOps.REPLACE, 20, 30, 100, 60)  # a selection left over from other work
+    run("selection", selected, selected_layer)
+
+    portrait, portrait_layer = make_image(480, 640)
+    run("layout", portrait, portrait_layer)
+    landscape, landscape_layer = make_image(640, 480)
+    run("layout", landscape, landscape_layer)
+    faint, faint_layer = make_image(480, 640, LONG_NAME, opaque=False)
+    run("layout", faint, faint_layer)
+
+    # the horizon: from a guide and by clicking the preview on one image, not carried to another, kept (and
+    # scaled) with the first
+    first, first_layer = make_image(640, 480)
+    first.add_hguide(300)
+    run("horizon-first", first, first_layer)
+    second, second_layer = make_image(1600, 1200)
+    run("horizon-second", second, second_layer)
+    first.scale(1280, 960)
+    run("horizon-again", first, first_layer)
+
+
+if globals().get("RUN_SET") == "narrow":
+    narrow()
+else:
+    wide()

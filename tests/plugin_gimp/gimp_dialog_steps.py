@@ -35,6 +35,8 @@ def snapshot():
     config, status = parts.config, parts.preview.status
     note = NOTE.search(status.get_text())
     window = parts.dialog.get_window()
+    intensity = getattr(parts.area, "intensity_box", None)  # (None: a plug-in without these, for a control run)
+    layout = getattr(parts, "layout", None)
     return {
         "label": parts.presets.get_active_text(),
         "map": parts.area.editor.lights.to_dict(),
@@ -48,7 +50,38 @@ def snapshot():
         "fov_sensitive": widget("fov").is_sensitive(),
         "size": [window.get_width(), window.get_height()],
         "preview": [parts.preview.widget.get_allocated_width(), parts.preview.widget.get_allocated_height()],
+        "target": next(text for text in label_texts() if text.startswith("Casting the shadow")),
+        "intensity": intensity.spin.get_value() if intensity is not None else None,
+        "intensity_sensitive": intensity is not None and intensity.is_sensitive(),
+        "selected": parts.area.editor.selected,
+        "stacked": layout is not None and layout.stacked,
+        "scrolled": layout is not None and layout.scrolled,
+        "ok": on_screen_rect(parts.dialog.get_widget_for_response(Gtk.ResponseType.OK)),
+        "screen": [window.get_screen().get_width(), window.get_screen().get_height()],
     }
+
+
+def label_texts():
+    """The text of every label in the dialog."""
+    found = []
+
+    def walk(w):
+        if isinstance(w, Gtk.Label):
+            found.append(w.get_text())
+        if isinstance(w, Gtk.Container):
+            w.forall(walk)
+
+    walk(parts.dialog)
+    return found
+
+
+def on_screen_rect(w):
+    """``w``'s rectangle on the screen: [left, top, right, bottom]."""
+    top = w.get_toplevel()
+    x, y = w.translate_coordinates(top, 0, 0)
+    _, ox, oy = top.get_window().get_origin()
+    alloc = w.get_allocation()
+    return [ox + x, oy + y, ox + x + alloc.width, oy + y + alloc.height]
 
 
 def on_screen(w, x=None, y=None):
@@ -146,6 +179,40 @@ def layout():
     done(Gtk.ResponseType.CANCEL)
 
 
+def lights():
+    """Issue items b and c: with the sun preset, a click on empty sky adds a disk light of the sun's size; the
+    selected light's intensity shows as a number, typed there it edits the light, and Shift+wheel shows in it."""
+    yield from settled()
+    record["initial"] = snapshot()
+    parts.presets.set_active([row[0] for row in parts.presets.get_model()].index("sun"))
+    yield from settled()
+    area = parts.area
+    click(area, 0.8 * area.width, 0.3 * area.height)  # empty sky, far from the sun
+    yield from settled()
+    record["added"] = snapshot()
+    click(area.intensity_box.spin)
+    xdotool("key", "ctrl+a")
+    xdotool("type", "1.25")
+    xdotool("key", "Tab")
+    yield from settled()
+    record["typed"] = snapshot()
+    record["typed_setting"] = parts.config.get_property("light-map")
+    xdotool("mousemove", *on_screen(area, 0.8 * area.width, 0.3 * area.height))
+    xdotool("keydown", "shift", "click", "4", "keyup", "shift")  # Shift + wheel up: intensity + 0.1
+    yield from settled()
+    record["wheeled"] = snapshot()
+    done(Gtk.ResponseType.CANCEL)
+
+
+def selection():
+    """Issue item a: with a selection left over, the dialog says it casts the selection (and its size), as the
+    cutout the filter reads is."""
+    yield from settled()
+    record["shown"] = snapshot()
+    record["cutout_source"] = parts.host.read_cutout(parts.host.pixel_plan()).source
+    done(Gtk.ResponseType.OK)
+
+
 def horizon_first():
     """Issue #41, defect 12: the fields take input only while the box is ticked; From guide; a click on the
     preview; then OK (the image keeps its camera)."""
@@ -225,6 +292,8 @@ def drive(steps):
 RUNS = {
     "reset": reset,
     "layout": layout,
+    "lights": lights,
+    "selection": selection,
     "horizon-first": horizon_first,
     "horizon-second": horizon_second,
     "horizon-again": horizon_again,

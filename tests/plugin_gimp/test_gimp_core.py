@@ -12,6 +12,7 @@ from ssn_core import (
     release,
     set_camera,
     settings_from_arguments,
+    target_note,
     upload_cutout,
 )
 from ssn_pixels import plan_for_precision
@@ -288,3 +289,15 @@ def test_the_preview_note_says_where_the_read_horizon_is():
     assert "row -42 (above the image)" in camera_read_note({"horizon": -42.0, "fov": 48.0}, 300)
     assert "row 300 (below the image)" in camera_read_note({"horizon": 300.0, "fov": 48.0}, 300)
     assert "dotted blue" not in camera_read_note({"horizon": 1200.0, "fov": 35.0}, 300)
+
+
+def test_the_target_note_names_what_is_cast():
+    """Issue item a: with a selection left over the dialog said 'the layer "horse"' while read_cutout cast the
+    selection; the note names the selection and its size, and how to cast the layer instead."""
+    assert target_note("horse", None, None) == 'Casting the shadow of the layer "horse".'
+    assert target_note("horse", "Shadow: horse", None) == (
+        'Casting the shadow of the layer "horse", replacing "Shadow: horse".'
+    )
+    note = target_note("horse", "Shadow: horse", (120, 80))
+    assert note.startswith('Casting the shadow of the selection (120 x 80 pixels) in "horse", replacing "Shadow:')
+    assert 'layer "horse"' not in note and "Select > None" in note
