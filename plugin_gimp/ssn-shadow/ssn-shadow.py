@@ -31,6 +31,8 @@ from ssn_settings import (  # noqa: E402
     IMAGE_TYPES,
     MENU_LABEL,
     MENU_PATH,
+    PROCEDURE_BLURB,
+    PROCEDURE_HELP,
     PROCEDURE_NAME,
 )
 
@@ -75,14 +77,7 @@ class SoftShadow(Gimp.PlugIn):
         procedure.set_sensitivity_mask(Gimp.ProcedureSensitivityMask.DRAWABLE)
         procedure.set_menu_label(MENU_LABEL)
         procedure.add_menu_path(MENU_PATH)
-        procedure.set_documentation(
-            "Soft shadow of a cutout (SSN)",
-            "Adds a layer 'Shadow: <layer>' right below the layer: the soft shadow that the selection "
-            "(or, with no selection, the layer's alpha) casts on the ground under the given light map, "
-            "predicted by the ssn-shadow engine (SSN, CVPR 2021). The layer is in Multiply mode; the "
-            "layer and the selection are left as they are. One undo step removes it.",
-            name,
-        )
+        procedure.set_documentation(PROCEDURE_BLURB, PROCEDURE_HELP, name)
         procedure.set_attribution("ssn-shadow contributors", "ssn-shadow contributors", "2025")
         add_arguments(procedure)
         return procedure

@@ -19,6 +19,16 @@ MENU_PATH = "<Image>/Filters/Light and Shadow"
 IMAGE_TYPES = "RGB*, GRAY*"
 LAYER_PREFIX = "Shadow: "
 CLIP_MARGIN = 0.1  # share of the canvas's larger side a clipped shadow layer may reach past each edge
+PRESET_LIST = ", ".join(light_map.PRESETS)  # every preset, from the host kit's table: none is left out
+PROCEDURE_BLURB = "Soft shadow of a cutout (SSN)"
+PROCEDURE_HELP = (
+    "Adds a layer 'Shadow: <layer>' right below the layer: the soft shadow that the selection "
+    "(or, with no selection, the layer's alpha) casts on the ground under the given light map, "
+    "predicted by the ssn-shadow engine (SSN, CVPR 2021). The light map is a preset ("
+    + PRESET_LIST
+    + f"; default {light_map.DEFAULT_PRESET}) or light-map JSON. The layer is in Multiply mode; the "
+    "layer and the selection are left as they are. One undo step removes it."
+)
 
 
 @dataclass(frozen=True)
@@ -46,7 +56,7 @@ ARGUMENTS: tuple[ArgSpec, ...] = (
         "light-map",
         "string",
         "_Light map",
-        "A preset name (" + ", ".join(light_map.PRESETS) + ") or light-map JSON "
+        "A preset name (" + PRESET_LIST + ") or light-map JSON "
         '({"format": "ssn-shadow-elm", "version": 1, "lights": [...]})',
         light_map.DEFAULT_PRESET,
     ),
@@ -130,9 +140,7 @@ def resolve_light_map(text: str) -> dict[str, Any]:
         return {"light_map": parsed.to_dict()}
     if text in light_map.PRESETS:
         return {"preset": text}
-    raise SettingsError(
-        f"light-map: unknown preset {text!r}; give one of {', '.join(light_map.PRESETS)} or light-map JSON"
-    )
+    raise SettingsError(f"light-map: unknown preset {text!r}; give one of {PRESET_LIST} or light-map JSON")
 
 
 def editor_light_map(text: str) -> light_map.LightMap:

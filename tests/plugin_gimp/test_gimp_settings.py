@@ -1,6 +1,8 @@
 """Procedure arguments and settings validation, without GIMP."""
 
 import json
+import re
+from pathlib import Path
 
 import pytest
 import ssn_settings as s
@@ -28,6 +30,22 @@ def test_arguments_cover_every_setting():
     assert s.PROCEDURE_NAME == "plug-in-ssn-shadow"
     assert s.MENU_PATH == "<Image>/Filters/Light and Shadow"
     assert "Soft" in s.MENU_LABEL and "(SSN)" in s.MENU_LABEL
+
+
+def test_the_procedures_help_and_docs_list_every_preset():
+    """Issue item e: the procedure's help, its light-map argument's blurb and docs/gimp.md's table named seven of
+    the nine presets (not sun and hazy-sun). The help and the blurb are made from the host kit's table; the page
+    must list the same names, in its order."""
+    names = list(light_map.PRESETS)
+    assert {"sun", "hazy-sun"} <= set(names)
+    listed = ", ".join(names)
+    assert f"a preset ({listed}; default {light_map.DEFAULT_PRESET})" in s.PROCEDURE_HELP
+    assert f"A preset name ({listed})" in s.ARG_BY_NAME["light-map"].blurb
+    page = (Path(__file__).resolve().parents[2] / "docs" / "gimp.md").read_text(encoding="utf-8")
+    row = next(line for line in page.splitlines() if line.startswith("| `light-map` |"))
+    documented = re.search(r"a preset name \(([^)]*)\)", row)
+    assert documented is not None, row
+    assert re.findall(r"`([^`]+)`", documented[1]) == names, row
 
 
 def test_mnemonics_do_not_clash_with_ok_and_cancel():
