@@ -81,6 +81,7 @@ class ShadowController(QObject):
         self._cutout_key: str | None = None
         self._cutout_camera: dict | None = None  # the camera the worker's cutout has
         self._mask = b""
+        self._shadow_seen: str | None = None  # the source's shadow layer as the docker last saw it (its id)
         self._renders = RenderQueue()
         self._edits = LatestWins()
         self._previews = LatestWins()
@@ -114,13 +115,18 @@ class ShadowController(QObject):
             self.host.watch_history(self.history_changed)
 
     def history_changed(self) -> None:
-        """Krita undid or redid a step: the docker shows the settings of the shadow layer now on the canvas
-        (where it knows them), and the cutout's layer stays active where the step made its shadow active."""
+        """Krita undid or redid a step, or added a layer: the docker shows the settings of the shadow layer now on
+        the canvas (where it knows them), and where that step brought a shadow layer (back) into the image, which
+        Krita makes the active layer, the cutout's layer is made active again (a shadow layer the user selected
+        stays active)."""
         source = self.source
         if source is None or self.host.active_document() != source.document:
             return
-        self.host.keep_source_active(source)
-        settings = self.model.shadow_shown(self.host.shadow_layer_id(source))
+        shown = self.host.shadow_layer_id(source)
+        if shown != self._shadow_seen:
+            self.host.keep_source_active(source)
+        self._shadow_seen = shown
+        settings = self.model.shadow_shown(shown)
         if settings is None:
             return
         self._layer_map = settings.light_map.copy()
@@ -169,12 +175,14 @@ class ShadowController(QObject):
         else:
             self._rerender(new_step)
 
-    def _rerender(self, new_step: bool, preview: bool = True) -> None:
+    def _rerender(self, new_step: bool, preview: bool = True, refresh: bool | None = None) -> None:
         """Re-render at once when Live is on and a shadow exists; ``preview``: a new undo step updates the
-        preview when it is written (a drag's updates it already)."""
+        preview when it is written (a drag's updates it already); ``refresh`` (default: ``new_step``, an edit's
+        first render): read the cutout again first, which may have been painted on since it was read."""
         if self.live and self.source is not None:
             self._preview_due = self._preview_due or (new_step and preview)
-            self._schedule(RenderJob(new_step=new_step, reread=False, started=time.perf_counter()))
+            refresh = new_step if refresh is None else refresh
+            self._schedule(RenderJob(new_step=new_step, reread=False, started=time.perf_counter(), refresh=refresh))
 
     def _light_map_set(self, new_step: bool) -> None:
         """The map changed; it ends a previewed drag. A map equal to the last one rendered, as after the last
@@ -183,8 +191,8 @@ class ShadowController(QObject):
         self._pause.stop()
         light_map = self.model.light_map
         if drag is not None:  # the drag's layer: its undo step unless a rest already wrote one
-            if light_map != self._layer_map or not drag.wrote:
-                self._rerender(new_step or not drag.wrote, preview=False)
+            if light_map != self._layer_map or not drag.wrote:  # the cutout was read again at the drag's start
+                self._rerender(new_step or not drag.wrote, preview=False, refresh=False)
             return
         if light_map == self._layer_map and not new_step:
             return
@@ -197,20 +205,38 @@ class ShadowController(QObject):
         if not self.live or source is None:
             return
         if self._drag is None:
-            self._drag = self._begin_drag(source)
+            if not self._refresh_source():
+                return
+            self._drag = self._begin_drag(self.source)
         self._background = self._drag.background
         self._pause.start(PAUSE_MS)
         self._request_preview()
 
     def _drag_rested(self) -> None:
         if self._drag is not None and self.model.light_map != self._layer_map:
-            self._rerender(not self._drag.wrote, preview=False)
+            self._rerender(not self._drag.wrote, preview=False, refresh=False)
             self._drag.wrote = True
 
-    def _begin_drag(self, source: Source) -> Drag:
+    def _refresh_source(self) -> bool:
+        """Read the cutout again where it changed since it was read (painted on, erased, an undo): a changed one
+        is sent to the worker again (its analysis and AO are of the old pixels). False, with a warning, where it
+        cannot be read now (emptied, say)."""
+        source = self.source
+        assert source is not None, "called with a source"
+        try:
+            self.source = fresh = self.host.refresh_source(source)
+        except (SourceError, UnsupportedFormat) as exc:
+            self.model.report_status("warning", str(exc))
+            return False
+        if fresh is not source and fresh.key != self._cutout_key:
+            self.cutout, self._cutout_key = None, None  # this drag: the layer alone follows, with the new cutout
+        return True
+
+    def _begin_drag(self, source: Source | None) -> Drag:
         """The drag's undo step at its start, where the host makes one (the shadow layer replaced by a copy of
         itself, which the drag's writes then fill in place: Krita recomposites the image once for the layer
         written on release instead of twice), and the preview's background (None: no preview)."""
+        assert source is not None, "a drag starts from a source"
         begin = getattr(self.host, "begin_drag", None)
         if self.cutout is None or begin is None:  # the worker restarted: the layer alone follows
             return Drag(self._take_background(source))
@@ -222,6 +248,7 @@ class ShadowController(QObject):
             return Drag(None)
         if replaced is None:
             return Drag(background)
+        self._shadow_seen = replaced.layer_id
         settings = self.model.shadows.get(shown) if shown is not None else None
         if settings is not None:
             self.model.record_shadow(replaced.layer_id, settings)
@@ -294,6 +321,8 @@ class ShadowController(QObject):
                 if self.source is not None and source.node_id != self.source.node_id:
                     self.model.clear_ao_edits()
                 self.source = source
+            elif job.refresh:
+                self.source = self.host.refresh_source(self.source)
             self._ensure_cutout(lambda: self._render(job), job)
         except (SourceError, UnsupportedFormat) as exc:
             self._fail(str(exc), "warning")
@@ -371,6 +400,10 @@ class ShadowController(QObject):
         nxt = self._renders.finish()
         if nxt is not None:
             self._run(nxt)  # the worker renders the next frame while this one is written
+        if not self.host.is_open(source.document):  # closed meanwhile: nothing to write, nothing to say
+            if not self._renders.in_flight:
+                self._set_busy(False)
+            return
         rect = (int(reply["x"]), int(reply["y"]), int(reply["width"]), int(reply["height"]))
         layer = buffers.get("layer")
         try:
@@ -381,6 +414,7 @@ class ShadowController(QObject):
             return
         if result.layer_id:
             made[0].record_shadow(result.layer_id, made[1])
+            self._shadow_seen = result.layer_id
         self.renders += 1
         elapsed = 1e3 * (time.perf_counter() - job.started) if job.started else 0.0
         info = {

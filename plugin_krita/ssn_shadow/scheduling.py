@@ -9,16 +9,24 @@ __all__ = ["Drag", "LatestWins", "RenderJob", "RenderQueue"]
 
 @dataclass
 class RenderJob:
-    """One wanted render; ``new_step`` makes its layer write an undo step, ``reread`` re-reads the source;
-    ``retried``: it already sent the cutout again once (after a worker restart)."""
+    """One wanted render; ``new_step`` makes its layer write an undo step, ``reread`` re-reads the source (the
+    active layer or selection); ``refresh``: reads the same source again first, where its pixels may have changed
+    since it was read (an edit's first render); ``retried``: it already sent the cutout again once (after a
+    worker restart)."""
 
     new_step: bool
     reread: bool
     started: float = 0.0
     retried: bool = False
+    refresh: bool = False
 
     def merge(self, other: RenderJob) -> RenderJob:
-        return RenderJob(self.new_step or other.new_step, self.reread or other.reread, self.started or other.started)
+        return RenderJob(
+            self.new_step or other.new_step,
+            self.reread or other.reread,
+            self.started or other.started,
+            refresh=self.refresh or other.refresh,
+        )
 
 
 @dataclass

@@ -1,5 +1,6 @@
 """Shared helpers of the plug-in tests: waiting on the Qt event loop, a stand-in Krita host."""
 
+import dataclasses
 import json
 import os
 import random
@@ -148,6 +149,7 @@ class FakeHost:
         self.writes: list[tuple] = []
         self.blends: list[str] = []
         self.reads = 0
+        self.refreshes = 0  # the source read again (refresh_source)
         self.document = FakeDocument("a.kra")
         self.closed: list[FakeDocument] = []
         self.shadow: str | None = None  # the shadow layer's id on the "canvas"
@@ -186,6 +188,13 @@ class FakeHost:
             pixel_format("RGBA", "U8"),
             "sRGB-elle-V2-srgbtrc.icc",
         )
+
+    def refresh_source(self, source):
+        """As Krita's adapter: the same source where the alpha is unchanged, else one with the new alpha."""
+        self.refreshes += 1
+        if self.fail:
+            raise SourceError(self.fail)
+        return source if source.alpha == self.alpha else dataclasses.replace(source, alpha=self.alpha)
 
     def write(self, source, pixels, rect, new_step, blend):
         self.writes.append((rect, len(pixels), new_step))

@@ -285,6 +285,62 @@ def test_an_undo_brings_back_the_settings_of_the_shadow_it_shows(qapp):
         host.shadow = "a-layer-the-docker-never-wrote"
         c.history_changed()
         assert c.model.light_map == lm.preset("low-sun-left") and len(host.writes) == 2
+        # an undo or a layer added that leaves the same shadow layer (a stroke undone on the shadow the user
+        # selected): that layer stays active
+        kept = host.kept_active
+        c.history_changed()
+        assert host.kept_active == kept
+    finally:
+        engine.shutdown()
+
+
+def test_a_light_change_after_the_cutout_was_painted_on_renders_the_new_cutout(qapp):
+    """The cutout's pixels change after Generate (half of it erased, more alpha painted): the next edit reads it
+    again and sends the new cutout to the worker, without a Generate; the renders within one edit (a drag's rest
+    and release, a slider's moves) and an edit of an unchanged cutout do not send it again."""
+    host = FakeHost()
+    c, engine, messages, _ = make(host)
+    sent = []
+    request = engine.request
+    engine.request = lambda cmd, *a, **k: (sent.append(cmd), request(cmd, *a, **k))[1]
+    try:
+        c.generate()
+        assert wait_until(lambda: not c.busy and len(host.writes) == 1), messages
+        key = c.source.key
+        moved(c, 0.3, 0.6, True)  # an unchanged cutout: read again, not sent again
+        assert wait_until(lambda: not c.busy and len(host.writes) == 2), messages
+        assert host.refreshes == 1 and sent.count("set_cutout") == 1 and c.source.key == key
+
+        host.alpha = cutout_alpha(200, 160, (80, 40, 100, 140))  # half of the cutout erased
+        for i in range(5):  # a slider's drag: read again at its first change only
+            moved(c, 0.35 + 0.01 * i, 0.6, i == 0)
+        assert wait_until(lambda: not c.busy and sent.count("set_cutout") == 2), messages
+        assert host.refreshes == 2 and c.source.alpha == host.alpha and c.source.key != key
+        assert not [m for m in messages if m[0] == "error"], messages
+
+        host.alpha = cutout_alpha(200, 160, (60, 40, 120, 140))  # more alpha painted, then a light drag
+        writes = len(host.writes)
+        for i in range(4):
+            moved(c, 0.4 + 0.01 * i, 0.6, i == 0, dragging=True)
+        moved(c, 0.45, 0.6, False)  # the release
+        assert wait_until(lambda: not c.busy and len(host.writes) > writes), messages
+        assert host.refreshes == 3 and sent.count("set_cutout") == 3 and c.source.alpha == host.alpha
+        assert host.reads == 1  # always the cutout of the Generate, read again, never the active layer afresh
+    finally:
+        engine.shutdown()
+
+
+def test_a_cutout_emptied_since_it_was_read_is_reported_not_rendered(qapp):
+    """The cutout's layer was erased entirely: the next edit says so (a warning) and writes nothing."""
+    host = FakeHost()
+    c, engine, messages, _ = make(host)
+    try:
+        c.generate()
+        assert wait_until(lambda: not c.busy and len(host.writes) == 1), messages
+        host.fail = "The layer 'Person' is empty on the canvas: nothing to cast a shadow from."
+        moved(c, 0.3, 0.6, True)
+        assert wait_until(lambda: not c.busy)
+        assert messages[-1] == ("warning", host.fail) and len(host.writes) == 1
     finally:
         engine.shutdown()
 

@@ -5,7 +5,8 @@ from __future__ import annotations
 from collections.abc import Callable
 from typing import TYPE_CHECKING
 
-from PyQt5.QtCore import QTimer
+from PyQt5.QtCore import QAbstractItemModel, QTimer
+from PyQt5.QtWidgets import QDockWidget, QTreeView
 
 if TYPE_CHECKING:
     from krita import Document, Krita
@@ -20,9 +21,13 @@ from .krita_document import (
     projection_thumbnail,
     read_annotation,
     read_source,
+    refresh_source,
     shadow_layer_id,
     write_annotation,
 )
+
+
+LAYERS_DOCKER = "KisLayerBox"  # the object name of Krita's Layers docker
 
 
 class KritaHost:
@@ -38,6 +43,10 @@ class KritaHost:
 
     def read_source(self, document: Document | None) -> Source:
         return read_source(document)
+
+    def refresh_source(self, source: Source) -> Source:
+        """The same cutout read again: ``source`` where its alpha is unchanged, else one with the new alpha."""
+        return refresh_source(source)
 
     def write(
         self, source: Source, pixels: bytes, rect: tuple[int, int, int, int], new_step: bool, blend: str
@@ -76,14 +85,33 @@ class KritaHost:
         keep_source_active(source.document, source.node)
 
     def watch_history(self, changed: Callable[[], None]) -> None:
-        """Call ``changed`` after each undo and redo (Ctrl+Z, the Edit menu, the Undo History docker's buttons
-        trigger these actions), once Krita has carried it out and activated a layer through its event loop."""
+        """Call ``changed`` after each undo and redo through Krita's actions (Ctrl+Z, Ctrl+Shift+Z, the Edit
+        menu), once Krita has carried it out and activated a layer through its event loop; and after each layer
+        added to the image of the active window (a step chosen in the Undo History docker, which goes to it
+        without those actions, and any other undo or redo that brings a layer back), once Krita has activated it.
+        Krita's scripting API has no undo or layer signal: the layers are the Layers docker's model's rows."""
         for name in ("edit_undo", "edit_redo"):
             action = self.krita.action(name)
             if action is None or any(action is known for known in self._watched):
                 continue
             self._watched.append(action)
             action.triggered.connect(lambda *_: QTimer.singleShot(0, lambda: self._after_history(changed)))
+        layers = self._layers_model()
+        if layers is not None and not any(layers is known for known in self._watched):
+            self._watched.append(layers)
+            # Krita adds the layer's row, then activates it, through events posted in that order: after both
+            layers.rowsInserted.connect(lambda *_: QTimer.singleShot(0, changed))
+
+    def _layers_model(self) -> QAbstractItemModel | None:
+        """The model of the active window's Layers docker (None: no window, or no such docker)."""
+        window = self.krita.activeWindow()
+        if window is None:
+            return None
+        for dock in window.qwindow().findChildren(QDockWidget):
+            if dock.objectName() == LAYERS_DOCKER:
+                view = dock.findChild(QTreeView)
+                return view.model() if view is not None else None
+        return None
 
     def _after_history(self, changed: Callable[[], None]) -> None:
         """Krita carries an undo out in its image's strokes, then activates a layer through a queued signal."""
@@ -94,6 +122,22 @@ class KritaHost:
 
     def horizontal_guides(self, document: Document | None) -> list[float]:
         return horizontal_guides(document)
+
+    def open_active_document(self) -> Document | None:
+        """The active document where it is still open (Krita 5.1 names a window's closed document its active
+        one until another view is activated)."""
+        document = self.active_document()
+        return document if document is not None and self.is_open(document) else None
+
+    def watch_closing(self, closed: Callable[[], None]) -> None:
+        """Call ``closed`` after each view or document Krita closes, once Krita has removed it (the docker's
+        ``canvasChanged`` does not come when a window's last view closes)."""
+        notifier = getattr(self.krita, "notifier", lambda: None)()  # libkis Notifier; not in the typings yet
+        if notifier is None:
+            return
+        notifier.setActive(True)  # its signals come only while it is active
+        notifier.viewClosed.connect(lambda *_: QTimer.singleShot(0, closed))
+        notifier.imageClosed.connect(lambda *_: QTimer.singleShot(0, closed))
 
     def is_open(self, document: Document) -> bool:
         """``document`` is still open in Krita (not closed)."""

@@ -1,0 +1,169 @@
+"""The cutout read again (``refresh_source``) on stand-ins for Krita's document and layer: the same source where its
+alpha is unchanged, a new one (a new key) where its pixels changed. No Krita needed."""
+
+import struct
+
+import pytest
+
+from plugin_krita.ssn_shadow.adapters.krita_document import SourceError, read_source, refresh_source
+
+W, H = 40, 30
+
+
+class Rect:
+    def __init__(self, x, y, w, h):
+        self._r = (x, y, w, h)
+
+    def x(self):
+        return self._r[0]
+
+    def y(self):
+        return self._r[1]
+
+    def width(self):
+        return self._r[2]
+
+    def height(self):
+        return self._r[3]
+
+
+class Uid:
+    def toString(self):  # noqa: N802 (Qt's name)
+        return "{person}"
+
+
+class Layer:
+    """A paint layer of ``depth`` whose pixels are a dict (x, y) -> alpha in 0..1 (colour black)."""
+
+    def __init__(self, depth="U8", alpha=None, parent=True):
+        self.depth, self.alpha, self.parent = depth, dict(alpha or {}), parent
+        self.reads = 0
+
+    def name(self):
+        return "Person"
+
+    def uniqueId(self):  # noqa: N802
+        return Uid()
+
+    def parentNode(self):  # noqa: N802
+        return object() if self.parent else None
+
+    def colorModel(self):  # noqa: N802
+        return "RGBA"
+
+    def colorDepth(self):  # noqa: N802
+        return self.depth
+
+    def bounds(self):
+        if not self.alpha:
+            return Rect(0, 0, 0, 0)
+        xs, ys = [x for x, _ in self.alpha], [y for _, y in self.alpha]
+        return Rect(min(xs), min(ys), max(xs) - min(xs) + 1, max(ys) - min(ys) + 1)
+
+    def projectionPixelData(self, x, y, w, h):  # noqa: N802
+        self.reads += 1
+        out = bytearray()
+        for yy in range(y, y + h):
+            for xx in range(x, x + w):
+                a = self.alpha.get((xx, yy), 0.0)
+                if self.depth == "U8":
+                    out += bytes([0, 0, 0, round(255 * a)])
+                else:
+                    out += struct.pack("<4f", 0.0, 0.0, 0.0, a)
+        return bytes(out)
+
+
+class Selection:
+    def __init__(self, box):
+        self.box = box  # x0, y0, x1, y1 selected
+
+    def width(self):
+        return self.box[2] - self.box[0]
+
+    def height(self):
+        return self.box[3] - self.box[1]
+
+    def pixelData(self, x, y, w, h):  # noqa: N802
+        x0, y0, x1, y1 = self.box
+        return bytes(255 if x0 <= i % w < x1 and y0 <= i // w < y1 else 0 for i in range(w * h))
+
+
+class Document:
+    def __init__(self, layer, selection=None):
+        self.layer, self.sel = layer, selection
+
+    def colorModel(self):  # noqa: N802
+        return "RGBA"
+
+    def colorDepth(self):  # noqa: N802
+        return self.layer.depth
+
+    def colorProfile(self):  # noqa: N802
+        return "sRGB-elle-V2-srgbtrc.icc"
+
+    def activeNode(self):  # noqa: N802
+        return self.layer
+
+    def width(self):
+        return W
+
+    def height(self):
+        return H
+
+    def selection(self):
+        return self.sel
+
+
+def box(x0, y0, x1, y1, a=1.0):
+    return {(x, y): a for x in range(x0, x1) for y in range(y0, y1)}
+
+
+@pytest.mark.parametrize("depth", ["U8", "F32"])
+def test_an_unchanged_cutout_is_the_same_source_and_a_changed_one_a_new_key(depth):
+    layer = Layer(depth, box(10, 5, 20, 25))
+    doc = Document(layer)
+    source = read_source(doc)
+    key = source.key
+    assert refresh_source(source) is source  # the same pixels: the same object, its key not hashed again
+
+    erased = {p: a for p, a in layer.alpha.items() if p[0] < 15}  # the right half erased: other bounds
+    layer.alpha = erased
+    half = refresh_source(source)
+    assert half is not source and half.key != key and half.region == (10, 5, 5, 20)
+    assert refresh_source(half) is half
+
+    layer.alpha = {**erased, (12, 10): 0.5, (11, 6): 0.25}  # alpha painted within the same bounds
+    painted = refresh_source(half)
+    assert painted is not half and painted.key != half.key and painted.region == half.region
+    assert read_source(doc).alpha == painted.alpha  # what a Generate would read
+
+
+def test_the_layer_alpha_is_compared_within_its_region_of_a_wide_layer():
+    """A layer spanning the canvas's width is compared in one piece; one pixel's change is seen."""
+    layer = Layer("U8", {**box(0, 5, W, 10), (3, 20): 1.0})
+    source = read_source(Document(layer))
+    assert refresh_source(source) is source
+    layer.alpha[(3, 20)] = 0.9
+    assert refresh_source(source) is not source
+
+
+def test_a_selection_source_reads_the_selection_again_and_keeps_itself_once_deselected():
+    layer = Layer("U8", box(0, 0, W, H))  # opaque everywhere: the selection is the cutout
+    doc = Document(layer, Selection((10, 5, 20, 25)))
+    source = read_source(doc)
+    assert source.from_selection and refresh_source(source) is source
+    doc.sel = Selection((10, 5, 15, 25))
+    smaller = refresh_source(source)
+    assert smaller is not source and smaller.key != source.key and smaller.from_selection
+    doc.sel = None  # deselected after Generate: the cutout is the selection that was
+    assert refresh_source(smaller) is smaller
+
+
+def test_a_layer_gone_keeps_the_source_and_an_emptied_one_says_so():
+    layer = Layer("U8", box(10, 5, 20, 25))
+    source = read_source(Document(layer))
+    layer.parent = False  # removed from the image
+    assert refresh_source(source) is source
+    layer.parent, layer.alpha = True, {}
+    with pytest.raises(SourceError, match="empty on the canvas"):
+        refresh_source(source)
