@@ -28,6 +28,7 @@ class SoftShadowDocker(DockWidget):
         self.panel = ShadowPanel(self.controller)  # its controls scroll in a short dock, Generate stays in view
         self.setWidget(self.panel)
         self.controller.watch_history()
+        host.watch_closing(self._document_closed)
         app = QApplication.instance()
         if app is not None:
             app.aboutToQuit.connect(self.engine.shutdown)
@@ -38,7 +39,20 @@ class SoftShadowDocker(DockWidget):
         try:
             self.controller.forget_cutout()
             self.controller.watch_history()  # a new window has its own undo action
-            self.controller.set_model(self.models.model_for(self.controller.host.active_document()))
-            self.panel.show_model(self.controller.model)
+            self._show_active_document()
         except Exception as exc:  # never crash the host
             self.panel.show_message("error", f"Soft Shadow: {exc}")
+
+    def _document_closed(self) -> None:
+        """A view or document was closed: where the docker showed that document's state (its message, say),
+        it shows the active document's, or a new image's where none is open."""
+        try:
+            if self.models.is_closed(self.controller.model):
+                self.controller.forget_cutout()
+                self._show_active_document()
+        except Exception as exc:  # never crash the host
+            self.panel.show_message("error", f"Soft Shadow: {exc}")
+
+    def _show_active_document(self) -> None:
+        self.controller.set_model(self.models.model_for(self.controller.host.open_active_document()))
+        self.panel.show_model(self.controller.model)

@@ -147,6 +147,11 @@ class DocumentModels:
         self.host = host
         self._models: list[tuple[Any, ShadowModel]] = []
 
+    def is_closed(self, model: ShadowModel) -> bool:
+        """Whether ``model`` is the model of a document that is no longer open (a model of no document, or one
+        this object did not make: False)."""
+        return any(known is model and not self.host.is_open(document) for document, known in self._models)
+
     def model_for(self, document: Any) -> ShadowModel:
         """The model of ``document`` (None: a model of its own, saved nowhere)."""
         if document is None:
