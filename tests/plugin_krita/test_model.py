@@ -116,6 +116,20 @@ def test_each_document_has_its_own_model_and_a_closed_one_is_forgotten(qapp):
     assert old.opacity == 0.3
 
 
+def test_the_model_of_a_closed_document_is_known_as_closed(qapp):
+    """The docker asks, when Krita closes a view, whether the document it shows is gone (then it shows the
+    active document's state instead of the closed one's message)."""
+    host = FakeHost()
+    models = DocumentModels(host)
+    first, other = host.document, FakeDocument("b.kra")
+    shown, kept = models.model_for(first), models.model_for(other)
+    shown.report_status("error", "the shadow engine exited")
+    assert not models.is_closed(shown) and not models.is_closed(ShadowModel())
+    host.closed.append(first)
+    assert models.is_closed(shown) and not models.is_closed(kept)
+    assert models.model_for(None).status == ("info", READY)  # what the docker shows where no image is left
+
+
 @pytest.mark.parametrize(
     ("change", "message"),
     [
