@@ -132,9 +132,7 @@ class KritaHost:
     def watch_closing(self, closed: Callable[[], None]) -> None:
         """Call ``closed`` after each view or document Krita closes, once Krita has removed it (the docker's
         ``canvasChanged`` does not come when a window's last view closes)."""
-        notifier = getattr(self.krita, "notifier", lambda: None)()  # libkis Notifier; not in the typings yet
-        if notifier is None:
-            return
+        notifier = self.krita.notifier()
         notifier.setActive(True)  # its signals come only while it is active
         notifier.viewClosed.connect(lambda *_: QTimer.singleShot(0, closed))
         notifier.imageClosed.connect(lambda *_: QTimer.singleShot(0, closed))
