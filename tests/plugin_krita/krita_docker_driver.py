@@ -19,6 +19,7 @@ from PyQt5.QtWidgets import QApplication, QDockWidget
 RESULT = os.environ.get("SSN_TEST_RESULT", "/tmp/ssn_krita_docker.json")
 W, H = 480, 360
 NARROW = 260  # pixels: a dock column narrower than Krita's default
+SHORT = (262, 180)  # pixels: the docker in Krita's default workspace on a 1366 x 768 screen
 out = {"log": []}
 
 
@@ -79,6 +80,26 @@ def bind_to(docker, doc, person):
     return controller, panel
 
 
+def short_dock(docker):
+    """The docker's height and what its panel shows without scrolling: the map whole within the scroll area's
+    viewport, Generate within the panel."""
+    panel = docker.panel
+    viewport = panel.scroll.viewport()
+    top = panel.map_widget.mapTo(viewport, panel.map_widget.rect().topLeft())
+    bottom = panel.map_widget.mapTo(viewport, panel.map_widget.rect().bottomRight())
+    generate = panel.generate.mapTo(panel, panel.generate.rect().bottomRight())
+    return {
+        "docker": [docker.width(), docker.height()],
+        "viewport_height": viewport.height(),
+        "body_height": panel.body.height(),
+        "scrolled": panel.scroll.verticalScrollBar().value(),
+        "map_in_view": viewport.rect().contains(top) and viewport.rect().contains(bottom),
+        "map_height": panel.map_widget.height(),
+        "generate_in_view": panel.rect().contains(generate) and not panel.generate.visibleRegion().isEmpty(),
+        "open": {name: section.is_open() for name, section in getattr(panel, "sections", {}).items()},
+    }
+
+
 def main(*args):
     with recording(out, RESULT):
         from ssn_shadow.shared import light_map as lm
@@ -122,6 +143,12 @@ def main(*args):
             "horizontal_scroll_bar": panel.scroll.horizontalScrollBar().isVisible(),
             "map_right": panel.map_widget.mapTo(panel.scroll.viewport(), panel.map_widget.rect().topRight()).x(),
         }
+        out["default_height"] = short_dock(docker)  # the docker where Krita put it, stacked under the others
+        # Krita's default workspace on a 1366 x 768 screen: the docker 262 x about 180, stacked under the others
+        qwin.resizeDocks([docker], [SHORT[0]], Qt.Orientation.Horizontal)
+        qwin.resizeDocks([docker], [SHORT[1]], Qt.Orientation.Vertical)
+        pump(1.0)
+        out["short"] = short_dock(docker)
         qwin.resizeDocks([docker], [default_width], Qt.Orientation.Horizontal)
         pump(0.5)
 
@@ -154,5 +181,9 @@ def main(*args):
                 }
             )
         out["first_light_map"] = first
+        # the Intensity box: it shows the selected light's intensity, and a value typed in it is the light's
+        shown = panel.intensity_box.value()
+        panel.intensity_box.setValue(1.5)
+        out["intensity"] = {"shown": shown, "light": controller.model.light_map.lights[0].intensity}
         out["messages"] = list(controller.model.status)
         docker.engine.shutdown()

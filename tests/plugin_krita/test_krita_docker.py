@@ -1,4 +1,5 @@
-"""The docker in a real Krita window (kritarunner) on a 1366 x 768 screen: its width, and Krita's undo."""
+"""The docker in a real Krita window (kritarunner) on a 1366 x 768 screen: its width, a short docker, and Krita's
+undo."""
 
 import pytest
 from krita_helpers import run_in_fresh_profile
@@ -25,6 +26,13 @@ def test_the_docker_fits_krita_default_dock_and_follows_undo(tmp_path):
     assert narrow["docker_width"] == 260 and not narrow["horizontal_scroll_bar"], narrow
     assert narrow["map_right"] < narrow["viewport_width"], narrow
 
+    # the docker as Krita's default workspace stacks it on a 1366 x 768 screen, 262 x 180: the map (the light
+    # editor) and Generate in view without scrolling, the other sections folded
+    short = data["short"]
+    assert short["docker"][0] == 262 and short["docker"][1] <= 180, short  # shorter where the window is crowded
+    assert short["map_in_view"] and short["generate_in_view"] and short["scrolled"] == 0, short
+    assert not any(short["open"].values()), short
+
     first, second = data["undo"]
     assert second["names"] == ["Background", "Shadow: Person", "Person"], data["undo"]  # the first shadow is back
     # the cutout's layer stays active (the next brush stroke lands on it, not on the shadow brought back)
@@ -32,3 +40,5 @@ def test_the_docker_fits_krita_default_dock_and_follows_undo(tmp_path):
     # and the docker shows the lights that shadow was made with
     assert second["light_map"] == data["first_light_map"] == lm.preset("low-sun-left").to_dict()
     assert second["preset"] == "Low sun, left"
+    # the Intensity box showed the selected light's intensity (the low sun's), and sets it
+    assert data["intensity"] == {"shown": second["light_map"]["lights"][0]["intensity"], "light": 1.5}, data

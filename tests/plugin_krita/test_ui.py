@@ -1,6 +1,6 @@
 import json
 
-from PyQt5.QtCore import QElapsedTimer, QEvent, QPoint, QPointF, Qt
+from PyQt5.QtCore import QElapsedTimer, QEvent, QPoint, QPointF, QSettings, Qt
 from PyQt5.QtGui import QMouseEvent, QWheelEvent
 from PyQt5.QtTest import QTest
 from PyQt5.QtWidgets import QApplication
@@ -10,9 +10,10 @@ from ssn_engine.host_kit.ao_edits import AoEdits
 from plugin_krita.ssn_shadow.controller import ShadowController
 from plugin_krita.ssn_shadow.persistence import ANNOTATION, DocumentModels
 from plugin_krita.ssn_shadow.shared import light_map as lm
-from plugin_krita.ssn_shadow.ui import light_map_widget
+from plugin_krita.ssn_shadow.shared import light_editor
+from plugin_krita.ssn_shadow.ui import folding, light_map_widget
 from plugin_krita.ssn_shadow.ui.light_map_widget import LightMapWidget
-from plugin_krita.ssn_shadow.ui.panel import ShadowPanel
+from plugin_krita.ssn_shadow.ui.panel import FoldChoices, ShadowPanel
 
 
 class NoEngine:
@@ -162,6 +163,83 @@ def test_the_size_box_shows_and_sets_the_selected_lights_size_in_degrees(qapp):
     assert m.light_map.lights[0].angle == 3.0 and box.prefix() == ""
     m.light_map = lm.LightMap()
     assert not box.isEnabled()
+
+
+def test_the_intensity_box_shows_and_sets_the_selected_lights_intensity(qapp):
+    """A number beside the Intensity slider: the host kit's range, decimals and step; it follows the selected
+    light, and a value typed in it is one complete edit (one undo step), the slider following."""
+    c = ShadowController(NoEngine(), FakeHost())
+    panel = ShadowPanel(c)
+    panel.show()
+    box, m = panel.intensity_box, c.model
+    assert (box.minimum(), box.maximum()) == lm.INTENSITY_RANGE
+    assert box.decimals() == light_editor.INTENSITY_DECIMALS == 2 and box.singleStep() == light_editor.INTENSITY_STEP
+    assert box.value() == m.light_map.lights[0].intensity == 2.0  # the softbox preset
+    edits = []
+    m.edited.connect(lambda what, step: edits.append((what, step)))
+    box.setValue(1.25)  # as typed (the box takes it when the typing ends)
+    assert m.light_map.lights[0].intensity == 1.25 and edits == [("light_map", True)]
+    assert panel.intensity.value() == 125 and panel.presets.currentText() == "Custom"
+    panel.intensity.setValue(250)  # the slider: the box follows, and shows it without another edit
+    assert box.value() == 2.5 and m.light_map.lights[0].intensity == 2.5 and len(edits) == 2
+    # Shift+wheel on the map, and another light selected: the box shows that light's intensity
+    m.light_map = lm.preset("two-lights")
+    panel.map_widget.editor.select(1)
+    assert box.value() == round(m.light_map.lights[1].intensity, 2)
+    m.light_map = lm.LightMap()
+    assert not box.isEnabled()
+
+
+def test_the_folding_rule():
+    """Without Qt: which sections start open for a dock's height, the artist's choice first; the map's cap."""
+    short, tall = folding.SHORT_PANEL - 1, folding.SHORT_PANEL
+    assert folding.open_sections(161, {}) == dict.fromkeys(folding.SECTIONS, False)  # Krita's 262 x 180 docker
+    assert folding.open_sections(short, {}) == dict.fromkeys(folding.SECTIONS, False)
+    assert folding.open_sections(tall, {}) == dict.fromkeys(folding.SECTIONS, True)
+    chosen = folding.open_sections(161, {"ao": True, "camera": False})
+    assert chosen == {"preview": False, "ao": True, "camera": False, "shadow": False}
+    assert folding.open_sections(900, {"camera": False})["camera"] is False
+    assert folding.map_height_cap(91, 8) == 83 and folding.map_height_cap(30, 8) == folding.MAP_MIN_HEIGHT
+
+
+def test_a_short_dock_shows_the_map_and_generate_and_folds_the_rest(qapp, tmp_path):
+    """Krita's default workspace on a 1366 x 768 screen stacks the docker about 180 px tall: the map (all of it)
+    and Generate are in view without scrolling, the other sections folded; an unfolded one stays so."""
+    folds = FoldChoices(QSettings(str(tmp_path / "folds.ini"), QSettings.Format.IniFormat))
+    engine, host, c, panel = generated_panel(262, 161)  # the docker's 180 px less its title bar
+    panel.folds = folds
+    panel.resize(262, 160)
+    QApplication.processEvents()
+    viewport = panel.scroll.viewport()
+    map_box = panel.map_widget
+    top, bottom = map_box.mapTo(viewport, QPoint(0, 0)), map_box.mapTo(viewport, map_box.rect().bottomRight())
+    assert viewport.rect().contains(top) and viewport.rect().contains(bottom), (top, bottom, viewport.rect())
+    assert map_box.height() >= folding.MAP_MIN_HEIGHT and panel.scroll.verticalScrollBar().value() == 0
+    generate = panel.generate.mapTo(panel, panel.generate.rect().bottomRight())
+    assert panel.rect().contains(generate) and not panel.generate.visibleRegion().isEmpty()
+    assert not any(section.is_open() for section in panel.sections.values())
+    assert not panel.preview.isVisible() and not panel.ao_preview.isVisible()
+    panel.sections["ao"].header.click()  # the artist unfolds the AO
+    assert panel.ao_preview.isVisible() and folds.chosen() == {"ao": True}
+    # the next Krita (the choice read back from the settings' file), in the same short dock
+    again = ShadowPanel(
+        ShadowController(NoEngine(), FakeHost()),
+        folds=FoldChoices(QSettings(str(tmp_path / "folds.ini"), QSettings.Format.IniFormat)),
+    )
+    again.resize(262, 160)
+    again.show()
+    QApplication.processEvents()
+    assert {n: s.is_open() for n, s in again.sections.items()} == {
+        "preview": False,
+        "ao": True,
+        "camera": False,
+        "shadow": False,
+    }
+    again.resize(262, 900)  # a tall dock: the sections the artist left alone open
+    QApplication.processEvents()
+    assert (
+        all(s.is_open() for s in again.sections.values()) and again.map_widget.height() == again.map_widget.width() // 2
+    )
 
 
 def test_ao_edits_list():
@@ -446,6 +524,8 @@ def test_generate_and_the_status_stay_in_view_while_the_controls_scroll(qapp):
     panel = ShadowPanel(c)
     panel.resize(300, 420)
     panel.show()
+    QApplication.processEvents()
+    panel.sections["camera"].set_open(True)  # a short dock folds the sections: one open, the controls scroll
     QApplication.processEvents()
     bar = panel.scroll.verticalScrollBar()
     assert bar.maximum() > 0  # the controls scroll

@@ -21,6 +21,7 @@ from PyQt5.QtWidgets import QSizePolicy, QWidget
 from ..shared import light_editor
 from ..shared import light_map as lm
 from ..shared import light_map_picture
+from .folding import MAP_MIN_HEIGHT
 
 PICTURE_INTERVAL_MS = 50  # while a light moves, the map's picture is made at most this often
 
@@ -41,7 +42,7 @@ class LightMapWidget(QWidget):
         self._catch_up.timeout.connect(self._redraw)
         self.setFocusPolicy(Qt.FocusPolicy.ClickFocus)
         self.setMouseTracking(False)
-        self.setMinimumSize(160, 80)
+        self.setMinimumSize(160, MAP_MIN_HEIGHT)  # a short dock caps its height (the panel: setMaximumHeight)
         policy = QSizePolicy(QSizePolicy.Expanding, QSizePolicy.Preferred)
         policy.setHeightForWidth(True)
         self.setSizePolicy(policy)
@@ -65,7 +66,9 @@ class LightMapWidget(QWidget):
         return True
 
     def heightForWidth(self, width: int) -> int:
-        return max(80, width // 2)
+        """2:1, at least 80 px, within the widget's maximum height (a short dock's cap: the map is drawn 2:1
+        within its box, narrower than the box)."""
+        return max(self.minimumHeight(), min(max(80, width // 2), self.maximumHeight()))
 
     def map_rect(self) -> QRectF:
         w, h = self.width(), self.height()
@@ -154,8 +157,13 @@ class LightMapWidget(QWidget):
         p.setFont(font)
         # Where a light there sits, and so where its shadow falls (the opposite way).
         p.drawText(QRectF(r.left(), r.bottom() - 16, r.width(), 14), Qt.AlignmentFlag.AlignHCenter, "behind the object")
-        p.drawText(QRectF(r.left() + 3, r.bottom() - 16, r.width(), 14), Qt.AlignmentFlag.AlignLeft, "behind you")
-        p.drawText(QRectF(r.left(), r.bottom() - 16, r.width() - 3, 14), Qt.AlignmentFlag.AlignRight, "behind you")
+        metrics = p.fontMetrics()
+        if (
+            2 * metrics.horizontalAdvance("behind you") + metrics.horizontalAdvance("behind the object") + 24
+            < r.width()
+        ):
+            p.drawText(QRectF(r.left() + 3, r.bottom() - 16, r.width(), 14), Qt.AlignmentFlag.AlignLeft, "behind you")
+            p.drawText(QRectF(r.left(), r.bottom() - 16, r.width() - 3, 14), Qt.AlignmentFlag.AlignRight, "behind you")
         p.drawText(QRectF(r.left(), r.top() + 2, r.width(), 14), Qt.AlignmentFlag.AlignHCenter, "zenith (short shadow)")
         p.drawText(
             QRectF(r.left(), r.bottom() - 30, r.width(), 14), Qt.AlignmentFlag.AlignHCenter, "horizon (long shadow)"

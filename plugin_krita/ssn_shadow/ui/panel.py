@@ -9,11 +9,16 @@ Its layout holds still under the mouse: the controls scroll in a body as
 narrow as a default dock (the map and previews scale to the width, labels
 wrap), Generate and the status stay in a footer below it, the shadow preview
 and the camera note keep their space whatever they show.
+
+The light editor (the sky map, then the preset, Size and Intensity) comes first; the preview, the ambient
+occlusion, the camera and the shadow's colour and opacity are sections that fold, folded at first in a short
+dock (:mod:`.folding` decides which), and the artist's choice to fold or unfold one is remembered (Qt's
+settings). In a short dock the map is no taller than the scroll area shows, so it and Generate are in view.
 """
 
 from __future__ import annotations
 
-from PyQt5.QtCore import QSize, Qt
+from PyQt5.QtCore import QEvent, QObject, QSettings, QSize, Qt, pyqtSignal
 from PyQt5.QtGui import QColor
 from PyQt5.QtWidgets import (
     QCheckBox,
@@ -21,7 +26,6 @@ from PyQt5.QtWidgets import (
     QComboBox,
     QDoubleSpinBox,
     QFormLayout,
-    QGroupBox,
     QHBoxLayout,
     QLabel,
     QProgressBar,
@@ -31,6 +35,7 @@ from PyQt5.QtWidgets import (
     QSizePolicy,
     QSlider,
     QSpinBox,
+    QToolButton,
     QVBoxLayout,
     QWidget,
 )
@@ -38,9 +43,11 @@ from PyQt5.QtWidgets import (
 from ..model import ShadowModel
 from ..properties import Binding, bind
 from ..shared import camera_rules, defaults
+from ..shared import light_editor
 from ..shared import light_map as lm
 from ..shared import light_size
 
+from . import folding
 from .ao_preview import AOPreview
 from .light_map_widget import LightMapWidget
 from .shadow_preview import ShadowPreview
@@ -58,6 +65,8 @@ PRESET_TITLES = {  # the presets' names for people (files and the CLI use the ke
 }
 PANEL_WIDTH = 300  # pixels: the panel's preferred width (it fits narrower docks: the map and previews scale)
 HINT_WIDTH = 240  # pixels: the width a wrapped label's size hint assumes (the layout asks at its real width)
+BODY_MARGIN = 4  # pixels around the scrolling controls
+SETTINGS = ("ssn-shadow", "krita-docker")  # QSettings' organisation and application: the fold choices
 UNKNOWN = "\u2014"  # a camera field's text while no camera is known (an em dash)
 CAMERA_NOTES = {
     "unknown": "At Generate the engine reads the horizon and field of view from the cutout's outline; tick "
@@ -122,6 +131,72 @@ class SteadyLabel(QLabel):
         return QSize(0, self.heightForWidth(HINT_WIDTH))
 
 
+class FoldChoices:
+    """The sections the artist folded or unfolded, kept in Qt's settings (``SETTINGS``, key ``folds/<section>``):
+    the next Krita shows them so."""
+
+    def __init__(self, settings: QSettings | None = None) -> None:
+        self.settings = settings if settings is not None else QSettings(*SETTINGS)
+
+    def chosen(self) -> dict[str, bool]:
+        s = self.settings
+        return {n: s.value(f"folds/{n}", type=bool) for n in folding.SECTIONS if s.contains(f"folds/{n}")}
+
+    def choose(self, name: str, opened: bool) -> None:
+        self.settings.setValue(f"folds/{name}", opened)
+        self.settings.sync()
+
+
+class Section(QWidget):
+    """A titled part of the panel that folds: a header button (an arrow and the title) over its content."""
+
+    chosen = pyqtSignal(str, bool)  # the artist folded (False) or unfolded (True) the section
+
+    def __init__(self, name: str, content: QWidget, parent: QWidget | None = None) -> None:
+        super().__init__(parent)
+        self.name, self.content = name, content
+        self.header = QToolButton()
+        self.header.setText(folding.TITLES[name])
+        self.header.setCheckable(True)
+        self.header.setAutoRaise(True)
+        self.header.setToolButtonStyle(Qt.ToolButtonStyle.ToolButtonTextBesideIcon)
+        self.header.setSizePolicy(QSizePolicy.Policy.Expanding, QSizePolicy.Policy.Fixed)
+        self.header.setStyleSheet("QToolButton { font-weight: bold; text-align: left; }")
+        layout = QVBoxLayout(self)
+        layout.setContentsMargins(0, 0, 0, 0)
+        layout.setSpacing(0)
+        layout.addWidget(self.header)
+        layout.addWidget(content)
+        self.set_open(True)
+        self.header.clicked.connect(self._clicked)  # the artist's click, not set_open
+
+    def is_open(self) -> bool:
+        return self.header.isChecked()
+
+    def set_open(self, opened: bool) -> None:
+        self.header.setChecked(opened)
+        self.header.setArrowType(Qt.ArrowType.DownArrow if opened else Qt.ArrowType.RightArrow)
+        self.header.setToolTip(f"{'Fold' if opened else 'Unfold'} {folding.TITLES[self.name].lower()}")
+        self.content.setVisible(opened)
+
+    def _clicked(self, opened: bool) -> None:
+        self.set_open(opened)
+        self.chosen.emit(self.name, opened)
+
+
+class _ResizeWatch(QObject):
+    """Calls ``fn`` after each resize of the widgets it is installed on."""
+
+    def __init__(self, fn, parent: QObject) -> None:
+        super().__init__(parent)
+        self.fn = fn
+
+    def eventFilter(self, watched, event) -> bool:  # noqa: N802 (Qt's API)
+        if event.type() == QEvent.Type.Resize:
+            self.fn()
+        return False
+
+
 def _slider(lo: int, hi: int, value: int) -> QSlider:
     s = QSlider(Qt.Orientation.Horizontal)
     s.setRange(lo, hi)
@@ -141,6 +216,17 @@ def _size_box() -> QDoubleSpinBox:
     return box
 
 
+def _intensity_box() -> QDoubleSpinBox:
+    """The selected light's intensity as a number (the host kit's range, decimals and step)."""
+    box = QDoubleSpinBox()
+    box.setRange(*lm.INTENSITY_RANGE)
+    box.setDecimals(light_editor.INTENSITY_DECIMALS)
+    box.setSingleStep(light_editor.INTENSITY_STEP)
+    box.setKeyboardTracking(False)  # typing "1.25" sets 1.25, not 1 first
+    box.setToolTip("The selected light's intensity (Shift+wheel on the map, or the slider)")
+    return box
+
+
 def _form(parent: QWidget | None = None) -> QFormLayout:
     """A form whose fields go below their labels where the dock is too narrow for both on one line."""
     form = QFormLayout(parent) if parent is not None else QFormLayout()
@@ -152,9 +238,11 @@ def _form(parent: QWidget | None = None) -> QFormLayout:
 class ShadowPanel(QWidget):
     """All controls, bound to the controller's model; the actions go to the controller."""
 
-    def __init__(self, controller, parent: QWidget | None = None) -> None:
+    def __init__(self, controller, parent: QWidget | None = None, folds: FoldChoices | None = None) -> None:
         super().__init__(parent)
         self.controller = controller
+        self.folds = folds if folds is not None else FoldChoices()
+        self.sections: dict[str, Section] = {}
         self.model: ShadowModel = controller.model
         self._bindings: list[Binding] = []
         self._syncing = False  # the light sliders show the selected light (no edit)
@@ -162,12 +250,35 @@ class ShadowPanel(QWidget):
         self._build()
         self._wire()
         self.show_model(controller.model)
+        self._watch = _ResizeWatch(self._fit, self)
+        self.installEventFilter(self._watch)
+        self.viewport.installEventFilter(self._watch)
 
     def sizeHint(self) -> QSize:  # noqa: N802 (Qt's API)
         """As wide as a narrow dock (added to Krita's dock column, the docker does not widen it)."""
         return QSize(PANEL_WIDTH, super().sizeHint().height())
 
     # -- layout ----------------------------------------------------------------------
+    def _add_section(self, root: QVBoxLayout, name: str, content: QWidget) -> None:
+        layout = content.layout()
+        if layout is not None:
+            layout.setContentsMargins(12, 0, 0, 4)  # indented under the section's title
+        section = self.sections[name] = Section(name, content)
+        section.chosen.connect(self._guard(lambda name, opened: self.folds.choose(name, opened)))
+        root.addWidget(section)
+
+    def _fit(self) -> None:
+        """After a resize: the sections the artist has not chosen for open or folded as the dock's height has
+        them (:func:`folding.open_sections`), and the map no taller than the scroll area shows."""
+        states = folding.open_sections(self.height(), self.folds.chosen())
+        for name, opened in states.items():
+            if self.sections[name].is_open() != opened:
+                self.sections[name].set_open(opened)
+        cap = folding.map_height_cap(self.viewport.height(), 2 * BODY_MARGIN)
+        if self.map_widget.maximumHeight() != cap:
+            self.map_widget.setMaximumHeight(cap)
+            self.map_widget.updateGeometry()
+
     def _build(self) -> None:
         outer = QVBoxLayout(self)
         outer.setContentsMargins(0, 0, 0, 0)
@@ -175,12 +286,16 @@ class ShadowPanel(QWidget):
         self.scroll = QScrollArea()
         self.scroll.setWidgetResizable(True)
         self.scroll.setFrameShape(QScrollArea.Shape.NoFrame)
+        self.scroll.setMinimumHeight(folding.MAP_MIN_HEIGHT + 2 * BODY_MARGIN)  # the map in view in any dock
+        self.viewport: QWidget = self.scroll.viewport()
         self.body = QWidget()
         root = QVBoxLayout(self.body)
-        root.setContentsMargins(4, 4, 4, 4)
+        root.setContentsMargins(BODY_MARGIN, BODY_MARGIN, BODY_MARGIN, BODY_MARGIN)
 
-        light_box = QGroupBox("Light")
-        lv = QVBoxLayout(light_box)
+        # The light editor first: in a short dock it (and Generate, below) is what shows.
+        self.map_widget = LightMapWidget(lm.LightMap())
+        root.addWidget(self.map_widget)
+        form = _form()
         self.presets = QComboBox()
         self.presets.setSizeAdjustPolicy(QComboBox.SizeAdjustPolicy.AdjustToMinimumContentsLengthWithIcon)
         self.presets.setMinimumContentsLength(8)
@@ -188,17 +303,16 @@ class ShadowPanel(QWidget):
         for name in lm.PRESETS:
             self.presets.addItem(preset_title(name), name)
         self.presets.setToolTip("The lights' preset (Custom: edited lights)")
-        lv.addWidget(self.presets)
-        self.preview = ShadowPreview()
-        lv.addWidget(self.preview)
-        self.map_widget = LightMapWidget(lm.LightMap())
-        lv.addWidget(self.map_widget)
-        form = _form()
         self.size_box = _size_box()
+        self.intensity_box = _intensity_box()
         self.intensity = _slider(0, 300, 100)
+        intensity_row = QHBoxLayout()
+        intensity_row.addWidget(self.intensity_box)
+        intensity_row.addWidget(self.intensity, 1)
+        form.addRow("Preset", self.presets)
         form.addRow("Size", self.size_box)
-        form.addRow("Intensity", self.intensity)
-        lv.addLayout(form)
+        form.addRow("Intensity", intensity_row)
+        root.addLayout(form)
         hint = QLabel(
             "A light casts its shadow the opposite way: right of centre, to the left; low, long. "
             "Click: add · drag: move · wheel: size · Shift+wheel: intensity · right-click / Del: remove"
@@ -206,10 +320,15 @@ class ShadowPanel(QWidget):
         hint.setWordWrap(True)
         hint.setSizePolicy(QSizePolicy.Policy.Ignored, QSizePolicy.Policy.Preferred)
         hint.setStyleSheet("color: gray; font-size: 8pt;")
-        lv.addWidget(hint)
-        root.addWidget(light_box)
+        root.addWidget(hint)
 
-        ao_box = QGroupBox("Ambient occlusion")
+        preview_box = QWidget()
+        pv = QVBoxLayout(preview_box)
+        self.preview = ShadowPreview()
+        pv.addWidget(self.preview)
+        self._add_section(root, "preview", preview_box)
+
+        ao_box = QWidget()
         av = QVBoxLayout(ao_box)
         self.ao_preview = AOPreview()
         av.addWidget(self.ao_preview)
@@ -246,9 +365,9 @@ class ShadowPanel(QWidget):
         arow.addWidget(self.ao_undo)
         arow.addWidget(self.ao_reset)
         av.addLayout(arow)
-        root.addWidget(ao_box)
+        self._add_section(root, "ao", ao_box)
 
-        camera_box = QGroupBox("Camera")
+        camera_box = QWidget()
         cv = QVBoxLayout(camera_box)
         self.use_horizon = QCheckBox("Horizon at")
         self.use_horizon.setToolTip(
@@ -282,39 +401,44 @@ class ShadowPanel(QWidget):
         cv.addLayout(hrow)
         cv.addLayout(cform)
         cv.addWidget(self.camera_read)
-        root.addWidget(camera_box)
+        self._add_section(root, "camera", camera_box)
 
-        shadow_box = QGroupBox("Shadow")
+        shadow_box = QWidget()
         sf = _form(shadow_box)
         self.color_button = QPushButton()
         self.color_button.setToolTip("Shadow colour")
         self.opacity = _slider(0, 100, round(100 * defaults.OPACITY))
         sf.addRow("Colour", self.color_button)
         sf.addRow("Opacity", self.opacity)
-        root.addWidget(shadow_box)
+        self._add_section(root, "shadow", shadow_box)
         root.addStretch(1)
         self.scroll.setWidget(self.body)
         outer.addWidget(self.scroll, 1)
 
+        # The footer, short so that a short dock keeps room for the map: Live, Generate and Cancel (a cross) on
+        # one row, the busy bar a thin line under it, the status.
         footer = QVBoxLayout()
         footer.setContentsMargins(4, 2, 4, 4)
+        footer.setSpacing(2)
         row = QHBoxLayout()
         self.live = QCheckBox("Live")
         self.live.setToolTip("Follow the lights as they change: the preview follows a dragged light")
         self.generate = QPushButton("Generate shadow")
         self.generate.setDefault(True)
+        self.cancel = QToolButton()  # a cross, not a word: the row fits a narrow dock at a large font
+        self.cancel.setText("\N{MULTIPLICATION X}")
+        self.cancel.setAccessibleName("Cancel")
+        self.cancel.setToolTip("Cancel: stop waiting for the shadow engine (it restarts with the next Generate)")
         row.addWidget(self.live)
         row.addWidget(self.generate, 1)
+        row.addWidget(self.cancel)
         footer.addLayout(row)
         self.busy = QProgressBar()
         self.busy.setRange(0, 0)  # an indeterminate busy indicator
-        self.busy.setMaximumHeight(8)
+        self.busy.setFixedHeight(5)
         self.busy.setTextVisible(False)
-        self.cancel = QPushButton("Cancel")
-        self.cancel.setToolTip("Stop waiting for the shadow engine (it restarts with the next Generate)")
         busy_row = QHBoxLayout()
         busy_row.addWidget(self.busy, 1)
-        busy_row.addWidget(self.cancel)
         for w in (self.busy, self.cancel):  # hidden while idle, keeping their place
             keep = w.sizePolicy()
             keep.setRetainSizeWhenHidden(True)
@@ -339,6 +463,7 @@ class ShadowPanel(QWidget):
         self.map_widget.selectionChanged.connect(guard(lambda _: self._sync_light_controls()))
         self.size_box.valueChanged.connect(guard(self._size_set))
         self.intensity.valueChanged.connect(guard(self._intensity_moved))
+        self.intensity_box.valueChanged.connect(guard(self._intensity_entered))
         self.ao_preview.brushed.connect(guard(self._brush))
         self.brush_size.valueChanged.connect(guard(self._brush_size))
         self.grow.clicked.connect(guard(lambda *_: self.model.grow_ao(2)))
@@ -463,12 +588,14 @@ class ShadowPanel(QWidget):
         light = self.map_widget.light_map.lights[i] if i is not None and i < len(self.map_widget.light_map) else None
         self.size_box.setEnabled(light is not None)
         self.intensity.setEnabled(light is not None)
+        self.intensity_box.setEnabled(light is not None)
         if light is not None:
             self._syncing = True
             self.size_box.setPrefix(light_size.size_prefix(light))
             self.size_box.setValue(light_size.shown_size(light))
             self.size_box.setSingleStep(light_size.increments(self.size_box.value())[0])  # Page Up/Down: ten steps
             self.intensity.setValue(round(100 * light.intensity))
+            self.intensity_box.setValue(light.intensity)
             self._syncing = False
 
     def _size_set(self, degrees: float) -> None:
@@ -478,6 +605,11 @@ class ShadowPanel(QWidget):
     def _intensity_moved(self, value: int) -> None:
         if not self._syncing:
             self.map_widget.editor.set_intensity(value / 100.0, self.model.take_step())
+
+    def _intensity_entered(self, value: float) -> None:
+        """A number typed or stepped in the Intensity box: a complete edit, one undo step."""
+        if not self._syncing:
+            self.map_widget.editor.enter_intensity(value)
 
     # -- AO ----------------------------------------------------------------------------------
     def _brush_size(self, value: int) -> None:
