@@ -8,6 +8,7 @@ from __future__ import annotations
 
 import argparse
 import contextlib
+import math
 import os
 import signal
 import sys
@@ -20,6 +21,7 @@ from typing import TYPE_CHECKING
 from .host_kit import defaults
 from .host_kit.ao_edits import strength_edits
 from .host_kit.camera_rules import DEFAULT_FOV, FOV_RANGE
+from .host_kit.geometry_rules import THICKNESS_RANGE
 
 if TYPE_CHECKING:
     import numpy as np
@@ -55,7 +57,8 @@ def _number_in(lo: float, hi: float):
         except ValueError:
             raise argparse.ArgumentTypeError(f"expected a number, got {text!r}") from None
         if not lo <= value <= hi:
-            raise argparse.ArgumentTypeError(f"expected a number in [{lo:g}, {hi:g}], got {text}")
+            limits = f"a number >= {lo:g}" if hi == math.inf else f"a number in [{lo:g}, {hi:g}]"
+            raise argparse.ArgumentTypeError(f"expected {limits}, got {text}")
         return value
 
     return parse
@@ -245,7 +248,8 @@ def load_cutout(args: argparse.Namespace) -> np.ndarray:
 
 def _make_shadow(cutout_rgba: np.ndarray, args: argparse.Namespace, stage: Stages):
     """The canvas shadow of a cutout (one session per object on the layer unless --one-object); returns
-    (CanvasShadow, loaded method, the camera the model read from the outline or None: the session's camera_read).
+    (CanvasShadow, loaded method, what to report: the session's camera_read, and the thickness the outline reads
+    as where the artist's geometry was given).
     The light map and AO edits are read first, so a bad one costs no inference."""
     from .ao_edit import AOEditError
     from .framing import EmptyAlphaError
@@ -266,12 +270,17 @@ def _make_shadow(cutout_rgba: np.ndarray, args: argparse.Namespace, stage: Stage
         session.set_ao_edits(edits)
     except AOEditError as exc:
         raise CliError(f"{args.ao_edits or '--ao-strength'}: {exc}") from None
+    try:
+        session.set_geometry(args.lift, args.thickness)
+    except ValueError as exc:
+        raise CliError(f"--{exc}") from None
     stage("rendering the shadow")
     shadow = session.render(lights)
     reason = no_shadow_reason(lights, shadow)
     if reason:
         raise NoShadow(reason)
-    return shadow, loaded, session.camera_read
+    read_thickness = session.thickness_read if args.lift or args.thickness is not None else None
+    return shadow, loaded, (session.camera_read, read_thickness)
 
 
 def _write_outputs(
@@ -335,16 +344,17 @@ def cmd_render(args: argparse.Namespace) -> int:
         cutout = load_cutout(args)
         stage("reading the background")
         background = _load_background(args, (cutout.shape[1], cutout.shape[0]))
-        shadow, loaded, camera_read = _make_shadow(cutout, args, stage)
+        shadow, loaded, read = _make_shadow(cutout, args, stage)
         with atomic_writes(args.placed) as write:
             written = _write_outputs(write, cutout, shadow, args, background, stage)
     finally:
         stage.close()
-    return _report(written, loaded, camera_read)
+    return _report(written, loaded, *read)
 
 
-def _report(written: list, loaded, camera_read: dict | None) -> int:
-    """Say what was written, which method made it and, for a call without a camera, which one the model read."""
+def _report(written: list, loaded, camera_read: dict | None, thickness_read: float | None = None) -> int:
+    """Say what was written, which method made it, for a call without a camera which one the model read, and
+    for a call with the artist's geometry the thickness the outline reads as."""
     for path in written:
         print(f"wrote {path}")
     print(f"method: {loaded.method.name} ({loaded.note})")
@@ -353,6 +363,8 @@ def _report(written: list, loaded, camera_read: dict | None) -> int:
             f"camera read from the cutout's outline: --horizon {camera_read['horizon']:.0f} "
             f"--fov {camera_read['fov']:.0f} (give the image's own to correct it)"
         )
+    if thickness_read is not None:
+        print(f"thickness read from the cutout's outline: {thickness_read:.2f}")
     return EXIT_OK
 
 
@@ -377,14 +389,14 @@ def cmd_demo(args: argparse.Namespace) -> int:
     args.composite, args.cutout = args.out, "the sample pawn"
     stage = Stages()
     try:
-        shadow, loaded, camera_read = _make_shadow(cutout, args, stage)
+        shadow, loaded, read = _make_shadow(cutout, args, stage)
         with atomic_writes(args.placed) as write:
             written = _write_outputs(write, cutout, shadow, args, background, stage)
             # a fresh background: the composite was blended into the first one
             written += [write(path, image) for path, image in zip(samples, (cutout, studio_background()), strict=False)]
     finally:
         stage.close()
-    return _report(written, loaded, camera_read)
+    return _report(written, loaded, *read)
 
 
 def cmd_presets(args: argparse.Namespace) -> int:
@@ -494,6 +506,21 @@ def _add_shadow_options(p: argparse.ArgumentParser) -> None:
         type=_number_in(*FOV_RANGE),
         metavar="DEG",
         help=f"with --horizon: the image's vertical field of view in degrees (default {DEFAULT_FOV:g})",
+    )
+    p.add_argument(
+        "--lift",
+        type=_number_in(0.0, math.inf),
+        default=0.0,
+        metavar="L",
+        help="the object floats: canvas rows from its lowest point down to the ground beneath it (default 0: it "
+        "rests on the ground; docs/conventions.md, 'Lift and thickness')",
+    )
+    p.add_argument(
+        "--thickness",
+        type=_number_in(*THICKNESS_RANGE),
+        metavar="T",
+        help="the object's depth along the view over its width across it (0 a flat sign, 1 a ball, 2 a person "
+        "seen from the side); default: read from the outline",
     )
     p.add_argument(
         "--one-object",

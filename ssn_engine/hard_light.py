@@ -89,6 +89,7 @@ __all__ = [
     "depth_map",
     "footprint_rise",
     "light_direction",
+    "read_thickness",
     "traced_share",
 ]
 
@@ -979,6 +980,15 @@ def depth_map(alpha: np.ndarray) -> np.ndarray:
     return _enlarged(nearest_fill(depth, solid)[1:-1, 1:-1], k, (h, w))
 
 
+def read_thickness(alpha: np.ndarray, depth: np.ndarray) -> float:
+    """The thickness the outline reads as (conventions, "Lift and thickness"): the deepest point of ``depth``
+    (:func:`depth_map`) over the width of the cutout's solid part; 1 for a disk, 0 where nothing is solid."""
+    cols = np.flatnonzero((alpha > SOLID).any(axis=0))
+    if cols.size == 0:
+        return 0.0
+    return float(depth.max()) / float(cols[-1] + 1 - cols[0])
+
+
 def _enlarged(small: np.ndarray, k: int, shape: tuple[int, int]) -> np.ndarray:
     """``small``, worked out on a copy reduced ``k`` times, enlarged bilinearly (float32) and cut to ``shape``."""
     small = np.ascontiguousarray(small, np.float32)
@@ -1005,7 +1015,13 @@ def foot_rows(shape: tuple[int, int], framing: Framing, heights: np.ndarray) -> 
 class ContactTracer:
     """The cutout as cards standing on its contact line: one :class:`CardTracer` per band of
     :func:`contact_bands`, cross-faded where two meet, their shadows added; ``heights`` (N, N), optional: the
-    frame's pixel heights (:func:`foot_rows`), which place each pixel's surface behind its card."""
+    frame's pixel heights (:func:`foot_rows`), which place each pixel's surface behind its card.
+
+    The artist's geometry (conventions, "Lift and thickness"): ``lift`` (pixels of ``alpha``) lowers every
+    card's foot and every pixel's foot that many rows, so the object floats above the ground that far (its
+    cards stand nearer, on the ground beneath it); ``thickness``, where given, scales the depth each pixel
+    reaches behind its surface so that the object's depth over its width is that (:func:`read_thickness` is the
+    reading it replaces)."""
 
     def __init__(
         self,
@@ -1013,15 +1029,22 @@ class ContactTracer:
         framing: Framing,
         camera: tuple[float, float] | None,
         heights: np.ndarray | None = None,
+        lift: float = 0.0,
+        thickness: float | None = None,
     ) -> None:
         alpha = np.clip(np.asarray(alpha, np.float32), 0.0, 1.0)
         bands = contact_bands(alpha, footprint_rise(alpha, framing, camera))
         x0, y0 = framing.bbox[:2]
         self.cards: list[CardTracer] = []
         width = alpha.shape[1]
-        thickness = depth_map(alpha)
-        feet = None if heights is None else foot_rows(alpha.shape, framing, heights)
+        depth = depth_map(alpha)
+        self.thickness_read = read_thickness(alpha, depth)
+        if thickness is not None:
+            depth = depth * np.float32(thickness / self.thickness_read) if self.thickness_read > 0 else depth * 0
+        rows = int(round(lift))
+        feet = None if heights is None else foot_rows(alpha.shape, framing, heights) + np.float32(rows)
         for i, (c0, c1, foot) in enumerate(bands):
+            foot += rows
             weight = np.zeros(width, np.float32)
             weight[c0:c1] = 1.0
             if i > 0:
@@ -1041,7 +1064,7 @@ class ContactTracer:
                 camera,
                 origin=(x0 + a, y0),
                 foot=foot,
-                thickness=thickness[:, a:b],
+                thickness=depth[:, a:b],
                 feet=None if feet is None else feet[:, a:b],
             )
             if not card.empty:

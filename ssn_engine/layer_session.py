@@ -220,9 +220,34 @@ class LayerSession:
     def render(self, light_map: LightMap, framing: Framing | None = None, clip: bool = True) -> CanvasShadow:
         """The combined shadow at canvas resolution, or on ``framing``'s canvas (each object's
         :meth:`ShadowSession.render`, combined as the module docstring says)."""
-        plan = LightPlan.of(light_map)
-        shadows = [part.render_plan(plan, self._part_framing(part, framing), clip) for part in self.parts]
+        plans: dict[float, LightPlan] = {}  # one per way the objects float (one where none does)
+        shadows = []
+        for part in self.parts:
+            if part.lifted not in plans:
+                plans[part.lifted] = part.plan(light_map)
+            plan = plans[part.lifted]
+            shadows.append(part.render_plan(plan, self._part_framing(part, framing), clip))
         return combine_shadows(shadows, float(small_lights_share(plan.elm[None])[0]))
+
+    def set_geometry(self, lift: float = 0.0, thickness: float | None = None) -> None:
+        """The artist's geometry for every object (:meth:`ShadowSession.set_geometry`), checked on each first."""
+        for part in self.parts:
+            part.checked_geometry(lift, thickness)
+        for part in self.parts:
+            part.set_geometry(lift, thickness)
+
+    @property
+    def lift(self) -> float:
+        return self.parts[0].lift
+
+    @property
+    def thickness(self) -> float | None:
+        return self.parts[0].thickness
+
+    @property
+    def thickness_read(self) -> float:
+        """The largest object's thickness as its outline reads."""
+        return self.parts[0].thickness_read
 
     def cover(self, framing: Framing) -> np.ndarray:
         """The layer's alpha (h, w) on ``framing``'s canvas, resampled from the objects' frames."""

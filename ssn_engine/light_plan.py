@@ -30,11 +30,14 @@ class LightPlan:
     broad: LightMap
 
     @classmethod
-    def of(cls, light_map: LightMap) -> LightPlan:
-        """The plan of ``light_map``."""
+    def of(cls, light_map: LightMap, lifted: float = 0.0) -> LightPlan:
+        """The plan of ``light_map``; ``lifted`` in [0, 1]: how far the object floats off the ground for the
+        network (its frames show objects standing on it), which hands that share of every broad light to the
+        tracer too (1: all of it traced)."""
         traced, broad = [], []
         for light in light_map:
-            share = traced_share(light.size_degrees) if light.intensity > 0 else 0.0
+            small = traced_share(light.size_degrees)
+            share = small + (1.0 - small) * lifted if light.intensity > 0 else 0.0
             if share > 0:
                 traced.append(light if share == 1 else replace(light, intensity=light.intensity * share))
             if share < 1:

@@ -34,6 +34,7 @@ from .framing import (
 from .hard_light import ContactTracer
 from .hemisphere import render_light_map
 from .host_kit.camera_rules import DEFAULT_FOV, FOV_RANGE
+from .host_kit.geometry_rules import check_lift, check_thickness
 from .host_kit.light_map import LightMap
 from .host_kit.shadow_notes import HIDDEN, NO_LIGHT
 from .host_kit.sky_map import NETWORK_SHAPE
@@ -48,6 +49,9 @@ NETWORK_THREAD = "ssn-network"  # the thread the network's frames render on whil
 # is given (the model's own reading of it: all). The network's soft shadow hedges against the traced geometry's
 # errors; a given camera leaves fewer (docs/hard_light.md, "Which lights are traced, and how the parts combine").
 GIVEN_CAMERA_HEDGE = 0.5
+# A lift of this share of the object's height floats it wholly for the network (docs/engine.md, "Lift and
+# thickness"): its frames show objects standing on the ground, so from there every light is traced.
+LIFT_FADE = 0.05
 
 
 def camera_input(
@@ -114,6 +118,7 @@ class ShadowSession:
             self.mask = np.minimum(self.mask / np.float32(self.opacity), 1.0)
         self.edits: list[dict[str, Any]] = []
         self._card: GeometricCard | None = None  # traces long shadows for methods without a card of their own
+        self.lift, self.thickness = 0.0, None  # the artist's geometry (:meth:`set_geometry`)
         self.set_camera(horizon, fov, read, clamp)
 
     def set_camera(
@@ -140,6 +145,47 @@ class ShadowSession:
         if cameras is None and self.used_cameras is not None:
             self.used_cameras = _in_fov_range(self.framing, self.used_cameras)
         self.ao = apply_edits(self.predicted_ao, self.edits) if self.edits else self.predicted_ao
+        self._check_lift(self.lift)
+
+    def set_geometry(self, lift: float = 0.0, thickness: float | None = None) -> None:
+        """Set the artist's geometry (conventions, "Lift and thickness"): ``lift`` canvas rows from the cutout's
+        lowest point down to the ground beneath it, ``thickness`` its depth over its width (None: read from the
+        outline). A ValueError names a value out of range, or a lift whose ground lies above the horizon."""
+        lift, thickness = self.checked_geometry(lift, thickness)
+        if (lift, thickness) != (self.lift, self.thickness):
+            self.lift, self.thickness, self._tracer = lift, thickness, None
+
+    def checked_geometry(self, lift: object, thickness: object) -> tuple[float, float | None]:
+        """``lift`` and ``thickness`` as :meth:`set_geometry` takes them, or the ValueError it raises."""
+        lift = check_lift(lift, self.framing.canvas_height)
+        self._check_lift(lift)
+        return lift, None if thickness is None else check_thickness(thickness)
+
+    def _check_lift(self, lift: float) -> None:
+        """A ValueError where ``lift`` puts the ground beneath the cutout at or above the horizon of the camera
+        the session uses (an object seen above the horizon floats at least that high)."""
+        if lift <= 0 or self.used_cameras is None:
+            return
+        horizon = self.framing.canvas_camera(*self.used_cameras[0])[0]
+        lowest = self.framing.bbox[3] - 1
+        if lowest + lift <= horizon:
+            raise ValueError(
+                f"lift: {lift:g} puts the ground beneath the cutout at row {lowest + lift:.0f}, at or above the "
+                f"horizon (row {horizon:.0f}); the ground lies below it: give more than {horizon - lowest:.0f}"
+            )
+
+    @property
+    def lifted(self) -> float:
+        """How far the object floats for the network, in [0, 1]: its lift over ``LIFT_FADE`` of its height.
+        The network's frames show objects standing on the ground; this share of every light is traced instead,
+        and the network's hedge of the traced lights fades by it."""
+        height = self.framing.bbox[3] - self.framing.bbox[1]
+        return min(1.0, self.lift / (LIFT_FADE * height))
+
+    @property
+    def thickness_read(self) -> float:
+        """The thickness the outline reads as (:func:`ssn_engine.hard_light.read_thickness`)."""
+        return self.tracer.thickness_read
 
     @property
     def camera_read(self) -> dict[str, float] | None:
@@ -181,13 +227,15 @@ class ShadowSession:
             self.framing,
             camera_at(self.used_cameras, 0),
             None if heights is None else heights[0],
+            self.lift,
+            self.thickness,
         )
 
     def render_frame(self, plan: LightPlan) -> np.ndarray:
         """The network's frame shadows (2, N, N) of a light plan: of its broad lights (those not traced), and of
         its small lights as Gaussians as wide (:attr:`LightPlan.gaussians`), which give the traced shadow the
         object's extent and contact (:meth:`to_canvas`); zeros for a part without light."""
-        maps = [plan.broad, plan.gaussians]
+        maps = [plan.broad, plan.gaussians if self._hedge > 0 else LightMap([])]
         out = np.zeros((2, *self.mask.shape), np.float32)
         lit = [i for i, part in enumerate(maps) if not part.is_dark]
         if lit:
@@ -216,7 +264,7 @@ class ShadowSession:
         that :meth:`render_plan` can make them meanwhile)."""
         parts = self._traced(plan, clip, framing)
         nets = self._network_shadows(frames(), plan, clip, framing)
-        return _combined(nets, parts, plan, self.hedge)
+        return _combined(nets, parts, plan, self._hedge)
 
     def _network_shadows(
         self, frames: np.ndarray, plan: LightPlan, clip: bool, framing: Framing
@@ -257,10 +305,20 @@ class ShadowSession:
         values, origin = long_shadow.extend(frame, wide, window=window if clip else None)
         return shadow_to_canvas(values, framing, origin, clip)
 
+    @property
+    def _hedge(self) -> float:
+        """The share of the network's shadow of the traced lights the traced shadow is kept no lighter than:
+        :attr:`hedge`, faded as the object floats (:attr:`lifted`)."""
+        return self.hedge * (1.0 - self.lifted)
+
+    def plan(self, light_map: LightMap) -> LightPlan:
+        """The :class:`LightPlan` of ``light_map`` for this object (as far as it floats, :attr:`lifted`)."""
+        return LightPlan.of(light_map, self.lifted)
+
     def render(self, light_map: LightMap, framing: Framing | None = None, clip: bool = True) -> CanvasShadow:
         """The shadow of ``light_map`` at canvas resolution, or on ``framing``'s canvas: :meth:`render_plan` of
-        its :class:`LightPlan`."""
-        return self.render_plan(LightPlan.of(light_map), framing, clip)
+        its :meth:`plan`."""
+        return self.render_plan(self.plan(light_map), framing, clip)
 
     def render_plan(self, plan: LightPlan, framing: Framing | None = None, clip: bool = True) -> CanvasShadow:
         """:meth:`to_canvas` of :meth:`render_frame` for a light plan made once by the caller, the network's

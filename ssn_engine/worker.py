@@ -169,6 +169,8 @@ class Worker:
         _check_alpha(alpha)
         horizon, fov = _camera(header["camera"]) if header.get("camera") is not None else (None, None)
         session = open_session(alpha, self.loaded.method, horizon, fov)
+        if "lift" in header or "thickness" in header:
+            session.set_geometry(header.get("lift", 0.0), header.get("thickness"))
         key = f"c{next(self._ids)}"
         self.sessions[key] = session
         while len(self.sessions) > MAX_SESSIONS:
@@ -182,6 +184,12 @@ class Worker:
         horizon, fov = _camera(header["camera"]) if header["camera"] is not None else (None, None)
         s.set_camera(horizon, fov)
         return _cutout_reply(header["cutout"], s), {}
+
+    def set_geometry(self, header: dict, buffers: dict) -> tuple[dict, dict]:
+        s = self._session(header)
+        s.set_geometry(header.get("lift", 0.0), header.get("thickness"))
+        reply = {"lift": s.lift, "thickness": s.thickness, "thickness_read": round(s.thickness_read, 4)}
+        return {**_cutout_reply(header["cutout"], s), **reply}, {}
 
     def get_ao(self, header: dict, buffers: dict) -> tuple[dict, dict]:
         s = self._session(header)
@@ -288,7 +296,17 @@ class Worker:
             del self.sessions[key]
         return {}, {}
 
-    COMMANDS = ("hello", "set_cutout", "set_camera", "get_ao", "edit_ao", "render", "preview", "release")
+    COMMANDS = (
+        "hello",
+        "set_cutout",
+        "set_camera",
+        "set_geometry",
+        "get_ao",
+        "edit_ao",
+        "render",
+        "preview",
+        "release",
+    )
 
     def handle(self, header: dict, buffers: dict[str, Buffer]) -> tuple[dict, dict[str, Buffer]]:
         """Answer one request; never raises."""

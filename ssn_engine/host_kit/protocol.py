@@ -13,7 +13,7 @@ import json
 import math
 from typing import IO, Any, NamedTuple
 
-PROTOCOL_VERSION = 2  # 2: set_camera
+PROTOCOL_VERSION = 3  # 2: set_camera; 3: set_geometry, set_cutout's lift and thickness
 DTYPES = {"uint8": 1, "uint16": 2, "float16": 2, "float32": 4}
 MAX_HEADER = 1 << 20
 MAX_DIMS = 4

@@ -66,7 +66,9 @@ def test_a_render_splits_its_light_map_once(method, monkeypatch):
     session = open_session(np.maximum.reduce(pawn_scene(W, H, THREE)), method, *CAMERA)
     made = []
     plan_of = LightPlan.of
-    monkeypatch.setattr(LightPlan, "of", lambda light_map: made.append(light_map) or plan_of(light_map))
+    monkeypatch.setattr(
+        LightPlan, "of", lambda light_map, lifted=0.0: made.append(light_map) or plan_of(light_map, lifted)
+    )
     shadow = session.render(preset("sun")).full_canvas(W, H)
     assert shadow.max() > 0.5 and len(made) == 1
 

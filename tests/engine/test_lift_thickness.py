@@ -1,0 +1,175 @@
+"""The artist's geometry (conventions, "Lift and thickness"): a lifted object's shadow detaches along the light and
+softens with the height; a thickness makes a sign flat and a box deep; bad values are refused with what to give,
+through the command line and the worker alike."""
+
+from __future__ import annotations
+
+import json
+
+import numpy as np
+import pytest
+from engine_helpers import converse, disc
+from PIL import Image
+
+from ssn_engine.cli import main
+from ssn_engine.host_kit.light_map import GaussianLight, LightMap, preset
+from ssn_engine.layer_session import LayerSession, open_session
+from ssn_engine.methods import LoadedMethod, load_method
+from ssn_engine.worker import Worker
+
+W, H = 900, 700
+CAMERA = (200.0, 45.0)  # horizon row, field of view
+BALL = (450, 400, 80)  # centre column, centre row, radius: lowest row 479
+
+
+@pytest.fixture(scope="module")
+def method():
+    return load_method("auto").method
+
+
+def sun(elevation_v: float, angle: float = 0.53) -> LightMap:
+    """A disk light in front of the camera, to the left (u 0.35), at map height ``elevation_v``."""
+    return LightMap([GaussianLight.disk(0.35, elevation_v, angle, 1.0)])
+
+
+def shadow_of(method, alpha: np.ndarray, light: LightMap, lift: float = 0.0, thickness: float | None = None):
+    session = open_session(alpha, method, *CAMERA)
+    session.set_geometry(lift, thickness)
+    return session.render(light).full_canvas(W, H)
+
+
+def top_row(shadow: np.ndarray, alpha: np.ndarray, level: float = 0.5) -> int:
+    """The highest row where the shadow is at least ``level`` on ground the object does not cover."""
+    rows = np.flatnonzero(((shadow >= level) & (alpha < 3)).any(axis=1))
+    return int(rows[0])
+
+
+@pytest.mark.parametrize("v", [0.3, 0.6], ids=["low sun", "high sun"])
+def test_a_lifted_ball_casts_a_shadow_that_leaves_it_as_it_rises(method, v):
+    ball = disc(W, H, *BALL)
+    lowest = BALL[1] + BALL[2] - 1
+    gaps = [top_row(shadow_of(method, ball, sun(v), lift), ball) - lowest for lift in (0, 40, 120)]
+    assert gaps[0] <= 2  # resting: the shadow starts at the contact
+    assert gaps[0] + 20 < gaps[1] < gaps[2] - 40, gaps
+
+
+def test_a_lift_softens_a_small_lights_shadow(method):
+    """The penumbra of a 3-degree light widens with the height: of the ground the shadow darkens, the share in
+    its penumbra (0.1 to 0.9) grows as the ball rises (both heights past the network's share, all traced)."""
+    ball = disc(W, H, *BALL)
+    shares = []
+    for lift in (30, 120):
+        s = shadow_of(method, ball, sun(0.5, 3.0), lift)
+        shares.append(((s > 0.1) & (s < 0.9)).sum() / (s > 0.1).sum())
+    assert shares[1] > 1.2 * shares[0], shares
+
+
+def test_a_lifted_object_loses_its_contact_blob(method):
+    """Under an overcast sky a resting ball is darkest at its contact; lifted by a third of its height, the
+    network's contact shadow is gone: the ground right below the ball is far lighter."""
+    ball = disc(W, H, *BALL)
+    below = (slice(BALL[1] + BALL[2], BALL[1] + BALL[2] + 12), slice(BALL[0] - 20, BALL[0] + 20))
+    resting = shadow_of(method, ball, preset("overcast"))[below].mean()
+    lifted = shadow_of(method, ball, preset("overcast"), 55.0)[below].mean()
+    assert resting > 0.4 and lifted < 0.5 * resting
+
+
+def test_a_thickness_makes_a_sign_flat_and_a_box_deep(method):
+    """A rectangle's shadow under a sun from the side: 0 (a sign facing the camera) casts a line's worth, the
+    reading about a round body's, 3 (a deep box) far more."""
+    board = np.zeros((H, W), np.uint8)
+    board[250:480, 380:520] = 255
+    light = sun(0.45)
+    areas = {t: int((shadow_of(method, board, light, 0.0, t) > 0.5).sum()) for t in (0.0, None, 3.0)}
+    assert areas[0.0] < 0.6 * areas[None] and areas[3.0] > 1.5 * areas[None], areas
+
+
+def test_no_geometry_and_lift_zero_are_the_same_shadow(method):
+    ball = disc(W, H, *BALL)
+    plain = open_session(ball, method, *CAMERA).render(preset("softbox")).full_canvas(W, H)
+    np.testing.assert_array_equal(shadow_of(method, ball, preset("softbox"), 0.0, None), plain)
+
+
+def test_every_object_of_a_layer_floats(method):
+    alpha = np.maximum(disc(W, H, 250, 400, 70), disc(W, H, 650, 380, 60))
+    session = open_session(alpha, method, *CAMERA)
+    assert isinstance(session, LayerSession)
+    session.set_geometry(60.0, 0.5)
+    assert all(part.lift == 60.0 and part.thickness == 0.5 and part.lifted == 1.0 for part in session.parts)
+
+
+@pytest.mark.parametrize(
+    "lift, thickness, fragment",
+    [
+        (-1.0, None, "lift: expected 0 to"),
+        (float("nan"), None, "lift: expected 0 to"),
+        (1e9, None, "lift: expected 0 to"),
+        ("high", None, "lift: expected 0 to"),
+        (0.0, 9.0, "thickness: expected 0 to 8"),
+        (0.0, float("inf"), "thickness: expected 0 to 8"),
+    ],
+)
+def test_bad_geometry_is_refused_and_the_old_kept(method, lift, thickness, fragment):
+    session = open_session(disc(W, H, *BALL), method, *CAMERA)
+    session.set_geometry(30.0, 1.0)
+    with pytest.raises(ValueError, match=fragment):
+        session.set_geometry(lift, thickness)
+    assert (session.lift, session.thickness) == (30.0, 1.0)
+
+
+def test_a_lift_whose_ground_lies_above_the_horizon_is_refused(method):
+    """A ball seen above the horizon (row 200) floats at least that high: its ground lies below the horizon."""
+    ball = disc(W, H, 450, 120, 40)  # lowest row 159
+    session = open_session(ball, method, *CAMERA)
+    with pytest.raises(ValueError, match=r"lift: 10 puts the ground beneath the cutout at row 169, at or above"):
+        session.set_geometry(10.0)
+    session.set_geometry(60.0)
+    assert session.lift == 60.0
+
+
+def _cutout_png(tmp_path, alpha: np.ndarray) -> str:
+    rgba = np.zeros((*alpha.shape, 4), np.uint8)
+    rgba[..., 3] = alpha
+    Image.fromarray(rgba, "RGBA").save(tmp_path / "ball.png")
+    return str(tmp_path / "ball.png")
+
+
+def test_the_command_line_floats_the_ball_and_names_bad_values(tmp_path, capsys):
+    cutout = _cutout_png(tmp_path, disc(W, H, *BALL))
+    camera = ["--horizon", "200", "--fov", "45", "--preset", "high-sun"]
+    layers = []
+    for lift in ("0", "80"):
+        out = tmp_path / f"lift{lift}.png"
+        assert main(["render", cutout, *camera, "--lift", lift, "--layer", str(out)]) == 0
+        layers.append(np.asarray(Image.open(out))[..., 3] / 255.0)
+    printed = capsys.readouterr().out
+    assert "thickness read from the cutout's outline: 0.9" in printed or "outline: 1.0" in printed
+    ball = disc(W, H, *BALL)
+    assert top_row(layers[1], ball) > top_row(layers[0], ball) + 40
+    for bad, message in ((["--lift", "-2"], "expected a number >= 0"), (["--thickness", "20"], "[0, 8]")):
+        out = tmp_path / "bad.png"
+        with pytest.raises(SystemExit) as exit_:
+            main(["render", cutout, *camera, *bad, "--layer", str(out)])
+        assert exit_.value.code == 2 and message in capsys.readouterr().err and not out.exists()
+    assert main(["render", cutout, "--horizon", "600", "--lift", "5", "--layer", str(tmp_path / "no.png")]) == 2
+    assert "--lift: 5 puts the ground beneath the cutout at row 484" in capsys.readouterr().err
+    assert not (tmp_path / "no.png").exists()
+
+
+def test_the_worker_sets_the_geometry_without_the_alpha_and_stays_up(method):
+    worker = Worker(LoadedMethod(method, "the shipped model"))
+    alpha = disc(W, H, *BALL)
+    entry = {"name": "alpha", "dtype": "uint8", "shape": list(alpha.shape), "nbytes": alpha.size}
+    header = {"id": 1, "cmd": "set_cutout", "camera": {"horizon": 200}, "buffers": [entry]}
+    replies, _ = converse(worker, json.dumps(header).encode() + b"\n" + alpha.tobytes())
+    key = replies[0]["cutout"]
+
+    def ask(i: int, **values) -> dict:
+        request = {"id": i, "cmd": "set_geometry", "cutout": key, **values}
+        return converse(worker, json.dumps(request).encode() + b"\n")[0][0]
+
+    reply = ask(2, lift=70, thickness=0.5)
+    assert reply["ok"] and reply["lift"] == 70 and reply["thickness"] == 0.5 and 0.8 < reply["thickness_read"] < 1.1
+    bad = ask(3, lift=-4)
+    assert not bad["ok"] and bad["error"]["type"] == "BadRequest" and "lift: expected 0 to" in bad["error"]["message"]
+    assert ask(4)["lift"] == 0.0  # back on the ground: the worker answers after the refusal
