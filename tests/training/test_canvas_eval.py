@@ -173,6 +173,22 @@ def test_render_set_resumes_and_refuses_another_plan(tmp_path):
         render_set(tmp_path, 64, 48, shapes=1, lights=2)
 
 
+def test_a_floating_set_lifts_each_shape_and_scores_it_with_its_lift(tmp_path):
+    if not (meshes.SHARED_MESHES / "manifest.csv").exists():
+        pytest.skip("shared meshes not available")
+    (group,) = render_set(tmp_path, 128, 96, shapes=1, lights=1, log=lambda _: None, floating=True)
+    assert cases.LIFTS[0] <= group.lift_share <= cases.LIFTS[1] and group.lift > 5
+    assert group.angles == cases.FLOATING_ANGLES
+    assert all(cases.truth_path(tmp_path, group, a).is_file() for a in cases.FLOATING_ANGLES)
+    assert not cases.truth_path(tmp_path, group, cases.ANGLES[-1]).is_file()
+    standing = render_set(tmp_path / "standing", 128, 96, shapes=1, lights=1, log=lambda _: None)[0]
+    floating, resting = cases.read_truth(tmp_path, group, 3.0), cases.read_truth(tmp_path / "standing", standing, 3.0)
+    assert np.abs(floating - resting).max() > 0.5  # the same shape, camera and light: its shadow moved
+    cmd = score.cli_command("py", tmp_path, group, 0.53, "camera", tmp_path / "l.png")
+    assert cmd[cmd.index("--lift") + 1] == f"{group.lift:.2f}"
+    assert "--lift" not in score.cli_command("py", tmp_path, group, 0.53, "blind", tmp_path / "l.png")
+
+
 def test_fixture_is_a_readable_test_set():
     groups = cases.read_groups(FIXTURE)
     assert len(groups) >= 2
@@ -208,8 +224,24 @@ def test_metrics_of_the_truth_itself_are_perfect():
     m = metrics.score_case(truth, truth, mask, horizon)
     assert m["zncc"] == pytest.approx(1.0) and m["bandpass_zncc"] == pytest.approx(1.0)
     assert m["dssim"] == pytest.approx(0.0, abs=1e-9)
-    for name in ("gradient_energy", "dark_ratio", "contact_ratio"):
+    for name in ("gradient_energy", "dark_ratio", "contact_ratio", "iou"):
         assert m[name] == pytest.approx(1.0)
+    assert np.isnan(m["gap_ratio"])  # the shadow touches the object: nothing floats
+
+
+def test_iou_and_gap_see_a_shadow_in_the_wrong_place():
+    """A floating object's shadow 10 rows below it: the truth's gap; a prediction glued to the object has
+    none, one twice as far twice the gap, and its IoU with the truth falls."""
+    mask, _, horizon = _scene()
+    truth = np.zeros((96, 96))
+    truth[60:80, 36:60] = 1.0  # 10 rows below the object's lowest row 49
+    glued, far = np.zeros_like(truth), np.zeros_like(truth)
+    glued[50:70, 36:60] = 1.0
+    far[70:90, 36:60] = 1.0
+    assert metrics.score_case(truth, truth, mask, horizon)["gap_ratio"] == pytest.approx(1.0)
+    on, off = (metrics.score_case(p, truth, mask, horizon) for p in (glued, far))
+    assert on["gap_ratio"] < 0.2 and off["gap_ratio"] == pytest.approx(2.0, rel=0.1)
+    assert on["iou"] == pytest.approx(1 / 3, abs=0.02) and off["iou"] == pytest.approx(1 / 3, abs=0.02)
 
 
 def test_a_blurred_prediction_loses_band_pass_and_gradient_energy():

@@ -26,6 +26,8 @@ from training.data.views import PITCHES, YAWS
 from .disk import HAZY, SOFTBOX, SUN, light_map_file
 
 ANGLES = (SUN, HAZY, SOFTBOX)
+FLOATING_ANGLES = (SUN, HAZY)  # a floating set's sizes: the lights whose shadow detaches crisply
+LIFTS = (0.15, 0.8)  # a floating set's shapes float this share of their height above the ground, drawn uniformly
 KIND_QUOTA = {"object": 7, "animal": 3, "human": 2}  # shapes per kind, 12 in all
 ELEVATIONS = (10.0, 70.0)  # light elevations are drawn uniformly in this range (degrees)
 CUTOUT_GREY = 128
@@ -49,6 +51,13 @@ class Group:
     seed: int = 0  # with the name and the size, seeds the jitter of the disk's directions
     horizon: float = float("nan")  # the canvas camera, filled in by the render
     fov: float = float("nan")
+    lift_share: float = 0.0  # a floating case: the shape floats this share of its height above the ground
+    lift: float = 0.0  # and its lift in canvas rows (conventions, "Lift and thickness"), filled in by the render
+
+    @property
+    def angles(self) -> tuple[float, ...]:
+        """The light sizes this group is rendered under."""
+        return FLOATING_ANGLES if self.lift_share > 0 else ANGLES
 
     def light_file(self, angle: float) -> dict:
         """The light-map file of this group's light at size ``angle``."""
@@ -71,13 +80,17 @@ def pick_shapes(items: list[Item], quota: dict[str, int] = KIND_QUOTA, split: st
     return sorted(picked, key=lambda it: (it.kind, it.id))
 
 
-def make_groups(items: list[Item], lights: int, width: int, height: int, seed: int = 0) -> list[Group]:
+def make_groups(
+    items: list[Item], lights: int, width: int, height: int, seed: int = 0, floating: bool = False
+) -> list[Group]:
     """``lights`` groups per shape: yaw from the paper's views, pitch cycling over 0, 15 and 30 degrees
-    across all groups, light elevation uniform in ``ELEVATIONS`` and azimuth uniform all round."""
+    across all groups, light elevation uniform in ``ELEVATIONS`` and azimuth uniform all round; ``floating``:
+    each shape lifted by a share of its height drawn uniformly in ``LIFTS``."""
     groups = []
     for i, it in enumerate(items):
         for k in range(lights):
             rng = np.random.default_rng([seed, stable_hash(it.id), k])
+            lift_share = round(float(np.random.default_rng([seed, stable_hash(it.id), k, 1]).uniform(*LIFTS)), 3)
             groups.append(
                 Group(
                     name=f"{it.id}_{k}",
@@ -91,6 +104,7 @@ def make_groups(items: list[Item], lights: int, width: int, height: int, seed: i
                     width=width,
                     height=height,
                     seed=seed,
+                    lift_share=lift_share if floating else 0.0,
                 )
             )
     return groups
@@ -168,6 +182,8 @@ def read_truth(root: Path, group: Group, angle: float) -> np.ndarray:
 
 __all__ = [
     "ANGLES",
+    "FLOATING_ANGLES",
+    "LIFTS",
     "Group",
     "angle_tag",
     "cutout_path",

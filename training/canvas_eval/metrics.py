@@ -24,7 +24,9 @@ FOOT_SHARE = 0.03  # the object's feet: its solid pixels in the lowest 3 % of it
 CONTACT_RADIUS = 6.0  # the contact region reaches this far from the feet, in pixels at 768 rows
 MIN_CONTACT_RADIUS = 2.0  # pixels, on small canvases: the dilated mask takes the first pixel
 MIN_CONTACT = 0.05  # a contact region whose true mean shadow is below this has no contact shadow to score
-NAMES = ("zncc", "dssim", "bandpass_zncc", "gradient_energy", "dark_ratio", "contact_ratio")
+SHADOW_LEVEL = 0.5  # IoU and the gap compare the regions where s is at least this
+MIN_GAP = 4.0  # pixels: a truth whose shadow is nearer touches the object (the ground leaves out its 1-px rim)
+NAMES = ("zncc", "dssim", "bandpass_zncc", "gradient_energy", "dark_ratio", "iou", "gap_ratio", "contact_ratio")
 
 
 def ground_region(mask: np.ndarray, horizon: float) -> np.ndarray:
@@ -89,6 +91,30 @@ def dark_ratio(p: np.ndarray, g: np.ndarray, region: np.ndarray, q: float = DARK
     return float(np.percentile(p[region], q)) / truth if truth > 0 else float("nan")
 
 
+def shadow_iou(p: np.ndarray, g: np.ndarray, region: np.ndarray) -> float:
+    """Intersection over union of the regions where ``p`` and ``g`` are at least ``SHADOW_LEVEL`` in ``region``
+    (nan where neither reaches it)."""
+    a, b = (p >= SHADOW_LEVEL) & region, (g >= SHADOW_LEVEL) & region
+    union = int((a | b).sum())
+    return int((a & b).sum()) / union if union else float("nan")
+
+
+def shadow_gap(s: np.ndarray, mask: np.ndarray, region: np.ndarray) -> float:
+    """The distance (pixels) from the object (its mask) to the nearest pixel of ``region`` where ``s`` is at
+    least ``SHADOW_LEVEL``: how far a floating object's shadow lies from it (nan where there is none)."""
+    dark = (s >= SHADOW_LEVEL) & region
+    if not dark.any():
+        return float("nan")
+    return float(ndimage.distance_transform_edt(~(np.asarray(mask) > SOLID))[dark].min())
+
+
+def gap_ratio(p: np.ndarray, g: np.ndarray, mask: np.ndarray, region: np.ndarray) -> float:
+    """The predicted shadow's :func:`shadow_gap` over the truth's; nan where the truth's is under ``MIN_GAP``
+    (its shadow touches the object: nothing floats)."""
+    truth = shadow_gap(g, mask, region)
+    return shadow_gap(p, mask, region) / truth if truth >= MIN_GAP else float("nan")
+
+
 def contact_region(mask: np.ndarray, region: np.ndarray) -> np.ndarray:
     """Where the object meets the ground: pixels of ``region`` within ``CONTACT_RADIUS`` (scaled by the
     canvas height / 768, at least ``MIN_CONTACT_RADIUS``) of the object's feet, at or below the feet's top row.
@@ -133,6 +159,8 @@ def score_case(p: np.ndarray, g: np.ndarray, mask: np.ndarray, horizon: float) -
         "bandpass_zncc": bandpass_zncc(p, g, region),
         "gradient_energy": gradient_energy_ratio(p, g, region),
         "dark_ratio": dark_ratio(p, g, region),
+        "iou": shadow_iou(p, g, region),
+        "gap_ratio": gap_ratio(p, g, mask, region),
         "contact_ratio": contact_ratio(p, g, contact_region(mask, region)),
     }
 
@@ -144,10 +172,13 @@ __all__ = [
     "contact_region",
     "contact_ratio",
     "dark_ratio",
+    "gap_ratio",
     "gradient_energy",
     "gradient_energy_ratio",
     "ground_region",
     "masked_gaussian",
+    "shadow_gap",
+    "shadow_iou",
     "region_dssim",
     "region_zncc",
     "score_case",

@@ -15,15 +15,16 @@ from . import cases, disk, render
 
 
 def planned_groups(
-    width: int, height: int, shapes: int | None, lights: int, seed: int, split: str = "test"
+    width: int, height: int, shapes: int | None, lights: int, seed: int, split: str = "test", floating: bool = False
 ) -> list[cases.Group]:
-    """The set's groups: the picked held-out shapes of ``split`` (the first ``shapes`` of them, None: all)."""
+    """The set's groups: the picked held-out shapes of ``split`` (the first ``shapes`` of them, None: all);
+    ``floating``: each lifted off the ground (:func:`cases.make_groups`)."""
     items = cases.pick_shapes(sources.manifest_items(), split=split)
-    return cases.make_groups(items[:shapes], lights, width, height, seed)
+    return cases.make_groups(items[:shapes], lights, width, height, seed, floating)
 
 
 def _same_plan(a: cases.Group, b: cases.Group) -> bool:
-    skip = {"horizon", "fov"}
+    skip = {"horizon", "fov", "lift"}
     return {k: v for k, v in asdict(a).items() if k not in skip} == {
         k: v for k, v in asdict(b).items() if k not in skip
     }
@@ -36,7 +37,16 @@ def group_scene(group: cases.Group) -> tuple[np.ndarray, meshes.Mesh, meshes.Top
         raise ValueError(f"{group.name}: shape {group.shape!r} is not in the meshes' manifest")
     mesh = sources.build_mesh(item)
     vertices = np.ascontiguousarray(meshes.yawed(mesh.vertices, group.yaw))
+    vertices[:, 1] += group.lift_share * float(np.ptp(vertices[:, 1]))  # a floating case: off the ground
     return vertices, mesh, meshes.topology(mesh), render.canvas_camera(vertices, group.width, group.height, group.pitch)
+
+
+def true_lift(vertices: np.ndarray, canvas: render.CanvasCamera) -> float:
+    """The lift in canvas rows (conventions, "Lift and thickness") of a shape whose lowest point is its lowest
+    vertex: the rows from that point's image down to the image of the ground point beneath it."""
+    low = vertices[int(np.argmin(vertices[:, 1]))]
+    rows = canvas.camera.project(np.array([low, [low[0], 0.0, low[2]]]))[:, 1]
+    return float(rows[1] - rows[0])
 
 
 def truth_directions(group: cases.Group, angle: float) -> np.ndarray:
@@ -45,13 +55,15 @@ def truth_directions(group: cases.Group, angle: float) -> np.ndarray:
     return disk.disk_directions(group.elevation, group.azimuth, angle, disk.samples_for(angle), rng)
 
 
-def render_group(root: Path, group: cases.Group, angles: tuple[float, ...], log=print) -> cases.Group:
-    """Render one group's cutout and every missing truth; returns the group with its canvas camera."""
+def render_group(root: Path, group: cases.Group, log=print) -> cases.Group:
+    """Render one group's cutout and every missing truth (at each of ``group.angles``); returns the group with
+    its canvas camera (and, floating, its lift)."""
     vertices, mesh, topo, canvas = group_scene(group)
-    group = replace(group, horizon=canvas.horizon, fov=canvas.fov)
+    lift = round(true_lift(vertices, canvas), 2) if group.lift_share > 0 else 0.0
+    group = replace(group, horizon=canvas.horizon, fov=canvas.fov, lift=lift)
     if not cases.cutout_path(root, group).is_file():
         cases.write_cutout(root, group, render.canvas_mask(vertices, mesh.faces, topo, canvas))
-    for angle in angles:
+    for angle in group.angles:
         if cases.truth_path(root, group, angle).is_file():
             continue
         t0 = time.perf_counter()
@@ -69,9 +81,9 @@ def render_set(
     shapes: int | None = None,
     lights: int = 2,
     seed: int = 0,
-    angles: tuple[float, ...] = cases.ANGLES,
     log=print,
     split: str = "test",
+    floating: bool = False,
 ) -> list[cases.Group]:
     """Render (or finish rendering) the set of ``split``'s shapes under ``root`` (the test set; "val": the same
     of the validation shapes, to choose models by without looking at the test set); returns its groups.
@@ -82,7 +94,7 @@ def render_set(
         ``root`` holds a test set planned with other settings.
     """
     root = Path(root)
-    plan = planned_groups(width, height, shapes, lights, seed, split)
+    plan = planned_groups(width, height, shapes, lights, seed, split, floating)
     if (root / "cases.json").is_file():
         done = cases.read_groups(root)
         if len(done) != len(plan) or not all(_same_plan(a, b) for a, b in zip(done, plan, strict=True)):
@@ -94,10 +106,10 @@ def render_set(
             f"[{i + 1}/{len(plan)}] {group.name} ({group.kind}, pitch {group.pitch:g}, light {group.elevation:g} / "
             f"{group.azimuth:g} deg)"
         )
-        groups[i] = render_group(root, group, angles, log)
+        groups[i] = render_group(root, group, log)
         cases.write_groups(root, groups[: i + 1] + plan[i + 1 :])
-    log(f"done: {len(plan)} groups x {len(angles)} sizes in {time.perf_counter() - t_start:.0f} s")
+    log(f"done: {len(plan)} groups in {time.perf_counter() - t_start:.0f} s")
     return groups
 
 
-__all__ = ["group_scene", "planned_groups", "render_group", "render_set", "truth_directions"]
+__all__ = ["group_scene", "planned_groups", "render_group", "render_set", "true_lift", "truth_directions"]

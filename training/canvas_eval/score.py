@@ -22,13 +22,15 @@ from PIL import Image
 from . import cases, metrics
 
 MODES = ("camera", "blind")
-MEAN_METRICS = ("zncc", "dssim", "bandpass_zncc")  # averaged; the ratios get their median (they are skewed)
+MEAN_METRICS = ("zncc", "dssim", "bandpass_zncc", "iou")  # averaged; the ratios get their median (they are skewed)
 LABELS = {
     "zncc": "ZNCC",
     "dssim": "DSSIM",
     "bandpass_zncc": "band-pass ZNCC",
     "gradient_energy": "gradient energy",
     "dark_ratio": "p99.9 dark ratio",
+    "iou": "IoU (s >= 0.5)",
+    "gap_ratio": "gap ratio",
     "contact_ratio": "contact ratio",
 }
 
@@ -56,6 +58,8 @@ def cli_command(
     ]
     if mode == "camera":
         cmd += ["--horizon", f"{group.horizon:.4f}", "--fov", f"{group.fov:.4f}"]
+        if group.lift > 0:  # a floating case: its true lift with its true camera
+            cmd += ["--lift", f"{group.lift:.2f}"]
     elif mode != "blind":
         raise ValueError(f"mode must be one of {MODES}, got {mode!r}")
     return cmd + shlex.split(engine_args)
@@ -196,13 +200,13 @@ def run_scoring(
     """
     data, out, repo = Path(data), Path(out), Path(repo)
     groups = spread(cases.read_groups(data), max_groups)
-    missing = [p for g in groups for a in cases.ANGLES if not (p := cases.truth_path(data, g, a)).is_file()]
+    missing = [p for g in groups for a in g.angles if not (p := cases.truth_path(data, g, a)).is_file()]
     if missing:
         raise FileNotFoundError(
             f"{len(missing)} truths are missing, e.g. {missing[0]}: finish the set with "
             "'python -m training.canvas_eval render' first"
         )
-    todo = [(g, a, m) for m in modes for g in groups for a in cases.ANGLES]
+    todo = [(g, a, m) for m in modes for g in groups for a in g.angles]
     seconds: dict[tuple[str, float, str], float] = {}
 
     def make(task: tuple[cases.Group, float, str]) -> None:
@@ -223,7 +227,7 @@ def run_scoring(
     for i, group in enumerate(groups):
         log(f"[{i + 1}/{len(groups)}] scoring {group.name}")
         mask = cases.read_mask(data, group)
-        for angle in cases.ANGLES:
+        for angle in group.angles:
             truth = cases.read_truth(data, group, angle)
             for mode in modes:
                 pred = read_layer(prediction_path(out, mode, group, angle), truth.shape)
