@@ -48,7 +48,7 @@ def panel_sheet(rows: list[list[tuple[str, np.ndarray, np.ndarray]]], out: Path)
 
 
 def write_sheet(data: Path, predictions: Path, out: Path, names: list[str] | None = None, mode: str = "camera") -> None:
-    """Rows: groups; columns: truth and prediction at each size of ``cases.ANGLES``. Writes a PNG to ``out``."""
+    """Rows: groups; columns: truth and prediction at each of the group's sizes. Writes a PNG to ``out``."""
     groups = {g.name: g for g in cases.read_groups(data)}
     names = names or default_groups(list(groups.values()))
     unknown = [n for n in names if n not in groups]
@@ -59,7 +59,7 @@ def write_sheet(data: Path, predictions: Path, out: Path, names: list[str] | Non
         group = groups[name]
         mask = cases.read_mask(data, group)
         row = []
-        for angle in cases.ANGLES:
+        for angle in group.angles:
             truth = cases.read_truth(data, group, angle)
             pred = read_layer(prediction_path(predictions, mode, group, angle), truth.shape)
             row += [(f"{group.name} {angle:g} deg: {what}", s, mask) for what, s in (("truth", truth), (mode, pred))]
