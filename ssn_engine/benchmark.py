@@ -37,6 +37,7 @@ BUDGET_MS = {
     "light moved 4000x3000": 25.0,
     "sun moved 4000x3000": 40.0,  # a 0.53-degree disk, traced at the canvas's resolution (docs/hard_light.md)
     "tracer analysis 4000x3000": 30.0,  # made on a cutout's first small light (as the cutout analysis's)
+    "lift changed 4000x3000": 40.0,  # the artist's geometry: within a light change's budget (the sun's)
 }
 BUDGET_MIB = 400.0
 
@@ -141,12 +142,21 @@ def run_benchmark(repeats: int = 20, method: str = "auto") -> dict[str, np.ndarr
         lambda: shadow_layer(session.render(light)), e2e_repeats, warmup=1
     )
     single = session if isinstance(session, ShadowSession) else session.parts[0]  # (the pawn is one object)
-    results["tracer analysis 4000x3000 (surface, cards)"] = time_calls(single.make_tracer, repeats)
+    results["tracer analysis 4000x3000 (surface, cards)"] = time_calls(lambda: single.make_tracer(False), repeats)
     # a 0.53-degree sun dragged across a low sky: every render a new direction, traced at the canvas's resolution
     suns = _alternating([LightMap([GaussianLight.disk(0.2 + 0.6 * k / DRAG, 0.7, SUN, 1.0)]) for k in range(DRAG)])
     results["sun moved 4000x3000 (traced+layer)"] = time_calls(
         lambda: shadow_layer(session.render(suns())), min(repeats, DRAG - 2), warmup=2
     )
+    # the artist's geometry dragged: a new lift each time (the tracer's cards again, the pixel heights kept)
+    lifts = _alternating([8.0 * k for k in range(DRAG)])
+    sun = LightMap([GaussianLight.disk(0.35, 0.6, SUN, 1.0)])
+
+    def lift_changed() -> None:
+        single.set_geometry(lifts())
+        shadow_layer(single.render(sun))
+
+    results["lift changed 4000x3000 (analysis+traced+layer)"] = time_calls(lift_changed, min(repeats, DRAG - 2))
     medians = {name: float(np.median(ms)) for name, ms in results.items()}
     budgets = {name: b for name in results if (b := budget_of(name))}
     ratios = {name: medians[name] / b for name, b in budgets.items()}

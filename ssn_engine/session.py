@@ -130,6 +130,7 @@ class ShadowSession:
         is predicted again with it and the AO edits are applied to it again. The camera the method uses is
         resolved here, once per camera (``used_cameras``), so that a light change resolves none."""
         self._tracer: ContactTracer | None = None  # made with the camera, on first use
+        self._heights: tuple[np.ndarray | None] | None = None  # the model's pixel heights, read with the tracer
         cameras = None
         if horizon is not None:
             fov = DEFAULT_FOV if fov is None else fov
@@ -214,11 +215,14 @@ class ShadowSession:
             self._tracer = self.make_tracer()
         return self._tracer
 
-    def make_tracer(self) -> ContactTracer:
+    def make_tracer(self, reuse_heights: bool = True) -> ContactTracer:
         """A new tracer of this cutout (the cutout's analysis: where each pixel's surface lies, for a model that
-        reads it, its depth and its cards)."""
-        read = getattr(self.method, "pixel_heights", None)
-        heights = read(self.mask[None], self.used_cameras) if read is not None else None
+        reads it, its depth and its cards). The model's pixel heights are read once per camera and kept, so a
+        change of the artist's geometry redoes only the cards (``reuse_heights`` False reads them again)."""
+        if self._heights is None or not reuse_heights:
+            read = getattr(self.method, "pixel_heights", None)
+            self._heights = (read(self.mask[None], self.used_cameras) if read is not None else None,)
+        heights = self._heights[0]
         cutout = as_unit_float(self._cutout)
         if 0.0 < self.opacity < 1.0:
             np.minimum(cutout / np.float32(self.opacity), 1.0, out=cutout)
