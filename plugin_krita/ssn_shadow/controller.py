@@ -20,6 +20,10 @@ undo step for the whole drag. After a render that is an undo step of its own
 (Generate, a preset, the camera...) the preview shows the image with its new
 shadow and the horizon, so the horizon the engine used is always in view.
 
+A lift or thickness change (the Geometry section, the preview's lift handle) goes the same way as a light's:
+``set_geometry`` tells the worker (the alpha is not sent again), then the preview follows a drag and the layer
+its rests and release, or the layer follows a single change at once.
+
 Each layer write records which settings made that shadow layer
 (:meth:`model.ShadowModel.record_shadow`); after Krita's undo or redo,
 :meth:`ShadowController.history_changed` shows the settings of the shadow
@@ -80,6 +84,7 @@ class ShadowController(QObject):
         self.cutout: str | None = None
         self._cutout_key: str | None = None
         self._cutout_camera: dict | None = None  # the camera the worker's cutout has
+        self._cutout_geometry: tuple[float, float | None] | None = None  # its lift and thickness (None: unknown)
         self._mask = b""
         self._shadow_seen: str | None = None  # the source's shadow layer as the docker last saw it (its id)
         self._renders = RenderQueue()
@@ -87,7 +92,7 @@ class ShadowController(QObject):
         self._previews = LatestWins()
         self.renders = 0
         self.previews = 0
-        self._layer_map: Any = None  # the light map of the last layer render sent
+        self._layer_key: Any = None  # the light map, lift and thickness of the last layer render sent
         self._background: tuple[int, int, bytes] | None = None  # the preview's image without its shadow
         self._preview_due = False  # a render that is an undo step of its own: the preview follows it
         self.preview_box: tuple[int, int] | None = None  # where the preview is drawn, device pixels (the panel's)
@@ -129,7 +134,7 @@ class ShadowController(QObject):
         settings = self.model.shadow_shown(shown)
         if settings is None:
             return
-        self._layer_map = settings.light_map.copy()
+        self._layer_key = (settings.light_map.copy(), settings.lift, settings.thickness)
         if self.cutout is not None:  # the AO edits it shows (a camera of its own re-sends the cutout anyway)
             self._send_edits()
         self._refresh_preview()
@@ -163,8 +168,8 @@ class ShadowController(QObject):
 
     # -- the model's edits ----------------------------------------------------------
     def _edited(self, what: str, new_step: bool) -> None:
-        if what == "light_map":
-            if self.model.light_dragging:
+        if what in ("light_map", "geometry"):  # a drag previews; its release, or a single change, renders
+            if self.model.dragging(what):
                 self._light_dragged()
             else:
                 self._light_map_set(new_step)
@@ -184,23 +189,28 @@ class ShadowController(QObject):
             refresh = new_step if refresh is None else refresh
             self._schedule(RenderJob(new_step=new_step, reread=False, started=time.perf_counter(), refresh=refresh))
 
+    def _layer_key_now(self) -> tuple:
+        """What a drag changes in the layer: the light map, the lift and the thickness."""
+        return (self.model.light_map, self.model.lift, self.model.thickness)
+
     def _light_map_set(self, new_step: bool) -> None:
-        """The map changed; it ends a previewed drag. A map equal to the last one rendered, as after the last
-        move of a live drag, renders nothing new."""
+        """The map (or the lift or thickness) changed; it ends a previewed drag. A map equal to the last one
+        rendered, as after the last move of a live drag, renders nothing new."""
         drag, self._drag = self._drag, None
         self._pause.stop()
-        light_map = self.model.light_map
+        key = self._layer_key_now()
         if drag is not None:  # the drag's layer: its undo step unless a rest already wrote one
-            if light_map != self._layer_map or not drag.wrote:  # the cutout was read again at the drag's start
+            if key != self._layer_key or not drag.wrote:  # the cutout was read again at the drag's start
                 self._rerender(new_step or not drag.wrote, preview=False, refresh=False)
             return
-        if light_map == self._layer_map and not new_step:
+        if key == self._layer_key and not new_step:
             return
         self._rerender(new_step)
 
     def _light_dragged(self) -> None:
-        """A light is being dragged: update the docker's preview (:attr:`previewed`); the layer follows when the
-        drag rests or ends. Before a first Generate, or with Live off, nothing is rendered."""
+        """A light (or the lift or thickness) is being dragged: update the docker's preview (:attr:`previewed`);
+        the layer follows when the drag rests or ends. Before a first Generate, or with Live off, nothing is
+        rendered."""
         source = self.source
         if not self.live or source is None:
             return
@@ -213,7 +223,7 @@ class ShadowController(QObject):
         self._request_preview()
 
     def _drag_rested(self) -> None:
-        if self._drag is not None and self.model.light_map != self._layer_map:
+        if self._drag is not None and self._layer_key_now() != self._layer_key:
             self._rerender(not self._drag.wrote, preview=False, refresh=False)
             self._drag.wrote = True
 
@@ -280,8 +290,14 @@ class ShadowController(QObject):
             return
         if not self._previews.begin():
             return  # latest wins: sent with the map of the moment when the reply comes
-        params, buffers = worker_requests.preview(self.model, cutout, source, background)
-        self.engine.request("preview", buffers, on_reply=self._on_preview, on_error=self._on_preview_error, **params)
+
+        def send() -> None:
+            params, buffers = worker_requests.preview(self.model, cutout, source, background)
+            self.engine.request(
+                "preview", buffers, on_reply=self._on_preview, on_error=self._on_preview_error, **params
+            )
+
+        self._ensure_geometry(send, self._on_preview_error)
 
     def _on_preview(self, reply: dict, buffers: dict) -> None:
         if self._previews.end():
@@ -329,14 +345,30 @@ class ShadowController(QObject):
         except Exception as exc:  # the UI boundary: never let an error reach Krita
             self._fail(f"Soft Shadow could not read the image: {type(exc).__name__}: {exc}")
 
-    def _ensure_cutout(self, then: Any, job: RenderJob) -> None:
+    def _ensure_cutout(self, render: Any, job: RenderJob) -> None:
         source = self.source
         assert source is not None, "a job reads its source first"
         camera = self.model.camera
+
+        def refused(error: EngineError) -> None:  # a lift or thickness the worker does not take: said, not fatal
+            if error.kind == "BadRequest":
+                self._fail(str(error), "warning")
+            else:
+                self._on_error(error, job)
+
+        def then() -> None:
+            self._ensure_geometry(render, refused)
+
         if self.cutout is not None and source.key == self._cutout_key:
             if camera == self._cutout_camera:
                 then()
                 return
+            if self._cutout_geometry is None or self._cutout_geometry[0] > 0:
+                # a lift is checked against the camera in use: the worker's cutout rests on the ground while the
+                # camera changes, and takes the lift again (clamped to the new horizon) after it
+                self._cutout_geometry = (0.0, self.model.thickness)
+                params = {**worker_requests.set_geometry(self.model, self.cutout), "lift": 0.0}
+                self.engine.request("set_geometry", on_reply=lambda r, b: None, on_error=lambda e: None, **params)
             # A new camera for the same alpha: the worker predicts the AO again (it depends on the camera) and
             # keeps the AO edits; the alpha is not sent again.
             self.model.report_status("info", "Analysing the cutout (ambient occlusion)...")
@@ -358,6 +390,7 @@ class ShadowController(QObject):
 
         def on_cutout(reply: dict, buffers: dict) -> None:
             self.cutout, self._cutout_key, self._cutout_camera = reply["cutout"], source.key, camera
+            self._cutout_geometry = None  # set_geometry follows (it reads the thickness the outline has)
             edits = self.model.ao_edit_list()
             if edits:
                 self.engine.request(
@@ -376,14 +409,41 @@ class ShadowController(QObject):
         )
 
     def _analysed(self, reply: dict) -> None:
-        """A cutout analysed (with its camera): report the camera the model read, and fetch the AO map."""
+        """A cutout analysed (with its camera): report the camera the model read and the cutout's ground, and
+        fetch the AO map."""
         self.model.report_camera_read(reply.get("camera_read"))
+        source = self.source
+        if source is not None and reply.get("bbox"):
+            self.model.report_ground(reply["bbox"], (source.width, source.height))
         self.engine.request("get_ao", cutout=self.cutout, on_reply=self._on_ao)
+
+    def _ensure_geometry(self, then: Any, on_error: Any) -> None:
+        """The worker's cutout takes the model's lift and thickness (``set_geometry``: the alpha is not sent again;
+        its reply says the thickness read), clamped first to the cutout's ground and camera now known; then
+        ``then()``, or ``on_error(error)`` where the worker refused it (the render or preview that asked is
+        dropped)."""
+        self.model.clamp_geometry()
+        wanted = (float(self.model.lift), self.model.thickness)
+        if self.cutout is None or wanted == self._cutout_geometry:
+            then()
+            return
+        self._cutout_geometry = wanted
+
+        def on_geometry(reply: dict, buffers: dict) -> None:
+            self.model.report_geometry(reply)
+            then()
+
+        def on_refused(error: EngineError) -> None:
+            self._cutout_geometry = None  # the worker kept its geometry: send it again with the next edit
+            on_error(error)
+
+        params = worker_requests.set_geometry(self.model, self.cutout)
+        self.engine.request("set_geometry", on_reply=on_geometry, on_error=on_refused, **params)
 
     def _render(self, job: RenderJob) -> None:
         source, cutout = self.source, self.cutout
         assert source is not None and cutout is not None, "a job reads its source and sends its cutout first"
-        self._layer_map = self.model.light_map.copy()
+        self._layer_key = (self.model.light_map.copy(), self.model.lift, self.model.thickness)
         model, settings = self.model, self.model.settings()  # the settings this shadow is rendered from
         params, blend = worker_requests.render(model, cutout, source)  # the blend of the colour rendered
         self.engine.request(
@@ -429,8 +489,11 @@ class ShadowController(QObject):
             self.model.report_status("warning", result.notice)
         elif rect[2] == 0:
             self.model.report_status("warning", shadow_notes.no_shadow_note(reply.get("no_shadow")))
+        elif self.model.clamped:  # a lift or thickness clamped for this render: why, not the timing
+            self.model.report_status("warning", self.model.clamped)
         elif job.new_step:
             self.model.report_status("info", f"Shadow {rect[2]} x {rect[3]} px in {elapsed:.0f} ms ({info['method']}).")
+        self.model.clamped = ""
         if not self._renders.in_flight:
             self._set_busy(False)
             if self._preview_due and self._drag is None:

@@ -3,8 +3,9 @@
 One :class:`ShadowModel` per open document (:class:`persistence.DocumentModels`
 keeps them). The panel binds its widgets to the model's properties; the
 controller renders what the model says and reports back into it (status,
-the camera the engine read). The settings (light map, horizon, colour,
-opacity, AO edits) are saved in the document (:mod:`persistence`).
+the camera the engine read, the thickness it read, the cutout's ground). The
+settings (light map, horizon, colour, opacity, AO edits, lift and thickness)
+are saved in the document (:mod:`persistence`).
 
 Signals besides each property's ``<name>_changed``:
 
@@ -13,6 +14,11 @@ Signals besides each property's ``<name>_changed``:
 - ``edited(what, new_step)``: a user edit the shadow depends on, ``what`` one of :data:`EDITS`;
   ``new_step``: the shadow layer's write starts a new undo step (the first change of a slider drag, a
   click) or continues the current one (the rest of the drag).
+
+The artist's geometry (conventions, "Lift and thickness"): ``lift``, canvas rows from the cutout's lowest point
+down to the ground beneath it, and ``thickness``, its depth over its width (None: the engine reads it from the
+outline, ``thickness_read``). Their edits (:meth:`ShadowModel.edit_lift`, :meth:`ShadowModel.edit_thickness`) are
+clamped to what the engine takes (the host kit's :mod:`geometry_clamp`), with the reason in the status.
 """
 
 from __future__ import annotations
@@ -24,7 +30,7 @@ from dataclasses import dataclass
 from PyQt5.QtCore import QObject, pyqtSignal
 
 from .properties import Property
-from .shared import ao_edits, camera_rules, defaults
+from .shared import ao_edits, camera_rules, defaults, geometry_clamp
 from .shared import light_map as lm
 
 AoEdits = ao_edits.AoEdits  # the kit's AO edit list (a model property shares the module's name)
@@ -33,7 +39,8 @@ __all__ = ["EDITS", "MAX_SHADOW_RECORDS", "READY", "Settings", "ShadowModel"]
 
 MAX_SHADOW_RECORDS = 32  # shadow layers whose settings are kept (the newest; older undo steps forget theirs)
 READY = "Select the cutout's layer (or a selection) and press Generate."
-EDITS = ("light_map", "camera", "color", "opacity", "ao_edits")
+EDITS = ("light_map", "camera", "color", "opacity", "ao_edits", "geometry")
+_GEOMETRY = ("lift", "thickness")
 _CAMERA = ("use_horizon", "horizon", "fov")
 
 
@@ -49,6 +56,8 @@ class Settings:
     opacity: float
     ao_edits: AoEdits
     ao_strength: float
+    lift: float = 0.0
+    thickness: float | None = None
 
 
 class ShadowModel(QObject):
@@ -62,8 +71,12 @@ class ShadowModel(QObject):
     opacity_changed = pyqtSignal(float)
     ao_edits_changed = pyqtSignal(object)
     ao_strength_changed = pyqtSignal(float)
+    lift_changed = pyqtSignal(float)
+    thickness_changed = pyqtSignal(object)
     status_changed = pyqtSignal(object)
     camera_read_changed = pyqtSignal(object)
+    thickness_read_changed = pyqtSignal(object)
+    ground_changed = pyqtSignal(object)
     modified = pyqtSignal(str)
     edited = pyqtSignal(str, bool)
 
@@ -75,12 +88,19 @@ class ShadowModel(QObject):
     opacity: Property[float] = Property(defaults.OPACITY)
     ao_edits: Property[AoEdits] = Property(AoEdits())  # brush strokes and grow/shrink steps
     ao_strength: Property[float] = Property(1.0)  # scales the contact shadow (AO), 0..MAX_AO_STRENGTH
+    lift: Property[float] = Property(0.0)  # canvas rows from the cutout's lowest point down to its ground
+    thickness: Property[float | None] = Property(None)  # depth over width (None: read from the outline)
     status: Property[tuple[str, str]] = Property(("info", READY), readonly=True)  # (level, text for people)
     camera_read: Property[dict | None] = Property(None, readonly=True)  # {"horizon", "fov"} the engine read
+    thickness_read: Property[float | None] = Property(None, readonly=True)  # what the outline reads as
+    # the analysed cutout's bbox [x0, y0, x1, y1] and its canvas's (width, height): where its ground point is
+    ground: Property[tuple[tuple[int, int, int, int], tuple[int, int]] | None] = Property(None, readonly=True)
 
     def __init__(self, parent: QObject | None = None) -> None:
         super().__init__(parent)
         self.light_dragging = False  # the last light map edit was a move of a drag (a preview, not the layer)
+        self.geometry_dragging = False  # the last lift or thickness edit was a move of a drag (the same)
+        self.clamped = ""  # why the last lift or thickness was clamped, for the status after its render
         self._stroke = 0  # 0: no stroke, each edit a new undo step; 1: a stroke begins; 2: a stroke continues
         self._quiet = False
         self._light_edit = False
@@ -104,6 +124,8 @@ class ShadowModel(QObject):
             self.opacity,
             self.ao_edits.copy(),
             self.ao_strength,
+            self.lift,
+            self.thickness,
         )
 
     def apply(self, settings: Settings) -> None:
@@ -114,6 +136,7 @@ class ShadowModel(QObject):
             self.horizon, self.fov, self.use_horizon = settings.horizon, settings.fov, settings.use_horizon
             self.color, self.opacity = settings.color, settings.opacity
             self.ao_edits, self.ao_strength = settings.ao_edits.copy(), settings.ao_strength
+            self.lift, self.thickness = settings.lift, settings.thickness
 
     def ao_edit_list(self) -> list[dict]:
         """The protocol's ``edits`` list (AO edits, then the strength)."""
@@ -145,6 +168,66 @@ class ShadowModel(QObject):
         finally:
             self._light_edit = False
         self.edited.emit("light_map", new_step)
+
+    def dragging(self, what: str) -> bool:
+        """Whether the last edit of ``what`` ("light_map" or "geometry") was a move of a drag."""
+        return self.light_dragging if what == "light_map" else what == "geometry" and self.geometry_dragging
+
+    def edit_lift(self, lift: float, new_step: bool = True, dragging: bool = False) -> None:
+        """The lift box, slider or the preview's handle set ``lift`` canvas rows: clamped to what the engine takes
+        (0 to 20 canvas heights, and a ground below the horizon of the camera in use), the reason in the status.
+        ``dragging``: a move of a drag (previewed; the layer follows at the release, an edit with it False)."""
+        lift, why = geometry_clamp.clamp_lift(lift, *self._lift_bounds())
+        self._say_clamped(why)
+        self._edit_geometry(lift, self.thickness, new_step, dragging)
+
+    def edit_thickness(self, thickness: float | None, new_step: bool = True, dragging: bool = False) -> None:
+        """The thickness slider set ``thickness`` (None: read from the outline), clamped as :meth:`edit_lift`."""
+        if thickness is not None:
+            thickness, why = geometry_clamp.clamp_thickness(thickness)
+            self._say_clamped(why)
+        self._edit_geometry(self.lift, thickness, new_step, dragging)
+
+    def reset_geometry(self) -> None:
+        """Rest on the ground, the thickness read from the outline: one edit."""
+        self._edit_geometry(0.0, None, True, False)
+
+    def clamp_geometry(self) -> bool:
+        """Clamp the lift to the cutout's ground and the camera now known (a camera changed, a cutout analysed),
+        saying why; True if it changed (saved, no render: the render that asked is under way)."""
+        lift, why = geometry_clamp.clamp_lift(self.lift, *self._lift_bounds())
+        if lift == self.lift:
+            return False
+        self._say_clamped(why)
+        with self.quietly():
+            self.lift = lift
+        self.modified.emit("geometry")
+        return True
+
+    def _say_clamped(self, why: str) -> None:
+        """A value clamped: why, in the status now and (:attr:`clamped`) after the render it asks for."""
+        if why:
+            self.clamped = why
+            self.report_status("warning", why)
+
+    def _lift_bounds(self) -> tuple[int, float | None, float | None]:
+        """The canvas height, the cutout's lowest row and the horizon of the camera in use, where known."""
+        ground = self.ground
+        if ground is None:
+            return 1 << 30, None, None  # no cutout yet: only the sign is known
+        camera = self.camera or self.camera_read
+        return ground[1][1], ground[0][3] - 1, None if camera is None else float(camera["horizon"])
+
+    def _edit_geometry(self, lift: float, thickness: float | None, new_step: bool, dragging: bool) -> None:
+        ending = self.geometry_dragging and not dragging
+        self.geometry_dragging = dragging
+        changed = (lift, thickness) != (self.lift, self.thickness)
+        if changed:
+            with self.quietly():
+                self.lift, self.thickness = lift, thickness
+            self.modified.emit("geometry")
+        if changed or ending:  # a drag's release is an edit where it rests (it writes the layer)
+            self.edited.emit("geometry", new_step)
 
     def brush_ao(self, x: float, y: float, radius: float, strength: float, new_stroke: bool) -> None:
         """One dab of the AO brush at frame position (x, y) (0..1); ``strength`` < 0 darkens."""
@@ -200,6 +283,16 @@ class ShadowModel(QObject):
                 self.horizon = float(round(read["horizon"]))
                 self.fov = float(round(read["fov"]))
 
+    def report_geometry(self, reply: dict) -> None:
+        """The worker's ``set_geometry`` reply: the thickness the outline reads as (for the slider's label)."""
+        read = reply.get("thickness_read")
+        type(self).thickness_read.set(self, float(read) if isinstance(read, (int, float)) else None)
+
+    def report_ground(self, bbox: list | tuple, canvas: tuple[int, int]) -> None:
+        """The analysed cutout's bbox on its canvas of ``canvas`` (width, height): the lift handle's place."""
+        x0, y0, x1, y1 = (int(v) for v in bbox)
+        type(self).ground.set(self, ((x0, y0, x1, y1), (int(canvas[0]), int(canvas[1]))))
+
     def record_shadow(self, layer_id: str, settings: Settings) -> None:
         """The shadow layer ``layer_id`` now shows a shadow rendered from ``settings`` (saved with the document,
         the newest :data:`MAX_SHADOW_RECORDS` layers)."""
@@ -241,7 +334,7 @@ class ShadowModel(QObject):
     def _property_set(self, name: str) -> None:
         if name in _CAMERA and self._quiet:  # shown or loaded: the camera to compare the next edit with
             self._camera = self.camera
-        if name in ("status", "camera_read") or self._quiet:
+        if name in ("status", "camera_read", "thickness_read", "ground") or self._quiet:
             return
         self.modified.emit(name)
         if name in _CAMERA:
@@ -255,5 +348,8 @@ class ShadowModel(QObject):
                 self.edited.emit("light_map", True)
         elif name in ("ao_edits", "ao_strength"):
             self.edited.emit("ao_edits", self.take_step())
+        elif name in _GEOMETRY:
+            self.geometry_dragging = False
+            self.edited.emit("geometry", self.take_step())
         else:
             self.edited.emit(name, self.take_step())

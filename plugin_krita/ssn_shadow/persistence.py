@@ -1,7 +1,7 @@
 """The docker's settings saved in the document, so that they travel with the .kra file.
 
 Each document's :class:`model.ShadowModel` settings (light map, horizon,
-colour, opacity, AO edits) are written, as JSON, into one of the document's
+colour, opacity, AO edits, lift and thickness) are written, as JSON, into one of the document's
 annotations (:data:`ANNOTATION`) whenever the user changes one, and read
 back when the docker first sees the document. Krita saves annotations in the
 .kra file (``<name>/annotations/ssn_shadow/settings`` in the archive) and
@@ -15,7 +15,12 @@ The file format (version 1)::
      "horizon": {"given": false, "row": 412.0, "fov": 45.0},
      "color": [0.0, 0.0, 0.0], "opacity": 0.85,
      "ao_edits": {"steps": [[{"op": "brush", ...}, ...], [{"op": "grow", "pixels": 2}]], "strength": 1.0},
-     "shadows": {"<shadow layer's unique id>": {...the same five settings...}, ...}}
+     "geometry": {"lift": 40.0, "thickness": null},
+     "shadows": {"<shadow layer's unique id>": {...the same six settings...}, ...}}
+
+``geometry`` (optional: a file saved before it reads as resting on the ground, the thickness read) is the lift
+in canvas rows and the thickness, ``null`` for the one read from the outline (conventions, "Lift and
+thickness"); a reader that knows no ``geometry`` ignores it.
 
 ``shadows`` (optional) records the settings each shadow layer was rendered
 from, so that an undo that brings back an older shadow layer brings back its
@@ -27,10 +32,11 @@ a layer's unique id in the .kra. A record that cannot be read is dropped
 from __future__ import annotations
 
 import json
+import math
 from typing import Any
 
 from .model import Settings, ShadowModel
-from .shared import ao_edits, camera_rules, defaults, protocol
+from .shared import ao_edits, camera_rules, defaults, geometry_rules, protocol
 from .shared import light_map as lm
 
 __all__ = ["ANNOTATION", "DocumentModels", "SettingsError", "dump", "restore"]
@@ -83,6 +89,7 @@ def _settings_dict(s: Settings) -> dict[str, Any]:
         "color": list(s.color),
         "opacity": s.opacity,
         "ao_edits": {"steps": s.ao_edits.steps, "strength": s.ao_strength},
+        "geometry": {"lift": s.lift, "thickness": s.thickness},
     }
 
 
@@ -109,7 +116,12 @@ def _settings(settings: dict) -> Settings:
     ao = _object(settings, "ao_edits")
     steps = _ao_steps(ao.get("steps"))
     strength = _number(ao.get("strength"), "ao_edits.strength", 0.0, defaults.MAX_AO_STRENGTH)
-    return Settings(light_map, given, row, fov, rgb, opacity, ao_edits.AoEdits(steps), strength)
+    geometry = _object(settings, "geometry") if "geometry" in settings else {}
+    lift = _number(geometry.get("lift", 0.0), "geometry.lift", 0.0, math.inf)  # clamped to its canvas when rendered
+    thickness = geometry.get("thickness")
+    if thickness is not None:
+        thickness = _number(thickness, "geometry.thickness", *geometry_rules.THICKNESS_RANGE)
+    return Settings(light_map, given, row, fov, rgb, opacity, ao_edits.AoEdits(steps), strength, lift, thickness)
 
 
 def _object(settings: dict, key: str) -> dict:

@@ -9,13 +9,19 @@ from .adapters.pixel_format import blend_mode, shadow_color
 from .model import ShadowModel
 from .shared import camera_rules, protocol
 
-__all__ = ["preview", "render", "set_cutout"]
+__all__ = ["preview", "render", "set_cutout", "set_geometry"]
 
 
 def set_cutout(source: Source, camera: dict | None) -> tuple[dict[str, Any], dict[str, protocol.Buffer]]:
     """``set_cutout``: the source's canvas-sized alpha, and the given camera if there is one."""
     alpha = protocol.Buffer(source.dtype, (source.height, source.width), source.alpha)
     return ({"camera": camera} if camera else {}), {"alpha": alpha}
+
+
+def set_geometry(model: ShadowModel, cutout: str) -> dict[str, Any]:
+    """``set_geometry``: the model's lift (canvas rows) and thickness (None: read from the outline); the alpha is
+    not sent again."""
+    return {"cutout": cutout, "lift": float(model.lift), "thickness": model.thickness}
 
 
 def render(model: ShadowModel, cutout: str, source: Source) -> tuple[dict[str, Any], str]:

@@ -198,6 +198,7 @@ class FakeHost:
 
     def write(self, source, pixels, rect, new_step, blend):
         self.writes.append((rect, len(pixels), new_step))
+        self.pixels = pixels  # the last layer's
         self.blends.append(blend)
         if new_step or self.shadow is None:  # a new layer replaces the old one
             self.shadow = f"shadow-{len(self.writes)}"

@@ -37,6 +37,25 @@ def pixels(doc):
     return {n.name(): hashlib.sha1(bytes(n.pixelData(0, 0, W, H))).hexdigest() for n in doc.rootNode().childNodes()}
 
 
+def wait_for(controller, timeout_s=90.0):
+    """Until the controller is idle (its render written)."""
+    deadline = time.monotonic() + timeout_s
+    pump(0.1)
+    while controller.busy and time.monotonic() < deadline:
+        pump(0.05)
+    pump(0.3)
+
+
+def shadow_top(doc):
+    """The topmost canvas row of the shadow layer whose alpha is above 5 % of its darkest (None: no layer)."""
+    shadow = next((n for n in doc.rootNode().childNodes() if n.name().startswith("Shadow")), None)
+    if shadow is None:
+        return None
+    alpha = bytes(shadow.pixelData(0, 0, W, H))[3::4]
+    darkest = max(alpha)
+    return next((r for r in range(H) if max(alpha[r * W : (r + 1) * W]) > 0.05 * darkest), None)
+
+
 def docker_parts(doc):
     """The docker's parts as SoftShadowDocker builds them, on ``doc``."""
     from ssn_shadow.adapters.host import KritaHost
@@ -64,6 +83,9 @@ def shown(panel):
             "opacity": panel.opacity.value(),
             "ao_strength": panel.ao_strength.value(),
             "colour": panel.color_button.styleSheet(),
+            "lift": panel.lift_box.value(),
+            "thickness": panel.thickness.value(),
+            "thickness_label": panel.thickness_label.text(),
         },
         "model": {
             "light_map": m.light_map.to_dict(),
@@ -71,6 +93,7 @@ def shown(panel):
             "color": list(m.color),
             "opacity": m.opacity,
             "ao_edits": m.ao_edit_list(),
+            "geometry": [m.lift, m.thickness],
         },
         "status": list(m.status),
     }
@@ -106,6 +129,8 @@ def save(*args):
         panel.ao_preview.brushed.emit(0.5, 0.8, True)
         panel.ao_preview.brushed.emit(0.52, 0.8, False)
         panel.ao_strength.setValue(150)
+        panel.lift_box.setValue(40)  # the Geometry section: lifted 40 px, thickness 1.5
+        panel.thickness.setValue(150)
         doc.waitForDone()
         pump(0.5)
 
@@ -147,6 +172,25 @@ def reopen(*args):
         out["docker_same_model"] = docker.controller.model is first
         out["docker_shown"] = shown(docker.panel)
         docker.engine.shutdown()
+
+        # the reopened lift casts: Generate (a high sun, behind the object: its shadow comes towards the viewer),
+        # then the lift box set to 0, live: the shadow's top row with and without the lift
+        person = next(n for n in doc.rootNode().childNodes() if n.name() == "Person")
+        doc.setActiveNode(person)
+        pump(0.5)
+        from ssn_shadow.shared import light_map as lm
+
+        controller.live = False
+        controller.model.light_map = lm.preset("high-sun")
+        controller.live = True
+        controller.generate()
+        wait_for(controller)
+        out["lifted"] = {"top": shadow_top(doc), "status": list(controller.model.status)}
+        panel.lift_box.setValue(0)
+        wait_for(controller)
+        out["resting"] = {"top": shadow_top(doc), "status": list(controller.model.status)}
+        out["lift_after"] = controller.model.lift
+        controller.engine.shutdown()
         doc.close()
         out["done"] = True
     except Exception:

@@ -379,6 +379,7 @@ def test_a_drag_while_the_worker_is_slow_keeps_one_preview_pending_and_ends_with
     host = FakeHost(w=800, h=640, alpha=cutout_alpha(800, 640, (320, 160, 480, 560)))
     c = ShadowController(worker, host)
     c.source, c.cutout = host.read_source(host.document), "c1"  # as after a Generate
+    c._cutout_geometry = (0.0, None)  # its lift and thickness, set at Generate
     shown = []
     c.previewed.connect(lambda rgb, w, h: shown.append(rgb[0]))
     for i in range(60):  # the mouse at 60 Hz, the worker answering one in 7 moves
@@ -404,3 +405,83 @@ def test_the_preview_is_rendered_as_large_as_the_docker_draws_it():
     assert preview_side(800, 200, (280, 175)) == 280
     assert preview_side(8000, 1000, (1200, 200)) == PREVIEW_SIDE  # a wide dock: at most that
     assert preview_side(800, 640, None) == PREVIEW_SIDE  # no preview shown yet
+
+
+def _top_shadow_row(host, threshold=0.05):
+    """The canvas row of the last written layer's topmost row with alpha above ``threshold`` of its darkest."""
+    (_x, y, w, h), alpha = host.writes[-1][0], host.pixels[3::4]
+    darkest = max(alpha)
+    rows = [r for r in range(h) if max(alpha[r * w : (r + 1) * w]) > threshold * darkest]
+    return y + rows[0]
+
+
+def test_a_lift_moves_the_shadow_down_through_set_geometry_without_sending_the_alpha_again(qapp):
+    """The lift and thickness go to the worker with set_geometry (the cutout is not sent again), each change the
+    same layer path as a light change (one undo step; a drag previewed, its release written in place); Generate
+    reads the thickness the outline has; a lift whose ground would lie above the horizon is clamped first, with
+    the reason."""
+    from plugin_krita.ssn_shadow.shared import light_map as lm
+
+    host = FakeHost(w=400, h=400, alpha=cutout_alpha(400, 400, (160, 60, 240, 220)))  # lowest row 219
+    c, engine, messages, _ = make(host)
+    sent = []
+    request = engine.request
+    engine.request = lambda cmd, *a, **k: (
+        sent.append((cmd, k.get("lift"), k.get("thickness"))),
+        request(cmd, *a, **k),
+    )[1]
+    shown = []
+    c.previewed.connect(lambda rgb, w, h: shown.append(w))
+    try:
+        c.live = False  # the settings, then Generate
+        c.model.light_map = lm.preset("high-sun")  # behind the object: its shadow comes towards the viewer
+        c.model.horizon, c.model.use_horizon = 100.0, True
+        c.live = True
+        c.generate()
+        assert wait_until(lambda: not c.busy and len(host.writes) == 1), messages
+        assert [s[0] for s in sent][:3] == ["set_cutout", "get_ao", "set_geometry"]
+        assert isinstance(c.model.thickness_read, float) and c.model.thickness_read > 0  # shown by the slider
+        assert c.model.ground == ((160, 60, 240, 220), (400, 400))
+        resting = _top_shadow_row(host)
+
+        sent.clear()
+        c.model.edit_lift(60.0)  # the lift box: one new undo step
+        assert wait_until(lambda: not c.busy and len(host.writes) == 2), messages
+        assert [s[0] for s in sent][:2] == ["set_geometry", "render"] and sent[0][1:] == (60.0, None)
+        assert host.writes[1][2] and not [m for m in messages if m[0] != "info"], messages
+        lifted = _top_shadow_row(host)
+        assert lifted >= resting + 20, (resting, lifted)  # the shadow leaves the object: it starts lower
+
+        sent.clear()
+        shown.clear()
+        for lift in (70.0, 80.0, 90.0):  # the preview's handle dragged: previews, no layer until the release
+            c.model.edit_lift(lift, False, dragging=True)
+            _spin(60)
+        assert wait_until(lambda: shown) and len(host.writes) == 2
+        assert "set_cutout" not in [s[0] for s in sent] and ("set_geometry", 70.0, None) in sent
+        c.model.edit_lift(90.0, False)  # the release
+        assert wait_until(lambda: not c.busy and len(host.writes) == 3), messages
+        assert not host.writes[2][2]  # in place: the drag's undo step was taken at its start
+        assert _top_shadow_row(host) > lifted
+
+        sent.clear()
+        c.model.edit_thickness(3.0)
+        assert wait_until(lambda: not c.busy and len(host.writes) == 4), messages
+        assert [s[0] for s in sent][:2] == ["set_geometry", "render"] and sent[0][1:] == (90.0, 3.0)
+
+        # the horizon moved below the object's foot: at the next render the lift is clamped to put its ground
+        # below it (the engine refuses a ground at or above the horizon), and says so
+        sent.clear()
+        c.model.horizon = 330.0
+        assert wait_until(lambda: not c.busy and len(host.writes) == 5), messages
+        assert c.model.lift == 112.0 and "raised to 112" in c.model.status[1], c.model.status
+        assert [s[0] for s in sent if s[0] not in ("get_ao", "preview")] == [
+            "set_geometry",
+            "set_camera",
+            "set_geometry",
+            "render",
+        ]
+        assert [s[1] for s in sent if s[0] == "set_geometry"] == [0.0, 112.0]
+        assert not [m for m in messages if m[0] == "error"], messages
+    finally:
+        engine.shutdown()

@@ -29,6 +29,8 @@ def test_settings_survive_saving_closing_and_reopening_the_kra(tmp_path):
     }
     assert {key: edited["model"][key] for key in expected} == expected
     assert [op["op"] for op in edited["model"]["ao_edits"]] == ["grow", "brush", "brush", "strength"]
+    assert edited["model"]["geometry"] == [40.0, 1.5] and new["model"]["geometry"] == [0.0, None]
+    assert edited["panel"]["thickness_label"] == "Thickness: 1.50" and edited["panel"]["lift"] == 40
 
     # the settings change no pixel and add no undo step; they mark the image modified (closing asks to save)
     assert first["pixels_after_settings"] == first["pixels_before"]
@@ -45,3 +47,9 @@ def test_settings_survive_saving_closing_and_reopening_the_kra(tmp_path):
     # the docker on the active (reopened) document shows them too, one model per document across view changes
     assert second["active_is_opened"] and second["docker_same_model"]
     assert second["docker_shown"] == second["shown"]
+
+    # the reopened lift casts the shadow lower: its top row lies further down than with the lift box set to 0
+    lifted, resting = second["lifted"], second["resting"]
+    assert lifted["top"] is not None and resting["top"] is not None, second
+    assert lifted["top"] >= resting["top"] + 15, (lifted, resting)
+    assert second["lift_after"] == 0.0 and resting["status"][0] == "info", resting

@@ -202,3 +202,83 @@ def test_shadow_records_are_saved_and_read_back(qapp):
     for i in range(MAX_SHADOW_RECORDS + 3):
         m.record_shadow(f"layer-{i}", m.settings())
     assert len(m.shadows) == MAX_SHADOW_RECORDS and "layer-a" not in m.shadows
+
+
+def test_lift_and_thickness_are_clamped_with_the_reason_and_a_drag_is_one_edit(qapp):
+    """The lift and thickness controls' edits: out of range clamped (0 to 20 canvas heights, a ground below the
+    horizon of the camera in use; thickness 0 to 8) with the reason in the status; a drag's moves are previewed
+    (``dragging``) and its release is an edit even where the value is unchanged; Reset is one edit."""
+    m = ShadowModel()
+    edits, saved = record(m)
+    m.edit_lift(-5)  # no cutout yet: only the sign is known
+    assert (
+        m.lift == 0.0
+        and m.status[0] == "warning"
+        and "set to 0 (it rests on the ground)" in m.status[1]
+        and edits == []
+    )
+    m.report_ground([120, 60, 200, 180], (320, 240))  # its lowest row 179
+    m.edit_lift(10_000)
+    assert m.lift == 4800.0 and "(4800 px, the most the engine takes); set to 4800" in m.status[1]  # 20 canvas heights
+    m.horizon, m.use_horizon = 300.0, True  # a horizon below the object: its ground lies lower still
+    m.edit_lift(40)
+    assert m.lift == 122.0 and "at or above the horizon (row 300)" in m.status[1], m.status
+    m.edit_lift(0)  # resting on the ground is always taken
+    assert m.lift == 0.0
+    edits.clear()
+    saved.clear()
+    m.edit_lift(130, False, dragging=True)
+    m.edit_lift(140, False, dragging=True)
+    assert m.dragging("geometry") and not m.dragging("light_map") and m.lift == 140.0
+    m.edit_lift(140, False)  # the release where the drag left it
+    assert not m.dragging("geometry")
+    assert edits == [("geometry", False)] * 3 and saved == ["geometry"] * 2
+    m.edit_lift(140)  # no change: no edit
+    assert len(edits) == 3
+
+    m.edit_thickness(12.0)
+    assert m.thickness == 8.0 and "0 (flat) to 8 (deep), the engine's range; set to 8" in m.status[1]
+    m.report_geometry({"lift": 140.0, "thickness": 8.0, "thickness_read": 0.29})
+    assert m.thickness_read == 0.29 and edits[-1] == ("geometry", True)
+    with pytest.raises(AttributeError):
+        m.thickness_read = 1.0  # derived: shown, not set
+    edits.clear()
+    m.reset_geometry()
+    assert (m.lift, m.thickness) == (0.0, None) and edits == [("geometry", True)]
+    m.lift = 12.0  # a plain assignment is an edit too
+    assert edits[-1] == ("geometry", True)
+
+    m.use_horizon = False  # the camera read: the lift is clamped to its horizon when the cutout is analysed
+    m.report_camera_read({"horizon": 200.0, "fov": 40.0})
+    edits.clear()
+    assert m.clamp_geometry() and m.lift == 22.0 and edits == [] and saved[-1] == "geometry"
+    assert not m.clamp_geometry()
+
+
+def test_lift_and_thickness_are_saved_with_the_document_and_an_older_file_reads_as_resting(qapp):
+    host = FakeHost()
+    m = DocumentModels(host).model_for(host.document)
+    m.edit_lift(40.0)
+    m.edit_thickness(1.5)
+    data = json.loads(host.document.annotations[ANNOTATION][1])
+    assert data["geometry"] == {"lift": 40.0, "thickness": 1.5}
+    again = DocumentModels(host).model_for(host.document)
+    assert (again.lift, again.thickness) == (40.0, 1.5) and again.settings() == m.settings()
+    m.reset_geometry()
+    assert json.loads(host.document.annotations[ANNOTATION][1])["geometry"] == {"lift": 0.0, "thickness": None}
+    assert DocumentModels(host).model_for(host.document).thickness is None
+
+    del data["geometry"]  # saved before the geometry: on the ground, the thickness read
+    older = ShadowModel()
+    older.lift = 7.0
+    restore(older, json.dumps(data).encode())
+    assert (older.lift, older.thickness) == (0.0, None)
+    for bad, message in (({"lift": -1}, "geometry.lift"), ({"lift": 0, "thickness": 9}, "geometry.thickness")):
+        with pytest.raises(SettingsError, match=message):
+            restore(ShadowModel(), json.dumps({**data, "geometry": bad}).encode())
+
+    # an undo brings back the lift and thickness a shadow layer was made with
+    m.edit_lift(30.0)
+    m.record_shadow("layer-a", m.settings())
+    m.edit_lift(60.0)
+    assert m.shadow_shown("layer-a") is not None and m.lift == 30.0

@@ -1,4 +1,5 @@
 import json
+import pytest
 
 from PyQt5.QtCore import QElapsedTimer, QEvent, QPoint, QPointF, QSettings, Qt
 from PyQt5.QtGui import QMouseEvent, QWheelEvent
@@ -58,6 +59,7 @@ def generated_panel(width, height, host=None):
     panel.show()
     QApplication.processEvents()
     c.source, c.cutout = host.read_source(host.document), "c1"
+    c._cutout_geometry = (0.0, None)  # the worker's cutout has the model's lift and thickness (set at Generate)
     return engine, host, c, panel
 
 
@@ -197,7 +199,7 @@ def test_the_folding_rule():
     assert folding.open_sections(short, {}) == dict.fromkeys(folding.SECTIONS, False)
     assert folding.open_sections(tall, {}) == dict.fromkeys(folding.SECTIONS, True)
     chosen = folding.open_sections(161, {"ao": True, "camera": False})
-    assert chosen == {"preview": False, "ao": True, "camera": False, "shadow": False}
+    assert chosen == {"preview": False, "ao": True, "camera": False, "geometry": False, "shadow": False}
     assert folding.open_sections(900, {"camera": False})["camera"] is False
     assert folding.map_height_cap(91, 8) == 83 and folding.map_height_cap(30, 8) == folding.MAP_MIN_HEIGHT
 
@@ -233,6 +235,7 @@ def test_a_short_dock_shows_the_map_and_generate_and_folds_the_rest(qapp, tmp_pa
         "preview": False,
         "ao": True,
         "camera": False,
+        "geometry": False,
         "shadow": False,
     }
     again.resize(262, 900)  # a tall dock: the sections the artist left alone open
@@ -537,3 +540,73 @@ def test_generate_and_the_status_stay_in_view_while_the_controls_scroll(qapp):
             assert not w.visibleRegion().isEmpty()
         places.append((panel.generate.mapTo(panel, QPoint(0, 0)), panel.message.mapTo(panel, QPoint(0, 0))))
     assert places[0] == places[1] == places[2]
+
+
+def test_the_geometry_section_sets_the_lift_and_thickness_and_the_previews_handle_drags_the_lift(qapp):
+    """The Geometry section: a lift box and slider (pixels), a thickness slider that shows the reading until it is
+    moved ("Thickness: read 0.29"), Reset back to the ground and the reading; in the preview a bar under the
+    object that a vertical drag moves: the lift in canvas rows (preview rows over the preview's scale),
+    previewed while dragging, the layer's render at the release."""
+    from plugin_krita.ssn_shadow.ui.shadow_preview import handle_row
+
+    class GeometryEngine(NoEngine):
+        """Answers set_geometry at once (the rest never)."""
+
+        def request(self, cmd, buffers=None, *, on_reply=None, on_error=None, timeout=None, **params):
+            n = super().request(cmd, buffers, on_reply=on_reply, on_error=on_error, timeout=timeout, **params)
+            if cmd == "set_geometry":
+                on_reply({**params, "thickness_read": 0.29}, {})
+            return n
+
+    host, engine = FakeHost(w=400, h=400), GeometryEngine()
+    c = ShadowController(engine, host)
+    panel = ShadowPanel(c)
+    panel.resize(360, 1400)
+    panel.show()
+    QApplication.processEvents()
+    c.source, c.cutout = host.read_source(host.document), "c1"  # as after a Generate
+    c._cutout_key, c._cutout_geometry = c.source.key, (0.0, None)
+    m = c.model
+    assert "geometry" in panel.sections and panel.sections["geometry"].is_open()
+    assert panel.thickness_label.text() == "Thickness: read from the outline"
+    m.report_ground([160, 60, 240, 220], (400, 400))
+    m.report_geometry({"lift": 0.0, "thickness": None, "thickness_read": 0.29})
+    assert panel.thickness_label.text() == "Thickness: read 0.29" and panel.thickness.value() == 29
+    assert panel.lift_box.maximum() == 8000 and panel.lift_slider.maximum() == 400  # 20 canvas heights; one
+
+    panel.lift_box.setValue(40)  # typed (the box takes it when typing ends) or stepped
+    assert m.lift == 40.0 and panel.lift_slider.value() == 40 and engine.sent == ["set_geometry", "render"]
+    c._renders.clear()  # (this engine renders nothing)
+    panel.thickness.setValue(150)
+    c._renders.clear()
+    assert m.thickness == 1.5 and panel.thickness_label.text() == "Thickness: 1.50"
+    panel.geometry_reset.click()
+    assert (m.lift, m.thickness) == (0.0, None) and panel.lift_box.value() == 0
+    c._renders.clear()
+    assert panel.thickness_label.text() == "Thickness: read 0.29" and panel.thickness.value() == 29
+
+    c.previewed.emit(bytes([90, 90, 90]) * (200 * 200), 200, 200)  # the 400 x 400 image at half its size
+    preview = panel.preview
+    rect, handle = preview.image_rect(), preview.handle_pos()
+    scale = rect.height() / 400  # preview pixels a canvas row
+    assert handle.y() == pytest.approx(rect.top() + handle_row((160, 60, 240, 220), 0) * scale)
+    engine.sent.clear()
+    start = QPoint(round(handle.x()), round(handle.y()))
+    QTest.mousePress(preview, Qt.LeftButton, Qt.NoModifier, start)
+    for dy in (10, 20, 30):
+        drag_move(preview, start + QPoint(0, dy))
+    assert m.dragging("geometry") and m.lift == pytest.approx(round((start.y() + 30 - rect.top()) / scale - 220))
+    assert m.lift > 30 / scale - 2 and engine.sent[:2] == ["set_geometry", "preview"]  # previewed, no layer
+    QTest.mouseRelease(preview, Qt.LeftButton, Qt.NoModifier, start + QPoint(0, 30))
+    assert not m.dragging("geometry") and engine.sent[-1] == "render"  # the layer's, at the release
+    assert panel.lift_box.value() == round(m.lift) and preview.handle_pos().y() > handle.y() + 25
+
+
+def test_the_lift_handle_is_where_its_drag_puts_it():
+    from plugin_krita.ssn_shadow.ui.shadow_preview import handle_row, lift_at
+
+    bbox = (160, 60, 240, 220)
+    for lift in (0.0, 12.0, 130.0):
+        y = 5 + handle_row(bbox, lift) / 2.0  # drawn from row 5 of the widget at half size
+        assert lift_at(y, 5, 2.0, bbox) == lift
+    assert lift_at(0, 5, 2.0, bbox) == 0.0  # above the object's foot: on the ground

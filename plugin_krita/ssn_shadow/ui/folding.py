@@ -1,7 +1,8 @@
 """Which of the docker's sections are open for a given dock height (pure Python: no Qt, no Krita).
 
 The panel shows the light editor (the sky map, the preset, Size and Intensity) first and the rest in sections
-that fold: the preview, the ambient occlusion, the camera and the shadow's colour and opacity. In a short dock
+that fold: the preview, the ambient occlusion, the camera, the object's geometry (lift and thickness) and the
+shadow's colour and opacity. In a short dock
 (Krita's default workspace on a 1366 x 768 screen gives a docker stacked under the others about 180 px tall) the
 sections start folded, so that the map and Generate are in view without scrolling; in a taller one they start
 open. A section the artist folded or unfolded stays so (the panel remembers the choice).
@@ -11,8 +12,14 @@ from __future__ import annotations
 
 from collections.abc import Mapping
 
-SECTIONS = ("preview", "ao", "camera", "shadow")  # below the light editor, top to bottom
-TITLES = {"preview": "Preview", "ao": "Ambient occlusion", "camera": "Camera", "shadow": "Shadow"}
+SECTIONS = ("preview", "ao", "camera", "geometry", "shadow")  # below the light editor, top to bottom
+TITLES = {
+    "preview": "Preview",
+    "ao": "Ambient occlusion",
+    "camera": "Camera",
+    "geometry": "Geometry",
+    "shadow": "Shadow",
+}
 SHORT_PANEL = 480  # pixels: a panel shorter than this starts with its sections folded
 MAP_MIN_HEIGHT = 72  # pixels: the sky map never gets shorter (the scroll area keeps room for it in any dock)
 

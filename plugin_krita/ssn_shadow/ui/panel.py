@@ -42,7 +42,7 @@ from PyQt5.QtWidgets import (
 
 from ..model import ShadowModel
 from ..properties import Binding, bind
-from ..shared import camera_rules, defaults
+from ..shared import camera_rules, defaults, geometry_rules
 from ..shared import light_editor
 from ..shared import light_map as lm
 from ..shared import light_size
@@ -74,6 +74,22 @@ CAMERA_NOTES = {
     "given": "Given: the shadow's perspective follows this horizon and field of view. Untick the box to let the "
     "engine read them from the cutout's outline.",
 }
+
+
+LIFT_HINT = (
+    "How far the object floats: canvas rows from its lowest point down to the ground beneath it (0 rests on the "
+    "ground). Drag the bar under the object in the preview, or type it."
+)
+THICKNESS_HINT = "The object's depth over its width: 0 a flat sign, 1 a ball, about 2 a person from the side, 8 deep."
+LIFT_SLIDER_ROWS = 500  # the lift slider's range before a cutout is known (then its canvas height; the box: more)
+MAX_BOX = 99999  # the lift box's range before a cutout is known (the model clamps; the box is as wide as its range)
+
+
+def thickness_text(thickness: float | None, read: float | None) -> str:
+    """The thickness slider's label: the value set, or the reading it uses ("Thickness: read 0.29")."""
+    if thickness is not None:
+        return f"Thickness: {thickness:.2f}"
+    return "Thickness: read from the outline" if read is None else f"Thickness: read {read:.2f}"
 
 
 def preset_title(name: str) -> str:
@@ -247,6 +263,7 @@ class ShadowPanel(QWidget):
         self._bindings: list[Binding] = []
         self._syncing = False  # the light sliders show the selected light (no edit)
         self._showing_map = False  # the map widget shows the model's map (no edit)
+        self._showing_geometry = False  # the geometry controls show the model's values (no edit)
         self._build()
         self._wire()
         self.show_model(controller.model)
@@ -403,6 +420,50 @@ class ShadowPanel(QWidget):
         cv.addWidget(self.camera_read)
         self._add_section(root, "camera", camera_box)
 
+        geometry_box = QWidget()
+        gv = QVBoxLayout(geometry_box)
+        gform = _form()
+        self.lift_box = QSpinBox()
+        self.lift_box.setRange(0, MAX_BOX)
+        self.lift_box.setSuffix(" px")
+        self.lift_box.setMinimumWidth(70)
+        self.lift_box.setKeyboardTracking(False)  # typing "40" sets 40, not 4 first
+        self.lift_box.setToolTip(LIFT_HINT)
+        self.lift_slider = _slider(0, LIFT_SLIDER_ROWS, 0)
+        self.lift_slider.setToolTip(LIFT_HINT)
+        lift_row = QHBoxLayout()
+        lift_row.addWidget(self.lift_box)
+        lift_row.addWidget(self.lift_slider, 1)
+        gform.addRow("Lift", lift_row)
+        gv.addLayout(gform)
+        self.thickness_label = QLabel(thickness_text(None, None))
+        self.thickness_label.setWordWrap(True)
+        self.thickness_label.setSizePolicy(QSizePolicy.Policy.Ignored, QSizePolicy.Policy.Preferred)
+        self.thickness = _slider(0, round(100 * geometry_rules.THICKNESS_RANGE[1]), 100)
+        self.thickness.setToolTip(THICKNESS_HINT + " Reset: the thickness read from the outline.")
+        scale = QHBoxLayout()
+        for text, align in (
+            ("flat", Qt.AlignmentFlag.AlignLeft),
+            ("round", None),
+            ("deep", Qt.AlignmentFlag.AlignRight),
+        ):
+            if align is None:
+                scale.addStretch(1)
+                label = QLabel(text)
+                scale.addWidget(label)
+                scale.addStretch(1)
+            else:
+                label = QLabel(text)
+                scale.addWidget(label)
+            label.setStyleSheet("color: gray; font-size: 8pt;")
+        gv.addWidget(self.thickness_label)
+        gv.addWidget(self.thickness)
+        gv.addLayout(scale)
+        self.geometry_reset = QPushButton("Reset geometry")
+        self.geometry_reset.setToolTip("On the ground (lift 0), the thickness read from the outline")
+        gv.addWidget(self.geometry_reset)
+        self._add_section(root, "geometry", geometry_box)
+
         shadow_box = QWidget()
         sf = _form(shadow_box)
         self.color_button = QPushButton()
@@ -471,6 +532,13 @@ class ShadowPanel(QWidget):
         self.ao_undo.clicked.connect(guard(lambda *_: self.model.undo_ao()))
         self.ao_reset.clicked.connect(guard(lambda *_: self.model.reset_ao()))
         self.color_button.clicked.connect(guard(lambda *_: self._pick_colour()))
+        self.lift_box.valueChanged.connect(guard(lambda v: self._lift_set(v, self.lift_box)))
+        self.lift_slider.valueChanged.connect(guard(lambda v: self._lift_set(v, self.lift_slider)))
+        self.lift_slider.sliderReleased.connect(guard(lambda: self._lift_set(self.lift_slider.value(), None)))
+        self.thickness.valueChanged.connect(guard(lambda v: self._thickness_set(v, self.thickness)))
+        self.thickness.sliderReleased.connect(guard(lambda: self._thickness_set(self.thickness.value(), None)))
+        self.geometry_reset.clicked.connect(guard(lambda *_: self.model.reset_geometry()))
+        self.preview.liftDragged.connect(guard(lambda lift, done: self.model.edit_lift(lift, False, not done)))
         for slider in (self.intensity, self.ao_strength, self.opacity):  # a drag: one undo step
             slider.sliderPressed.connect(guard(lambda: self.model.begin_stroke()))
             slider.sliderReleased.connect(guard(lambda: self.model.end_stroke()))
@@ -504,6 +572,10 @@ class ShadowPanel(QWidget):
             bind(model, "color", guard(self._show_colour)),
             self._bind_percent(model, "opacity", self.opacity),
             bind(model, "status", guard(lambda status: self.show_message(*status))),
+            bind(model, "ground", guard(lambda _: self._show_geometry())),
+            bind(model, "lift", guard(lambda _: self._show_geometry())),
+            bind(model, "thickness", guard(lambda _: self._show_geometry())),
+            bind(model, "thickness_read", guard(lambda _: self._show_geometry())),
         ]
 
     def _bind_percent(self, model: ShadowModel, name: str, box: QSlider) -> Binding:
@@ -644,6 +716,44 @@ class ShadowPanel(QWidget):
             source = self.controller.source  # the cutout's image, whose camera the model read
             note = camera_rules.camera_read_note(read, source.height if source is not None else 0)
         self.camera_read.setText(note)
+
+    # -- geometry --------------------------------------------------------------------------
+    def _show_geometry(self) -> None:
+        """The lift box and slider (their ranges: the cutout's canvas where known), the thickness slider and its
+        label (the reading where none is set), the preview's handle."""
+        m = self.model
+        self._showing_geometry = True
+        try:
+            if m.ground is not None:
+                height = m.ground[1][1]
+                self.lift_box.setMaximum(min(MAX_BOX, round(geometry_rules.MAX_LIFT_HEIGHTS * height)))
+                self.lift_slider.setMaximum(max(1, height))
+            self.lift_box.setValue(round(m.lift))
+            self.lift_slider.setValue(round(m.lift))
+            shown = m.thickness if m.thickness is not None else m.thickness_read
+            self.thickness.setValue(round(100 * (shown if shown is not None else 1.0)))
+            self.thickness_label.setText(thickness_text(m.thickness, m.thickness_read))
+        finally:
+            self._showing_geometry = False
+        self.preview.set_ground(m.ground, m.lift)
+
+    def _lift_set(self, value: int, widget: QWidget | None) -> None:
+        """The box or slider set ``value`` rows (``widget`` None: the slider's release). A slider drag is
+        previewed; its release, a typed value or a step is the layer's."""
+        if self._showing_geometry:
+            return
+        dragging = widget is self.lift_slider and self.lift_slider.isSliderDown()
+        if widget is None or dragging:
+            self.model.edit_lift(float(value), False, dragging)
+        else:
+            self.model.edit_lift(float(value), True)
+
+    def _thickness_set(self, value: int, widget: QWidget | None) -> None:
+        """The slider set ``value`` hundredths (``widget`` None: its release), as :meth:`_lift_set`."""
+        if self._showing_geometry:
+            return
+        dragging = widget is not None and self.thickness.isSliderDown()
+        self.model.edit_thickness(value / 100.0, widget is not None and not dragging, dragging)
 
     # -- shadow ----------------------------------------------------------------------------
     def _show_colour(self, rgb: tuple[float, float, float]) -> None:
