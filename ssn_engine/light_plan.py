@@ -28,27 +28,36 @@ class LightPlan:
     light_map: LightMap
     traced: tuple[GaussianLight, ...]
     broad: LightMap
+    shared: tuple[bool, ...] = ()  # per traced light: whether a share of it is in ``broad`` too
 
     @classmethod
     def of(cls, light_map: LightMap, lifted: float = 0.0) -> LightPlan:
         """The plan of ``light_map``; ``lifted`` in [0, 1]: how far the object floats off the ground for the
         network (its frames show objects standing on it), which hands that share of every broad light to the
         tracer too (1: all of it traced)."""
-        traced, broad = [], []
+        traced, broad, shared = [], [], []
         for light in light_map:
             small = traced_share(light.size_degrees)
             share = small + (1.0 - small) * lifted if light.intensity > 0 else 0.0
             if share > 0:
                 traced.append(light if share == 1 else replace(light, intensity=light.intensity * share))
+                shared.append(share < 1)
             if share < 1:
                 broad.append(light if share == 0 else replace(light, intensity=light.intensity * (1 - share)))
-        return cls(light_map, tuple(traced), LightMap(broad))
+        return cls(light_map, tuple(traced), LightMap(broad), tuple(shared))
 
     @cached_property
-    def gaussians(self) -> LightMap:
-        """The traced lights as Gaussians as wide (a disk's
-        :func:`ssn_engine.host_kit.light_map.angle_softness`): the network's view of them."""
-        return LightMap([GaussianLight(light.u, light.v, light.softness, light.intensity) for light in self.traced])
+    def network_view(self) -> LightMap:
+        """The traced lights as the network renders them, to hedge their traced shadow: a light wholly traced as
+        a Gaussian as wide (a disk's :func:`ssn_engine.host_kit.light_map.angle_softness`; a small disk on the
+        16 x 32 map is a texel or two), one shared with the broad part as it is there, so that where it is the
+        only light both parts are one map (the shadow does not depend on its intensity: one network pass)."""
+        return LightMap(
+            [
+                light if shared else GaussianLight(light.u, light.v, light.softness, light.intensity)
+                for light, shared in zip(self.traced, self.shared, strict=True)
+            ]
+        )
 
     @cached_property
     def shares(self) -> np.ndarray:

@@ -32,7 +32,7 @@ from .framing import (
     shadow_to_canvas,
 )
 from .hard_light import ContactTracer
-from .hemisphere import render_light_map
+from .hemisphere import network_elm, render_light_map
 from .host_kit.camera_rules import DEFAULT_FOV, FOV_RANGE
 from .host_kit.geometry_rules import check_lift, check_thickness
 from .host_kit.light_map import LightMap
@@ -128,25 +128,27 @@ class ShadowSession:
         one given is a model's reading, another object's, not the artist's; ``clamp``: it was checked on another
         object, so a horizon this one's model does not take is moved, not refused (:func:`camera_input`)): the AO
         is predicted again with it and the AO edits are applied to it again. The camera the method uses is
-        resolved here, once per camera (``used_cameras``), so that a light change resolves none."""
-        self._tracer: ContactTracer | None = None  # made with the camera, on first use
-        self._heights: tuple[np.ndarray | None] | None = None  # the model's pixel heights, read with the tracer
+        resolved here, once per camera (``used_cameras``), so that a light change resolves none. A camera under
+        whose horizon the artist's lift would put the ground above the horizon is refused (ValueError) and
+        nothing changes."""
         cameras = None
         if horizon is not None:
             fov = DEFAULT_FOV if fov is None else fov
             cameras = np.array([camera_input(self.framing, horizon, fov, clamp or read)])
         elif fov is not None:
             raise ValueError("field of view: give the horizon row too (the camera input needs both)")
-        self.cameras = cameras
+        resolve = getattr(self.method, "cameras_for", None)  # a model's own reading of a blind call's camera
+        used = resolve(self.mask[None], cameras) if resolve is not None else cameras
+        if cameras is None and used is not None:
+            used = _in_fov_range(self.framing, used)
+        self._check_lift(self.lift, used)
+        self._tracer: ContactTracer | None = None  # made with the camera, on first use
+        self._heights: tuple[np.ndarray | None] | None = None  # the model's pixel heights, read with the tracer
+        self.cameras, self.used_cameras = cameras, used
         # the share of the network's shadow a traced light's shadow is kept no lighter than (:meth:`to_canvas`)
         self.hedge = GIVEN_CAMERA_HEDGE if cameras is not None and not read else 1.0
         self.predicted_ao = self.method.predict_ao(self.mask[None], cameras)[0]
-        resolve = getattr(self.method, "cameras_for", None)  # a model's own reading of a blind call's camera
-        self.used_cameras = resolve(self.mask[None], cameras) if resolve is not None else cameras
-        if cameras is None and self.used_cameras is not None:
-            self.used_cameras = _in_fov_range(self.framing, self.used_cameras)
         self.ao = apply_edits(self.predicted_ao, self.edits) if self.edits else self.predicted_ao
-        self._check_lift(self.lift)
 
     def set_geometry(self, lift: float = 0.0, thickness: float | None = None) -> None:
         """Set the artist's geometry (conventions, "Lift and thickness"): ``lift`` canvas rows from the cutout's
@@ -159,15 +161,15 @@ class ShadowSession:
     def checked_geometry(self, lift: object, thickness: object) -> tuple[float, float | None]:
         """``lift`` and ``thickness`` as :meth:`set_geometry` takes them, or the ValueError it raises."""
         lift = check_lift(lift, self.framing.canvas_height)
-        self._check_lift(lift)
+        self._check_lift(lift, self.used_cameras)
         return lift, None if thickness is None else check_thickness(thickness)
 
-    def _check_lift(self, lift: float) -> None:
-        """A ValueError where ``lift`` puts the ground beneath the cutout at or above the horizon of the camera
-        the session uses (an object seen above the horizon floats at least that high)."""
-        if lift <= 0 or self.used_cameras is None:
+    def _check_lift(self, lift: float, cameras: np.ndarray | None) -> None:
+        """A ValueError where ``lift`` puts the ground beneath the cutout at or above the horizon of ``cameras``
+        (the frame camera input in use; an object seen above the horizon floats at least that high)."""
+        if lift <= 0 or cameras is None:
             return
-        horizon = self.framing.canvas_camera(*self.used_cameras[0])[0]
+        horizon = self.framing.canvas_camera(*cameras[0])[0]
         lowest = self.framing.bbox[3] - 1
         if lowest + lift <= horizon:
             raise ValueError(
@@ -237,16 +239,20 @@ class ShadowSession:
 
     def render_frame(self, plan: LightPlan) -> np.ndarray:
         """The network's frame shadows (2, N, N) of a light plan: of its broad lights (those not traced), and of
-        its small lights as Gaussians as wide (:attr:`LightPlan.gaussians`), which give the traced shadow the
+        its small lights as the network sees them (:attr:`LightPlan.network_view`), which give the traced shadow the
         object's extent and contact (:meth:`to_canvas`); zeros for a part without light."""
-        maps = [plan.broad, plan.gaussians if self._hedge > 0 else LightMap([])]
+        maps = [plan.broad, plan.network_view if self._hedge > 0 else LightMap([])]
         out = np.zeros((2, *self.mask.shape), np.float32)
         lit = [i for i, part in enumerate(maps) if not part.is_dark]
-        if lit:
-            elms = np.stack([render_light_map(maps[i], NETWORK_SHAPE[0]) for i in lit])
-            masks, ao = np.repeat(self.mask[None], len(lit), 0), np.repeat(self.ao[None], len(lit), 0)
-            cameras = None if self.used_cameras is None else np.repeat(self.used_cameras, len(lit), 0)
-            out[lit] = self.method.render(masks, ao, elms, cameras) * np.float32(self.opacity)
+        if not lit:
+            return out
+        elms = np.stack([render_light_map(maps[i], NETWORK_SHAPE[0]) for i in lit])
+        # one light between small and broad is in both parts as one map (up to its intensity): one pass
+        same = len(lit) == 2 and np.allclose(network_elm(elms[0]), network_elm(elms[1]), rtol=0.0, atol=1e-6)
+        runs = elms[:1] if same else elms
+        masks, ao = np.repeat(self.mask[None], len(runs), 0), np.repeat(self.ao[None], len(runs), 0)
+        cameras = None if self.used_cameras is None else np.repeat(self.used_cameras, len(runs), 0)
+        out[lit] = self.method.render(masks, ao, runs, cameras) * np.float32(self.opacity)
         return out
 
     def to_canvas(
@@ -279,7 +285,7 @@ class ShadowSession:
             return self._network_canvas(frames[0], plan.broad, clip, framing), None
         broad = plan.broad
         wide = CanvasShadow.nothing() if broad.is_dark else self._network_canvas(frames[0], broad, clip, framing)
-        return wide, self._network_canvas(frames[1], plan.gaussians, clip, framing)
+        return wide, self._network_canvas(frames[1], plan.network_view, clip, framing)
 
     def _traced(self, plan: LightPlan, clip: bool, framing: Framing) -> list[tuple[float, np.ndarray, int, int]]:
         """The traced lights' shadows on ``framing``'s canvas, each with its share of their E0, scaled by the

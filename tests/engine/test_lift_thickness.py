@@ -127,6 +127,18 @@ def test_a_lift_whose_ground_lies_above_the_horizon_is_refused(method):
     assert session.lift == 60.0
 
 
+def test_a_camera_that_puts_a_lifted_objects_ground_above_the_horizon_is_refused_and_nothing_changes(method):
+    session = open_session(disc(W, H, *BALL), method, *CAMERA)  # lowest row 479
+    session.set_geometry(20.0)
+    before = session.used_cameras.copy()
+    with pytest.raises(ValueError, match="lift: 20 puts the ground beneath the cutout at row 499"):
+        session.set_camera(600.0, 45.0)
+    np.testing.assert_array_equal(session.used_cameras, before)
+    session.set_geometry(0.0)
+    session.set_camera(600.0, 45.0)  # resting: any horizon the model takes
+    assert session.used_cameras[0, 0] != before[0, 0]
+
+
 def _cutout_png(tmp_path, alpha: np.ndarray) -> str:
     rgba = np.zeros((*alpha.shape, 4), np.uint8)
     rgba[..., 3] = alpha
