@@ -96,8 +96,8 @@ class SoftShadow(Gimp.PlugIn):
         if len(drawables) != 1:
             raise ShadowError("Soft Shadow works on one layer: select exactly one layer.")
         host = GimpHost(image, drawables[0])
-        if run_mode != Gimp.RunMode.NONINTERACTIVE:  # GIMP's last values are any image's: the camera is this one's
-            for name, value in host.image_camera().items():
+        if run_mode != Gimp.RunMode.NONINTERACTIVE:  # GIMP's last values are any image's: the camera and the
+            for name, value in {**host.image_camera(), **host.image_geometry()}.items():  # geometry are this one's
                 config.set_property(name, value)
         wait = EngineWait()  # GIMP's progress while the engine works; its Cancel stops this plug-in
         engine = connect(on_wait=wait)
@@ -115,6 +115,7 @@ class SoftShadow(Gimp.PlugIn):
             engine.close()
         if run_mode == Gimp.RunMode.INTERACTIVE:
             host.remember_camera(config_values(config))
+            host.remember_geometry(config_values(config))
         Gimp.displays_flush()
         return Gimp.ValueArray.new_from_values(
             [GObject.Value(Gimp.PDBStatusType, Gimp.PDBStatusType.SUCCESS), GObject.Value(Gimp.Layer, layer)]

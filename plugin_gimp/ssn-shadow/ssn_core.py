@@ -14,7 +14,7 @@ from dataclasses import dataclass
 from typing import Any, Protocol
 
 from ssn_engine_link import client as engine_client
-from ssn_engine_link import protocol, shadow_notes
+from ssn_engine_link import geometry_rules, protocol, shadow_notes
 from ssn_pixels import BYTES_PER_SAMPLE, PixelPlan, is_blank
 from ssn_settings import ARG_BY_NAME, LAYER_PREFIX, SettingsError, ShadowSettings
 
@@ -107,12 +107,12 @@ def engine_call(engine: Engine, cmd: str, buffers: dict | None = None, **params:
         raise ShadowError(f"Lost contact with the shadow engine: {exc}") from None
 
 
-def upload_cutout(
-    engine: Engine, cutout: Cutout, camera: dict[str, float] | None = None
-) -> tuple[str, dict[str, float] | None]:
-    """Send the alpha (and the image's camera, if set) to the worker, which predicts AO now; return the cutout
-    id and, without a camera, the one the model read from the outline ({"horizon": row, "fov": degrees} in the
-    cutout's pixels; None where it reads none)."""
+def send_cutout(
+    engine: Engine, cutout: Cutout, camera: dict[str, float] | None = None, geometry: dict[str, Any] | None = None
+) -> dict[str, Any]:
+    """Send the alpha (and the image's camera, if set, and the artist's ``geometry``, ``lift`` and ``thickness``,
+    if given) to the worker, which predicts AO now; return its reply: ``cutout`` (the id), ``bbox`` (x0, y0, x1,
+    y1 on the canvas) and, without a camera, ``camera_read`` where the model read one."""
     if cutout.width <= 0 or cutout.height <= 0:
         raise ShadowError("The image is empty.")
     if is_blank(cutout.data):
@@ -121,7 +121,17 @@ def upload_cutout(
             "Select the object or paint it on a layer with a transparent background."
         )
     alpha = protocol.Buffer(cutout.dtype, (cutout.height, cutout.width), cutout.data)
-    reply, _ = engine_call(engine, "set_cutout", {"alpha": alpha}, **({"camera": camera} if camera else {}))
+    params: dict[str, Any] = {"camera": camera} if camera else {}
+    reply, _ = engine_call(engine, "set_cutout", {"alpha": alpha}, **params, **(geometry or {}))
+    return reply
+
+
+def upload_cutout(
+    engine: Engine, cutout: Cutout, camera: dict[str, float] | None = None, geometry: dict[str, Any] | None = None
+) -> tuple[str, dict[str, float] | None]:
+    """:func:`send_cutout`; return the cutout id and, without a camera, the one the model read from the outline
+    ({"horizon": row, "fov": degrees} in the cutout's pixels; None where it reads none)."""
+    reply = send_cutout(engine, cutout, camera, geometry)
     return str(reply["cutout"]), reply.get("camera_read")
 
 
@@ -130,6 +140,24 @@ def set_camera(engine: Engine, cutout_id: str, camera: dict[str, float] | None) 
     worker predicts its AO again. Returns the camera the model read, as :func:`upload_cutout` does."""
     reply, _ = engine_call(engine, "set_camera", cutout=cutout_id, camera=camera)
     return reply.get("camera_read")
+
+
+def set_geometry(engine: Engine, cutout_id: str, lift: float, thickness: float | None) -> dict[str, Any]:
+    """Give an uploaded cutout the artist's geometry (``lift`` canvas rows, ``thickness`` or None: read) without
+    sending its alpha again; the worker's reply, with ``thickness_read`` (what the outline reads as). A refusal (a
+    lift whose ground lies at or above the horizon) is a :class:`ShadowError` with the engine's message; the
+    cutout keeps its geometry."""
+    reply, _ = engine_call(engine, "set_geometry", cutout=cutout_id, lift=lift, thickness=thickness)
+    return reply
+
+
+def checked_lift(lift: float, canvas_height: int) -> float:
+    """``lift`` where a canvas ``canvas_height`` rows tall takes it (:func:`geometry_rules.check_lift`), else a
+    :class:`ShadowError` that says the range (a script's argument; the dialog clamps instead)."""
+    try:
+        return geometry_rules.check_lift(lift, canvas_height)
+    except ValueError as exc:
+        raise ShadowError(f"{exc}. Nothing was changed.") from None
 
 
 def render_shadow(
@@ -173,7 +201,8 @@ def compute_shadow(host: Host, engine: Engine, settings: ShadowSettings) -> tupl
         raise ShadowError(hidden)
     plan = host.pixel_plan()
     cutout = host.read_cutout(plan)
-    cutout_id, _ = upload_cutout(engine, cutout, settings.camera())
+    checked_lift(settings.lift, cutout.height)
+    cutout_id, _ = upload_cutout(engine, cutout, settings.camera(), settings.cutout_geometry())
     try:
         shadow = render_shadow(engine, cutout_id, settings, plan.layer_dtype, (cutout.width, cutout.height))
     finally:
@@ -218,6 +247,16 @@ def settings_from_arguments(values: dict[str, Any]) -> ShadowSettings:
             horizon=get("horizon") if get("use-horizon") else None,
             fov=get("fov"),
             keep_whole=bool(get("keep-whole-shadow")),
+            lift=get("lift"),
+            thickness=thickness_setting(get("thickness")),
         )
     except SettingsError as exc:
         raise ShadowError(str(exc)) from None
+
+
+def thickness_setting(argument: Any) -> Any:
+    """The thickness setting of a thickness argument: None (read from the outline) below 0, else the value (a bad
+    one is refused by :class:`ShadowSettings`, naming the argument)."""
+    if isinstance(argument, (int, float)) and not isinstance(argument, bool) and argument < 0:
+        return None
+    return argument

@@ -21,41 +21,79 @@ gi.require_version("GimpUi", "3.0")
 gi.require_version("Gtk", "3.0")
 gi.require_version("GdkPixbuf", "2.0")
 gi.require_version("Pango", "1.0")
-from gi.repository import Gdk, GdkPixbuf, Gimp, GimpUi, GLib, Gtk, Pango  # noqa: E402
+from gi.repository import Gdk, GdkPixbuf, Gimp, GimpUi, GLib, GObject, Gtk, Pango  # noqa: E402
 
-from ssn_core import ShadowError, release, set_camera, settings_from_arguments, upload_cutout  # noqa: E402
+from ssn_core import ShadowError, release, send_cutout, set_camera, set_geometry, settings_from_arguments  # noqa: E402
 from ssn_engine_link import camera_rules, light_editor, light_map, shadow_notes  # noqa: E402
 from ssn_engine_link import client as engine_client  # noqa: E402
 from ssn_gimp_host import config_values  # noqa: E402
 from ssn_layout import Layout, choose_layout  # noqa: E402
 from ssn_light_area import LightMapArea  # noqa: E402
-from ssn_preview import PREVIEW_HEIGHT, PREVIEW_SIZE, render_preview  # noqa: E402
+from ssn_preview import (  # noqa: E402
+    PREVIEW_HEIGHT,
+    PREVIEW_SIZE,
+    draw_ground_mark,
+    in_lift_handle,
+    lift_from_preview,
+    lowest_row,
+    render_preview,
+)
 from ssn_progress import EngineWait  # noqa: E402
-from ssn_settings import PROCEDURE_NAME, SettingsError, editor_light_map  # noqa: E402
+from ssn_settings import (  # noqa: E402
+    PROCEDURE_NAME,
+    READ_THICKNESS,
+    THICKNESS_SLIDER_TOP,
+    SettingsError,
+    clamp_lift,
+    clamp_thickness,
+    editor_light_map,
+    slider_from_thickness,
+    thickness_from_slider,
+    thickness_read_text,
+)
 
 CUSTOM = "(custom)"
 SELFTEST_ENV = "SSN_SHADOW_DIALOG_SELFTEST"  # "1": the built-in self-test; a path to a .py: a test's script
 SCREEN_SCREENSHOT_ENV = "SSN_SHADOW_SCREEN_SCREENSHOT"  # the selftest grabs the whole screen
 PREVIEW_DELAY_MS = 150
+DRAG_START = 3  # thumbnail pixels a press must move to be a drag (of the lift handle), not a click (the horizon)
 
 
 class ShadowPreview:
     """A thumbnail of the image with the shadow multiplied on, re-rendered while the light moves."""
 
-    def __init__(self, host, engine, on_camera_read=None, on_row_clicked=None) -> None:
+    def __init__(
+        self, host, engine, on_camera_read=None, on_row_clicked=None, on_lift_dragged=None, on_thickness_read=None
+    ) -> None:
         """``on_camera_read`` gets the editor's settings (:func:`camera_rules.camera_read_settings`) of each camera
         the model reads from the outline (the first analysis, and each one after the image's horizon is turned
-        off); ``on_row_clicked`` the canvas row of a click on the preview. The image's cutout is uploaded once; a
-        camera change sends the camera alone."""
+        off); ``on_row_clicked`` the canvas row of a click on the preview; ``on_lift_dragged`` the lift (canvas
+        rows) while the ground point under the cutout is dragged; ``on_thickness_read`` the thickness the outline
+        reads as. The image's cutout is uploaded once; a camera or geometry change sends that alone."""
         self.host, self.engine, self.on_camera_read = host, engine, on_camera_read
-        self.on_row_clicked = on_row_clicked
+        self.on_row_clicked, self.on_lift_dragged, self.on_thickness_read = (
+            on_row_clicked,
+            on_lift_dragged,
+            on_thickness_read,
+        )
         self.widget = Gtk.Image()
         self.clickable = Gtk.EventBox()  # exactly the picture's size, so event rows are thumbnail rows
         self.clickable.add(self.widget)
         self.clickable.set_halign(Gtk.Align.START)
         self.clickable.set_valign(Gtk.Align.START)
-        self.clickable.set_tooltip_text("Click to put the image's horizon on that row")
+        self.clickable.set_tooltip_text(
+            "Click to put the image's horizon on that row; drag the mark under the object down to lift it"
+        )
+        self.clickable.add_events(Gdk.EventMask.BUTTON_RELEASE_MASK | Gdk.EventMask.BUTTON1_MOTION_MASK)
         self.clickable.connect("button-press-event", self._on_press)
+        self.clickable.connect("motion-notify-event", self._on_motion)
+        self.clickable.connect("button-release-event", self._on_release)
+        self._press: tuple[float, float, bool] | None = None  # a press being held: where, and on the lift handle
+        self._dragged = False
+        self.bbox: list[int] | None = None  # the cutout's bounds on the canvas (x0, y0, x1, y1)
+        self.engine_geometry: tuple[float, float | None] = (0.0, None)  # the lift and thickness the worker has
+        self.thickness_read: float | None = None  # what the outline reads as (the worker's set_geometry reply)
+        self.geometry_note = ""  # why the dialog clamped the lift or thickness last, shown under the preview
         self.status = _wrap(Gtk.Label(xalign=0.0))
         self.scale = 1.0  # thumbnail pixels per image pixel
         self.cutout_id: str | None = None
@@ -70,9 +108,11 @@ class ShadowPreview:
             self.thumbnail = host.thumbnail(tw, th)
             self.scale = self.thumbnail.width / width
             self.camera: dict | None = None  # the camera the worker's cutout was analysed with (image rows)
-            cutout_id, read = upload_cutout(engine, host.read_cutout(host.pixel_plan()))
-            self.cutout_id = cutout_id
-            self._analysed(read)
+            reply = send_cutout(engine, host.read_cutout(host.pixel_plan()))
+            self.cutout_id = str(reply["cutout"])
+            bbox = reply.get("bbox")  # where a worker sends none, the preview has no lift handle
+            self.bbox = [int(v) for v in bbox] if isinstance(bbox, list) and len(bbox) == 4 else None
+            self._analysed(reply.get("camera_read"))
         except (ShadowError, engine_client.EngineError) as exc:
             self.status.set_text(str(exc))
 
@@ -120,10 +160,20 @@ class ShadowPreview:
             settings = settings_from_arguments(values)
             camera = settings.camera()
             if camera != self.camera:  # a new horizon: the worker analyses the cutout again
+                if self.engine_geometry[0] > 0:  # rest the object first: the new horizon may not take the lift
+                    self._set_geometry(cutout_id, 0.0, self.engine_geometry[1])
                 self._analysed(set_camera(self.engine, cutout_id, camera))
                 self.camera = camera
+            geometry = (settings.lift, settings.thickness)
+            if geometry != self.engine_geometry:
+                self._set_geometry(cutout_id, *geometry)
             horizon = camera_rules.scaled_camera(camera, self.scale)["horizon"] if camera is not None else None
             rgb, no_shadow = render_preview(self.engine, cutout_id, settings, self.thumbnail, horizon)
+            if self.thickness_read is None:  # the reading, for the Thickness row: asked after the first picture
+                self._set_geometry(cutout_id, *self.engine_geometry)
+            if self.bbox is not None:
+                size = (self.thumbnail.width, self.thumbnail.height)
+                rgb = draw_ground_mark(rgb, size, self.scale, self.bbox, settings.lift)
         except engine_client.Cancelled as exc:  # the dialog closed while the engine worked: it was stopped
             self.cutout_id = None
             self.status.set_text(str(exc))
@@ -135,7 +185,25 @@ class ShadowPreview:
         self.widget.set_from_pixbuf(
             GdkPixbuf.Pixbuf.new_from_bytes(GLib.Bytes.new(rgb), GdkPixbuf.Colorspace.RGB, False, 8, w, h, 3 * w)
         )
-        self.status.set_text(shadow_notes.no_shadow_note(no_shadow) if no_shadow else self._camera_note())
+        note = shadow_notes.no_shadow_note(no_shadow) if no_shadow else self._camera_note()
+        self.status.set_text("\n".join(text for text in (self.geometry_note, note) if text))
+
+    def _set_geometry(self, cutout_id: str, lift: float, thickness: float | None) -> None:
+        """Give the worker's cutout this lift and thickness (a refusal: :class:`ShadowError`, the cutout keeping
+        its geometry) and pass on the thickness the outline reads as."""
+        reply = set_geometry(self.engine, cutout_id, lift, thickness)
+        self.engine_geometry = (lift, thickness)
+        read = reply.get("thickness_read")
+        self.thickness_read = float(read) if isinstance(read, (int, float)) else None
+        if self.on_thickness_read is not None:
+            self.on_thickness_read(self.thickness_read)
+
+    def horizon_in_use(self, values: dict) -> float | None:
+        """The horizon row (canvas) of the camera the engine uses for ``values``: the image's where it is given,
+        else the one the model read from the outline; None where neither is known."""
+        if values.get("use-horizon"):
+            return float(values["horizon"])
+        return None if self.camera_read is None else float(self.camera_read["horizon"])
 
     def _analysed(self, camera_read: dict | None) -> None:
         self.camera_read = camera_read
@@ -143,10 +211,33 @@ class ShadowPreview:
             self.on_camera_read(camera_rules.camera_read_settings(camera_read))
 
     def _on_press(self, _widget, event) -> bool:
+        """A press starts a click (on release: the horizon on that row) or, under the cutout, a drag of its ground
+        point (the lift)."""
         if event.button != 1 or event.type != Gdk.EventType.BUTTON_PRESS or self.cutout_id is None:
             return False
-        if self.on_row_clicked is not None:
-            self.on_row_clicked(camera_rules.row_from_preview(event.y, self.scale))
+        handle = self.bbox is not None and in_lift_handle(event.x, event.y, self.scale, self.bbox)
+        self._press, self._dragged = (event.x, event.y, handle), False
+        return True
+
+    def _on_motion(self, _widget, event) -> bool:
+        """Dragging the ground point: the lift follows the pointer's row, live (canvas rows = preview rows /
+        scale)."""
+        if self._press is None or not self._press[2] or self.bbox is None:
+            return False
+        if not self._dragged and abs(event.y - self._press[1]) < DRAG_START:
+            return True
+        self._dragged = True
+        if self.on_lift_dragged is not None:
+            self.on_lift_dragged(lift_from_preview(event.y, self.scale, self.bbox))
+        return True
+
+    def _on_release(self, _widget, event) -> bool:
+        if event.button != 1 or self._press is None:
+            return False
+        press, dragged = self._press, self._dragged
+        self._press, self._dragged = None, False
+        if not dragged and self.on_row_clicked is not None:
+            self.on_row_clicked(camera_rules.row_from_preview(press[1], self.scale))
         return True
 
     def _camera_note(self) -> str:
@@ -192,7 +283,9 @@ def run_dialog(procedure: Gimp.Procedure, config: Gimp.ProcedureConfig, host, en
         config.set_property("use-horizon", True)  # first: unticked, the fields keep the camera read
         config.set_property("horizon", row)
 
-    preview = ShadowPreview(host, engine, show_camera_read, give_horizon)
+    geometry = GeometryRow(dialog, config)
+    preview = ShadowPreview(host, engine, show_camera_read, give_horizon, geometry.drag_lift, geometry.show_read)
+    geometry.preview = preview
     area: LightMapArea | None = None
 
     def keep_camera_read(*_) -> None:
@@ -201,6 +294,10 @@ def run_dialog(procedure: Gimp.Procedure, config: Gimp.ProcedureConfig, host, en
 
     for name in ("use-horizon", "horizon", "fov"):
         config.connect(f"notify::{name}", keep_camera_read)
+    for name in ("lift", "use-horizon", "horizon"):  # a lift the camera in use does not take is clamped
+        config.connect(f"notify::{name}", geometry.check_lift)
+    config.connect("notify::thickness", geometry.check_thickness)
+    geometry.check_lift()
 
     def on_change(live: bool, new_stroke: bool) -> None:
         if area is not None:
@@ -314,6 +411,7 @@ def run_dialog(procedure: Gimp.Procedure, config: Gimp.ProcedureConfig, host, en
     preview_box.pack_start(title, False, False, 0)
     preview_box.pack_start(preview.clickable, False, False, 0)
     preview_box.pack_start(preview.status, False, False, 0)
+    preview_box.pack_start(geometry.widget, False, False, 0)
     box = Gtk.Box(spacing=12)
     box.pack_start(lights_box, False, False, 0)
     box.pack_start(preview_box, True, True, 0)
@@ -334,7 +432,14 @@ def run_dialog(procedure: Gimp.Procedure, config: Gimp.ProcedureConfig, host, en
         GLib.timeout_add(300, _selftest, dialog, area, preview, values, config)
     elif selftest.endswith(".py"):
         parts = SimpleNamespace(
-            dialog=dialog, config=config, host=host, preview=preview, area=area, presets=presets, layout=layout
+            dialog=dialog,
+            config=config,
+            host=host,
+            preview=preview,
+            area=area,
+            presets=presets,
+            layout=layout,
+            geometry=geometry,
         )
         GLib.timeout_add(300, _run_test_script, selftest, parts)
     try:
@@ -347,6 +452,123 @@ def run_dialog(procedure: Gimp.Procedure, config: Gimp.ProcedureConfig, host, en
             waiting.handle_events = None
         preview.close()
         dialog.destroy()
+
+
+class GeometryRow:
+    """The artist's geometry under the preview, one compact row each: **Lift** (a number of canvas pixels, GIMP's
+    widget of the ``lift`` argument; the preview's handle drags it) and **Thickness** (a slider, flat - round -
+    deep, with *From outline* and the value the outline reads as), both the procedure's arguments, so that Reset
+    and GIMP's saved settings reach them. A value the engine would refuse is clamped, and the line under the
+    preview says why (:func:`ssn_settings.clamp_lift`, :func:`ssn_settings.clamp_thickness`)."""
+
+    def __init__(self, dialog, config) -> None:
+        self.config = config
+        self.preview: ShadowPreview | None = None
+        self._syncing = False
+        self._checked: float | None = None  # the lift last checked: a notify that changes nothing keeps the note
+        self.lift = dialog.get_widget("lift", GObject.TYPE_NONE)  # GimpLabelSpin, bound to the argument
+        self.lift.set_tooltip_text(
+            "Canvas pixels from the object's lowest point down to the ground beneath it (0: it rests on the "
+            "ground). Or drag the mark under the object in the preview down."
+        )
+        self.read = Gtk.CheckButton.new_with_mnemonic("Fro_m outline")
+        self.read.set_tooltip_text("Use the thickness the cutout's outline reads as")
+        self.scale = Gtk.Scale.new_with_range(Gtk.Orientation.HORIZONTAL, 0.0, THICKNESS_SLIDER_TOP, 0.01)
+        self.scale.set_draw_value(False)
+        self.scale.set_size_request(140, -1)
+        for position, text in ((0.0, "flat"), (1.0, "round"), (THICKNESS_SLIDER_TOP, "deep")):
+            self.scale.add_mark(position, Gtk.PositionType.BOTTOM, f"<small>{text}</small>")
+        self.scale.set_tooltip_text(
+            "The object's depth along the view over its width: 0 a flat sign, 1 a ball, about 2 a person seen from "
+            "the side, 8 a rod seen end-on"
+        )
+        self.value = Gtk.Label(xalign=0.0)  # "read 0.29", or "0.50 (read 0.29)"
+        label = Gtk.Label.new_with_mnemonic("_Thickness")
+        label.set_mnemonic_widget(self.scale)
+        lift_row = Gtk.Box(spacing=6)  # Lift [number] px    Thickness read 0.29
+        lift_row.pack_start(self.lift, False, False, 0)
+        lift_row.pack_start(Gtk.Label(label="px"), False, False, 0)
+        lift_row.pack_start(label, False, False, 12)
+        lift_row.pack_start(self.value, False, False, 0)
+        thickness_row = Gtk.Box(spacing=6)  # flat - round - deep [slider]    [x] From outline
+        thickness_row.pack_start(self.scale, True, True, 0)
+        thickness_row.pack_start(self.read, False, False, 0)
+        self.widget = Gtk.Box(orientation=Gtk.Orientation.VERTICAL, spacing=2)
+        self.widget.pack_start(lift_row, False, False, 0)
+        self.widget.pack_start(thickness_row, False, False, 0)
+        self.scale.connect("value-changed", self._on_slider)
+        self.read.connect("toggled", self._on_read_toggled)
+        self.check_thickness()
+
+    def _set(self, name: str, value: float) -> None:
+        if self.config.get_property(name) != value:
+            self.config.set_property(name, value)
+
+    def _note(self, why: str) -> None:
+        if self.preview is not None:
+            self.preview.geometry_note = why
+
+    def drag_lift(self, lift: float) -> None:
+        """The preview's handle dragged to ``lift`` canvas rows."""
+        self._set("lift", lift)
+
+    def check_lift(self, *_) -> None:
+        """Clamp the lift to what the engine takes for this canvas and the camera in use, and say why."""
+        if self._syncing or self.preview is None:
+            return
+        preview = self.preview
+        lift = self.config.get_property("lift")
+        lowest = lowest_row(preview.bbox) if preview.bbox is not None else None
+        values = {name: self.config.get_property(name) for name in ("use-horizon", "horizon")}
+        clamped, why = clamp_lift(lift, preview.image_height, lowest, preview.horizon_in_use(values))
+        if clamped != lift:
+            self._syncing = True
+            try:
+                self._set("lift", clamped)
+            finally:
+                self._syncing = False
+        if why or lift != self._checked:
+            self._note(why)
+        self._checked = clamped
+
+    def check_thickness(self, *_) -> None:
+        """Clamp the thickness (a script's or a saved value) and show it: the slider, *From outline*, the value."""
+        if self._syncing:
+            return
+        thickness = self.config.get_property("thickness")
+        clamped, why = clamp_thickness(thickness)
+        self._syncing = True
+        try:
+            self._set("thickness", clamped)
+            read = self.preview.thickness_read if self.preview is not None else None
+            reading = clamped < 0
+            self.read.set_active(reading)
+            shown = (read if read is not None else 0.0) if reading else clamped
+            self.scale.set_value(slider_from_thickness(shown))
+            self.value.set_text(
+                thickness_read_text(read) if reading else f"{clamped:.2f} ({thickness_read_text(read)})"
+            )
+        finally:
+            self._syncing = False
+        if why:
+            self._note(why)
+
+    def show_read(self, read: float | None) -> None:
+        """The thickness the outline reads as, from the engine."""
+        self.check_thickness()
+
+    def _on_slider(self, scale) -> None:
+        if not self._syncing:
+            self._set("thickness", thickness_from_slider(scale.get_value()))
+
+    def _on_read_toggled(self, button) -> None:
+        if self._syncing:
+            return
+        if button.get_active():
+            self._set("thickness", READ_THICKNESS)
+        else:  # start from the reading
+            read = self.preview.thickness_read if self.preview is not None else None
+            self._set("thickness", round(read, 2) if read is not None else 1.0)
 
 
 def _fit_to_screen(dialog: Gtk.Dialog, box: Gtk.Box) -> Layout:

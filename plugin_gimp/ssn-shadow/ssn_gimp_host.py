@@ -19,7 +19,14 @@ from gi.repository import Babl, Gegl, Gimp  # noqa: E402
 from ssn_core import Cutout, ShadowError, ShadowLayerData, target_note  # noqa: E402
 from ssn_pixels import PixelFormatError, PixelPlan, layer_image_type, plan_for_precision  # noqa: E402
 from ssn_preview import Thumbnail  # noqa: E402
-from ssn_settings import ARGUMENTS, image_camera_arguments, image_camera_record  # noqa: E402
+from ssn_settings import (  # noqa: E402
+    ARGUMENTS,
+    GEOMETRY_PARASITE,
+    image_camera_arguments,
+    image_camera_record,
+    image_geometry_arguments,
+    image_geometry_record,
+)
 
 SOURCE_PARASITE = "ssn-shadow-source"  # on a shadow layer: the tattoo of the layer it was cast from
 CAMERA_PARASITE = "ssn-shadow-camera"  # on an image: its camera settings (ssn_engine_link.image_camera)
@@ -142,6 +149,21 @@ class GimpHost:
         record = image_camera_record(values, self.image.get_height())
         self.image.attach_parasite(
             Gimp.Parasite.new(CAMERA_PARASITE, Gimp.PARASITE_PERSISTENT, list(record.encode("ascii")))
+        )
+
+    def image_geometry(self) -> dict[str, float]:
+        """The lift and thickness arguments this image had when the filter last ran on it interactively (the lift
+        scaled with the image since), or the defaults (resting on the ground, the thickness read): never another
+        image's."""
+        parasite = self.image.get_parasite(GEOMETRY_PARASITE)
+        record = bytes(parasite.get_data()).decode("utf-8", "replace") if parasite is not None else None
+        return image_geometry_arguments(record, self.image.get_height())
+
+    def remember_geometry(self, values: dict[str, Any]) -> None:
+        """Keep the lift and thickness arguments in ``values`` with the image (saved in the XCF; no undo step)."""
+        record = image_geometry_record(values, self.image.get_height())
+        self.image.attach_parasite(
+            Gimp.Parasite.new(GEOMETRY_PARASITE, Gimp.PARASITE_PERSISTENT, list(record.encode("ascii")))
         )
 
     def hidden_reason(self) -> str | None:

@@ -55,3 +55,50 @@ def render_preview(
     if image is None or image.dtype != "uint8" or tuple(image.shape) != (h, w, 3):
         raise ShadowError("The shadow engine sent a malformed preview.")
     return bytes(memoryview(image.data).cast("B")), str(reply.get("no_shadow") or "")
+
+
+HANDLE_SLACK = 8  # thumbnail pixels: how far beside the cutout's columns (and above its lowest row) a drag lifts it
+GROUND_MARK = (230, 0, 180)  # the ground point's mark: a colour the horizon lines (orange, blue) do not use
+
+
+def lowest_row(bbox: tuple[int, int, int, int] | list[int]) -> int:
+    """The cutout's lowest canvas row, from its ``bbox`` (x0, y0, x1, y1; x1 and y1 exclusive)."""
+    return int(bbox[3]) - 1
+
+
+def in_lift_handle(x: float, y: float, scale: float, bbox: tuple[int, int, int, int] | list[int]) -> bool:
+    """Whether a press at thumbnail point (``x``, ``y``) grabs the lift handle: under the cutout (at or below its
+    lowest row, less :data:`HANDLE_SLACK`) and within its columns (:data:`HANDLE_SLACK` wider each side)."""
+    x0, x1 = bbox[0] * scale - HANDLE_SLACK, bbox[2] * scale + HANDLE_SLACK
+    return x0 <= x <= x1 and y >= lowest_row(bbox) * scale - HANDLE_SLACK
+
+
+def lift_from_preview(y: float, scale: float, bbox: tuple[int, int, int, int] | list[int]) -> float:
+    """The lift (whole canvas rows) that puts the ground point beneath the cutout at thumbnail row ``y`` of a
+    preview drawn at ``scale``: canvas rows = preview rows / scale, less the cutout's lowest row, at least 0."""
+    return float(max(0, round(y / scale) - lowest_row(bbox)))
+
+
+def draw_ground_mark(
+    rgb: bytes, size: tuple[int, int], scale: float, bbox: tuple[int, int, int, int] | list[int], lift: float
+) -> bytes:
+    """``rgb`` (packed RGB, ``size`` = (width, height)) with the lift handle drawn: a short bar across the cutout's
+    middle column at the ground point (its lowest row plus ``lift``, at ``scale``), and, lifted, a dotted line up
+    from it to the cutout's lowest row; what lies off the thumbnail is not drawn."""
+    w, h = size
+    out = bytearray(rgb)
+    centre = round((bbox[0] + bbox[2]) / 2 * scale)
+    top = round(lowest_row(bbox) * scale)
+    ground = round((lowest_row(bbox) + lift) * scale)
+
+    def put(x: int, y: int) -> None:
+        if 0 <= x < w and 0 <= y < h:
+            out[3 * (y * w + x) : 3 * (y * w + x) + 3] = bytes(GROUND_MARK)
+
+    for y in range(top + 1, ground):
+        if (y - top) % 3 == 0:
+            put(centre, y)
+    for dy in (0, 1):
+        for x in range(centre - HANDLE_SLACK, centre + HANDLE_SLACK + 1):
+            put(x, ground + dy)
+    return bytes(out)

@@ -8,10 +8,12 @@ engine requests.
 
 from __future__ import annotations
 
+import json
+import math
 from dataclasses import dataclass
 from typing import Any
 
-from ssn_engine_link import ao_edits, camera_rules, defaults, image_camera, light_map, protocol
+from ssn_engine_link import ao_edits, camera_rules, defaults, geometry_rules, image_camera, light_map, protocol
 
 PROCEDURE_NAME = "plug-in-ssn-shadow"
 MENU_LABEL = "Soft _Shadow (SSN)..."
@@ -27,8 +29,14 @@ PROCEDURE_HELP = (
     "predicted by the ssn-shadow engine (SSN, CVPR 2021). The light map is a preset ("
     + PRESET_LIST
     + f"; default {light_map.DEFAULT_PRESET}) or light-map JSON. The layer is in Multiply mode; the "
-    "layer and the selection are left as they are. One undo step removes it."
+    "layer and the selection are left as they are. One undo step removes it. The object's geometry: 'lift', "
+    "canvas pixels from its lowest point down to the ground beneath it (0, the default, rests on the ground; at "
+    "most 20 canvas heights, and the ground must lie below the horizon), and 'thickness', its depth along the view "
+    "over its width (0 flat, 1 round as a ball, about 2 a person seen from the side, up to 8; -1, the default, or "
+    "any value below 0: read from the outline)."
 )
+GIMP_MAX_IMAGE_SIZE = 524288  # GIMP's largest image side: the lift argument's bound is 20 such heights
+READ_THICKNESS = -1.0  # the thickness argument's "read it from the outline" (any value below 0 reads so)
 
 
 @dataclass(frozen=True)
@@ -102,6 +110,27 @@ ARGUMENTS: tuple[ArgSpec, ...] = (
         "canvas's edges (what can be seen when the layer is moved a bit)",
         False,
     ),
+    ArgSpec(
+        "lift",
+        "double",
+        "_Lift",
+        "Canvas pixels from the cutout's lowest point down to the ground beneath it: 0 rests on the ground; at most "
+        f"{geometry_rules.MAX_LIFT_HEIGHTS:g} canvas heights, and the ground must lie below the horizon",
+        0.0,
+        0.0,
+        geometry_rules.MAX_LIFT_HEIGHTS * GIMP_MAX_IMAGE_SIZE,
+    ),
+    ArgSpec(
+        "thickness",
+        "double",
+        "_Thickness",
+        "The object's depth along the view over its width across it: 0 a flat sign, 1 a ball, about 2 a person "
+        f"seen from the side, up to {geometry_rules.THICKNESS_RANGE[1]:g}; {READ_THICKNESS:g} (any value below 0): "
+        "read from the cutout's outline",
+        READ_THICKNESS,
+        READ_THICKNESS,
+        geometry_rules.THICKNESS_RANGE[1],
+    ),
 )
 ARG_BY_NAME = {a.name: a for a in ARGUMENTS}
 
@@ -166,6 +195,8 @@ class ShadowSettings:
     horizon: float | None = None  # the image's horizon row, or None: the engine's default camera
     fov: float = camera_rules.DEFAULT_FOV
     keep_whole: bool = False  # the layer keeps a long shadow whole, past the canvas plus its margin
+    lift: float = 0.0  # canvas rows from the cutout's lowest point down to the ground beneath it
+    thickness: float | None = None  # depth over width, or None: read from the outline
 
     def __post_init__(self) -> None:
         if not isinstance(self.light_map, str):
@@ -182,7 +213,22 @@ class ShadowSettings:
             object.__setattr__(self, "horizon", _unit(self.horizon, "horizon", *spec.bounds))
         spec = ARG_BY_NAME["fov"]
         object.__setattr__(self, "fov", _unit(self.fov, "fov", *spec.bounds))
+        object.__setattr__(self, "lift", _unit(self.lift, "lift", *ARG_BY_NAME["lift"].bounds))
+        if self.thickness is not None:
+            try:
+                object.__setattr__(self, "thickness", geometry_rules.check_thickness(self.thickness))
+            except ValueError as exc:
+                raise SettingsError(str(exc)) from None
         resolve_light_map(self.light_map)  # validate now, before any pixel is read
+
+    def geometry(self) -> dict[str, Any]:
+        """The artist's geometry for ``set_cutout`` and ``set_geometry``: ``lift`` and ``thickness`` (None: read)."""
+        return {"lift": self.lift, "thickness": self.thickness}
+
+    def cutout_geometry(self) -> dict[str, Any]:
+        """The geometry keys ``set_cutout`` needs: none where the object rests on the ground with the thickness
+        read (the engine's defaults)."""
+        return {} if self.lift == 0 and self.thickness is None else self.geometry()
 
     def camera(self) -> dict[str, float] | None:
         """The image's camera for ``set_cutout`` and ``set_camera`` (image rows), or None: the one the model reads."""
@@ -203,3 +249,117 @@ class ShadowSettings:
     def ao_edits(self) -> list[dict[str, Any]]:
         """The AO edit list for ``edit_ao``; empty when the predicted AO is kept."""
         return ao_edits.strength_edits(self.ao_strength)
+
+
+# -- the artist's geometry: clamp and say why, and each image's own values ---------------------------------------
+
+
+def clamp_lift(
+    value: float, canvas_height: int, lowest_row: float | None = None, horizon: float | None = None
+) -> tuple[float, str]:
+    """The lift the dialog sets for a typed or dragged ``value`` on a canvas ``canvas_height`` rows tall, and why
+    it differs ("" where it does not): 0 to :data:`geometry_rules.MAX_LIFT_HEIGHTS` canvas heights
+    (:func:`geometry_rules.check_lift`); where the cutout's lowest row ``lowest_row`` and the ``horizon`` row of
+    the camera in use are known, a lift that leaves the ground beneath the cutout at or above the horizon (the
+    engine refuses it) is raised to the least whole row that puts it below."""
+    most = geometry_rules.MAX_LIFT_HEIGHTS * max(1, int(canvas_height))
+    if not isinstance(value, (int, float)) or isinstance(value, bool) or math.isnan(value) or value < 0:
+        return 0.0, f"Lift: {value!r} is no distance below the object; set to 0 (it rests on the ground)."
+    lift = float(value)
+    if lift > most:
+        return most, (
+            f"Lift: {lift:g} px is more than {geometry_rules.MAX_LIFT_HEIGHTS:g} canvas heights "
+            f"({most:g} px, the most the engine takes); set to {most:g}."
+        )
+    if lift > 0 and lowest_row is not None and horizon is not None and lowest_row + lift <= horizon:
+        least = min(most, float(math.floor(horizon - lowest_row) + 1))
+        return least, (
+            f"Lift: {lift:g} px puts the ground beneath the object at row {lowest_row + lift:.0f}, at or above the "
+            f"horizon (row {horizon:.0f}); the ground lies below it, so the lift is raised to {least:g}."
+        )
+    return lift, ""
+
+
+def clamp_thickness(value: float) -> tuple[float, str]:
+    """The thickness argument the dialog sets for ``value`` and why it differs ("" where it does not): below 0
+    is :data:`READ_THICKNESS` (read from the outline), above the range its top."""
+    lo, hi = geometry_rules.THICKNESS_RANGE
+    if not isinstance(value, (int, float)) or isinstance(value, bool) or math.isnan(value):
+        return READ_THICKNESS, f"Thickness: {value!r} is no number; read from the outline instead."
+    if value < lo:
+        return READ_THICKNESS, ""
+    if value > hi:
+        return hi, (
+            f"Thickness: {value:g} is more than {hi:g} (a rod seen end-on), the most the engine takes; set to {hi:g}."
+        )
+    return float(value), ""
+
+
+def thickness_argument(thickness: float | None) -> float:
+    """The thickness argument of a thickness (None: :data:`READ_THICKNESS`)."""
+    return READ_THICKNESS if thickness is None else float(thickness)
+
+
+def thickness_read_text(read: float | None) -> str:
+    """What the dialog shows beside the thickness slider: the value the outline reads as."""
+    return "read ?" if read is None else f"read {read:.2f}"
+
+
+GEOMETRY_PARASITE = "ssn-shadow-geometry"  # on an image: its lift and thickness (image_geometry_record)
+GEOMETRY_FORMAT = "ssn-shadow-geometry"
+GEOMETRY_VERSION = 1
+GEOMETRY_NAMES = ("lift", "thickness")
+
+
+def image_geometry_record(values: dict[str, Any], image_height: int) -> str:
+    """The record of an image's geometry arguments ("lift", "thickness" in ``values``) for an image
+    ``image_height`` rows tall: compact JSON, ``height`` so that the lift scales with the image."""
+    record = {
+        "format": GEOMETRY_FORMAT,
+        "version": GEOMETRY_VERSION,
+        "lift": float(values["lift"]),
+        "thickness": float(values["thickness"]),
+        "height": int(image_height),
+    }
+    return json.dumps(record, separators=(",", ":"))
+
+
+def image_geometry_arguments(record: str | None, image_height: int) -> dict[str, float]:
+    """The geometry arguments an image's record (:func:`image_geometry_record`) gives it now ``image_height`` rows
+    tall: the lift scaled with the image's height (a whole row, within its range), the thickness as kept; the
+    defaults (resting, read) for no record or text that is none, so that an image never takes another's."""
+    defaults_ = {name: float(ARG_BY_NAME[name].default) for name in GEOMETRY_NAMES}
+    try:
+        record = json.loads(record) if record else None
+    except ValueError:
+        return defaults_
+    if not isinstance(record, dict) or record.get("format") != GEOMETRY_FORMAT:
+        return defaults_
+    if record.get("version") != GEOMETRY_VERSION:
+        return defaults_
+    lift, thickness, height = record.get("lift"), record.get("thickness"), record.get("height")
+    numbers = (lift, thickness, height)
+    if not all(isinstance(n, (int, float)) and not isinstance(n, bool) and math.isfinite(n) for n in numbers):
+        return defaults_
+    assert isinstance(lift, (int, float)) and isinstance(thickness, (int, float))
+    if not isinstance(height, int) or height <= 0 or lift < 0:
+        return defaults_
+    scaled = round(lift * image_height / height) if image_height > 0 else lift
+    return {
+        "lift": clamp_lift(float(scaled), image_height)[0],
+        "thickness": clamp_thickness(float(thickness))[0],
+    }
+
+
+THICKNESS_SLIDER_TOP = math.sqrt(geometry_rules.THICKNESS_RANGE[1])  # the slider's right end: the deepest
+
+
+def thickness_from_slider(position: float) -> float:
+    """The thickness at ``position`` of the dialog's slider (0 to :data:`THICKNESS_SLIDER_TOP`): its square, so
+    that flat (0), round (1) and deep (8) sit at 0 %, 35 % and 100 % of its length, two decimals."""
+    return round(min(max(position, 0.0), THICKNESS_SLIDER_TOP) ** 2, 2)
+
+
+def slider_from_thickness(thickness: float) -> float:
+    """The slider's position of a ``thickness`` (:func:`thickness_from_slider`'s inverse)."""
+    return math.sqrt(min(max(thickness, 0.0), geometry_rules.THICKNESS_RANGE[1]))

@@ -53,6 +53,9 @@ def run(name, image, layer, **task):
         out["layers"] = layer_names(image)
         parasite = image.get_parasite("ssn-shadow-camera")
         out["camera_record"] = bytes(parasite.get_data()).decode() if parasite is not None else None
+        if name.startswith("geometry"):
+            parasite = image.get_parasite("ssn-shadow-geometry")
+            out["geometry_record"] = bytes(parasite.get_data()).decode() if parasite is not None else None
     except Exception:  # noqa: BLE001 - report it to the test
         out["exception"] = traceback.format_exc()
     with open(os.path.join(HERE, "out", "runs.jsonl"), "a") as f:
@@ -92,6 +95,13 @@ def wide():
     run("horizon-second", second, second_layer)
     first.scale(1280, 960)
     run("horizon-again", first, first_layer)
+
+    # the lift and thickness: set, kept with the image, reset; not carried to another image
+    lifted, lifted_layer = make_image(320, 240)
+    run("geometry", lifted, lifted_layer)
+    run("geometry-again", lifted, lifted_layer)
+    other, other_layer = make_image(320, 240)
+    run("geometry-other", other, other_layer)
 
 
 if globals().get("RUN_SET") == "narrow":

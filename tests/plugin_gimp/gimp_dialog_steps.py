@@ -252,6 +252,81 @@ def horizon_again():
     done(Gtk.ResponseType.CANCEL)
 
 
+def geometry_shown():
+    """The lift and thickness: the arguments, the slider, From outline, the value shown and the note."""
+    geometry = parts.geometry
+    return {
+        "lift": parts.config.get_property("lift"),
+        "thickness": parts.config.get_property("thickness"),
+        "slider": geometry.scale.get_value(),
+        "from_outline": geometry.read.get_active(),
+        "value": geometry.value.get_text(),
+        "note": parts.preview.status.get_text(),
+        "read": parts.preview.thickness_read,
+        "bbox": parts.preview.bbox,
+        "scale": parts.preview.scale,
+        "size": snapshot()["size"],
+    }
+
+
+def type_lift(text):
+    spin = parts.geometry.lift.get_spin_button()
+    click(spin)
+    xdotool("key", "ctrl+a")
+    xdotool("type", text)
+    xdotool("key", "Tab")
+
+
+def drag_ground(down):
+    """Drag from just under the cutout's foot ``down`` preview rows further down, in the cutout's middle column."""
+    bbox, scale = parts.preview.bbox, parts.preview.scale
+    x, foot = (bbox[0] + bbox[2]) / 2 * scale, (bbox[3] - 1) * scale
+    drag(parts.preview.widget, (x, foot + 4), (x, foot + 4 + down))
+    return foot + 4 + down  # the preview row the ground point was dragged to
+
+
+def geometry():
+    """The lift and thickness controls: a lift typed past 20 canvas heights is clamped with a note saying why; the
+    preview's handle drags the ground point down (live); the slider sets the thickness; OK keeps both with the
+    image."""
+    yield from settled()
+    yield from settled()  # the first render brings the thickness the outline reads as
+    record["initial"] = geometry_shown()
+    type_lift("99999")
+    yield from settled()
+    record["typed"] = geometry_shown()
+    record["dragged_to"] = drag_ground(24)
+    yield from settled()
+    record["dragged"] = geometry_shown()
+    parts.geometry.scale.set_value(1.0)  # round
+    yield from settled()
+    record["slid"] = geometry_shown()
+    done(Gtk.ResponseType.OK)
+
+
+def geometry_again():
+    """The same image again: its lift and thickness as kept; a drag, then Reset to Initial Values brings them back,
+    and Reset to Factory Defaults rests the object and reads the thickness from the outline."""
+    yield from settled()
+    yield from settled()
+    record["initial"] = geometry_shown()
+    drag_ground(10)
+    yield from settled()
+    record["dragged"] = geometry_shown()
+    yield from reset_to("Initial")
+    record["after_initial"] = geometry_shown()
+    yield from reset_to("Factory")
+    record["after_factory"] = geometry_shown()
+    done(Gtk.ResponseType.CANCEL)
+
+
+def geometry_other():
+    """Another image: nothing of the first image's lift and thickness."""
+    yield from settled()
+    record["initial"] = geometry_shown()
+    done(Gtk.ResponseType.CANCEL)
+
+
 def done(response):
     with open(os.path.join(HERE, "out", "steps.jsonl"), "a") as f:
         f.write(json.dumps(record) + "\n")
@@ -297,5 +372,8 @@ RUNS = {
     "horizon-first": horizon_first,
     "horizon-second": horizon_second,
     "horizon-again": horizon_again,
+    "geometry": geometry,
+    "geometry-again": geometry_again,
+    "geometry-other": geometry_other,
 }
 drive(RUNS[TASK["run"]]())

@@ -11,6 +11,7 @@ from ssn_core import (
     make_shadow,
     release,
     set_camera,
+    set_geometry,
     settings_from_arguments,
     target_note,
     upload_cutout,
@@ -194,6 +195,50 @@ def test_undo_group_closes_when_adding_the_layer_fails():
     assert host.calls[-2:] == ["undo_group_start", "undo_group_end"]
 
 
+def test_a_lift_and_thickness_go_with_the_cutout():
+    host, engine = FakeHost(), FakeEngine()
+    make_shadow(host, engine, {**ARGS, "lift": 30.0, "thickness": 0.5})
+    assert engine.requests[0][0] == "set_cutout"
+    assert engine.requests[0][1] == {"lift": 30.0, "thickness": 0.5}
+    make_shadow(host, engine := FakeEngine(), {**ARGS, "lift": 30.0, "thickness": -1.0})
+    assert engine.requests[0][1] == {"lift": 30.0, "thickness": None}  # -1: read from the outline
+    make_shadow(host, engine := FakeEngine(), ARGS)
+    assert engine.requests[0][1] == {}  # resting, read: the engine's defaults, nothing sent
+
+
+def test_a_bad_lift_in_a_script_is_refused_clearly_and_changes_nothing():
+    """A script's lift past 20 canvas heights (the engine's range): refused before the engine is asked, with the
+    range; one the engine refuses (its ground above the horizon) with the engine's words; no layer either way."""
+    host, engine = FakeHost(), FakeEngine()
+    with pytest.raises(ShadowError, match=r"lift: expected 0 to 2400 canvas pixels .* got 5000.0. Nothing was"):
+        make_shadow(host, engine, {**ARGS, "lift": 5000.0})
+    assert engine.requests == [] and "undo_group_start" not in host.calls and not host.layers
+    refusal = EngineError("BadRequest", "lift: 5 puts the ground beneath the cutout at row 104, at or above the ")
+    host = FakeHost()
+    with pytest.raises(ShadowError, match="at or above the"):
+        make_shadow(host, FakeEngine("set_cutout", refusal), {**ARGS, "lift": 5.0})
+    assert "undo_group_start" not in host.calls and not host.layers
+
+
+def test_the_preview_s_lift_handle():
+    """Dragging in the preview below the cutout sets the lift: canvas rows = preview rows / scale, less the cutout's
+    lowest row; the handle is a mark at the ground point, with a dotted line up to the cutout when lifted."""
+    from ssn_preview import GROUND_MARK, draw_ground_mark, in_lift_handle, lift_from_preview
+
+    bbox = [70, 20, 90, 100]  # the pawn: its lowest row 99
+    assert lift_from_preview(100, 0.5, bbox) == 101.0 and lift_from_preview(10, 0.5, bbox) == 0.0
+    assert in_lift_handle(40, 60, 0.5, bbox) and in_lift_handle(40, 47, 0.5, bbox)
+    assert not in_lift_handle(40, 30, 0.5, bbox) and not in_lift_handle(5, 60, 0.5, bbox)
+    w, h = 80, 80
+    rgb = draw_ground_mark(bytes(3 * w * h), (w, h), 0.5, bbox, 20.0)
+    marked = np.all(np.frombuffer(rgb, np.uint8).reshape(h, w, 3) == GROUND_MARK, axis=-1)
+    rows = np.nonzero(marked.any(axis=1))[0]
+    ground = round((99 + 20) * 0.5)  # the ground point's row on the thumbnail: a bar two rows deep
+    assert rows.max() == ground + 1 and marked[ground, 40 - 8 : 40 + 9].all() and not marked[ground, 30]
+    assert rows.min() == round(99 * 0.5) + 3  # the dotted line up to the cutout's foot
+    assert draw_ground_mark(bytes(3 * w * h), (w, h), 0.5, bbox, 999.0) != bytes(3 * w * h)  # the dotted line
+
+
 def test_settings_from_arguments_defaults():
     st = settings_from_arguments({})
     assert st.light_map == "softbox" and st.opacity == 0.85 and st.ao_strength == 1.0
@@ -277,6 +322,25 @@ def test_dialog_preview_from_the_real_worker(real_engine, precision):
     assert abs(row - read["horizon"] * scale) <= 1 and dotted.sum() == (tw + 1) // 2  # one dotted row
     dark = settings_from_arguments({**ARGS, "light-map": '{"format": "ssn-shadow-elm", "version": 1, "lights": []}'})
     assert render_preview(real_engine, key, dark, thumbnail)[1]
+    release(real_engine, key)
+
+
+def test_real_worker_a_lift_moves_the_shadow_down(real_engine):
+    """The engine's lift in the filter's terms: the shadow's topmost row lies lower with lift 40 than resting, and the
+    dialog's set_geometry reply carries the thickness the outline reads as."""
+    tops = {}
+    for lift in (0.0, 40.0):
+        host = FakeHost()
+        make_shadow(
+            host, real_engine, {**ARGS, "light-map": "high-sun", "use-horizon": True, "horizon": 10.0, "lift": lift}
+        )
+        _, shadow, _ = host.layers[0]
+        a = np.frombuffer(shadow.data, shadow.dtype).reshape(shadow.height, shadow.width, 4)[..., 3]
+        tops[lift] = shadow.y + int(np.nonzero((a > 25).any(axis=1))[0][0])
+    assert tops[40.0] > tops[0.0] + 10, tops
+    key, _ = upload_cutout(real_engine, FakeHost().read_cutout(FakeHost().plan))
+    reply = set_geometry(real_engine, key, 12.0, None)
+    assert reply["lift"] == 12.0 and 0 < reply["thickness_read"] < 8
     release(real_engine, key)
 
 

@@ -203,3 +203,41 @@ def test_the_dialog_fits_a_768_pixel_wide_screen_with_ok_on_it(narrow_session):
         assert 0 <= left < right <= NARROW_SCREEN[0] and 0 <= top < bottom <= NARROW_SCREEN[1], shown["ok"]
         assert shown["size"][0] <= NARROW_SCREEN[0] and shown["size"][1] <= NARROW_SCREEN[1], shown["size"]
         assert shown["stacked"] and not shown["scrolled"], shown
+
+
+def test_lift_and_thickness_are_set_kept_with_the_image_and_reset(session):
+    """The issue's lift and thickness controls: a lift typed past 20 canvas heights is clamped to 4800 on the 240-row
+    image and the note says why; dragging the ground point under the object in the preview sets the lift (canvas
+    rows = preview rows / scale, less the cutout's lowest row), live; the slider sets the thickness (From outline
+    unticks, the value and the reading show); OK keeps both with the image (a parasite), the next dialog on it
+    opens with them, Reset to Initial Values brings them back after a drag and Reset to Factory Defaults rests the
+    object and reads its thickness; another image opens with neither."""
+    run = _run(session[0], "geometry")
+    initial, typed, dragged, slid = run["initial"], run["typed"], run["dragged"], run["slid"]
+    print(f"\nlift and thickness: {initial}\n{typed}\n{dragged}\n{slid}")
+    assert initial["lift"] == 0.0 and initial["thickness"] == -1.0 and initial["from_outline"]
+    assert initial["read"] is not None and initial["value"] == f"read {initial['read']:.2f}", initial
+    assert typed["lift"] == 4800.0, typed
+    assert "more than 20 canvas heights (4800 px" in typed["note"], typed["note"]
+    bbox, scale = dragged["bbox"], dragged["scale"]
+    assert dragged["lift"] == round(run["dragged_to"] / scale) - (bbox[3] - 1) > 0, (dragged, run["dragged_to"])
+    assert "canvas heights" not in dragged["note"], dragged["note"]  # the note is about the last change only
+    assert slid["thickness"] == 1.0 and not slid["from_outline"] and slid["value"].startswith("1.00 (read ")
+    width, height = slid["size"]
+    assert height <= MAX_HEIGHT, slid["size"]
+    runs = [outcome for outcome in session[1] if outcome["run"].startswith("geometry")]
+    assert runs[0]["status"] == "success" and runs[0]["layers"] == ["Pawn", "Shadow: Pawn", "Background"], runs[0]
+    kept = json.loads(runs[0]["geometry_record"])
+    assert (kept["lift"], kept["thickness"], kept["height"]) == (dragged["lift"], 1.0, 240), kept
+    again = _run(session[0], "geometry-again")
+    assert (again["initial"]["lift"], again["initial"]["thickness"]) == (dragged["lift"], 1.0), again["initial"]
+    assert again["dragged"]["lift"] != dragged["lift"], again["dragged"]
+    after = again["after_initial"]
+    assert (after["lift"], after["thickness"], after["from_outline"]) == (dragged["lift"], 1.0, False), after
+    factory = again["after_factory"]
+    assert (factory["lift"], factory["thickness"], factory["from_outline"]) == (0.0, -1.0, True), factory
+    assert factory["value"] == f"read {factory['read']:.2f}", factory
+    assert runs[1]["status"] == "cancel" and json.loads(runs[1]["geometry_record"]) == kept  # Cancel keeps it
+    other = _run(session[0], "geometry-other")["initial"]
+    assert (other["lift"], other["thickness"], other["from_outline"]) == (0.0, -1.0, True), other
+    assert runs[2]["geometry_record"] is None

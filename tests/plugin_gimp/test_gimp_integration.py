@@ -51,6 +51,7 @@ PAWN = {"name": "Pawn", "x": 100, "y": 20, "w": 120, "h": 200, "rect": [40, 20, 
 LEFT_LIGHT = json.dumps(
     {"format": "ssn-shadow-elm", "version": 1, "lights": [{"u": 0.3, "v": 0.75, "softness": 0.004, "intensity": 2.5}]}
 )
+HIGH_SUN = {"light-map": "high-sun", "opacity": 1.0, "ao-strength": 1.0, "shadow-color": [0, 0, 0]}
 CASES = [
     # u8 perceptual RGB, cutout from the layer's alpha (layer offset on the canvas); light right -> shadow left
     {
@@ -141,6 +142,41 @@ CASES = [
             "fov": 40.0,
         },
         "side": "left",
+    },
+    # the artist's geometry (lift and thickness arguments): the pawn floating 25 rows, and the same resting
+    {
+        "id": "rgb-u8-lift",
+        "base": "RGB",
+        "precision": "U8_NON_LINEAR",
+        "cutout": PAWN,
+        "args": {**HIGH_SUN, "lift": 25.0, "thickness": 0.5},
+        "side": None,
+    },
+    {
+        "id": "rgb-u8-lift-resting",
+        "base": "RGB",
+        "precision": "U8_NON_LINEAR",
+        "cutout": PAWN,
+        "args": {**HIGH_SUN, "lift": 0.0, "thickness": 0.5},
+        "side": None,
+    },
+    # a lift past 20 canvas heights (4800 rows here), and one whose ground lies above the given horizon (row 230;
+    # the pawn's foot is row 209)
+    {
+        "id": "error-lift-too-far",
+        "base": "RGB",
+        "precision": "U8_NON_LINEAR",
+        "cutout": PAWN,
+        "args": {**HIGH_SUN, "lift": 5000.0},
+        "error": "lift: expected 0 to 4800 canvas pixels",
+    },
+    {
+        "id": "error-lift-above-the-horizon",
+        "base": "RGB",
+        "precision": "U8_NON_LINEAR",
+        "cutout": PAWN,
+        "args": {**HIGH_SUN, "lift": 5.0, "use-horizon": True, "horizon": 230.0, "fov": 45.0},
+        "error": "at or above the horizon (row 230)",
     },
     # errors: no selection and no alpha; a malformed light map
     {
@@ -323,6 +359,9 @@ def _expected(worker: tuple[int, str], case: dict, cutout: np.ndarray) -> tuple[
     client = EngineClient(address=("127.0.0.1", worker[0]), token=worker[1])
     try:
         camera = {"camera": {"horizon": args["horizon"], "fov": args["fov"]}} if args.get("use-horizon") else {}
+        if "lift" in args or "thickness" in args:  # the artist's geometry; a thickness below 0 reads the outline
+            thickness = args.get("thickness", -1.0)
+            camera.update(lift=args.get("lift", 0.0), thickness=None if thickness < 0 else thickness)
         reply, _ = client.request(
             "set_cutout", {"alpha": Buffer(str(alpha.dtype), alpha.shape, alpha.tobytes())}, **camera
         )
@@ -397,6 +436,21 @@ def test_a_low_sun_shadow_reaches_past_the_canvas_by_the_margin(gimp_results):
     larger side past its edge, no further (the whole shadow only when asked)."""
     r = gimp_results[0]["rgb-u8-nonlinear"]
     assert r["shadow_offsets"][0] == -32, r["shadow_offsets"]
+
+
+def test_a_lift_moves_the_shadow_layer_down(gimp_results):
+    """The lift argument (a batch call): the pawn floating 25 rows casts a shadow whose topmost row (alpha over
+    0.2) lies lower on the canvas than the resting pawn's, under the same high sun and thickness."""
+    results, arrays, _ = gimp_results
+    tops = {}
+    for name in ("rgb-u8-lift", "rgb-u8-lift-resting"):
+        r = results[name]
+        assert r["status"] == "success", r.get("error")
+        width, height = r["shadow_size"]
+        alpha = arrays[(name, "shadow_pixels")].reshape(height, width, 4)[..., 3]
+        tops[name] = r["shadow_offsets"][1] + int(np.nonzero((alpha > 0.2).any(axis=1))[0][0])
+    print(f"\ntopmost shadow row: lifted 25 rows {tops['rgb-u8-lift']}, resting {tops['rgb-u8-lift-resting']}")
+    assert tops["rgb-u8-lift"] > tops["rgb-u8-lift-resting"] + 10, tops
 
 
 def test_running_again_replaces_the_shadow(gimp_results):

@@ -22,6 +22,8 @@ def test_arguments_cover_every_setting():
         "horizon",
         "fov",
         "keep-whole-shadow",
+        "lift",
+        "thickness",
     ]
     for spec in s.ARGUMENTS:
         assert spec.kind in {"string", "double", "boolean", "color"}
@@ -151,3 +153,81 @@ def test_an_image_s_camera_arguments_are_its_own():
         "fov": s.ARG_BY_NAME["fov"].default,
     }
     assert set(s.image_camera_arguments(None, 10)) <= set(s.ARG_BY_NAME)
+
+
+# -- the artist's geometry: lift and thickness -------------------------------------------------------------------
+def test_lift_and_thickness_are_arguments_the_help_and_the_page_list():
+    """Scripts and Ctrl+F set them: lift (pixels, >= 0, default 0) and thickness (-1, the default, or any value below
+    0: read from the outline); the procedure's help and docs/gimp.md's table name both."""
+    lift, thickness = s.ARG_BY_NAME["lift"], s.ARG_BY_NAME["thickness"]
+    assert (lift.kind, lift.default, lift.lo) == ("double", 0.0, 0.0) and lift.hi >= 20 * 32768
+    assert (thickness.kind, thickness.default, thickness.lo, thickness.hi) == ("double", -1.0, -1.0, 8.0)
+    assert "-1 (any value below 0): read from the cutout's outline" in thickness.blurb
+    assert "'lift'" in s.PROCEDURE_HELP and "'thickness'" in s.PROCEDURE_HELP and "-1" in s.PROCEDURE_HELP
+    page = (Path(__file__).resolve().parents[2] / "docs" / "gimp.md").read_text(encoding="utf-8")
+    rows = [line for line in page.splitlines() if line.startswith(("| `lift` |", "| `thickness` |"))]
+    assert len(rows) == 2 and "read from the outline" in rows[1], rows
+
+
+def test_geometry_settings_from_arguments():
+    from ssn_core import ShadowError, settings_from_arguments
+
+    st = settings_from_arguments({})
+    assert (st.lift, st.thickness) == (0.0, None) and st.cutout_geometry() == {}  # the engine's defaults: none sent
+    st = settings_from_arguments({"lift": 40, "thickness": -1.0})
+    assert st.geometry() == {"lift": 40.0, "thickness": None} == st.cutout_geometry()
+    assert settings_from_arguments({"thickness": -0.5}).thickness is None  # below 0: read
+    assert settings_from_arguments({"thickness": 0.0}).thickness == 0.0  # flat, not read
+    assert settings_from_arguments({"thickness": 2.5}).cutout_geometry() == {"lift": 0.0, "thickness": 2.5}
+    for bad, name in (({"lift": -1.0}, "lift"), ({"lift": float("nan")}, "lift"), ({"thickness": 9.0}, "thickness")):
+        with pytest.raises(ShadowError, match=name):
+            settings_from_arguments(bad)
+    with pytest.raises(ShadowError, match="thickness"):
+        settings_from_arguments({"thickness": float("nan")})
+
+
+def test_the_dialog_clamps_a_lift_and_says_why():
+    """Hosts clamp and say why: past 20 canvas heights to 20; below 0 to 0; a lift leaving the ground beneath the
+    object at or above the horizon (the engine refuses it) raised to the least whole row below it."""
+    assert s.clamp_lift(12.0, 240) == (12.0, "")
+    assert s.clamp_lift(0.0, 240, lowest_row=100, horizon=150) == (0.0, "")  # resting: always taken
+    lift, why = s.clamp_lift(99999.0, 240)
+    assert lift == 4800.0 and "more than 20 canvas heights (4800 px" in why and "set to 4800" in why
+    lift, why = s.clamp_lift(-5.0, 240)
+    assert lift == 0.0 and "set to 0" in why
+    lift, why = s.clamp_lift(30.0, 240, lowest_row=100, horizon=150.5)
+    assert lift == 51.0 and "at or above the horizon (row 150)" in why and "raised to 51" in why
+    assert s.clamp_lift(51.0, 240, lowest_row=100, horizon=150.5) == (51.0, "")
+    assert s.clamp_lift(30.0, 240, lowest_row=200, horizon=150) == (30.0, "")  # its foot below the horizon already
+
+
+def test_the_dialog_clamps_a_thickness_and_says_why():
+    assert s.clamp_thickness(0.29) == (0.29, "")
+    assert s.clamp_thickness(-3.0) == (s.READ_THICKNESS, "")  # below 0 reads from the outline: nothing to say
+    value, why = s.clamp_thickness(12.0)
+    assert value == 8.0 and "more than 8" in why and "set to 8" in why
+    value, why = s.clamp_thickness(float("nan"))
+    assert value == s.READ_THICKNESS and "read from the outline" in why
+
+
+def test_the_thickness_slider_puts_flat_round_and_deep_apart():
+    assert s.thickness_from_slider(0.0) == 0.0 and s.thickness_from_slider(1.0) == 1.0
+    assert s.thickness_from_slider(s.THICKNESS_SLIDER_TOP) == 8.0 and s.thickness_from_slider(99) == 8.0
+    assert 0.3 < s.slider_from_thickness(1.0) / s.THICKNESS_SLIDER_TOP < 0.4
+    assert s.thickness_from_slider(s.slider_from_thickness(0.29)) == 0.29
+    assert s.thickness_read_text(0.2912) == "read 0.29"
+
+
+def test_an_image_s_lift_and_thickness_are_its_own_and_scale_with_it():
+    """Kept with each image (a parasite): the lift scales with the image's height; no record, another program's or a
+    damaged one gives the defaults (resting, read), never another image's values."""
+    record = s.image_geometry_record({"lift": 40.0, "thickness": 0.5, "opacity": 1.0}, 480)
+    assert json.loads(record)["format"] == "ssn-shadow-geometry"
+    assert s.image_geometry_arguments(record, 480) == {"lift": 40.0, "thickness": 0.5}
+    assert s.image_geometry_arguments(record, 960) == {"lift": 80.0, "thickness": 0.5}
+    read = s.image_geometry_record({"lift": 0.0, "thickness": -1.0}, 100)
+    assert s.image_geometry_arguments(read, 100) == {"lift": 0.0, "thickness": -1.0}
+    defaults = {"lift": 0.0, "thickness": -1.0}
+    for text in (None, "", "{", '{"format": "other"}', record.replace('"height":480', '"height":0')):
+        assert s.image_geometry_arguments(text, 480) == defaults, text
+    assert set(defaults) <= set(s.ARG_BY_NAME)
