@@ -6,6 +6,7 @@ import functools
 import io
 import os
 import sys
+import time
 from pathlib import Path
 from typing import TYPE_CHECKING
 
@@ -121,3 +122,26 @@ def converse(worker: Worker, data: bytes) -> tuple[list[dict], bool]:
             replies.append(read_message(writer)[0])
         except EOFError:
             return replies, ended
+
+
+HUNG_WORKER = Path(__file__).resolve().parents[1] / "hung_worker.py"  # a worker that hangs (tests/hung_worker.py)
+
+
+def alive(pid: int) -> bool:
+    """Whether ``pid`` runs (a zombie, killed but not yet reaped by its parent, counts as stopped; a stopped
+    process runs)."""
+    try:
+        with open(f"/proc/{pid}/stat") as f:
+            return f.read().rsplit(")", 1)[1].split()[0] != "Z"
+    except FileNotFoundError:
+        return False
+
+
+def gone_within(pid: int, seconds: float) -> bool:
+    """Whether ``pid`` stops running within ``seconds``."""
+    deadline = time.monotonic() + seconds
+    while alive(pid):
+        if time.monotonic() > deadline:
+            return False
+        time.sleep(0.02)
+    return True

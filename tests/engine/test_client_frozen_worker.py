@@ -25,6 +25,7 @@ import time
 from pathlib import Path
 
 import pytest
+from engine_helpers import HUNG_WORKER, alive, gone_within
 
 from ssn_engine.host_kit import client
 from ssn_engine.host_kit.client import Cancelled, EngineClient, WorkerUnavailable
@@ -33,29 +34,9 @@ from ssn_engine.host_kit.protocol import PROTOCOL_VERSION
 
 pytestmark = pytest.mark.skipif(os.name != "posix" or not Path("/proc/self").is_dir(), reason="POSIX with /proc")
 
-HUNG_WORKER = Path(__file__).resolve().parents[1] / "hung_worker.py"
-
 
 def whole_freezing_command(pid_file: Path) -> list[str]:
     return [sys.executable, str(HUNG_WORKER), str(PROTOCOL_VERSION), str(pid_file), "--stop"]
-
-
-def alive(pid: int) -> bool:
-    """Whether ``pid`` runs (a zombie, killed but not yet reaped, does not; a stopped process does)."""
-    try:
-        with open(f"/proc/{pid}/stat") as f:
-            return f.read().rsplit(")", 1)[1].split()[0] != "Z"
-    except FileNotFoundError:
-        return False
-
-
-def gone_within(pid: int, seconds: float) -> bool:
-    deadline = time.monotonic() + seconds
-    while alive(pid):
-        if time.monotonic() > deadline:
-            return False
-        time.sleep(0.02)
-    return True
 
 
 def wait_for_file(path: Path, seconds: float = 30.0) -> None:
