@@ -24,7 +24,7 @@ gi.require_version("Pango", "1.0")
 from gi.repository import Gdk, GdkPixbuf, Gimp, GimpUi, GLib, GObject, Gtk, Pango  # noqa: E402
 
 from ssn_core import ShadowError, release, send_cutout, set_camera, set_geometry, settings_from_arguments  # noqa: E402
-from ssn_engine_link import camera_rules, light_editor, light_map, shadow_notes  # noqa: E402
+from ssn_engine_link import camera_rules, geometry_clamp, light_editor, light_map, shadow_notes  # noqa: E402
 from ssn_engine_link import client as engine_client  # noqa: E402
 from ssn_gimp_host import config_values  # noqa: E402
 from ssn_layout import Layout, choose_layout  # noqa: E402
@@ -44,7 +44,6 @@ from ssn_settings import (  # noqa: E402
     READ_THICKNESS,
     THICKNESS_SLIDER_TOP,
     SettingsError,
-    clamp_lift,
     clamp_thickness,
     editor_light_map,
     slider_from_thickness,
@@ -459,7 +458,7 @@ class GeometryRow:
     widget of the ``lift`` argument; the preview's handle drags it) and **Thickness** (a slider, flat - round -
     deep, with *From outline* and the value the outline reads as), both the procedure's arguments, so that Reset
     and GIMP's saved settings reach them. A value the engine would refuse is clamped, and the line under the
-    preview says why (:func:`ssn_settings.clamp_lift`, :func:`ssn_settings.clamp_thickness`)."""
+    preview says why (:func:`geometry_clamp.clamp_lift`, :func:`ssn_settings.clamp_thickness`)."""
 
     def __init__(self, dialog, config) -> None:
         self.config = config
@@ -520,7 +519,7 @@ class GeometryRow:
         lift = self.config.get_property("lift")
         lowest = lowest_row(preview.bbox) if preview.bbox is not None else None
         values = {name: self.config.get_property(name) for name in ("use-horizon", "horizon")}
-        clamped, why = clamp_lift(lift, preview.image_height, lowest, preview.horizon_in_use(values))
+        clamped, why = geometry_clamp.clamp_lift(lift, preview.image_height, lowest, preview.horizon_in_use(values))
         if clamped != lift:
             self._syncing = True
             try:

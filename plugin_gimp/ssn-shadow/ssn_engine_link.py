@@ -2,7 +2,7 @@
 
 The installed plug-in carries copies of the engine's stdlib-only modules in
 ``host_kit/`` (the host kit: protocol, client, engine config, light map
-and its editor, defaults, the lift and thickness rules) and the ``engine.json`` that ``ssn-shadow
+and its editor, defaults, the lift and thickness rules and clamps) and the ``engine.json`` that ``ssn-shadow
 install-plugin gimp`` wrote; in a source checkout (tests) the modules come
 from ``ssn_engine`` itself. GIMP-free.
 """
@@ -14,14 +14,14 @@ from typing import TYPE_CHECKING
 
 if TYPE_CHECKING:  # the copy is this package
     from ssn_engine.host_kit import *  # noqa: F403
-    from ssn_engine.host_kit import client, engine_config, geometry_rules  # noqa: F401 - geometry_rules: for the others
+    from ssn_engine.host_kit import client, engine_config, geometry_clamp, geometry_rules  # noqa: F401 - for the others
 else:
     try:  # installed: the copy made by `ssn-shadow install-plugin`
         from host_kit import *  # noqa: F403
-        from host_kit import client, engine_config, geometry_rules  # noqa: F401 - geometry_rules: for the others
+        from host_kit import client, engine_config, geometry_clamp, geometry_rules  # noqa: F401 - for the others
     except ImportError:  # running from the repository (tests)
         from ssn_engine.host_kit import *  # noqa: F403
-        from ssn_engine.host_kit import client, engine_config, geometry_rules  # noqa: F401 - geometry_rules: for the others
+        from ssn_engine.host_kit import client, engine_config, geometry_clamp, geometry_rules  # noqa: F401 - for the others
 
 PLUGIN_DIR = Path(__file__).resolve().parent
 WORKER_STATE = "worker.json"  # the shared worker's address and token (this user only)

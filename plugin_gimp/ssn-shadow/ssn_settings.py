@@ -13,7 +13,16 @@ import math
 from dataclasses import dataclass
 from typing import Any
 
-from ssn_engine_link import ao_edits, camera_rules, defaults, geometry_rules, image_camera, light_map, protocol
+from ssn_engine_link import (
+    ao_edits,
+    camera_rules,
+    defaults,
+    geometry_clamp,
+    geometry_rules,
+    image_camera,
+    light_map,
+    protocol,
+)
 
 PROCEDURE_NAME = "plug-in-ssn-shadow"
 MENU_LABEL = "Soft _Shadow (SSN)..."
@@ -254,45 +263,15 @@ class ShadowSettings:
 # -- the artist's geometry: clamp and say why, and each image's own values ---------------------------------------
 
 
-def clamp_lift(
-    value: float, canvas_height: int, lowest_row: float | None = None, horizon: float | None = None
-) -> tuple[float, str]:
-    """The lift the dialog sets for a typed or dragged ``value`` on a canvas ``canvas_height`` rows tall, and why
-    it differs ("" where it does not): 0 to :data:`geometry_rules.MAX_LIFT_HEIGHTS` canvas heights
-    (:func:`geometry_rules.check_lift`); where the cutout's lowest row ``lowest_row`` and the ``horizon`` row of
-    the camera in use are known, a lift that leaves the ground beneath the cutout at or above the horizon (the
-    engine refuses it) is raised to the least whole row that puts it below."""
-    most = geometry_rules.MAX_LIFT_HEIGHTS * max(1, int(canvas_height))
-    if not isinstance(value, (int, float)) or isinstance(value, bool) or math.isnan(value) or value < 0:
-        return 0.0, f"Lift: {value!r} is no distance below the object; set to 0 (it rests on the ground)."
-    lift = float(value)
-    if lift > most:
-        return most, (
-            f"Lift: {lift:g} px is more than {geometry_rules.MAX_LIFT_HEIGHTS:g} canvas heights "
-            f"({most:g} px, the most the engine takes); set to {most:g}."
-        )
-    if lift > 0 and lowest_row is not None and horizon is not None and lowest_row + lift <= horizon:
-        least = min(most, float(math.floor(horizon - lowest_row) + 1))
-        return least, (
-            f"Lift: {lift:g} px puts the ground beneath the object at row {lowest_row + lift:.0f}, at or above the "
-            f"horizon (row {horizon:.0f}); the ground lies below it, so the lift is raised to {least:g}."
-        )
-    return lift, ""
-
-
 def clamp_thickness(value: float) -> tuple[float, str]:
     """The thickness argument the dialog sets for ``value`` and why it differs ("" where it does not): below 0
-    is :data:`READ_THICKNESS` (read from the outline), above the range its top."""
-    lo, hi = geometry_rules.THICKNESS_RANGE
+    is :data:`READ_THICKNESS` (read from the outline), a number not a number reads so too, the rest as the
+    hosts clamp it (:func:`geometry_clamp.clamp_thickness`)."""
     if not isinstance(value, (int, float)) or isinstance(value, bool) or math.isnan(value):
         return READ_THICKNESS, f"Thickness: {value!r} is no number; read from the outline instead."
-    if value < lo:
+    if value < geometry_rules.THICKNESS_RANGE[0]:
         return READ_THICKNESS, ""
-    if value > hi:
-        return hi, (
-            f"Thickness: {value:g} is more than {hi:g} (a rod seen end-on), the most the engine takes; set to {hi:g}."
-        )
-    return float(value), ""
+    return geometry_clamp.clamp_thickness(float(value))
 
 
 def thickness_argument(thickness: float | None) -> float:
@@ -346,7 +325,7 @@ def image_geometry_arguments(record: str | None, image_height: int) -> dict[str,
         return defaults_
     scaled = round(lift * image_height / height) if image_height > 0 else lift
     return {
-        "lift": clamp_lift(float(scaled), image_height)[0],
+        "lift": geometry_clamp.clamp_lift(float(scaled), image_height)[0],
         "thickness": clamp_thickness(float(thickness))[0],
     }
 

@@ -8,7 +8,7 @@ import pytest
 import ssn_settings as s
 from ssn_settings import SettingsError, ShadowSettings, resolve_light_map
 
-from ssn_engine.host_kit import camera_rules, light_map
+from ssn_engine.host_kit import camera_rules, geometry_clamp, light_map
 
 
 def test_arguments_cover_every_setting():
@@ -189,23 +189,26 @@ def test_geometry_settings_from_arguments():
 def test_the_dialog_clamps_a_lift_and_says_why():
     """Hosts clamp and say why: past 20 canvas heights to 20; below 0 to 0; a lift leaving the ground beneath the
     object at or above the horizon (the engine refuses it) raised to the least whole row below it."""
-    assert s.clamp_lift(12.0, 240) == (12.0, "")
-    assert s.clamp_lift(0.0, 240, lowest_row=100, horizon=150) == (0.0, "")  # resting: always taken
-    lift, why = s.clamp_lift(99999.0, 240)
+    assert geometry_clamp.clamp_lift(12.0, 240) == (12.0, "")
+    assert geometry_clamp.clamp_lift(0.0, 240, lowest=100, horizon=150) == (0.0, "")  # resting: always taken
+    lift, why = geometry_clamp.clamp_lift(99999.0, 240)
     assert lift == 4800.0 and "more than 20 canvas heights (4800 px" in why and "set to 4800" in why
-    lift, why = s.clamp_lift(-5.0, 240)
+    lift, why = geometry_clamp.clamp_lift(-5.0, 240)
     assert lift == 0.0 and "set to 0" in why
-    lift, why = s.clamp_lift(30.0, 240, lowest_row=100, horizon=150.5)
+    lift, why = geometry_clamp.clamp_lift(30.0, 240, lowest=100, horizon=150.5)
     assert lift == 51.0 and "at or above the horizon (row 150)" in why and "raised to 51" in why
-    assert s.clamp_lift(51.0, 240, lowest_row=100, horizon=150.5) == (51.0, "")
-    assert s.clamp_lift(30.0, 240, lowest_row=200, horizon=150) == (30.0, "")  # its foot below the horizon already
+    assert geometry_clamp.clamp_lift(51.0, 240, lowest=100, horizon=150.5) == (51.0, "")
+    assert geometry_clamp.clamp_lift(30.0, 240, lowest=200, horizon=150) == (
+        30.0,
+        "",
+    )  # its foot below the horizon already
 
 
 def test_the_dialog_clamps_a_thickness_and_says_why():
     assert s.clamp_thickness(0.29) == (0.29, "")
     assert s.clamp_thickness(-3.0) == (s.READ_THICKNESS, "")  # below 0 reads from the outline: nothing to say
     value, why = s.clamp_thickness(12.0)
-    assert value == 8.0 and "more than 8" in why and "set to 8" in why
+    assert value == 8.0 and "outside 0 (flat) to 8 (deep)" in why and "set to 8" in why
     value, why = s.clamp_thickness(float("nan"))
     assert value == s.READ_THICKNESS and "read from the outline" in why
 
