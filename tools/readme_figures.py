@@ -1,5 +1,6 @@
 """Make the README's pictures: the demo composite, the cutout under four contrasting lights, every preset, a
-horse under the sun and a softbox (its legs in the sun's shadow), and a low sun's long shadow on a wide canvas.
+horse under the sun and a softbox (its legs in the sun's shadow), a low sun's long shadow on a wide canvas, and a
+ball lifted and a board made flat or deep (--lift, --thickness).
 
 Run: python tools/readme_figures.py [--out docs/img]
 """
@@ -50,9 +51,10 @@ def main() -> None:
     sheet([tiles[name] for name in CONTRAST], out / "follow_the_light.png")
     long_shadows(cutout, loaded.method).save(out / "long_shadow.png", optimize=True)
     hard_light(loaded.method).save(out / "hard_light.png", optimize=True)
+    lift_and_thickness(loaded.method).save(out / "lift_thickness.png", optimize=True)
     print(
-        f"wrote demo.png, presets.png, follow_the_light.png, hard_light.png and long_shadow.png in {out} with the "
-        f"{loaded.method.name} method"
+        f"wrote demo.png, presets.png, follow_the_light.png, hard_light.png, long_shadow.png and lift_thickness.png "
+        f"in {out} with the {loaded.method.name} method"
     )
 
 
@@ -103,6 +105,40 @@ def hard_light(method: ShadowMethod, horizon: float = 100.0, fov: float = 40.0) 
     page = Image.new("RGB", (2 * tiles[0].width, 2 * tiles[0].height), (255, 255, 255))
     for i, tile in enumerate(tiles):
         page.paste(tile, ((i % 2) * tile.width, (i // 2) * tile.height))
+    return page
+
+
+def lift_and_thickness(method: ShadowMethod, horizon: float = 150.0, fov: float = 40.0) -> Image.Image:
+    """The artist's geometry (``--lift``, ``--thickness``): a ball resting, lifted by a quarter of its height and
+    by half of it, under a high and a low 0.53-degree sun (two rows); then a board read as it is, as a flat sign
+    (thickness 0) and as a deep box (thickness 2) under a sun from the side (a third row)."""
+    w, h = 900, 560
+    yy, xx = np.mgrid[0:h, 0:w]
+    ball = ((((xx + 0.5 - 400) ** 2 + (yy + 0.5 - 300) ** 2) < 70**2) * 255).astype(np.uint8)
+    board = np.zeros((h, w), np.uint8)
+    board[190:370, 340:460] = 255
+    suns = {
+        "high sun": LightMap([GaussianLight.disk(0.42, 0.3, SUN)]),
+        "low sun": LightMap([GaussianLight.disk(0.3, 0.75, SUN)]),
+    }
+    cases = [(ball, name, light, lift, None) for name, light in suns.items() for lift in (0.0, 35.0, 70.0)]
+    side = LightMap([GaussianLight.disk(0.2, 0.55, SUN)])
+    cases += [(board, "sun from the side", side, 0.0, t) for t in (None, 0.0, 2.0)]
+    tiles = []
+    for alpha, name, light, lift, thickness in cases:
+        session = ShadowSession(alpha, method, horizon, fov)
+        session.set_geometry(lift, thickness)
+        shadow = session.render(light).full_canvas(w, h)
+        cutout = np.dstack([np.full((h, w, 3), 90, np.uint8), alpha])
+        tile = Image.fromarray(over(composite_shadow(np.full((h, w, 3), 235, np.uint8), shadow), cutout))
+        tile = tile.crop((150, 170, w - 50, h)).resize((TILE, TILE * (h - 170) // (w - 200)))
+        shape = "read" if thickness is None else f"{thickness:g}"
+        caption = f"{name}, lift {lift:g}" if alpha is ball else f"{name}, thickness {shape}"
+        ImageDraw.Draw(tile).text((8, 6), caption, fill=(20, 20, 20))
+        tiles.append(tile)
+    page = Image.new("RGB", (3 * TILE, 3 * tiles[0].height), (255, 255, 255))
+    for i, tile in enumerate(tiles):
+        page.paste(tile, ((i % 3) * TILE, (i // 3) * tile.height))
     return page
 
 
