@@ -105,7 +105,8 @@ def shadow_gap(s: np.ndarray, mask: np.ndarray, region: np.ndarray) -> float:
     dark = (s >= SHADOW_LEVEL) & region
     if not dark.any():
         return float("nan")
-    return float(ndimage.distance_transform_edt(~(np.asarray(mask) > SOLID))[dark].min())
+    distance = np.asarray(ndimage.distance_transform_edt(~(np.asarray(mask) > SOLID)))
+    return float(distance[dark].min())
 
 
 def gap_ratio(p: np.ndarray, g: np.ndarray, mask: np.ndarray, region: np.ndarray) -> float:
