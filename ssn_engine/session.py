@@ -6,8 +6,9 @@ continued beyond it by the geometric card (:mod:`ssn_engine.long_shadow`).
 A render splits its light map once (:class:`ssn_engine.light_plan.LightPlan`)
 and hands the plan down: small lights are traced at the output's resolution
 (:mod:`ssn_engine.hard_light`), kept no lighter than the network's shadow of
-them as Gaussians (half of it where the camera is given:
-``GIVEN_CAMERA_HEDGE``); the network renders the rest, and the parts add up
+them (:attr:`~ssn_engine.light_plan.LightPlan.network_view`; half of it where
+the camera is given: ``GIVEN_CAMERA_HEDGE``; fading as the artist lifts the
+object); the network renders the rest, and the parts add up
 in their shares of the ground's unoccluded irradiance E0:
 s = sum_i (E0_i / E0) s_i.
 """
@@ -262,9 +263,10 @@ class ShadowSession:
         :meth:`Framing.scaled`), cropped to its visible part, from the network's frames of :meth:`render_frame`.
 
         The broad lights' frame is enlarged. The small lights are traced on the canvas's pixels, added in their
-        shares of E0, and where the network's shadow of them as Gaussians is darker (the object's extent in
-        depth, its contact), that is kept: s_small = max(traced, h network), h = ``GIVEN_CAMERA_HEDGE`` where
-        the camera is given, else 1. The two parts add up in their shares of E0."""
+        shares of E0, and where the network's shadow of them (:attr:`LightPlan.network_view`) is darker (the
+        object's extent in depth, its contact), that is kept: s_small = max(traced, h network), h =
+        ``GIVEN_CAMERA_HEDGE`` where the camera is given, else 1 (faded as the object floats: :attr:`lifted`).
+        The two parts add up in their shares of E0."""
         return self._on_canvas(lambda: frames, plan, clip, framing or self.framing)
 
     def _on_canvas(
