@@ -123,83 +123,92 @@ class LightMapArea(Gtk.EventBox):
         return False
 
 
-class LightSizeBox(Gtk.Box):
+class _SelectedLightBox(Gtk.Box):
+    """A spin button that shows a value of the selected light (insensitive when none is selected) and sets it
+    through the editor: subclasses say which value (:meth:`_show`) and how it is set (:meth:`_set`)."""
+
+    def __init__(self, editor: light_editor.LightMapEditor, spin: Gtk.SpinButton, tooltip: str) -> None:
+        super().__init__(spacing=4)
+        self.editor, self.spin = editor, spin
+        self.spin.set_numeric(True)
+        self.spin.set_tooltip_text(tooltip)
+        self._showing = False
+
+    def _connect(self) -> None:
+        """Follow the spin button and show the selected light (once the subclass has packed its widgets)."""
+        self.spin.connect("value-changed", self._on_value)
+        self.show_selected()
+
+    def show_selected(self) -> None:
+        """Show the selected light's value (insensitive when no light is selected)."""
+        index = self.editor.selected
+        lights = self.editor.lights.lights
+        light = lights[index] if index is not None and index < len(lights) else None
+        self.set_sensitive(light is not None)
+        if light is None:
+            return
+        self._showing = True
+        try:
+            self._show(light)
+        finally:
+            self._showing = False
+
+    def _on_value(self, spin: Gtk.SpinButton) -> None:
+        if not self._showing:  # the editor's change redraws the map, which shows the new value here
+            self._set(spin.get_value())
+
+    def _show(self, light: light_map.GaussianLight) -> None:
+        raise NotImplementedError
+
+    def _set(self, value: float) -> None:
+        raise NotImplementedError
+
+
+class LightSizeBox(_SelectedLightBox):
     """ "Size" and a spin button in degrees: the selected light's size (the host kit's rule, :mod:`light_size`);
     setting it resizes the light, keeping its power. A Gaussian light's size shows "≈" before it."""
 
     def __init__(self, editor: light_editor.LightMapEditor) -> None:
-        super().__init__(spacing=4)
-        self.editor = editor
         lo, hi = light_size.SIZE_RANGE
-        self.spin = Gtk.SpinButton.new(Gtk.Adjustment.new(lo, lo, hi, 0.1, 1.0, 0.0), 1.0, light_size.DECIMALS)
-        self.spin.set_numeric(True)
-        self.spin.set_tooltip_text(light_size.SIZE_HINT)
+        spin = Gtk.SpinButton.new(Gtk.Adjustment.new(lo, lo, hi, 0.1, 1.0, 0.0), 1.0, light_size.DECIMALS)
+        super().__init__(editor, spin, light_size.SIZE_HINT)
         self.about = Gtk.Label(label="")
         self.pack_start(Gtk.Label(label="Size:"), False, False, 0)
         self.pack_start(self.about, False, False, 0)
         self.pack_start(self.spin, False, False, 0)
         self.pack_start(Gtk.Label(label=light_size.UNIT), False, False, 0)
-        self._showing = False
-        self.spin.connect("value-changed", self._on_value)
-        self.show_selected()
+        self._connect()
 
-    def show_selected(self) -> None:
-        """Show the selected light's size (insensitive when no light is selected)."""
-        index = self.editor.selected
-        lights = self.editor.lights.lights
-        light = lights[index] if index is not None and index < len(lights) else None
-        self.set_sensitive(light is not None)
-        if light is None:
-            return
-        self._showing = True
-        try:
-            self.about.set_text(light_size.size_prefix(light))
-            self.spin.set_value(light_size.shown_size(light))
-            self.spin.set_increments(*light_size.increments(self.spin.get_value()))
-        finally:
-            self._showing = False
+    def _show(self, light: light_map.GaussianLight) -> None:
+        self.about.set_text(light_size.size_prefix(light))
+        self.spin.set_value(light_size.shown_size(light))
+        self.spin.set_increments(*light_size.increments(self.spin.get_value()))
 
-    def _on_value(self, spin: Gtk.SpinButton) -> None:
-        if not self._showing:  # the editor's change redraws the map, which shows the new size here
-            self.editor.set_size(spin.get_value())
+    def _set(self, value: float) -> None:
+        self.editor.set_size(value)
 
 
-class LightIntensityBox(Gtk.Box):
+class LightIntensityBox(_SelectedLightBox):
     """ "Intensity" and a spin button: the selected light's peak intensity (0 to 3, what Shift+wheel changes);
     setting it is one edit (:meth:`light_editor.LightMapEditor.enter_intensity`)."""
 
     def __init__(self, editor: light_editor.LightMapEditor) -> None:
-        super().__init__(spacing=4)
-        self.editor = editor
         lo, hi = light_map.INTENSITY_RANGE
         step = light_editor.INTENSITY_STEP
-        digits = light_editor.INTENSITY_DECIMALS
-        self.spin = Gtk.SpinButton.new(Gtk.Adjustment.new(lo, lo, hi, step, 5 * step, 0.0), step, digits)
-        self.spin.set_numeric(True)
-        self.spin.set_tooltip_text(
+        spin = Gtk.SpinButton.new(
+            Gtk.Adjustment.new(lo, lo, hi, step, 5 * step, 0.0), step, light_editor.INTENSITY_DECIMALS
+        )
+        tooltip = (
             "The selected light's intensity, 0 (off) to 3: the brighter a light beside the others, the darker its "
             "shadow. Shift+wheel over the map changes it too."
         )
+        super().__init__(editor, spin, tooltip)
         self.pack_start(Gtk.Label(label="Intensity:"), False, False, 0)
         self.pack_start(self.spin, False, False, 0)
-        self._showing = False
-        self.spin.connect("value-changed", self._on_value)
-        self.show_selected()
+        self._connect()
 
-    def show_selected(self) -> None:
-        """Show the selected light's intensity (insensitive when no light is selected)."""
-        index = self.editor.selected
-        lights = self.editor.lights.lights
-        light = lights[index] if index is not None and index < len(lights) else None
-        self.set_sensitive(light is not None)
-        if light is None:
-            return
-        self._showing = True
-        try:
-            self.spin.set_value(light.intensity)
-        finally:
-            self._showing = False
+    def _show(self, light: light_map.GaussianLight) -> None:
+        self.spin.set_value(light.intensity)
 
-    def _on_value(self, spin: Gtk.SpinButton) -> None:
-        if not self._showing:  # the editor's change redraws the map, which shows the new intensity here
-            self.editor.enter_intensity(spin.get_value())
+    def _set(self, value: float) -> None:
+        self.editor.enter_intensity(value)

@@ -145,3 +145,21 @@ def gone_within(pid: int, seconds: float) -> bool:
             return False
         time.sleep(0.02)
     return True
+
+
+class CancelAfter:
+    """A client's ``on_wait`` hook: counts its calls and gives up ``delay`` seconds after the first (never, by
+    default)."""
+
+    def __init__(self, delay: float = float("inf")) -> None:
+        self.delay, self.calls, self.cancelled_at = delay, 0, None
+        self.first: float | None = None
+
+    def __call__(self) -> bool:
+        self.calls += 1
+        now = time.monotonic()
+        self.first = self.first or now
+        if now - self.first >= self.delay:
+            self.cancelled_at = self.cancelled_at or now
+            return True
+        return False

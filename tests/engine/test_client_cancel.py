@@ -16,7 +16,7 @@ import time
 from pathlib import Path
 
 import pytest
-from engine_helpers import HUNG_WORKER, alive, gone_within
+from engine_helpers import HUNG_WORKER, CancelAfter, alive, gone_within
 
 from ssn_engine.host_kit import client
 from ssn_engine.host_kit.client import Cancelled, EngineClient, WorkerUnavailable, wait_for
@@ -26,23 +26,6 @@ from ssn_engine.host_kit.protocol import PROTOCOL_VERSION
 
 def hung_command(pid_file: Path) -> list[str]:
     return [sys.executable, str(HUNG_WORKER), str(PROTOCOL_VERSION), str(pid_file)]
-
-
-class CancelAfter:
-    """An ``on_wait`` hook: counts its calls and gives up ``delay`` seconds after the first."""
-
-    def __init__(self, delay: float) -> None:
-        self.delay, self.calls, self.cancelled_at = delay, 0, None
-        self.first: float | None = None
-
-    def __call__(self) -> bool:
-        self.calls += 1
-        now = time.monotonic()
-        self.first = self.first or now
-        if now - self.first >= self.delay:
-            self.cancelled_at = self.cancelled_at or now
-            return True
-        return False
 
 
 def test_wait_for_says_done_late_or_cancelled():

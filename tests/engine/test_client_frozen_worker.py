@@ -25,7 +25,7 @@ import time
 from pathlib import Path
 
 import pytest
-from engine_helpers import HUNG_WORKER, alive, gone_within
+from engine_helpers import HUNG_WORKER, CancelAfter, alive, gone_within
 
 from ssn_engine.host_kit import client
 from ssn_engine.host_kit.client import Cancelled, EngineClient, WorkerUnavailable
@@ -46,22 +46,6 @@ def wait_for_file(path: Path, seconds: float = 30.0) -> None:
     assert path.exists(), f"{path} never appeared"
 
 
-class Hook:
-    """An ``on_wait`` hook: counts its calls; gives up ``delay`` seconds after the first (never, by default)."""
-
-    def __init__(self, delay: float = float("inf")) -> None:
-        self.delay, self.calls, self.first, self.cancelled_at = delay, 0, None, None
-
-    def __call__(self) -> bool:
-        self.calls += 1
-        now = time.monotonic()
-        self.first = self.first or now
-        if now - self.first >= self.delay:
-            self.cancelled_at = self.cancelled_at or now
-            return True
-        return False
-
-
 @pytest.fixture
 def frozen_port():
     """A loopback port whose listener answers nothing (connections complete, as a frozen worker's do)."""
@@ -72,7 +56,7 @@ def frozen_port():
 def test_a_frozen_workers_handshake_is_late_within_the_requests_limit(frozen_port):
     """Connecting to a worker frozen whole: the ``auth`` reply is awaited as any reply, within the request's
     limit (not the socket's timeout), with the host's hook asked meanwhile (its progress bar and Cancel)."""
-    hook = Hook()
+    hook = CancelAfter()
     c = EngineClient(address=("127.0.0.1", frozen_port), timeout=15.0, token="t", on_wait=hook)
     start = time.monotonic()
     with pytest.raises(WorkerUnavailable, match="did not answer 'auth' within 1 s"):
@@ -84,7 +68,7 @@ def test_a_frozen_workers_handshake_is_late_within_the_requests_limit(frozen_por
 
 
 def test_the_user_can_give_up_during_the_handshake(frozen_port):
-    hook = Hook(delay=0.3)
+    hook = CancelAfter(0.3)
     c = EngineClient(address=("127.0.0.1", frozen_port), timeout=15.0, token="t", on_wait=hook)
     with pytest.raises(Cancelled, match="'auth'"):
         c.request("hello")
@@ -116,7 +100,7 @@ def test_a_frozen_worker_whose_caller_was_killed_is_stopped_and_replaced_within_
     plugin, command, state, first = _freeze_a_shared_worker(tmp_path)
     plugin.kill()
     plugin.wait()
-    hook = Hook()
+    hook = CancelAfter()
     start = time.monotonic()
     again = client.connect(EngineConfig(command=tuple(command), shared=True), state, timeout=15.0, on_wait=hook)
     try:
