@@ -233,6 +233,7 @@ def live_drag(doc, depth):
     c.previewed.connect(lambda rgb, w, h: previews.append(time.perf_counter()))
     c.rendered.connect(lambda info: writes.append((time.perf_counter(), info)))
     write_ms, start_ms = timed(c.host, "write"), timed(c.host, "begin_drag")
+    reread_ms = timed(c.host, "refresh_source")  # a drag's start reads the cutout again (where it changed)
     replies = trace_replies(c.engine)
     light = {"i": 0}
     editor = c.model.light_map.copy()
@@ -309,6 +310,7 @@ def live_drag(doc, depth):
         **{f"release_{k}_ms": _median([r[k] for r in releases]) for k in RELEASE_PARTS},
         "release_new_layer": any(r["created"] for r in releases),
         "drag_start_ms": _median(start_ms[1:]),  # the releases' drags (their undo step, the preview's background)
+        "drag_reread_ms": _median(reread_ms[1:]),  # the same drags' cutout read again (or not: nothing changed)
         "release_reply_chunks": _median([r["reply_chunks"] for r in releases]),
         "release_layer_mb": _median([r["layer_mb"] for r in releases]),
         "total_s": round(time.perf_counter() - t0, 2),

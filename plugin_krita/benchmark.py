@@ -106,7 +106,7 @@ def main() -> None:
     print("a light dragged on a 2000 x 2000 canvas (60 Hz mouse moves): the docker's live preview, then the layer")
     print(
         f"{'depth':6s} {'previews/s':>10s} {'median gap ms':>13s} {'layer writes':>12s} {'release to layer ms':>19s} "
-        f"{'vs U8':>6s} {'stall ms':>8s} {'drag start ms':>13s}"
+        f"{'vs U8':>6s} {'stall ms':>8s} {'drag start ms':>13s} {'re-read ms':>10s}"
     )
     for depth, live in data["live"].items():
         ms = live["release_to_layer_ms"]
@@ -114,7 +114,8 @@ def main() -> None:
         print(
             f"{depth:6s} {live['previews_per_s']:10.1f} {live['median_preview_gap_ms']!s:>13s} "
             f"{live['layer_writes_during_drag']:12d} {ms!s:>19s} {ratio:>6s} "
-            f"{live['release_longest_stall_ms']!s:>8s} {live['drag_start_ms']!s:>13s}"
+            f"{live['release_longest_stall_ms']!s:>8s} {live['drag_start_ms']!s:>13s} "
+            f"{live.get('drag_reread_ms')!s:>10s}"
         )
     print("where a release's time goes (medians, ms)")
     parts = [
@@ -138,7 +139,9 @@ def main() -> None:
         f"release: medians of {data['live'][next(iter(data['live']))]['releases']} releases after short drags; "
         "stall: the longest the event loop did not turn from the release to the written layer; drag start: "
         "Krita's part of a drag's start (its undo step, the shadow layer replaced by a copy of itself, and the "
-        "preview's background). queued: release to the render request; waiting: the request to the reply's first "
+        "preview's background, taken again only where the image changed); re-read: the cutout read again before it "
+        "(only where an undoable change was made since it was read). queued: release to the render request; "
+        "waiting: the request to the reply's first "
         "byte less the render (a preview still in flight at the release, the worker reading the request and "
         "writing the reply); worker: its render, of which shadow (the shadow at the canvas's size: the network, "
         "and the traced lights on a thread beside it) and layer (the layer's pixels in the document's format); "
