@@ -50,6 +50,24 @@ def choose(controller, preset, live=True):
     controller.model.light_map = lm.preset(preset)
 
 
+def edit_in_box(doc, action, box):
+    """Krita's ``action`` (Edit > Clear, Fill with Foreground Color) on the active layer within ``box`` (x, y, w,
+    h), as a user does: a selection made, the edit, the selection gone; each an undo command (the docker reads the
+    cutout again only after one: Node.setPixelData makes none)."""
+    from krita import Selection
+
+    selection = Selection()
+    selection.select(*box, 255)
+    doc.setSelection(selection)
+    pump(0.3)
+    Krita.instance().action(action).trigger()
+    doc.waitForDone()
+    pump(0.3)
+    Krita.instance().action("deselect").trigger()
+    doc.waitForDone()
+    pump(0.3)
+
+
 def history_step(window, rows_back):
     """Click the row ``rows_back`` above (negative: below) the current one in the window's Undo History docker,
     as the user does: Krita goes to that step without its undo and redo actions."""
@@ -90,11 +108,12 @@ def main(*args):
         panel.generate.click()
         wait_idle(controller)
         whole = shadow_digest(doc)
-        person.setPixelData(bytes(4 * 80 * 90), 200, 180, 80, 90)  # the lower half erased
-        doc.refreshProjection()
+        keys = [controller._cutout_key]  # the cutout the worker renders from: its alpha's digest
+        edit_in_box(doc, "clear", (200, 180, 80, 90))  # the lower half erased
         choose(controller, "low-sun-right")  # Live: rendered at once
         wait_idle(controller)
         by_light = shadow_digest(doc)
+        keys.append(controller._cutout_key)
         panel.generate.click()  # what Generate casts from the layer as it is now, with that light
         wait_idle(controller)
         out["stale"] = {
@@ -102,10 +121,10 @@ def main(*args):
             "by_light": by_light,
             "by_generate": shadow_digest(doc),
             "messages": list(controller.model.status),
+            "keys": keys + [controller._cutout_key],
         }
         # ... and after more alpha painted, a light drag's release casts it too
-        person.setPixelData(bytes([200, 90, 40, 255]) * (40 * 90), 240, 180, 40, 90)
-        doc.refreshProjection()
+        edit_in_box(doc, "fill_selection_foreground_color", (240, 180, 40, 90))
         editor = controller.model.light_map.copy()
         for i in range(6):
             editor.move(0, 0.3 + 0.02 * i, editor.lights[0].v)
@@ -114,9 +133,12 @@ def main(*args):
         controller.model.edit_light_map(editor, False)
         wait_idle(controller)
         dragged = shadow_digest(doc)
+        keys.append(controller._cutout_key)
         panel.generate.click()
         wait_idle(controller)
-        out["stale"].update(dragged=dragged, dragged_by_generate=shadow_digest(doc))
+        out["stale"].update(
+            dragged=dragged, dragged_by_generate=shadow_digest(doc), drag_keys=keys[-1:] + [controller._cutout_key]
+        )
 
         # 2. A step chosen in the Undo History docker: two back (the last Generate's replacement undone: its
         # shadow goes, the one before comes back), then both again; the cutout's layer stays active

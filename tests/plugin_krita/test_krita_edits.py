@@ -17,6 +17,11 @@ def test_the_docker_follows_edits_made_outside_it(tmp_path):
     assert stale["by_light"] == stale["by_generate"], stale
     assert stale["dragged"] == stale["dragged_by_generate"], stale
     assert stale["messages"][0] == "info", stale
+    # the worker's cutout: a new one after the erase, read again by the light change (not by Generate); the same
+    # after the drag's release as after the Generate that follows it
+    keys = stale["keys"]
+    assert keys[1] != keys[0] and keys[1] == keys[2], stale
+    assert stale["drag_keys"][0] == stale["drag_keys"][1] != keys[2], stale
 
     # two steps back in the Undo History docker bring the previous shadow layer back, which Krita activates:
     # the cutout's layer is active again; and two steps forward

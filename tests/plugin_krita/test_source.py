@@ -167,3 +167,126 @@ def test_a_layer_gone_keeps_the_source_and_an_emptied_one_says_so():
     layer.parent, layer.alpha = True, {}
     with pytest.raises(SourceError, match="empty on the canvas"):
         refresh_source(source)
+
+
+# -- the read skipped while Krita's undo history stands still (KritaHost, HistoryStamp) --------------------------
+
+
+@pytest.fixture
+def history(qapp):
+    """A main window with an Undo History docker whose list's model a test appends to: a new undo command."""
+    from PyQt5.QtGui import QStandardItem, QStandardItemModel
+    from PyQt5.QtWidgets import QDockWidget, QListView, QMainWindow
+
+    from plugin_krita.ssn_shadow.adapters.host import HISTORY_DOCKER
+
+    window, dock, view, model = QMainWindow(), QDockWidget(), QListView(), QStandardItemModel()
+    dock.setObjectName(HISTORY_DOCKER)
+    view.setModel(model)
+    dock.setWidget(view)
+    window.addDockWidget(1, dock)  # Qt.LeftDockWidgetArea; hidden: Krita's hidden dockers follow the stack too
+    KritaStandIn.window = window
+    yield lambda name: model.appendRow(QStandardItem(name))
+    KritaStandIn.window = None
+    window.deleteLater()
+
+
+class KritaStandIn:
+    """Krita's active window (None: none), the one main window a test made."""
+
+    window = None
+
+    def activeWindow(self):  # noqa: N802
+        window = self.window
+        return None if window is None else type("Window", (), {"qwindow": lambda _: window})()
+
+
+class Doc(Document):
+    def setActiveNode(self, node):  # noqa: N802
+        pass
+
+
+def krita_host(monkeypatch, shots):
+    from plugin_krita.ssn_shadow.adapters import host as host_module
+
+    def thumbnail(document, side):
+        shots.append(side)
+        return 1, 1, bytes(4)
+
+    monkeypatch.setattr(host_module, "projection_thumbnail", thumbnail)
+    monkeypatch.setattr(host_module, "preview_background", lambda document, node, side: thumbnail(document, side))
+    return host_module.KritaHost(KritaStandIn())  # type: ignore[arg-type]
+
+
+def test_the_cutout_is_not_read_again_until_krita_records_an_undoable_change(history, monkeypatch):
+    host = krita_host(monkeypatch, [])
+    layer = Layer("F32", box(10, 5, 20, 25))
+    source = host.read_source(Doc(layer))
+    reads = layer.reads
+    assert host.refresh_source(source) is source and layer.reads == reads  # nothing recorded since: no read
+    layer.alpha = box(10, 5, 15, 25)  # the right half erased (a stroke: its undo command follows)
+    history("Erase")
+    erased = host.refresh_source(source)
+    assert layer.reads == reads + 1 and erased is not source and erased.region == (10, 5, 5, 20)
+    assert host.refresh_source(erased) is erased and layer.reads == reads + 1
+    history("Undo")  # any change of the history reads it again, even one that leaves the pixels as they were
+    assert host.refresh_source(erased) is erased and layer.reads == reads + 2
+
+
+def test_without_a_window_the_cutout_is_read_at_each_edit(qapp, monkeypatch):
+    host = krita_host(monkeypatch, [])
+    layer = Layer("U8", box(10, 5, 20, 25))
+    source = host.read_source(Doc(layer))
+    reads = layer.reads
+    assert host.refresh_source(source) is source and host.refresh_source(source) is source
+    assert layer.reads == reads + 2
+
+
+def test_the_plugins_own_layer_commands_keep_the_cutout_and_the_preview_background(history, monkeypatch):
+    from plugin_krita.ssn_shadow.adapters.krita_document import WriteResult
+
+    shots: list[int] = []
+    host = krita_host(monkeypatch, shots)
+
+    def take_over(document, node, while_out):  # a layer removed, its copy added: two undo commands
+        history("Remove Layer")
+        while_out()
+        history("Add Layer")
+        return WriteResult("copy", True, "", "copy")
+
+    def write(document, node, pixels, rect, new_step, blend):
+        history("Add Layer")
+        return WriteResult("shadow", True, "", "shadow")
+
+    monkeypatch.setattr(host.writer, "take_over", take_over)
+    monkeypatch.setattr(host.writer, "write", write)
+    layer = Layer("F32", box(10, 5, 20, 25))
+    source = host.read_source(Doc(layer))
+    host.write(source, b"", (0, 0, 0, 0), True, "normal")  # Generate's layer
+    host.preview_background(source, 160)  # the preview after it
+    reads = layer.reads
+    for _ in range(2):  # two drags: the cutout not read again, the image without its shadow kept
+        assert host.refresh_source(source) is source
+        assert host.begin_drag(source, 160)[0] == (1, 1, bytes(4))
+    assert layer.reads == reads and shots == [160]
+    host.begin_drag(source, 120)  # the preview drawn smaller: taken again
+    history("Brush stroke")  # the image painted on: both taken again
+    host.refresh_source(source)
+    host.begin_drag(source, 120)
+    assert layer.reads == reads + 1 and shots == [160, 120, 120]
+
+
+def test_another_active_window_reads_the_cutout_again(history, monkeypatch):
+    from PyQt5.QtWidgets import QMainWindow
+
+    host = krita_host(monkeypatch, [])
+    layer = Layer("U8", box(10, 5, 20, 25))
+    source = host.read_source(Doc(layer))
+    reads, first = layer.reads, KritaStandIn.window
+    KritaStandIn.window = other = QMainWindow()  # no Undo History docker: nothing to go by
+    assert host.refresh_source(source) is source and host.refresh_source(source) is source
+    assert layer.reads == reads + 2
+    KritaStandIn.window = first  # back: it was read meanwhile, under another window's stamp
+    assert host.refresh_source(source) is source and layer.reads == reads + 3
+    assert host.refresh_source(source) is source and layer.reads == reads + 3
+    other.deleteLater()

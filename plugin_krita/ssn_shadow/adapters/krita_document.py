@@ -120,8 +120,9 @@ def refresh_source(source: Source) -> Source:
     selection is gone, keeps ``source``. SourceError where the cutout is now empty or opaque everywhere.
 
     A libkis node has no change counter or signal, so the alpha is read again and compared: on a 4000 x 3000
-    layer about 45 ms at 8 bit (docs/krita.md, *The cutout read again*); the docker does it once per edit (the
-    start of a drag, a click), not per frame."""
+    layer 63 to 70 ms at 8 bit, 338 to 394 ms at 32-bit float (docs/krita.md, *The cutout read again*); the
+    docker does it once per edit (the start of a drag, a click), not per frame, and only where Krita's undo
+    history changed since the last read (``host.HistoryStamp``)."""
     document, node = source.document, source.node
     if source.from_selection:
         selection = document.selection()
