@@ -46,6 +46,7 @@ def open_session(
     horizon: float | None = None,
     fov: float | None = None,
     split: bool = True,
+    layer_opacity: float = 1.0,
 ) -> ShadowSession | LayerSession:
     """The shadow session for a layer's alpha: a :class:`ShadowSession` where it holds one object (or where
     ``split`` is False: the whole alpha as one object), else a :class:`LayerSession` of its objects.
@@ -60,6 +61,8 @@ def open_session(
         The camera: the horizon as a canvas row and the canvas's vertical field of view in degrees.
     split : bool
         Whether to split the alpha into objects (:func:`ssn_engine.objects.split_objects`).
+    layer_opacity : float
+        The opacity the alpha does not carry (a host layer's, times its groups'): every shadow is scaled by it.
 
     Returns
     -------
@@ -67,10 +70,11 @@ def open_session(
     """
     layer = split_objects(alpha) if split else None
     if layer is None:
-        return ShadowSession(alpha, method, horizon, fov)
+        return ShadowSession(alpha, method, horizon, fov, layer_opacity=layer_opacity)
     if len(layer.objects) == 1:  # without the specks left out: they would change its frame and camera
-        return ShadowSession(layer.alpha_of(0, alpha) if layer.left_out else alpha, method, horizon, fov)
-    return LayerSession(layer, alpha, method, horizon, fov)
+        alpha = layer.alpha_of(0, alpha) if layer.left_out else alpha
+        return ShadowSession(alpha, method, horizon, fov, layer_opacity=layer_opacity)
+    return LayerSession(layer, alpha, method, horizon, fov, layer_opacity)
 
 
 def combine_shadows(shadows: list[CanvasShadow], hard_share: float) -> CanvasShadow:
@@ -109,16 +113,17 @@ class LayerSession:
         method: ShadowMethod,
         horizon: float | None = None,
         fov: float | None = None,
+        layer_opacity: float = 1.0,
     ) -> None:
         self.method = method
         self.mask, self.framing = frame_alpha(alpha, method.resolution)
-        main = ShadowSession(objects.alpha_of(0, alpha), method, horizon, fov)
+        main = ShadowSession(objects.alpha_of(0, alpha), method, horizon, fov, layer_opacity=layer_opacity)
         read = main.camera_read
         if read is not None:  # the largest object's reading, the camera of them all
             horizon, fov = read["horizon"], read["fov"]
         # one object's canvas-sized alpha at a time
         others = (
-            ShadowSession(objects.alpha_of(i, alpha), method, horizon, fov, read is not None, clamp=True)
+            ShadowSession(objects.alpha_of(i, alpha), method, horizon, fov, read is not None, True, layer_opacity)
             for i in range(1, len(objects.objects))
         )
         self.parts = [main, *others]

@@ -87,6 +87,13 @@ def _in_fov_range(framing: Framing, cameras: np.ndarray) -> np.ndarray:
     return np.array([camera_input(framing, horizon, float(np.clip(fov, *FOV_RANGE)), clamp=True)], cameras.dtype)
 
 
+def check_layer_opacity(value: object) -> float:
+    """``value`` as a float when it is a layer's opacity the engine takes (0 to 1), else ValueError."""
+    if isinstance(value, bool) or not isinstance(value, (int, float)) or not 0.0 <= value <= 1.0:
+        raise ValueError(f"layer_opacity: expected the layer's opacity from 0 to 1, got {value!r}")
+    return float(value)
+
+
 def no_shadow_reason(light_map: LightMap, shadow: CanvasShadow) -> str | None:
     """Why a rendered shadow shows nothing (:data:`NO_LIGHT` or :data:`HIDDEN`), or None when it shows."""
     if light_map.is_dark:
@@ -97,7 +104,8 @@ def no_shadow_reason(light_map: LightMap, shadow: CanvasShadow) -> str | None:
 class ShadowSession:
     """Shadow rendering for one canvas alpha with one method; ``horizon`` (a canvas row) and ``fov`` (the
     canvas's vertical field of view, degrees) give the camera, else the method assumes the default one; ``read``:
-    the camera given is a model's reading (another object's in the same layer), not the artist's."""
+    the camera given is a model's reading (another object's in the same layer), not the artist's;
+    ``layer_opacity``: the opacity the alpha does not carry (a host layer's, times its groups')."""
 
     def __init__(
         self,
@@ -107,16 +115,18 @@ class ShadowSession:
         fov: float | None = None,
         read: bool = False,
         clamp: bool = False,
+        layer_opacity: float = 1.0,
     ) -> None:
         self.method = method
         self.mask, self.framing = frame_alpha(alpha, method.resolution)
         x0, y0, x1, y1 = self.framing.bbox
         self._cutout = alpha[y0:y1, x0:x1].copy()  # the cutout at the canvas's resolution, for the tracer
         # A half-transparent cutout lets that share of the light through: every part casts the shadow of its
-        # opaque shape (the mask and the cutout divided by the opacity), scaled by the opacity.
-        self.opacity = cutout_opacity(self.mask)
-        if 0.0 < self.opacity < 1.0:
-            self.mask = np.minimum(self.mask / np.float32(self.opacity), 1.0)
+        # opaque shape (the mask and the cutout divided by its body's opacity), scaled by the opacity it shows.
+        self.body_opacity = cutout_opacity(self.mask)
+        if 0.0 < self.body_opacity < 1.0:
+            self.mask = np.minimum(self.mask / np.float32(self.body_opacity), 1.0)
+        self.opacity = self.body_opacity * check_layer_opacity(layer_opacity)
         self.edits: list[dict[str, Any]] = []
         self._card: GeometricCard | None = None  # traces long shadows for methods without a card of their own
         self.lift, self.thickness = 0.0, None  # the artist's geometry (:meth:`set_geometry`)
@@ -227,8 +237,8 @@ class ShadowSession:
             self._heights = (read(self.mask[None], self.used_cameras) if read is not None else None,)
         heights = self._heights[0]
         cutout = as_unit_float(self._cutout)
-        if 0.0 < self.opacity < 1.0:
-            np.minimum(cutout / np.float32(self.opacity), 1.0, out=cutout)
+        if 0.0 < self.body_opacity < 1.0:
+            np.minimum(cutout / np.float32(self.body_opacity), 1.0, out=cutout)
         return ContactTracer(
             cutout,
             self.framing,

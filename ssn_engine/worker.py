@@ -168,7 +168,7 @@ class Worker:
         alpha = to_array(buffers["alpha"])  # 2D and bounded: check_request
         _check_alpha(alpha)
         horizon, fov = _camera(header["camera"]) if header.get("camera") is not None else (None, None)
-        session = open_session(alpha, self.loaded.method, horizon, fov)
+        session = open_session(alpha, self.loaded.method, horizon, fov, layer_opacity=header.get("layer_opacity", 1.0))
         if "lift" in header or "thickness" in header:
             session.set_geometry(header.get("lift", 0.0), header.get("thickness"))
         key = f"c{next(self._ids)}"

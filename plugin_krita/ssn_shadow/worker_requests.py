@@ -13,9 +13,13 @@ __all__ = ["preview", "render", "set_cutout", "set_geometry"]
 
 
 def set_cutout(source: Source, camera: dict | None) -> tuple[dict[str, Any], dict[str, protocol.Buffer]]:
-    """``set_cutout``: the source's canvas-sized alpha, and the given camera if there is one."""
+    """``set_cutout``: the source's canvas-sized alpha, the layer's opacity where it is below 1 (the alpha does
+    not carry it), and the given camera if there is one."""
     alpha = protocol.Buffer(source.dtype, (source.height, source.width), source.alpha)
-    return ({"camera": camera} if camera else {}), {"alpha": alpha}
+    params: dict[str, Any] = {"camera": camera} if camera else {}
+    if source.opacity < 1.0:
+        params["layer_opacity"] = source.opacity
+    return params, {"alpha": alpha}
 
 
 def set_geometry(model: ShadowModel, cutout: str) -> dict[str, Any]:

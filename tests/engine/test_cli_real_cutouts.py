@@ -9,14 +9,20 @@ from __future__ import annotations
 
 import contextlib
 import io
+import json
 import re
 
 import numpy as np
 import pytest
+from engine_helpers import converse
 from PIL import Image
 from skimage import data, transform
 
 from ssn_engine.cli import main
+from ssn_engine.host_kit.light_map import preset
+from ssn_engine.layer_session import open_session
+from ssn_engine.methods import load_method
+from ssn_engine.worker import Worker
 
 W, H = 2000, 1500
 READ = re.compile(r"camera read from the cutout's outline: --horizon (-?\d+) --fov (\d+)")
@@ -92,3 +98,18 @@ def test_a_half_transparent_cutout_casts_the_opaque_shape_as_dark_as_it_is_opaqu
     shadow, _ = render(tmp_path, "faint", alpha, capsys)
     assert cosine(shadow, opaque[0]) > 0.99
     assert shadow.sum() / opaque[0].sum() == pytest.approx(level, abs=0.03)
+
+
+def test_a_layers_opacity_the_alpha_does_not_carry_scales_its_shadow():
+    """A host sends a layer's opacity beside its alpha (``set_cutout``'s ``layer_opacity``): a horse on a 50 %
+    layer casts the opaque horse's shadow at half its darkness; a value outside 0 to 1 is refused by name."""
+    method = load_method("auto").method
+    sun = preset("sun")
+    full, half = (open_session(horse(), method, layer_opacity=o).render(sun).full_canvas(W, H) for o in (1.0, 0.5))
+    assert half.sum() / full.sum() == pytest.approx(0.5, abs=0.02) and cosine(half, full) > 0.999
+    worker = Worker(load_method("geometric"))
+    alpha = horse()
+    entry = {"name": "alpha", "dtype": "uint8", "shape": list(alpha.shape), "nbytes": alpha.size}
+    request = {"id": 1, "cmd": "set_cutout", "layer_opacity": 1.5, "buffers": [entry]}
+    reply = converse(worker, json.dumps(request).encode() + b"\n" + alpha.tobytes())[0][0]
+    assert reply["error"]["type"] == "BadRequest" and "layer_opacity: expected" in reply["error"]["message"]

@@ -5,6 +5,7 @@ import struct
 
 import pytest
 
+from plugin_krita.ssn_shadow import worker_requests
 from plugin_krita.ssn_shadow.adapters.krita_document import SourceError, read_source, refresh_source
 
 W, H = 40, 30
@@ -32,12 +33,30 @@ class Uid:
         return "{person}"
 
 
+class Group:
+    """The group a layer lies in, itself in the image's root (whose parent is None)."""
+
+    def __init__(self, opacity=255):
+        self.level = opacity
+
+    def opacity(self):
+        return self.level
+
+    def parentNode(self):  # noqa: N802
+        return Root()
+
+
+class Root:
+    def parentNode(self):  # noqa: N802
+        return None
+
+
 class Layer:
     """A paint layer of ``depth`` whose pixels are a dict (x, y) -> alpha in 0..1 (colour black)."""
 
-    def __init__(self, depth="U8", alpha=None, parent=True):
+    def __init__(self, depth="U8", alpha=None, parent=True, opacity=255, group_opacity=255):
         self.depth, self.alpha, self.parent = depth, dict(alpha or {}), parent
-        self.reads = 0
+        self.reads, self.level, self.group = 0, opacity, Group(group_opacity)
 
     def name(self):
         return "Person"
@@ -46,7 +65,10 @@ class Layer:
         return Uid()
 
     def parentNode(self):  # noqa: N802
-        return object() if self.parent else None
+        return self.group if self.parent else None
+
+    def opacity(self):
+        return self.level
 
     def colorModel(self):  # noqa: N802
         return "RGBA"
@@ -136,6 +158,22 @@ def test_an_unchanged_cutout_is_the_same_source_and_a_changed_one_a_new_key(dept
     painted = refresh_source(half)
     assert painted is not half and painted.key != half.key and painted.region == half.region
     assert read_source(doc).alpha == painted.alpha  # what a Generate would read
+
+
+def test_the_layers_opacity_and_its_groups_go_with_the_cutout_and_a_change_of_it_is_a_new_source():
+    """The alpha does not carry the layer's opacity: a layer at 50 % in a group at 80 % shows at 40 %, sent as
+    the cutout's ``layer_opacity``; an opacity changed since is a new source (a new key), a selection's is 1."""
+    layer = Layer("U8", box(10, 5, 20, 25), opacity=128, group_opacity=204)
+    source = read_source(Document(layer))
+    assert source.opacity == pytest.approx(128 / 255 * 204 / 255)
+    params, _ = worker_requests.set_cutout(source, None)
+    assert params == {"layer_opacity": source.opacity}
+    layer.level = layer.group.level = 255
+    opaque = refresh_source(source)
+    assert opaque is not source and opaque.key != source.key and opaque.alpha == source.alpha
+    assert "layer_opacity" not in worker_requests.set_cutout(opaque, None)[0]
+    selected = read_source(Document(layer, Selection((10, 5, 20, 25))))
+    assert selected.from_selection and selected.opacity == 1.0
 
 
 def test_the_layer_alpha_is_compared_within_its_region_of_a_wide_layer():
