@@ -37,10 +37,12 @@ def main(*args):
         doc = k.createDocument(W, H, "ssn-objects", "RGBA", "U8", "", 72.0)
         k.openWindow().addView(doc)  # the active layer follows a view
         root = doc.rootNode()
-        layers = {"Both": list(POSTS.values()), "A": [POSTS["A"]], "B": [POSTS["B"]]}
+        layers = {"Both": list(POSTS.values()), "A": [POSTS["A"]], "B": [POSTS["B"]], "A at half": [POSTS["A"]]}
         for name, boxes in layers.items():
             node = doc.createNode(name, "paintlayer")
             paint(node, boxes)
+            if name == "A at half":
+                node.setOpacity(128)  # the layer's opacity, which its pixels' alpha does not carry
             root.addChildNode(node, None)
         engine = EngineProcess()
         host = KritaHost(k)

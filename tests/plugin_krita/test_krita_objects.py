@@ -1,5 +1,6 @@
 """Two objects on one layer inside real Krita (kritarunner), against the real worker: each casts its own shadow,
-the one it casts alone, with no change to the plug-in (the engine splits the layer)."""
+the one it casts alone, with no change to the plug-in (the engine splits the layer); and a layer at half
+opacity casts its shape's shadow half as dark."""
 
 import sys
 
@@ -22,6 +23,9 @@ def test_two_objects_on_one_layer_in_real_krita(tmp_path):
     assert all(data["layers"].values()), data
     assert not [m for m in data["messages"] if m[0] == "error"], data["messages"]
     shadows = {name: np.fromfile(tmp_path / f"{name}.alpha", np.uint8).reshape(H, W) / 255.0 for name in data["layers"]}
+    half, full = shadows["A at half"], shadows["A"]  # a layer at 50 % opacity: its shape's shadow, half as dark
+    assert half.sum() / full.sum() == pytest.approx(128 / 255, abs=0.04)
+    assert (half * full).sum() / np.sqrt((half**2).sum() * (full**2).sum()) > 0.99
     for name, (x0, y0, x1, y1) in POSTS.items():
         alone = shadows[name]
         region = alone > 2 / 255
