@@ -28,7 +28,7 @@ class LightPlan:
     light_map: LightMap
     traced: tuple[GaussianLight, ...]
     broad: LightMap
-    shared: tuple[bool, ...] = ()  # per traced light: whether a share of it is in ``broad`` too
+    shared: tuple[bool, ...]  # per traced light: whether a share of it is in ``broad`` too
 
     @classmethod
     def of(cls, light_map: LightMap, lifted: float = 0.0) -> LightPlan:

@@ -35,7 +35,7 @@ from .framing import (
 from .hard_light import ContactTracer
 from .hemisphere import network_elm, render_light_map
 from .host_kit.camera_rules import DEFAULT_FOV, FOV_RANGE
-from .host_kit.geometry_rules import check_lift, check_thickness
+from .host_kit.geometry_rules import check_lift, check_thickness, ground_above_horizon
 from .host_kit.light_map import LightMap
 from .host_kit.shadow_notes import HIDDEN, NO_LIGHT
 from .host_kit.sky_map import NETWORK_SHAPE
@@ -178,11 +178,11 @@ class ShadowSession:
     def _check_lift(self, lift: float, cameras: np.ndarray | None) -> None:
         """A ValueError where ``lift`` puts the ground beneath the cutout at or above the horizon of ``cameras``
         (the frame camera input in use; an object seen above the horizon floats at least that high)."""
-        if lift <= 0 or cameras is None:
+        if cameras is None:
             return
         horizon = self.framing.canvas_camera(*cameras[0])[0]
         lowest = self.framing.bbox[3] - 1
-        if lowest + lift <= horizon:
+        if ground_above_horizon(lowest, lift, horizon):
             raise ValueError(
                 f"lift: {lift:g} puts the ground beneath the cutout at row {lowest + lift:.0f}, at or above the "
                 f"horizon (row {horizon:.0f}); the ground lies below it: give more than {horizon - lowest:.0f}"

@@ -10,7 +10,7 @@ from __future__ import annotations
 
 import math
 
-from .geometry_rules import MAX_LIFT_HEIGHTS, THICKNESS_RANGE
+from .geometry_rules import MAX_LIFT_HEIGHTS, THICKNESS_RANGE, ground_above_horizon, max_lift
 
 __all__ = ["clamp_lift", "clamp_thickness", "lowest_lift"]
 
@@ -29,7 +29,7 @@ def clamp_lift(
 ) -> tuple[float, str]:
     """``value`` (canvas rows) clamped to what the engine takes on a canvas ``canvas_height`` rows tall, given the
     cutout's lowest row and the horizon of the camera in use where known; and why it was clamped ("" if not)."""
-    most = MAX_LIFT_HEIGHTS * max(1, int(canvas_height))
+    most = max_lift(canvas_height)
     lift = float(value) if math.isfinite(value) else 0.0
     if lift < 0:
         return 0.0, f"Lift: {value:g} px is no distance below the object; set to 0 (it rests on the ground)."
@@ -38,7 +38,7 @@ def clamp_lift(
             f"Lift: {lift:g} px is more than {MAX_LIFT_HEIGHTS:g} canvas heights ({most:g} px, the most the engine "
             f"takes); set to {most:g}."
         )
-    if lift > 0 and lowest is not None and horizon is not None and lowest + lift <= horizon:
+    if lowest is not None and horizon is not None and ground_above_horizon(lowest, lift, horizon):
         least = min(most, lowest_lift(lowest, horizon))
         return least, (
             f"Lift: {lift:g} px puts the ground beneath the object at row {lowest + lift:.0f}, at or above the horizon "

@@ -11,7 +11,7 @@ from __future__ import annotations
 
 import math
 
-__all__ = ["MAX_LIFT_HEIGHTS", "THICKNESS_RANGE", "check_lift", "check_thickness"]
+__all__ = ["MAX_LIFT_HEIGHTS", "THICKNESS_RANGE", "check_lift", "check_thickness", "ground_above_horizon", "max_lift"]
 
 MAX_LIFT_HEIGHTS = 20.0  # a lift of at most this many canvas heights: beyond it the foot is nowhere on the picture
 THICKNESS_RANGE = (0.0, 8.0)  # a flat sign to a rod seen end-on
@@ -24,10 +24,21 @@ def _number(value: object) -> float | None:
     return float(value)
 
 
+def max_lift(canvas_height: int) -> float:
+    """The largest lift the engine takes on a canvas ``canvas_height`` rows tall: :data:`MAX_LIFT_HEIGHTS` of it."""
+    return MAX_LIFT_HEIGHTS * max(1, int(canvas_height))
+
+
+def ground_above_horizon(lowest: float, lift: float, horizon: float) -> bool:
+    """Whether a lift of ``lift`` puts the ground beneath a cutout whose lowest row is ``lowest`` at or above the
+    horizon at row ``horizon`` (canvas rows), which the engine refuses: resting (0) is always taken."""
+    return lift > 0 and lowest + lift <= horizon
+
+
 def check_lift(value: object, canvas_height: int, name: str = "lift") -> float:
     """``value`` as a float when it is a lift the engine takes on a canvas ``canvas_height`` rows tall (0 to
-    :data:`MAX_LIFT_HEIGHTS` canvas heights), else ValueError naming ``name`` and the range."""
-    most = MAX_LIFT_HEIGHTS * max(1, int(canvas_height))
+    :func:`max_lift`), else ValueError naming ``name`` and the range."""
+    most = max_lift(canvas_height)
     lift = _number(value)
     if lift is None or not 0.0 <= lift <= most:
         raise ValueError(

@@ -726,7 +726,7 @@ class ShadowPanel(QWidget):
         try:
             if m.ground is not None:
                 height = m.ground[1][1]
-                self.lift_box.setMaximum(min(MAX_BOX, round(geometry_rules.MAX_LIFT_HEIGHTS * height)))
+                self.lift_box.setMaximum(min(MAX_BOX, round(geometry_rules.max_lift(height))))
                 self.lift_slider.setMaximum(max(1, height))
             self.lift_box.setValue(round(m.lift))
             self.lift_slider.setValue(round(m.lift))
