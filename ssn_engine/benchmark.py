@@ -148,7 +148,7 @@ def run_benchmark(repeats: int = 20, method: str = "auto") -> dict[str, np.ndarr
     results["sun moved 4000x3000 (traced+layer)"] = time_calls(
         lambda: shadow_layer(session.render(suns())), min(repeats, DRAG - 2), warmup=2
     )
-    # the artist's geometry dragged: a new lift each time (the tracer's cards again, the pixel heights kept)
+    # the artist's geometry dragged: a new lift each time (the tracer's cards again, the cutout's reading kept)
     lifts = _alternating([8.0 * k for k in range(DRAG)])
     sun = LightMap([GaussianLight.disk(0.35, 0.6, SUN, 1.0)])
 

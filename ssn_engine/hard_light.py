@@ -115,6 +115,7 @@ HORIZON_GAP = 0.02  # share of the frame below the horizon that a foot's row is 
 # infinity at the horizon: a foot read there is read a little nearer)
 MAX_SURFACE_DEPTH = 2.0  # a pixel's surface lies behind its card by at most this many times the cutout's size
 PAD = 0.25  # share of the cutout's size added above and beside it, where its blurred copies spread
+PAD_STEP = 64  # pixels: a lifted card's pad grows with the lift in steps of this
 UNCLIPPED_MARGIN = 0.5  # share of the canvas a layer that may leave the canvas reaches beyond each side
 
 
@@ -190,6 +191,12 @@ class CardTracer:
         below the surface the pixel shows (:func:`foot_rows`). Where it lies above the card's foot, the pixel's
         surface lies behind the card by the ground's distance between the two (:meth:`_surface_depth`); None:
         every surface on the card.
+    lift : int
+        How many of the rows down to ``foot`` are the artist's lift (the cutout floats): the pad above and beside
+        the cutout grows with it in steps.
+    blurred : tuple or None
+        The :attr:`blurred_copies` of a tracer of the same ``alpha`` and origin whose foot or depth differ (the
+        artist's lift or thickness changed): taken over where its pad is this one's.
     """
 
     def __init__(
@@ -201,6 +208,8 @@ class CardTracer:
         foot: int | None = None,
         thickness: np.ndarray | None = None,
         feet: np.ndarray | None = None,
+        lift: int = 0,
+        blurred: tuple[int, dict[float, dict[int, tuple[int, int, _Level]]]] | None = None,
     ) -> None:
         alpha = np.clip(np.asarray(alpha, np.float32), 0.0, 1.0)
         x0, y0 = origin if origin is not None else framing.bbox[:2]
@@ -235,7 +244,9 @@ class CardTracer:
             alpha[solid[-1] + 1 :] = alpha[solid[-1]]
         cols = np.flatnonzero((alpha > 0).any(axis=0))
         self._x_cols = (cols[0] * s + framing.offset_x + x0 * s, (cols[-1] + 1) * s + framing.offset_x + x0 * s)
-        pad = math.ceil(PAD * max(foot, width))  # room for the blur above and beside the cutout (not below: ground)
+        # room for the blur above and beside the cutout (not below: ground); a lifted card's grows with the lift in
+        # steps, so that a card whose foot moves a little (a lift dragged) keeps its pad and its blurred copies
+        pad = math.ceil(PAD * max(foot - lift, width)) + PAD_STEP * math.ceil(PAD * lift / PAD_STEP)
 
         def padded(values: np.ndarray) -> np.ndarray:  # with the pad, and zeros down to the foot (a card standing
             out = np.zeros((pad + foot, width + 2 * pad), np.float32)  # behind its lowest row)
@@ -249,7 +260,11 @@ class CardTracer:
         self._sources: dict[int, _Source] = {}
         self._swept_depths: dict[tuple[int, int], tuple[np.ndarray, np.ndarray]] = {}  # per reduction and sweep's
         self._on_card: dict[int, np.ndarray | None] = {}  # per reduction: the pixels whose surface is the card's
-        self._levels: dict[float, dict[int, tuple[int, int, _Level]]] = {}  # per scale, level: rows, blurred
+        # per scale, level: rows, blurred; those of the same alpha with the same pad (a card whose foot moved) hold
+        self._levels: dict[float, dict[int, tuple[int, int, _Level]]] = (
+            blurred[1] if blurred is not None and blurred[0] == pad else {}
+        )
+        self.blurred_copies = (pad, self._levels)  # what a card of the same alpha and another foot can take over
 
     # -- the cutout at the output's resolution ------------------------------------------------------------------
     def _source(self, out_scale: float) -> _Source:
@@ -272,13 +287,14 @@ class CardTracer:
 
     def _level(self, source: _Source, k: int, r0: int, r1: int) -> _Level:
         """The source blurred by a Gaussian of sigma ``MIN_SIGMA * 2^((k - 1) / LEVELS_PER_OCTAVE)`` pixels
-        (k = 0: unblurred), over at least its rows [r0, r1): blurred only over the rows a light needs of it (each
-        level serves a band of rows), kept and widened as other lights need more."""
+        (k = 0: unblurred), over at least its rows [r0, r1): blurred first only over the rows a light needs of it
+        (each level serves a band of rows), and over all rows once another light needs others."""
         levels = self._levels.setdefault(source.scale, {})
         kept = levels.get(k)
         if kept is not None and kept[0] <= r0 and r1 <= kept[1]:
             return kept[2]
-        lo, hi = (r0, r1) if kept is None else (min(kept[0], r0), max(kept[1], r1))
+        # a level asked for more rows (another light's, another lift's) is blurred over all of them, once
+        lo, hi = (r0, r1) if kept is None else (0, source.alpha.shape[0])
         if k == 0:
             lo, hi, level = 0, source.alpha.shape[0], _Level.of(source.alpha)
         else:
@@ -1012,6 +1028,36 @@ def foot_rows(shape: tuple[int, int], framing: Framing, heights: np.ndarray) -> 
     return _enlarged(small, k, (h, w)) + (np.arange(h, dtype=np.float32) + 0.5)[:, None]
 
 
+@dataclass(frozen=True)
+class ContactReading:
+    """What a cutout's tracer reads from it once, whatever the artist's lift and thickness: the cutout's alpha,
+    its contact line's bands (:func:`contact_bands`: columns and foot row each), its depth (:func:`depth_map`)
+    and the thickness that reads as, and, with the frame's pixel heights, each pixel's foot row
+    (:func:`foot_rows`)."""
+
+    alpha: np.ndarray
+    bands: list[tuple[int, int, int]]
+    depth: np.ndarray
+    thickness_read: float
+    feet: np.ndarray | None
+
+    @classmethod
+    def of(
+        cls, alpha: np.ndarray, framing: Framing, camera: tuple[float, float] | None, heights: np.ndarray | None = None
+    ) -> ContactReading:
+        """The reading of ``alpha`` (the cutout's crop at ``framing.bbox``) with ``camera``; ``heights`` (N, N),
+        optional: the frame's pixel heights."""
+        alpha = np.clip(np.asarray(alpha, np.float32), 0.0, 1.0)
+        depth = depth_map(alpha)
+        return cls(
+            alpha,
+            contact_bands(alpha, footprint_rise(alpha, framing, camera)),
+            depth,
+            read_thickness(alpha, depth),
+            None if heights is None else foot_rows(alpha.shape, framing, heights),
+        )
+
+
 class ContactTracer:
     """The cutout as cards standing on its contact line: one :class:`CardTracer` per band of
     :func:`contact_bands`, cross-faded where two meet, their shadows added; ``heights`` (N, N), optional: the
@@ -1021,7 +1067,8 @@ class ContactTracer:
     card's foot and every pixel's foot that many rows, so the object floats above the ground that far (its
     cards stand nearer, on the ground beneath it); ``thickness``, where given, scales the depth each pixel
     reaches behind its surface so that the object's depth over its width is that (:func:`read_thickness` is the
-    reading it replaces)."""
+    reading it replaces). :meth:`of_reading` makes the cards of a reading already made (a new lift or thickness:
+    the cutout is not read again)."""
 
     def __init__(
         self,
@@ -1032,17 +1079,46 @@ class ContactTracer:
         lift: float = 0.0,
         thickness: float | None = None,
     ) -> None:
-        alpha = np.clip(np.asarray(alpha, np.float32), 0.0, 1.0)
-        bands = contact_bands(alpha, footprint_rise(alpha, framing, camera))
+        self._make_cards(ContactReading.of(alpha, framing, camera, heights), framing, camera, lift, thickness)
+
+    @classmethod
+    def of_reading(
+        cls,
+        reading: ContactReading,
+        framing: Framing,
+        camera: tuple[float, float] | None,
+        lift: float = 0.0,
+        thickness: float | None = None,
+        blurred: dict[int, tuple[int, dict]] | None = None,
+    ) -> ContactTracer:
+        """The tracer of a cutout read before (:class:`ContactReading`), with the artist's geometry; ``blurred``:
+        the :attr:`blurred_copies` of a tracer of the same reading (another lift or thickness), which its cards
+        take over."""
+        tracer = cls.__new__(cls)
+        tracer._make_cards(reading, framing, camera, lift, thickness, blurred or {})
+        return tracer
+
+    def _make_cards(
+        self,
+        reading: ContactReading,
+        framing: Framing,
+        camera: tuple[float, float] | None,
+        lift: float,
+        thickness: float | None,
+        blurred: dict[int, tuple[int, dict]] | None = None,
+    ) -> None:
+        alpha, bands, depth = reading.alpha, reading.bands, reading.depth
+        blurred = blurred or {}
         x0, y0 = framing.bbox[:2]
         self.cards: list[CardTracer] = []
+        self.blurred_copies: dict[
+            int, tuple[int, dict]
+        ] = {}  # per band: its card's (:attr:`CardTracer.blurred_copies`)
         width = alpha.shape[1]
-        depth = depth_map(alpha)
-        self.thickness_read = read_thickness(alpha, depth)
+        self.thickness_read = reading.thickness_read
         if thickness is not None:
             depth = depth * np.float32(thickness / self.thickness_read) if self.thickness_read > 0 else depth * 0
         rows = int(round(lift))
-        feet = None if heights is None else foot_rows(alpha.shape, framing, heights) + np.float32(rows)
         for i, (c0, c1, foot) in enumerate(bands):
             foot += rows
             weight = np.zeros(width, np.float32)
@@ -1065,10 +1141,13 @@ class ContactTracer:
                 origin=(x0 + a, y0),
                 foot=foot,
                 thickness=depth[:, a:b],
-                feet=None if feet is None else feet[:, a:b],
+                feet=None if reading.feet is None else reading.feet[:, a:b] + np.float32(rows),
+                lift=rows,
+                blurred=blurred.get(i),
             )
             if not card.empty:
                 self.cards.append(card)
+                self.blurred_copies[i] = card.blurred_copies
         self.empty = not self.cards
 
     def shadow(

@@ -32,7 +32,7 @@ from .framing import (
     placed_sum,
     shadow_to_canvas,
 )
-from .hard_light import ContactTracer
+from .hard_light import ContactReading, ContactTracer
 from .hemisphere import network_elm, render_light_map
 from .host_kit.camera_rules import DEFAULT_FOV, FOV_RANGE
 from .host_kit.geometry_rules import check_lift, check_thickness, ground_above_horizon
@@ -154,7 +154,8 @@ class ShadowSession:
             used = _in_fov_range(self.framing, used)
         self._check_lift(self.lift, used)
         self._tracer: ContactTracer | None = None  # made with the camera, on first use
-        self._heights: tuple[np.ndarray | None] | None = None  # the model's pixel heights, read with the tracer
+        self._reading: ContactReading | None = None  # the cutout read for the tracer (the model's pixel heights too)
+        self._blurred: dict[int, tuple[int, dict]] | None = None  # the cards' blurred copies of it, by band
         self.cameras, self.used_cameras = cameras, used
         # the share of the network's shadow a traced light's shadow is kept no lighter than (:meth:`to_canvas`)
         self.hedge = GIVEN_CAMERA_HEDGE if cameras is not None and not read else 1.0
@@ -228,25 +229,22 @@ class ShadowSession:
             self._tracer = self.make_tracer()
         return self._tracer
 
-    def make_tracer(self, reuse_heights: bool = True) -> ContactTracer:
-        """A new tracer of this cutout (the cutout's analysis: where each pixel's surface lies, for a model that
-        reads it, its depth and its cards). The model's pixel heights are read once per camera and kept, so a
-        change of the artist's geometry redoes only the cards (``reuse_heights`` False reads them again)."""
-        if self._heights is None or not reuse_heights:
+    def make_tracer(self, reuse_reading: bool = True) -> ContactTracer:
+        """A new tracer of this cutout. The cutout's reading (where each pixel's surface lies, for a model that
+        reads pixel heights, its depth and its contact line: :class:`ContactReading`) is made once per camera and
+        kept, so a change of the artist's geometry redoes only the cards (``reuse_reading`` False reads again)."""
+        camera = camera_at(self.used_cameras, 0)
+        if self._reading is None or not reuse_reading:
             read = getattr(self.method, "pixel_heights", None)
-            self._heights = (read(self.mask[None], self.used_cameras) if read is not None else None,)
-        heights = self._heights[0]
-        cutout = as_unit_float(self._cutout)
-        if 0.0 < self.body_opacity < 1.0:
-            np.minimum(cutout / np.float32(self.body_opacity), 1.0, out=cutout)
-        return ContactTracer(
-            cutout,
-            self.framing,
-            camera_at(self.used_cameras, 0),
-            None if heights is None else heights[0],
-            self.lift,
-            self.thickness,
-        )
+            heights = read(self.mask[None], self.used_cameras) if read is not None else None
+            cutout = as_unit_float(self._cutout)
+            if 0.0 < self.body_opacity < 1.0:
+                np.minimum(cutout / np.float32(self.body_opacity), 1.0, out=cutout)
+            self._reading = ContactReading.of(cutout, self.framing, camera, None if heights is None else heights[0])
+            self._blurred = None
+        tracer = ContactTracer.of_reading(self._reading, self.framing, camera, self.lift, self.thickness, self._blurred)
+        self._blurred = tracer.blurred_copies  # another lift or thickness of the same reading takes them over
+        return tracer
 
     def render_frame(self, plan: LightPlan) -> np.ndarray:
         """The network's frame shadows (2, N, N) of a light plan: of its broad lights (those not traced), and of

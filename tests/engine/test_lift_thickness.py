@@ -90,6 +90,21 @@ def test_no_geometry_and_lift_zero_are_the_same_shadow(method):
     np.testing.assert_array_equal(shadow_of(method, ball, preset("softbox"), 0.0, None), plain)
 
 
+def test_a_dragged_lift_casts_what_a_fresh_one_does(method):
+    """A lift dragged (each value after the last, the cutout's reading and the cards' blurred copies kept from one
+    to the next) casts at every step the shadow the same lift and thickness cast in a session of their own."""
+    ball = disc(W, H, *BALL)
+    light = sun(0.45, 3.0)
+    dragged = open_session(ball, method, *CAMERA)
+    dragged.render(light)
+    for lift, thickness in ((24.0, None), (40.0, None), (40.0, 0.5), (120.0, 0.5), (0.0, None)):
+        dragged.set_geometry(lift, thickness)
+        got = dragged.render(light).full_canvas(W, H)
+        want = shadow_of(method, ball, light, lift, thickness)
+        assert want.sum() > 500
+        np.testing.assert_allclose(got, want, atol=2 / 255)
+
+
 def test_every_object_of_a_layer_floats(method):
     alpha = np.maximum(disc(W, H, 250, 400, 70), disc(W, H, 650, 380, 60))
     session = open_session(alpha, method, *CAMERA)
