@@ -226,6 +226,7 @@ def test_metrics_of_the_truth_itself_are_perfect():
     assert m["dssim"] == pytest.approx(0.0, abs=1e-9)
     for name in ("gradient_energy", "dark_ratio", "contact_ratio", "iou"):
         assert m[name] == pytest.approx(1.0)
+    assert m["outline_distance"] == 0.0
     assert np.isnan(m["gap_ratio"])  # the shadow touches the object: nothing floats
 
 
@@ -242,6 +243,10 @@ def test_iou_and_gap_see_a_shadow_in_the_wrong_place():
     on, off = (metrics.score_case(p, truth, mask, horizon) for p in (glued, far))
     assert on["gap_ratio"] < 0.2 and off["gap_ratio"] == pytest.approx(2.0, rel=0.1)
     assert on["iou"] == pytest.approx(1 / 3, abs=0.02) and off["iou"] == pytest.approx(1 / 3, abs=0.02)
+    # the outlines: the same shadow's lie on each other; shifted 10 rows, the top and bottom edges lie 10 away and
+    # the sides' nearest points 0 to 10 away
+    assert metrics.score_case(truth, truth, mask, horizon)["outline_distance"] == 0.0
+    assert 4.0 <= on["outline_distance"] <= 10.0 and on["outline_distance"] == off["outline_distance"]
 
 
 def test_a_blurred_prediction_loses_band_pass_and_gradient_energy():
@@ -357,7 +362,7 @@ def _write_truth_as_predictions(out: Path, mode: str = "camera") -> None:
 def test_sheet_shows_truth_beside_prediction_for_each_size(tmp_path):
     _write_truth_as_predictions(tmp_path / "pred")
     names = [g.name for g in cases.read_groups(FIXTURE)]
-    sheet.write_sheet(FIXTURE, tmp_path / "pred", tmp_path / "sheet.png", names)
+    sheet.write_sheet(FIXTURE, [tmp_path / "pred"], tmp_path / "sheet.png", names)
     with Image.open(tmp_path / "sheet.png") as im:
         img = np.asarray(im)
     panel_h = round(sheet.PANEL_WIDTH * 192 / 256)
@@ -366,7 +371,12 @@ def test_sheet_shows_truth_beside_prediction_for_each_size(tmp_path):
     truth, pred = top[:, : sheet.PANEL_WIDTH], top[:, sheet.PANEL_WIDTH : 2 * sheet.PANEL_WIDTH]
     assert truth.min() < 100 and np.array_equal(truth, pred)  # a perfect prediction looks like the truth
     with pytest.raises(ValueError, match="unknown groups"):
-        sheet.write_sheet(FIXTURE, tmp_path / "pred", tmp_path / "x.png", ["nope"])
+        sheet.write_sheet(FIXTURE, [tmp_path / "pred"], tmp_path / "x.png", ["nope"])
+    # two programs side by side under one light size: the truth and each one's prediction
+    shutil.copytree(tmp_path / "pred", tmp_path / "other")
+    sheet.write_sheet(FIXTURE, [tmp_path / "pred", tmp_path / "other"], tmp_path / "two.png", names, angles=[3.0])
+    with Image.open(tmp_path / "two.png") as im:
+        assert im.size == (3 * sheet.PANEL_WIDTH, len(names) * (panel_h + sheet.LABEL))
 
 
 def test_mitsuba_casts_the_same_shadow_as_the_canvas_renderer():

@@ -4,6 +4,7 @@ python -m training.canvas_eval render [--out data/canvas_test] [--width 1024 --h
 python -m training.canvas_eval score --method cli [--data data/canvas_test] [--repo DIR] [--python EXE]
                                      --out data/canvas_eval/NAME
 python -m training.canvas_eval sheet --predictions data/canvas_eval/NAME [--out docs/img/canvas_eval_sheet.png]
+python -m training.canvas_eval prepare-outsource --git MIRROR [--out data/outsource_meshes]
 python -m training.canvas_eval mitsuba [--data data/canvas_test] [--groups 3]
 python -m training.canvas_eval oracle [--data data/canvas_test] [--out data/canvas_eval/oracle.json] [--sheet PNG]
 """
@@ -18,6 +19,7 @@ from training.data import render_bases
 
 from .mitsuba_check import compare
 from .oracle import run_oracle
+from .out_of_source import prepare
 from .render_set import render_set
 from .score import run_scoring
 from .sheet import write_sheet
@@ -33,13 +35,18 @@ def _render(args: argparse.Namespace) -> int:
     return 0
 
 
+def _prepare(args: argparse.Namespace) -> int:
+    prepare(args.git, args.out)
+    return 0
+
+
 def _score(args: argparse.Namespace) -> int:
     run_scoring(args.data, args.out, args.repo, args.python, args.modes, args.engine_args, args.jobs, args.max_groups)
     return 0
 
 
 def _sheet(args: argparse.Namespace) -> int:
-    write_sheet(args.data, args.predictions, args.out, args.groups, args.mode)
+    write_sheet(args.data, args.predictions, args.out, args.groups, args.mode, args.angles)
     return 0
 
 
@@ -69,9 +76,10 @@ def build_parser() -> argparse.ArgumentParser:
     r.add_argument("--threads", type=int, default=1)
     r.add_argument(
         "--split",
-        choices=["test", "val"],
+        choices=["test", "val", "outsource"],
         default="test",
-        help="whose shapes: the test set's, or the validation shapes' (a set to choose models by)",
+        help="whose shapes: the test set's, the validation shapes' (a set to choose models by), or every shape "
+        "of the out-of-source folder (prepare-outsource; SSN_MESHES pointing at it)",
     )
     r.add_argument(
         "--floating",
@@ -80,6 +88,13 @@ def build_parser() -> argparse.ArgumentParser:
         "its true lift (--lift) and camera",
     )
     r.set_defaults(func=_render)
+
+    q = sub.add_parser("prepare-outsource", help="write the out-of-source test shapes from a snapshot of their source")
+    q.add_argument(
+        "--git", type=Path, required=True, help="a git snapshot (bare) of alecjacobson/common-3d-test-models"
+    )
+    q.add_argument("--out", type=Path, default=Path("data/outsource_meshes"))
+    q.set_defaults(func=_prepare)
 
     s = sub.add_parser("score", help="render every case through the CLI and score it against the truth")
     s.add_argument("--method", choices=["cli"], default="cli", help="how predictions are made (the CLI)")
@@ -95,10 +110,11 @@ def build_parser() -> argparse.ArgumentParser:
 
     t = sub.add_parser("sheet", help="picture sheet: truth vs prediction under the three sizes")
     t.add_argument("--data", type=Path, default=DEFAULT_DATA)
-    t.add_argument("--predictions", type=Path, required=True, help="a 'score --out' folder")
+    t.add_argument("--predictions", type=Path, nargs="+", required=True, help="'score --out' folders, side by side")
     t.add_argument("--out", type=Path, default=Path("docs/img/canvas_eval_sheet.png"))
     t.add_argument("--groups", nargs="+", help="groups to show (default: four spread over the set)")
     t.add_argument("--mode", choices=["camera", "blind"], default="camera")
+    t.add_argument("--angles", type=float, nargs="+", help="only these light sizes (degrees)")
     t.set_defaults(func=_sheet)
 
     m = sub.add_parser("mitsuba", help="check truths against Mitsuba 3 ray casting (needs mitsuba)")

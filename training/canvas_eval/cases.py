@@ -64,10 +64,12 @@ class Group:
         return light_map_file(self.elevation, self.azimuth, angle)
 
 
-def pick_shapes(items: list[Item], quota: dict[str, int] = KIND_QUOTA, split: str = "test") -> list[Item]:
+def pick_shapes(items: list[Item], quota: dict[str, int] | None = KIND_QUOTA, split: str = "test") -> list[Item]:
     """``split`` items (the test set's; "val": a set to choose models by), in stable-hash order, up to ``quota``
-    per kind: distinct categories first, then any to fill the quota."""
+    per kind: distinct categories first, then any to fill the quota (None: every item of the split)."""
     ordered = sorted((it for it in items if it.split == split), key=lambda it: (stable_hash(it.id), it.id))
+    if quota is None:
+        return sorted(ordered, key=lambda it: (it.kind, it.id))
     picked: list[Item] = []
     for distinct in (True, False):
         for it in ordered:

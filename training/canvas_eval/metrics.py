@@ -26,7 +26,17 @@ MIN_CONTACT_RADIUS = 2.0  # pixels, on small canvases: the dilated mask takes th
 MIN_CONTACT = 0.05  # a contact region whose true mean shadow is below this has no contact shadow to score
 SHADOW_LEVEL = 0.5  # IoU and the gap compare the regions where s is at least this
 MIN_GAP = 4.0  # pixels: a truth whose shadow is nearer touches the object (the ground leaves out its 1-px rim)
-NAMES = ("zncc", "dssim", "bandpass_zncc", "gradient_energy", "dark_ratio", "iou", "gap_ratio", "contact_ratio")
+NAMES = (
+    "zncc",
+    "dssim",
+    "bandpass_zncc",
+    "gradient_energy",
+    "dark_ratio",
+    "iou",
+    "outline_distance",
+    "gap_ratio",
+    "contact_ratio",
+)
 
 
 def ground_region(mask: np.ndarray, horizon: float) -> np.ndarray:
@@ -99,6 +109,21 @@ def shadow_iou(p: np.ndarray, g: np.ndarray, region: np.ndarray) -> float:
     return int((a & b).sum()) / union if union else float("nan")
 
 
+def outline_distance(p: np.ndarray, g: np.ndarray, region: np.ndarray) -> float:
+    """The median distance (pixels) from each pixel of either shadow's outline (the region where it is at least
+    ``SHADOW_LEVEL``, its pixels beside one that is not, within ``region``) to the other's outline: how far the
+    shadow's edges lie from the truth's (nan where either has no outline)."""
+    outlines = []
+    for s in (p, g):
+        dark = (s >= SHADOW_LEVEL) & region
+        inner = np.asarray(ndimage.binary_erosion(dark, border_value=1), bool)
+        outlines.append(dark & ~inner & region)
+    if not outlines[0].any() or not outlines[1].any():
+        return float("nan")
+    to = [np.asarray(ndimage.distance_transform_edt(~o)) for o in outlines]
+    return float(np.median(np.concatenate([to[1][outlines[0]], to[0][outlines[1]]])))
+
+
 def shadow_gap(s: np.ndarray, mask: np.ndarray, region: np.ndarray) -> float:
     """The distance (pixels) from the object (its mask) to the nearest pixel of ``region`` where ``s`` is at
     least ``SHADOW_LEVEL``: how far a floating object's shadow lies from it (nan where there is none)."""
@@ -161,6 +186,7 @@ def score_case(p: np.ndarray, g: np.ndarray, mask: np.ndarray, horizon: float) -
         "gradient_energy": gradient_energy_ratio(p, g, region),
         "dark_ratio": dark_ratio(p, g, region),
         "iou": shadow_iou(p, g, region),
+        "outline_distance": outline_distance(p, g, region),
         "gap_ratio": gap_ratio(p, g, mask, region),
         "contact_ratio": contact_ratio(p, g, contact_region(mask, region)),
     }
@@ -178,6 +204,7 @@ __all__ = [
     "gradient_energy_ratio",
     "ground_region",
     "masked_gaussian",
+    "outline_distance",
     "shadow_gap",
     "shadow_iou",
     "region_dssim",

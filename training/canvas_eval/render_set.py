@@ -11,15 +11,22 @@ import numpy as np
 from training.data import meshes, sources
 from training.data.items import stable_hash
 
-from . import cases, disk, render
+from . import cases, disk, out_of_source, render
 
 
 def planned_groups(
     width: int, height: int, shapes: int | None, lights: int, seed: int, split: str = "test", floating: bool = False
 ) -> list[cases.Group]:
-    """The set's groups: the picked held-out shapes of ``split`` (the first ``shapes`` of them, None: all);
+    """The set's groups: the picked held-out shapes of ``split`` (the first ``shapes`` of them, None: all; every
+    shape of the out-of-source split);
     ``floating``: each lifted off the ground (:func:`cases.make_groups`)."""
-    items = cases.pick_shapes(sources.manifest_items(), split=split)
+    every = split == out_of_source.SPLIT  # a whole source held out: every shape of it
+    items = cases.pick_shapes(sources.manifest_items(), quota=None if every else cases.KIND_QUOTA, split=split)
+    if not items:
+        raise ValueError(
+            f"the meshes' manifest ({meshes.SHARED_MESHES}) has no shapes of the split {split!r}"
+            + (" (prepare-outsource writes them; point SSN_MESHES at its folder)" if every else "")
+        )
     return cases.make_groups(items[:shapes], lights, width, height, seed, floating)
 
 

@@ -30,6 +30,7 @@ LABELS = {
     "gradient_energy": "gradient energy",
     "dark_ratio": "p99.9 dark ratio",
     "iou": "IoU (s >= 0.5)",
+    "outline_distance": "outline distance (px, median)",
     "gap_ratio": "gap ratio",
     "contact_ratio": "contact ratio",
 }

@@ -1,4 +1,4 @@
-"""A picture sheet of the canvas evaluation: per group, the truth and a prediction under each light size."""
+"""A picture sheet of the canvas evaluation: per group, the truth and predictions under each light size."""
 
 from __future__ import annotations
 
@@ -47,22 +47,33 @@ def panel_sheet(rows: list[list[tuple[str, np.ndarray, np.ndarray]]], out: Path)
     sheet.save(out, optimize=True)
 
 
-def write_sheet(data: Path, predictions: Path, out: Path, names: list[str] | None = None, mode: str = "camera") -> None:
-    """Rows: groups; columns: truth and prediction at each of the group's sizes. Writes a PNG to ``out``."""
+def write_sheet(
+    data: Path,
+    predictions: list[Path],
+    out: Path,
+    names: list[str] | None = None,
+    mode: str = "camera",
+    angles: list[float] | None = None,
+) -> None:
+    """Rows: groups; columns: the truth and each folder's prediction (captioned by the folder's name) at each of
+    the group's sizes (``angles``: those alone). Writes a PNG to ``out``."""
     groups = {g.name: g for g in cases.read_groups(data)}
     names = names or default_groups(list(groups.values()))
     unknown = [n for n in names if n not in groups]
     if unknown:
         raise ValueError(f"unknown groups {unknown}; the set has {sorted(groups)}")
+    label = (lambda p: mode) if len(predictions) == 1 else (lambda p: f"{p.name} ({mode})")
     rows = []
     for name in names:
         group = groups[name]
         mask = cases.read_mask(data, group)
         row = []
-        for angle in group.angles:
+        for angle in [a for a in group.angles if angles is None or any(abs(a - b) < 1e-6 for b in angles)]:
             truth = cases.read_truth(data, group, angle)
-            pred = read_layer(prediction_path(predictions, mode, group, angle), truth.shape)
-            row += [(f"{group.name} {angle:g} deg: {what}", s, mask) for what, s in (("truth", truth), (mode, pred))]
+            row.append((f"{group.name} {angle:g} deg: truth", truth, mask))
+            for folder in predictions:
+                pred = read_layer(prediction_path(folder, mode, group, angle), truth.shape)
+                row.append((f"{group.name} {angle:g} deg: {label(folder)}", pred, mask))
         rows.append(row)
     panel_sheet(rows, out)
 
