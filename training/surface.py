@@ -25,6 +25,12 @@ def parse_args(argv: list[str] | None = None) -> argparse.Namespace:
     m = sub.add_parser("make", help="masks, camera inputs and pixel heights of a split's views")
     add_split_arguments(m)
     m.add_argument("--sources", nargs="+", choices=SOURCES, default=list(SOURCES), help="the kinds of items viewed")
+    m.add_argument(
+        "--stretch",
+        type=float,
+        default=0.0,
+        help="stretch each view's shape along x, y and z by up to 1 + STRETCH (or shrink by as much): other shapes",
+    )
     t = sub.add_parser("train", help="train the surface model on a folder's train.npz, scored on its val.npz")
     t.add_argument("--data", required=True)
     t.add_argument("--sets", nargs="+", help="the training files' names in --data (default: every train*.npz)")
@@ -45,7 +51,7 @@ def parse_args(argv: list[str] | None = None) -> argparse.Namespace:
 def main(argv: list[str] | None = None) -> None:
     args = parse_args(argv)
     if args.command == "make":
-        make(args.split, args.cameras, Path(args.out), args.seed, tuple(args.sources))
+        make(args.split, args.cameras, Path(args.out), args.seed, tuple(args.sources), stretch=args.stretch)
     elif args.command == "train":
         widths = tuple(args.widths) if args.widths else WIDTHS
         init = Path(args.init) if args.init else None

@@ -14,7 +14,8 @@ from ssn_engine.camera import Camera
 from ssn_engine.methods import load_method
 from ssn_engine.methods.onnx_ssn import OnnxSSN
 from training.data.procedural import procedural_items
-from training.data.surface_views import R, load, make, pixel_heights, save
+from training.data import meshes
+from training.data.surface_views import R, load, make, pixel_heights, save, stretched
 from training.data.views import VIEWS
 
 pytest.importorskip("torch")
@@ -45,6 +46,23 @@ def test_a_box_s_front_stands_on_its_bottom_edge_and_its_top_reaches_back():
     assert np.abs(feet[front] - bottom).max() < 1.0
     top = feet[~front]  # the top face's feet: behind the front's, the farther the higher in the picture
     assert np.all(np.diff(top) > 0) and top[-1] < bottom and top[0] < bottom - 10.0
+
+
+def test_a_stretched_shape_is_another_shape_standing_as_the_conventions_say():
+    """--stretch: each view's shape scaled along x, y and z by its own factors (at most 1 + stretch either way),
+    normalised again (AABB diagonal 1, standing on y = 0), its triangles unchanged."""
+    v, f = _box(0.2, 1.0)
+    box = meshes.normalise(meshes.Mesh(v, f.astype(np.int32)))
+    ratios = []
+    for k in range(20):
+        out = stretched(box, np.random.default_rng(k), 0.5)
+        ext = np.ptp(out.vertices, axis=0)
+        assert np.linalg.norm(ext) == pytest.approx(1.0) and out.vertices[:, 1].min() == pytest.approx(0.0)
+        np.testing.assert_array_equal(out.faces, box.faces)
+        ratios.append((ext / np.ptp(box.vertices, axis=0)) / (ext[1] / np.ptp(box.vertices, axis=0)[1]))
+    ratios = np.array(ratios)[:, [0, 2]]  # width and depth over height, against the box's own
+    assert ratios.min() >= 1 / 1.5**2 - 1e-9 and ratios.max() <= 1.5**2 + 1e-9
+    assert ratios.min() < 0.8 and ratios.max() > 1.25  # flatter and stockier boxes among them
 
 
 def test_views_travel_packed_and_come_back(tmp_path):

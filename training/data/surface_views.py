@@ -23,11 +23,12 @@ from ssn_engine.frames import nearest_fill, resample_frames
 from ..canvas_eval.oracle import surface_depths
 from . import meshes
 from .camera_views import split_views
+from .items import stable_hash
 from .meshes import yawed
 from .render_bases import mask_coverage, view_camera
 from .sources import SOURCES
 
-__all__ = ["HEIGHT_STEPS", "R", "load", "make", "pixel_heights", "save", "view_record"]
+__all__ = ["HEIGHT_STEPS", "R", "load", "make", "pixel_heights", "save", "stretched", "view_record"]
 
 FRAME = 256  # the frame the masks are covered at (the engine's N)
 R = 128
@@ -68,15 +69,29 @@ def make(
     sources: tuple[str, ...] = SOURCES,
     procedural: int = 36,
     humans: int = 48,
+    stretch: float = 0.0,
 ) -> None:
     """Write every view of ``split``'s items of ``sources`` under each camera set to ``out`` (npz): ``masks``
     bit-packed (mask > 0.5, (n, R * R / 8)), ``heights`` uint8 over the masks' set pixels in order (nearest
-    surface's where a set pixel's centre misses the mesh), ``camera`` (n, 2) at R, ``pitch``."""
+    surface's where a set pixel's centre misses the mesh), ``camera`` (n, 2) at R, ``pitch``. ``stretch`` > 0:
+    each view's shape stretched first (:func:`stretched`, its factors drawn from the seed, the item and the view)."""
     views, pitches = [], []
-    for _, mesh, topo, (yaw, pitch, fov) in split_views(split, cameras, seed, procedural, humans, sources=sources):
+    for k, (item, mesh, topo, (yaw, pitch, fov)) in enumerate(
+        split_views(split, cameras, seed, procedural, humans, sources=sources)
+    ):
+        if stretch > 0.0:
+            mesh = stretched(mesh, np.random.default_rng([seed, stable_hash(item.id), k]), stretch)
         views.append(view_record(mesh, topo, yaw, pitch, fov))
         pitches.append(pitch)
     save(out, views, pitches)
+
+
+def stretched(mesh: meshes.Mesh, rng: np.random.Generator, stretch: float) -> meshes.Mesh:
+    """``mesh`` scaled along x, y and z by factors drawn log-uniformly in [1 / (1 + stretch), 1 + stretch] and
+    normalised again: a horse longer or shorter in the leg, a box flatter, a figure stockier; shapes the meshes do
+    not hold, each still a solid with true pixel heights (the topology is unchanged)."""
+    scale = np.exp(rng.uniform(-np.log1p(stretch), np.log1p(stretch), 3))
+    return meshes.normalise(meshes.Mesh(mesh.vertices * scale, mesh.faces))
 
 
 def save(out: Path, views: list[dict], pitches: list[float]) -> None:
