@@ -168,6 +168,11 @@ class _Source:
     offset_y: float
 
 
+# a card's blurred copies of its cutout, kept for a card of the same cutout and another foot: its pad and, per
+# scale and level, the rows blurred and the copy
+Blurred = tuple[int, dict[float, dict[int, tuple[int, int, _Level]]]]
+
+
 class CardTracer:
     """Traces disk lights' shadows of one cutout's card at any output resolution.
 
@@ -209,7 +214,7 @@ class CardTracer:
         thickness: np.ndarray | None = None,
         feet: np.ndarray | None = None,
         lift: int = 0,
-        blurred: tuple[int, dict[float, dict[int, tuple[int, int, _Level]]]] | None = None,
+        blurred: Blurred | None = None,
     ) -> None:
         alpha = np.clip(np.asarray(alpha, np.float32), 0.0, 1.0)
         x0, y0 = origin if origin is not None else framing.bbox[:2]
@@ -264,7 +269,7 @@ class CardTracer:
         self._levels: dict[float, dict[int, tuple[int, int, _Level]]] = (
             blurred[1] if blurred is not None and blurred[0] == pad else {}
         )
-        self.blurred_copies = (pad, self._levels)  # what a card of the same alpha and another foot can take over
+        self.blurred_copies: Blurred = (pad, self._levels)  # for a card of the same alpha and another foot
 
     # -- the cutout at the output's resolution ------------------------------------------------------------------
     def _source(self, out_scale: float) -> _Source:
@@ -1089,13 +1094,13 @@ class ContactTracer:
         camera: tuple[float, float] | None,
         lift: float = 0.0,
         thickness: float | None = None,
-        blurred: dict[int, tuple[int, dict]] | None = None,
+        blurred: dict[int, Blurred] | None = None,
     ) -> ContactTracer:
         """The tracer of a cutout read before (:class:`ContactReading`), with the artist's geometry; ``blurred``:
         the :attr:`blurred_copies` of a tracer of the same reading (another lift or thickness), which its cards
         take over."""
         tracer = cls.__new__(cls)
-        tracer._make_cards(reading, framing, camera, lift, thickness, blurred or {})
+        tracer._make_cards(reading, framing, camera, lift, thickness, blurred)
         return tracer
 
     def _make_cards(
@@ -1105,15 +1110,13 @@ class ContactTracer:
         camera: tuple[float, float] | None,
         lift: float,
         thickness: float | None,
-        blurred: dict[int, tuple[int, dict]] | None = None,
+        blurred: dict[int, Blurred] | None = None,
     ) -> None:
         alpha, bands, depth = reading.alpha, reading.bands, reading.depth
         blurred = blurred or {}
         x0, y0 = framing.bbox[:2]
         self.cards: list[CardTracer] = []
-        self.blurred_copies: dict[
-            int, tuple[int, dict]
-        ] = {}  # per band: its card's (:attr:`CardTracer.blurred_copies`)
+        self.blurred_copies: dict[int, Blurred] = {}  # per band: its card's (:attr:`CardTracer.blurred_copies`)
         width = alpha.shape[1]
         self.thickness_read = reading.thickness_read
         if thickness is not None:
