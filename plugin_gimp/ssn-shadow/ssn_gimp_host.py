@@ -21,7 +21,6 @@ from ssn_pixels import PixelFormatError, PixelPlan, layer_image_type, plan_for_p
 from ssn_preview import Thumbnail  # noqa: E402
 from ssn_settings import (  # noqa: E402
     ARGUMENTS,
-    GEOMETRY_PARASITE,
     image_camera_arguments,
     image_camera_record,
     image_geometry_arguments,
@@ -30,6 +29,7 @@ from ssn_settings import (  # noqa: E402
 
 SOURCE_PARASITE = "ssn-shadow-source"  # on a shadow layer: the tattoo of the layer it was cast from
 CAMERA_PARASITE = "ssn-shadow-camera"  # on an image: its camera settings (ssn_engine_link.image_camera)
+GEOMETRY_PARASITE = "ssn-shadow-geometry"  # on an image: its lift and thickness (image_geometry_record)
 
 
 def config_values(config: Gimp.ProcedureConfig) -> dict:
@@ -140,31 +140,30 @@ class GimpHost:
     def image_camera(self) -> dict[str, Any]:
         """The camera arguments this image had when the filter last ran on it interactively (scaled with the image
         since), or the horizon not given: never another image's (GIMP's last values are global)."""
-        parasite = self.image.get_parasite(CAMERA_PARASITE)
-        record = bytes(parasite.get_data()).decode("utf-8", "replace") if parasite is not None else None
-        return image_camera_arguments(record, self.image.get_height())
+        return image_camera_arguments(self._image_record(CAMERA_PARASITE), self.image.get_height())
 
     def remember_camera(self, values: dict[str, Any]) -> None:
         """Keep the camera arguments in ``values`` with the image (saved in the XCF; no undo step)."""
-        record = image_camera_record(values, self.image.get_height())
-        self.image.attach_parasite(
-            Gimp.Parasite.new(CAMERA_PARASITE, Gimp.PARASITE_PERSISTENT, list(record.encode("ascii")))
-        )
+        self._keep_image_record(CAMERA_PARASITE, image_camera_record(values, self.image.get_height()))
 
     def image_geometry(self) -> dict[str, float]:
         """The lift and thickness arguments this image had when the filter last ran on it interactively (the lift
         scaled with the image since), or the defaults (resting on the ground, the thickness read): never another
         image's."""
-        parasite = self.image.get_parasite(GEOMETRY_PARASITE)
-        record = bytes(parasite.get_data()).decode("utf-8", "replace") if parasite is not None else None
-        return image_geometry_arguments(record, self.image.get_height())
+        return image_geometry_arguments(self._image_record(GEOMETRY_PARASITE), self.image.get_height())
 
     def remember_geometry(self, values: dict[str, Any]) -> None:
         """Keep the lift and thickness arguments in ``values`` with the image (saved in the XCF; no undo step)."""
-        record = image_geometry_record(values, self.image.get_height())
-        self.image.attach_parasite(
-            Gimp.Parasite.new(GEOMETRY_PARASITE, Gimp.PARASITE_PERSISTENT, list(record.encode("ascii")))
-        )
+        self._keep_image_record(GEOMETRY_PARASITE, image_geometry_record(values, self.image.get_height()))
+
+    def _image_record(self, name: str) -> str | None:
+        """The text of the image's parasite ``name``, or None where it has none."""
+        parasite = self.image.get_parasite(name)
+        return bytes(parasite.get_data()).decode("utf-8", "replace") if parasite is not None else None
+
+    def _keep_image_record(self, name: str, record: str) -> None:
+        """Attach ``record`` (ASCII) to the image as its persistent parasite ``name``, replacing one before."""
+        self.image.attach_parasite(Gimp.Parasite.new(name, Gimp.PARASITE_PERSISTENT, list(record.encode("ascii"))))
 
     def hidden_reason(self) -> str | None:
         """Why the source layer shows nothing (hidden, or at opacity 0), or None; a selection casts regardless."""

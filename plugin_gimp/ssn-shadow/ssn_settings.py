@@ -284,7 +284,6 @@ def thickness_read_text(read: float | None) -> str:
     return "read ?" if read is None else f"read {read:.2f}"
 
 
-GEOMETRY_PARASITE = "ssn-shadow-geometry"  # on an image: its lift and thickness (image_geometry_record)
 GEOMETRY_FORMAT = "ssn-shadow-geometry"
 GEOMETRY_VERSION = 1
 GEOMETRY_NAMES = ("lift", "thickness")
