@@ -5,6 +5,7 @@ from __future__ import annotations
 import functools
 import io
 import os
+import subprocess
 import sys
 import time
 from pathlib import Path
@@ -145,6 +146,26 @@ def gone_within(pid: int, seconds: float) -> bool:
             return False
         time.sleep(0.02)
     return True
+
+
+def wait_for_file(path: Path, seconds: float = 30.0) -> None:
+    """Wait until ``path`` exists (asserting that it does within ``seconds``)."""
+    deadline = time.monotonic() + seconds
+    while not path.exists() and time.monotonic() < deadline:
+        time.sleep(0.05)
+    assert path.exists(), f"{path} never appeared"
+
+
+def shared_render_call(command: list[str], state: Path) -> subprocess.Popen:
+    """A call in a process of its own (as GIMP's plug-in is) that takes the shared worker run by ``command`` (its
+    record at ``state``) and asks it to render."""
+    caller = (
+        "from pathlib import Path; from ssn_engine.host_kit import client; "
+        "from ssn_engine.host_kit.engine_config import EngineConfig; "
+        f"c = client.connect(EngineConfig(command=tuple({command!r}), shared=True), Path({str(state)!r})); "
+        "c.request('render')"
+    )
+    return subprocess.Popen([sys.executable, "-c", caller])
 
 
 class CancelAfter:

@@ -9,14 +9,13 @@ host's progress and Cancel button.
 from __future__ import annotations
 
 import json
-import subprocess
 import sys
 import threading
 import time
 from pathlib import Path
 
 import pytest
-from engine_helpers import HUNG_WORKER, CancelAfter, alive, gone_within
+from engine_helpers import HUNG_WORKER, CancelAfter, alive, gone_within, shared_render_call, wait_for_file
 
 from ssn_engine.host_kit import client
 from ssn_engine.host_kit.client import Cancelled, EngineClient, WorkerUnavailable, wait_for
@@ -149,18 +148,10 @@ def test_a_worker_whose_caller_was_killed_is_stopped_by_the_next_call(tmp_path):
     pid_file = tmp_path / "pid"
     command = hung_command(pid_file)
     state = tmp_path / "worker.json"
-    caller = (
-        "import sys; from pathlib import Path; from ssn_engine.host_kit import client; "
-        "from ssn_engine.host_kit.engine_config import EngineConfig; "
-        f"c = client.connect(EngineConfig(command=tuple({command!r}), shared=True), Path({str(state)!r})); "
-        "c.request('render')"
-    )
-    plugin = subprocess.Popen([sys.executable, "-c", caller])
+    plugin = shared_render_call(command, state)
     try:
         frozen = Path(f"{pid_file}.frozen")
-        deadline = time.monotonic() + 30
-        while not frozen.exists() and time.monotonic() < deadline:
-            time.sleep(0.05)
+        wait_for_file(frozen)
         assert frozen.read_text() == "render"
         first = int(pid_file.read_text())
         assert json.loads(state.read_text())["client"] == plugin.pid

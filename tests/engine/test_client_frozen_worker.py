@@ -25,7 +25,7 @@ import time
 from pathlib import Path
 
 import pytest
-from engine_helpers import HUNG_WORKER, CancelAfter, alive, gone_within
+from engine_helpers import HUNG_WORKER, CancelAfter, alive, gone_within, shared_render_call, wait_for_file
 
 from ssn_engine.host_kit import client
 from ssn_engine.host_kit.client import Cancelled, EngineClient, WorkerUnavailable
@@ -37,13 +37,6 @@ pytestmark = pytest.mark.skipif(os.name != "posix" or not Path("/proc/self").is_
 
 def whole_freezing_command(pid_file: Path) -> list[str]:
     return [sys.executable, str(HUNG_WORKER), str(PROTOCOL_VERSION), str(pid_file), "--stop"]
-
-
-def wait_for_file(path: Path, seconds: float = 30.0) -> None:
-    deadline = time.monotonic() + seconds
-    while not path.exists() and time.monotonic() < deadline:
-        time.sleep(0.05)
-    assert path.exists(), f"{path} never appeared"
 
 
 @pytest.fixture
@@ -82,13 +75,7 @@ def _freeze_a_shared_worker(tmp_path: Path) -> tuple[subprocess.Popen, list[str]
     pid_file = tmp_path / "pid"
     command = whole_freezing_command(pid_file)
     state = tmp_path / "worker.json"
-    caller = (
-        "from pathlib import Path; from ssn_engine.host_kit import client; "
-        "from ssn_engine.host_kit.engine_config import EngineConfig; "
-        f"c = client.connect(EngineConfig(command=tuple({command!r}), shared=True), Path({str(state)!r})); "
-        "c.request('render')"
-    )
-    plugin = subprocess.Popen([sys.executable, "-c", caller])
+    plugin = shared_render_call(command, state)
     wait_for_file(Path(f"{pid_file}.frozen"))
     return plugin, command, state, int(pid_file.read_text())
 
