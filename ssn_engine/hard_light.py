@@ -266,10 +266,15 @@ class CardTracer:
         self._swept_depths: dict[tuple[int, int], tuple[np.ndarray, np.ndarray]] = {}  # per reduction and sweep's
         self._on_card: dict[int, np.ndarray | None] = {}  # per reduction: the pixels whose surface is the card's
         # per scale, level: rows, blurred; those of the same alpha with the same pad (a card whose foot moved) hold
+        self._pad = pad
         self._levels: dict[float, dict[int, tuple[int, int, _Level]]] = (
             blurred[1] if blurred is not None and blurred[0] == pad else {}
         )
-        self.blurred_copies: Blurred = (pad, self._levels)  # for a card of the same alpha and another foot
+
+    @property
+    def blurred_copies(self) -> Blurred:
+        """Its pad and blurred copies of the cutout, for a card of the same alpha and another foot."""
+        return self._pad, self._levels
 
     # -- the cutout at the output's resolution ------------------------------------------------------------------
     def _source(self, out_scale: float) -> _Source:
