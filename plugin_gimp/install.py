@@ -90,6 +90,7 @@ def install(
     *,
     address: tuple[str, int] | None = None,
     token: str = "",
+    configure: bool = True,
 ) -> Path:
     """Install the plug-in; return its folder.
 
@@ -103,6 +104,7 @@ def install(
         loopback ``(host, port)``.
     token : with ``address``, the token that worker printed when it started
         (``listening HOST:PORT token=TOKEN``).
+    configure : write ``engine.json``; a package's plug-in sets up its own engine.
     """
     dest = Path(dest) if dest is not None else default_dest()
     if dest.name != PLUGIN_NAME:
@@ -124,6 +126,12 @@ def install(
     copy_host_kit(dest, link)
     if address is not None:
         write_address_config(dest, *address, token)
-    else:
+    elif configure:
         write_engine_config(dest, python)
     return dest
+
+
+def stage(root: Path) -> Path:
+    """The plug-in as its package holds it (the ``ssn-shadow`` folder to unpack into GIMP's plug-ins folder), with
+    no engine.json (the package's Set up makes the engine); returns the plug-in folder."""
+    return install(Path(root) / PLUGIN_NAME, configure=False)

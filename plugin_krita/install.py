@@ -1,7 +1,5 @@
-"""Install the Krita plug-in into a pykrita folder, or build the zip Krita imports.
-
-``ssn-shadow install-plugin krita [--dest DIR] [--python PY] [--link] [--zip OUT]``
-calls :func:`install` or :func:`build_zip`.
+"""Install the Krita plug-in into a pykrita folder (``ssn-shadow install-plugin krita [--dest DIR] [--python PY]
+[--link]``), or lay it out for its one-file package (:func:`stage`, ``ssn-shadow package krita``).
 """
 
 from __future__ import annotations
@@ -9,8 +7,6 @@ from __future__ import annotations
 import os
 import shutil
 import sys
-import tempfile
-import zipfile
 from collections.abc import Mapping
 from pathlib import Path
 
@@ -44,9 +40,10 @@ def _remove(path: Path) -> None:
         shutil.rmtree(path)
 
 
-def install(dest: Path | None = None, python: str | None = None, link: bool = False) -> Path:
+def install(dest: Path | None = None, python: str | None = None, link: bool = False, configure: bool = True) -> Path:
     """Copy (or symlink, for development) the plug-in into ``dest`` (default: the user's pykrita
-    folder), add the engine's shared modules and ``engine.json``; returns the plug-in package folder.
+    folder), add the engine's shared modules and (``configure``) the ``engine.json`` naming ``python``; returns
+    the plug-in package folder.
 
     Enable it afterwards in Krita: Settings > Configure Krita > Python Plugin Manager > Soft Shadow (SSN),
     then restart Krita; the docker is under Settings > Dockers > Soft Shadow.
@@ -66,8 +63,15 @@ def install(dest: Path | None = None, python: str | None = None, link: bool = Fa
         shutil.copytree(PACKAGE, target, ignore=shutil.ignore_patterns(*_GENERATED))
         shutil.copy2(DESKTOP, desktop)
     copy_host_kit(target, link)
-    write_engine_config(target, _resolve_python(python))
+    if configure:
+        write_engine_config(target, _resolve_python(python))
     return target
+
+
+def stage(root: Path) -> Path:
+    """The plug-in as its package holds it (the importer's layout: the .desktop file beside the folder), with no
+    engine.json (the package's Set up makes the engine); returns the plug-in folder."""
+    return install(root, configure=False)
 
 
 def _resolve_python(python: str | None) -> str | None:
@@ -77,20 +81,3 @@ def _resolve_python(python: str | None) -> str | None:
     if os.sep in python or (os.altsep and os.altsep in python):
         return str(Path(python).absolute())
     return shutil.which(python) or python
-
-
-def build_zip(out: Path) -> Path:
-    """A zip for Krita's Tools > Scripts > Import Python Plugin from File: the .desktop file and
-    the ``ssn_shadow`` folder with the shared modules and an engine.json naming this Python."""
-    out = Path(out)
-    out.parent.mkdir(parents=True, exist_ok=True)
-    with tempfile.TemporaryDirectory() as tmp:
-        package = install(Path(tmp))
-        with zipfile.ZipFile(out, "w", zipfile.ZIP_DEFLATED) as zf:
-            zf.write(DESKTOP, DESKTOP.name)
-            zf.write(package, PLUGIN_NAME + "/")  # Krita's importer looks for this folder entry
-            for path in sorted(package.rglob("*")):
-                if "__pycache__" in path.parts or path.suffix == ".pyc":
-                    continue
-                zf.write(path, Path(PLUGIN_NAME) / path.relative_to(package))
-    return out

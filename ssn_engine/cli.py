@@ -16,7 +16,7 @@ import threading
 import time
 from collections.abc import Iterator, Sequence
 from pathlib import Path
-from typing import TYPE_CHECKING
+from typing import TYPE_CHECKING, Any
 
 from .host_kit import defaults
 from .host_kit.ao_edits import strength_edits
@@ -438,23 +438,45 @@ def cmd_soak(args: argparse.Namespace) -> int:
     return EXIT_OK
 
 
-def cmd_install_plugin(args: argparse.Namespace) -> int:
+def _host_installer(host: str) -> Any:
+    """The host plug-in's installer module (found by entry point: the engine does not import the plug-ins)."""
     from importlib.metadata import entry_points
 
     found = {ep.name: ep for ep in entry_points(group=PLUGIN_ENTRY_POINTS)}
     try:
-        host_install = found[args.host].load()
+        return found[host].load()
     except (KeyError, ImportError) as exc:
         raise CliError(
-            f"the {args.host} plug-in is not part of this installation ({exc!r}); reinstall ssn-shadow with pip",
+            f"the {host} plug-in is not part of this installation ({exc!r}); reinstall ssn-shadow with pip",
             EXIT_ERROR,
         ) from None
+
+
+def cmd_package(args: argparse.Namespace) -> int:
+    from .plugin_package import PackageError, package
+
+    if args.wheel and args.requirement:
+        raise CliError("give --wheel or --requirement, not both")
+    try:
+        out = package(_host_installer(args.host), Path(args.out), args.wheel and Path(args.wheel), args.requirement)
+    except PackageError as exc:
+        raise CliError(str(exc), EXIT_ERROR) from None
+    print(f"wrote {out} ({out.stat().st_size / 1e6:.1f} MB)")
+    print(f"next: {PACKAGE_STEP[args.host]}")
+    return EXIT_OK
+
+
+PACKAGE_STEP = {
+    "krita": "in Krita, Tools > Scripts > Import Python Plugin from File, choose this file, restart Krita, then "
+    "press Set up in Settings > Dockers > Soft Shadow",
+    "gimp": "unpack this file into GIMP's plug-ins folder (Edit > Preferences > Folders > Plug-ins), restart GIMP, "
+    "then press Set up in Filters > Light and Shadow > Soft Shadow (SSN)...",
+}
+
+
+def cmd_install_plugin(args: argparse.Namespace) -> int:
+    host_install = _host_installer(args.host)
     dest = Path(args.dest) if args.dest else None
-    if args.zip:
-        if args.host != "krita":
-            raise CliError("--zip is for the Krita plug-in")
-        print(f"wrote {host_install.build_zip(Path(args.zip))}")
-        return EXIT_OK
     path = host_install.install(dest=dest, python=args.python, link=args.link)
     print(f"installed the {args.host} plug-in in {path}")
     print(f"next: {NEXT_STEP[args.host]}")
@@ -603,8 +625,14 @@ def build_parser() -> argparse.ArgumentParser:
     p.add_argument("--dest", help="plug-in folder (default: the host's user folder for this OS)")
     p.add_argument("--python", help="Python that runs the engine (default: this one)")
     p.add_argument("--link", action="store_true", help="symlink instead of copying (for development)")
-    p.add_argument("--zip", metavar="OUT.zip", help="Krita: build a zip for 'Import Python Plugin from File'")
     p.set_defaults(func=cmd_install_plugin)
+
+    p = sub.add_parser("package", help="build the one file an artist installs from inside Krita or GIMP")
+    p.add_argument("host", choices=["krita", "gimp"])
+    p.add_argument("--out", required=True, help="the zip to write")
+    p.add_argument("--wheel", help="the engine wheel to carry (default: built from this source checkout)")
+    p.add_argument("--requirement", help="carry no wheel: Set up installs this from the index (e.g. ssn-shadow==0.2.0)")
+    p.set_defaults(func=cmd_package)
     return parser
 
 

@@ -7,9 +7,10 @@ from PyQt5.QtWidgets import QApplication
 
 from .adapters.host import KritaHost
 from .controller import ShadowController
-from .engine import EngineProcess
+from .engine import PLUGIN_DIR, EngineProcess
 from .persistence import DocumentModels
 from .ui.panel import ShadowPanel
+from .ui.setup_box import SetupBox
 
 DOCKER_ID = "ssn_shadow_docker"
 TITLE = "Soft Shadow"
@@ -26,12 +27,20 @@ class SoftShadowDocker(DockWidget):
         self.models = DocumentModels(host)
         self.controller = ShadowController(self.engine, host, self.models.model_for(host.active_document()), self)
         self.panel = ShadowPanel(self.controller)  # its controls scroll in a short dock, Generate stays in view
+        self.setup_box = SetupBox(PLUGIN_DIR)  # a packaged plug-in's Set up, shown while its engine is missing
+        self.setup_box.finished.connect(self._set_up)
+        self.panel.layout().insertWidget(0, self.setup_box)  # above the controls, hidden once set up
         self.setWidget(self.panel)
         self.controller.watch_history()
         host.watch_closing(self._document_closed)
         app = QApplication.instance()
         if app is not None:
             app.aboutToQuit.connect(self.engine.shutdown)
+
+    def _set_up(self, ready: bool) -> None:
+        if ready:
+            self.engine.stop()  # the next request starts the engine just set up
+            self.controller.model.report_status("info", "The shadow engine is set up: press Generate.")
 
     def canvasChanged(self, canvas) -> None:  # noqa: N802 (Krita's API)
         """Another document or view: the docker shows that document's settings, and the next Generate reads its

@@ -3,7 +3,10 @@
 In order: ``$SSN_SHADOW_ENGINE_ADDRESS`` (``TOKEN@host:port`` of a running
 ``ssn-shadow serve --port``), ``$SSN_SHADOW_ENGINE_CONFIG`` (the path of an
 ``engine.json``), the ``engine.json`` that ``ssn-shadow install-plugin`` wrote
-beside the plug-in, and last ``ssn-shadow`` found on PATH.
+beside the plug-in; for a packaged plug-in (``ssn-shadow package``, its
+``setup.json`` beside it) the environment its Set up made
+(:mod:`engine_setup`), else :class:`EngineSetupNeeded`; last ``ssn-shadow``
+found on PATH.
 
 ``engine.json`` either names the Python that runs the worker
 (``{"python": ..., "args": [...], "env": {...}, "shared": true}``) or the
@@ -21,6 +24,8 @@ from dataclasses import dataclass, field
 from pathlib import Path
 from typing import Any
 
+from . import engine_setup
+
 CONFIG_NAME = "engine.json"
 CONFIG_ENV = "SSN_SHADOW_ENGINE_CONFIG"
 ADDRESS_ENV = "SSN_SHADOW_ENGINE_ADDRESS"
@@ -29,6 +34,14 @@ DEFAULT_ARGS = ("-m", "ssn_engine", "serve")
 
 class EngineConfigError(RuntimeError):
     """The engine cannot be found or its configuration is malformed; the message says what to do."""
+
+
+class EngineSetupNeeded(EngineConfigError):
+    """A packaged plug-in whose engine is not set up (or set up for an older plug-in): the host offers Set up."""
+
+    def __init__(self, message: str, bundle: engine_setup.Bundle, state: engine_setup.State) -> None:
+        super().__init__(message)
+        self.bundle, self.state = bundle, state
 
 
 @dataclass(frozen=True)
@@ -114,6 +127,16 @@ def load_engine_config(plugin_dir: Path, host: str) -> EngineConfig:
     local = Path(plugin_dir) / CONFIG_NAME
     if local.is_file():
         return read_config(local, host)
+    try:
+        bundle = engine_setup.read_bundle(Path(plugin_dir))
+    except engine_setup.SetupError as exc:
+        raise EngineConfigError(str(exc)) from None
+    if bundle is not None:
+        state = engine_setup.engine_state(bundle, engine_setup.data_dir())
+        if state.status != "ready":
+            raise EngineSetupNeeded(state.describe(bundle), bundle, state)
+        # its own environment: none of the host's Python paths (an embedded Python's PYTHONPATH) may leak in
+        return EngineConfig(command=(str(state.python), *DEFAULT_ARGS), env={"PYTHONPATH": ""}, source=str(state.python))
     exe = shutil.which("ssn-shadow")
     if exe:
         return EngineConfig(command=(exe, "serve"), source="PATH")

@@ -35,11 +35,18 @@ def need(tool: str) -> str:
 
 
 def run_kritarunner(
-    pykrita: Path, module: str, function: str, result: Path, env_extra: dict[str, str], screen: str = ""
+    pykrita: Path,
+    module: str,
+    function: str,
+    result: Path,
+    env_extra: dict[str, str],
+    screen: str = "",
+    with_repo: bool = True,
+    timeout_s: float = 300,
 ) -> dict:
     """Run ``function`` of the driver ``module`` (in this folder) in a fresh Krita (kritarunner) on a virtual X
     server (``screen``: its size, e.g. "1366x768x24"; else xvfb-run's), with the plug-in installed in
-    ``pykrita``; returns the JSON the driver wrote to ``result``.
+    ``pykrita`` (and ``with_repo``, this checkout on the path); returns the JSON the driver wrote to ``result``.
 
     Needs Debian's krita (kritarunner) and xvfb-run: Krita's undo action exists only with a window, which
     kritarunner can open on an X server but not on the offscreen platform.
@@ -51,7 +58,7 @@ def run_kritarunner(
         env_extra,
         SSN_TEST_RESULT=str(result),
         # the plug-in as installed, the driver, and the repo (so the worker's Python finds ssn_engine)
-        PYTHONPATH=os.pathsep.join([str(pykrita), str(HERE), str(REPO)]),
+        PYTHONPATH=os.pathsep.join([str(pykrita), str(HERE), *([str(REPO)] if with_repo else [])]),
         XDG_RUNTIME_DIR=str(result.parent),
     )
     env.pop("SSN_SHADOW_ENGINE_CONFIG", None)
@@ -80,7 +87,7 @@ def run_kritarunner(
             env=env,
             capture_output=True,
             text=True,
-            timeout=300,
+            timeout=timeout_s,
         )
         if result.exists() or "could not connect to display" not in proc.stderr:
             break

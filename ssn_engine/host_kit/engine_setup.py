@@ -1,0 +1,521 @@
+"""Set up the shadow engine from inside a host: a private Python environment in the user's data folder.
+
+Standard library only (both plug-ins carry a copy). A packaged plug-in
+(``ssn-shadow package``) carries ``setup.json`` and the engine's wheel; when
+no engine is configured the host offers **Set up**, which runs
+:class:`EngineSetup` off the UI thread: find a Python 3.10+ (the host's own
+first), create ``<data>/engine`` with ``venv``, give it pip (from the
+package index where the Python has no ``ensurepip``), ``pip install`` the
+wheel and its dependencies, check that the engine imports, and last write
+``engine/setup-done.json``. That marker, written only after everything
+succeeded, is what makes the environment count: a killed or failed set-up
+leaves none, and the next one resumes (the environment and pip's cache in
+``<data>/cache`` are reused). A plug-in carrying another wheel than the
+marker names (an update) asks to set up again, which upgrades in place.
+
+Every failure ends in :class:`SetupError` with a message that says what to
+do; the whole log is ``<data>/setup.log``.
+"""
+
+from __future__ import annotations
+
+import hashlib
+import json
+import os
+import re
+import shutil
+import subprocess
+import sys
+import threading
+import time
+import urllib.parse
+import urllib.request
+from collections.abc import Callable, Mapping, Sequence
+from dataclasses import dataclass
+from pathlib import Path
+
+SETUP_NAME = "setup.json"  # beside a packaged plug-in: what Set up installs
+DATA_ENV = "SSN_SHADOW_DATA"  # overrides the data folder (tests, administrators)
+DONE_NAME = "setup-done.json"  # inside the environment, written last
+MIN_PYTHON = (3, 10)
+DEFAULT_INDEX = "https://pypi.org/simple"
+PROBE = (
+    "import json, sys, importlib.util as u; print(json.dumps({'executable': sys.executable, "
+    "'version': list(sys.version_info[:3]), 'venv': u.find_spec('venv') is not None, "
+    "'ensurepip': u.find_spec('ensurepip') is not None}))"
+)
+Report = Callable[[float, str], None]
+
+
+class SetupError(RuntimeError):
+    """The set-up cannot go on; the message says what to do."""
+
+
+class SetupCancelled(SetupError):
+    """The artist pressed Cancel."""
+
+
+# -- where things are ------------------------------------------------------------------------------------------------
+def data_dir(platform: str | None = None, env: Mapping[str, str] | None = None, home: Path | None = None) -> Path:
+    """The engine's folder in the user's data: ``$SSN_SHADOW_DATA``, else ~/.local/share/ssn-shadow (Linux,
+    ``$XDG_DATA_HOME``), %LOCALAPPDATA%\\ssn-shadow (Windows), ~/Library/Application Support/ssn-shadow (macOS)."""
+    platform = platform or sys.platform
+    env = os.environ if env is None else env
+    home = home or Path.home()
+    if env.get(DATA_ENV):
+        return Path(env[DATA_ENV])
+    if platform.startswith("win"):
+        base = Path(env["LOCALAPPDATA"]) if env.get("LOCALAPPDATA") else home / "AppData" / "Local"
+        return base / "ssn-shadow"
+    if platform == "darwin":
+        return home / "Library" / "Application Support" / "ssn-shadow"
+    base = Path(env["XDG_DATA_HOME"]) if env.get("XDG_DATA_HOME") else home / ".local" / "share"
+    return base / "ssn-shadow"
+
+
+def env_python(env_dir: Path, platform: str | None = None) -> Path:
+    """The Python inside a virtual environment."""
+    platform = platform or sys.platform
+    if platform.startswith("win"):
+        return Path(env_dir) / "Scripts" / "python.exe"
+    return Path(env_dir) / "bin" / "python"
+
+
+@dataclass(frozen=True)
+class Bundle:
+    """What a packaged plug-in installs: its engine wheel (or a requirement for the package index)."""
+
+    version: str
+    wheel: Path | None = None
+    sha256: str = ""
+    requirement: str = ""
+
+    @property
+    def target(self) -> str:
+        """What ``pip install`` is given."""
+        return str(self.wheel) if self.wheel is not None else self.requirement
+
+    @property
+    def identity(self) -> str:
+        """What the done-marker records: the wheel's hash, or the requirement."""
+        return self.sha256 or self.requirement
+
+
+def read_bundle(plugin_dir: Path) -> Bundle | None:
+    """The plug-in's ``setup.json``; None for a plug-in installed with ``ssn-shadow install-plugin``."""
+    path = Path(plugin_dir) / SETUP_NAME
+    if not path.is_file():
+        return None
+    try:
+        data = json.loads(path.read_text(encoding="utf-8"))
+        version = str(data["version"])
+        if data.get("wheel"):
+            return Bundle(version, Path(plugin_dir) / str(data["wheel"]), str(data["sha256"]))
+        return Bundle(version, requirement=str(data["requirement"]))
+    except (OSError, ValueError, KeyError, TypeError) as exc:
+        raise SetupError(f"{path} is damaged ({exc}); import the plug-in's file again.") from None
+
+
+# -- state -------------------------------------------------------------------------------------------------------------
+@dataclass(frozen=True)
+class State:
+    """Whether the environment in ``data`` serves ``bundle``: ``ready``, ``missing`` or ``outdated``."""
+
+    status: str
+    python: Path
+    installed_version: str = ""
+
+    def describe(self, bundle: Bundle) -> str:
+        if self.status == "ready":
+            return f"The shadow engine {bundle.version} is set up."
+        if self.status == "outdated":
+            return (
+                f"The plug-in was updated ({self.installed_version} -> {bundle.version}): press Update to update "
+                "its engine (only the engine is downloaded again)."
+            )
+        return (
+            "The shadow engine is not set up yet. Set up installs it into a folder of its own "
+            "(about 250 MB, downloaded from the Python package index); it takes a few minutes."
+        )
+
+
+def engine_state(bundle: Bundle, data: Path) -> State:
+    """Read ``data/engine``'s done-marker against the plug-in's bundle."""
+    env_dir = Path(data) / "engine"
+    python = env_python(env_dir)
+    try:
+        done = json.loads((env_dir / DONE_NAME).read_text(encoding="utf-8"))
+    except (OSError, ValueError):
+        return State("missing", python)
+    if not isinstance(done, dict) or not python.exists():
+        return State("missing", python)
+    if done.get("identity") != bundle.identity:
+        return State("outdated", python, str(done.get("version", "?")))
+    return State("ready", python, str(done.get("version", "")))
+
+
+# -- finding a Python ------------------------------------------------------------------------------------------------
+@dataclass(frozen=True)
+class PythonFound:
+    executable: str
+    version: tuple[int, ...]
+    ensurepip: bool
+
+
+def python_candidates(
+    platform: str | None = None,
+    executable: str | None = None,
+    base_prefix: str | None = None,
+    version: Sequence[int] | None = None,
+    which: Callable[[str], str | None] = shutil.which,
+) -> list[list[str]]:
+    """Commands that may start a Python, best first: the host's own (its ``sys.executable`` when that is a Python,
+    else the interpreter in its ``sys.base_prefix``: Krita and GIMP embed one), then those on PATH, newest first."""
+    platform = platform or sys.platform
+    executable = sys.executable if executable is None else executable
+    base_prefix = sys.base_prefix if base_prefix is None else base_prefix
+    major, minor = tuple(version or sys.version_info[:2])[:2]
+    found: list[list[str]] = []
+    windows = platform.startswith("win")
+    if executable and Path(executable).name.lower().startswith("python"):
+        found.append([executable])
+    if base_prefix:
+        base = Path(base_prefix)
+        own = [base / "python.exe"] if windows else [base / "bin" / f"python{major}.{minor}", base / "bin" / "python3"]
+        found += [[str(p)] for p in own]
+    names = [f"python3.{m}" for m in range(14, MIN_PYTHON[1] - 1, -1)] + ["python3", "python"]
+    for name in names:
+        path = which(name)
+        if path:
+            found.append([path])
+    if windows and which("py"):
+        found.append([str(which("py")), "-3"])
+    unique: list[list[str]] = []
+    for command in found:
+        if command not in unique:
+            unique.append(command)
+    return unique
+
+
+def probe_python(command: Sequence[str], timeout: float = 30.0) -> PythonFound | None:
+    """Ask a candidate what it is; None if it does not start or has no ``venv`` module."""
+    try:
+        out = subprocess.run(
+            [*command, "-I", "-c", PROBE], capture_output=True, text=True, timeout=timeout, **_no_window()
+        )
+        info = json.loads(out.stdout.strip().splitlines()[-1])
+    except (OSError, subprocess.SubprocessError, ValueError, IndexError):
+        return None
+    if out.returncode != 0 or not info.get("venv"):
+        return None
+    return PythonFound(str(info["executable"]), tuple(int(v) for v in info["version"]), bool(info["ensurepip"]))
+
+
+def install_python_hint(platform: str | None = None) -> str:
+    """What to install, in words, for this system."""
+    platform = platform or sys.platform
+    if platform.startswith("win"):
+        return "Install Python 3.10 or newer from https://www.python.org/downloads/ (tick 'Add python.exe to PATH')"
+    if platform == "darwin":
+        return "Install Python 3.10 or newer from https://www.python.org/downloads/ (or 'brew install python')"
+    return "Install Python 3.10 or newer with its venv module (Debian/Ubuntu: 'sudo apt install python3 python3-venv')"
+
+
+def find_python(
+    candidates: Sequence[Sequence[str]], probe: Callable[[Sequence[str]], PythonFound | None] = probe_python
+) -> PythonFound:
+    """The first candidate that is a Python 3.10+ with ``venv`` (one with ``ensurepip`` preferred)."""
+    usable, too_old = [], []
+    for command in candidates:
+        found = probe(command)
+        if found is None:
+            continue
+        (usable if found.version[:2] >= MIN_PYTHON else too_old).append(found)
+    with_pip = [p for p in usable if p.ensurepip]
+    if with_pip or usable:
+        return (with_pip or usable)[0]
+    if too_old:
+        old = ", ".join(f"{p.executable} ({'.'.join(map(str, p.version))})" for p in too_old)
+        raise SetupError(f"The engine needs Python 3.10 or newer; found only {old}. {install_python_hint()}, then "
+                         "press Set up again.")
+    raise SetupError(f"No Python with its venv module was found. {install_python_hint()}, then press Set up again.")
+
+
+# -- what went wrong -------------------------------------------------------------------------------------------------
+def index_url(env: Mapping[str, str]) -> str:
+    return env.get("PIP_INDEX_URL") or DEFAULT_INDEX
+
+
+_FAILURES: tuple[tuple[str, str], ...] = (
+    (r"No space left on device|\[Errno 28\]",
+     "The disk is full: {data} needs about 600 MB free. Free some space and press Set up again (it resumes)."),
+    (r"Read-only file system|Permission denied|\[Errno 13\]|\[Errno 30\]",
+     "Cannot write to {data}. Make that folder writable (or set SSN_SHADOW_DATA to a writable folder before "
+     "starting the program) and press Set up again."),
+    (r"ProxyError|Cannot connect to proxy|407 Proxy Authentication",
+     "The proxy refused the connection to {index}. Set HTTPS_PROXY (with its user and password if it needs them) "
+     "or pip's proxy setting (pip.conf), then press Set up again."),
+    (r"CERTIFICATE_VERIFY_FAILED|SSLError",
+     "The secure connection to {index} failed (a proxy or firewall that intercepts HTTPS?). Set pip's 'cert' "
+     "setting to your organisation's certificate, then press Set up again."),
+    (r"NewConnectionError|Failed to establish a new connection|Temporary failure in name resolution|"
+     r"Network is unreachable|Connection refused|ConnectTimeout|Read timed out|No matching distribution found|"
+     r"Could not find a version that satisfies",
+     "Cannot reach the package index ({index}). Check the network connection (or the proxy), then press Set up "
+     "again: what was downloaded is kept."),
+)
+
+
+def explain_failure(output: str, data: Path, env: Mapping[str, str], what: str) -> str:
+    """A message for people from a failed step's output."""
+    for pattern, message in _FAILURES:
+        if re.search(pattern, output):
+            return message.format(data=data, index=index_url(env))
+    lines = [line.strip() for line in output.splitlines() if line.strip()]
+    last = lines[-1] if lines else "no output"
+    return f"{what} failed ({last}). The log {Path(data) / 'setup.log'} has the details; press Set up to try again."
+
+
+def _no_window() -> dict:
+    """Keep Windows from opening a console for each child process."""
+    if sys.platform.startswith("win"):
+        return {"creationflags": getattr(subprocess, "CREATE_NO_WINDOW", 0)}
+    return {}
+
+
+# -- the set-up ------------------------------------------------------------------------------------------------------
+class EngineSetup:
+    """One set-up run: ``run(report, cancelled)`` from a worker thread (:class:`SetupJob`)."""
+
+    def __init__(
+        self,
+        bundle: Bundle,
+        data: Path,
+        candidates: Sequence[Sequence[str]] | None = None,
+        env: Mapping[str, str] | None = None,
+    ) -> None:
+        self.bundle, self.data = bundle, Path(data)
+        self.candidates = python_candidates() if candidates is None else candidates
+        self.env = dict(os.environ if env is None else env)
+        self.env_dir = self.data / "engine"
+        self.python = env_python(self.env_dir)
+        self.log_path = self.data / "setup.log"
+        self._proc: subprocess.Popen | None = None
+        self._cancelled = threading.Event()
+
+    # -- steps -----------------------------------------------------------------
+    def run(self, report: Report, cancelled: threading.Event | None = None) -> Path:
+        """Set up (or update, or resume); returns the environment's Python. Raises SetupError."""
+        self._cancelled = cancelled or threading.Event()
+        try:
+            self.data.mkdir(parents=True, exist_ok=True)
+            (self.data / "cache").mkdir(exist_ok=True)
+            with open(self.log_path, "a", encoding="utf-8") as log:
+                log.write(f"\n=== set-up of ssn-shadow {self.bundle.version} at {time.strftime('%Y-%m-%d %H:%M:%S')}\n")
+        except OSError as exc:
+            raise SetupError(explain_failure(str(exc), self.data, self.env, "Creating the folder")) from None
+        (self.env_dir / DONE_NAME).unlink(missing_ok=True)
+        report(0.0, "Looking for Python 3.10 or newer...")
+        found = find_python(self.candidates)
+        self._log(f"python: {found.executable} {'.'.join(map(str, found.version))}")
+        self._check_cancel()
+        report(0.04, f"Creating the engine's environment with Python {'.'.join(map(str, found.version[:2]))}...")
+        self._make_environment(found)
+        report(0.1, "Getting pip...")
+        self._ensure_pip()
+        self._install(report, 0.12, 0.93)
+        report(0.94, "Checking the engine...")
+        version = self._step(
+            [str(self.python), "-c", "import onnxruntime, ssn_engine; print(ssn_engine.__version__)"], "Checking the engine"
+        ).strip().splitlines()[-1]
+        if version != self.bundle.version:
+            raise SetupError(f"The environment holds engine {version}, not {self.bundle.version}; press Set up again.")
+        done = {"version": version, "identity": self.bundle.identity, "python": str(found.executable)}
+        tmp = self.env_dir / (DONE_NAME + ".tmp")
+        tmp.write_text(json.dumps(done, indent=2) + "\n", encoding="utf-8")
+        os.replace(tmp, self.env_dir / DONE_NAME)
+        self._log("done")
+        report(1.0, f"The shadow engine {version} is set up.")
+        return self.python
+
+    def _make_environment(self, found: PythonFound) -> None:
+        """Reuse a working environment of this Python's version (a resumed or updated set-up), else make it anew."""
+        if self.python.exists():
+            ok = probe_python([str(self.python)])
+            if ok is not None and ok.version[:2] == found.version[:2]:
+                self._log("reusing the environment")
+                return
+            self._log("the environment is broken or of another Python: made anew")
+        if self.env_dir.exists():
+            shutil.rmtree(self.env_dir, ignore_errors=True)
+        args = [found.executable, "-m", "venv", *([] if found.ensurepip else ["--without-pip"]), str(self.env_dir)]
+        self._step(args, "Creating the environment")
+
+    def _ensure_pip(self) -> None:
+        """pip in the environment: there from ``ensurepip``, else its wheel from the package index."""
+        try:
+            self._step([str(self.python), "-m", "pip", "--version"], "Checking pip", quiet=True)
+            return
+        except SetupError:
+            pass
+        wheel = self._download_pip()
+        self._step([str(self.python), f"{wheel}/pip", "install", "--no-index", str(wheel)], "Installing pip")
+
+    def _download_pip(self) -> Path:
+        """The newest ``pip-*-py3-none-any.whl`` of the index's simple page, checked against its sha256."""
+        index = index_url(self.env).rstrip("/")
+        try:
+            with urllib.request.urlopen(f"{index}/pip/", timeout=60) as page:
+                html = page.read().decode("utf-8", "replace")
+            links = re.findall(r'href="([^"]*?/?(pip-(\d+(?:\.\d+)*)-py3-none-any\.whl)(?:#sha256=([0-9a-f]+))?)"', html)
+            if not links:
+                raise SetupError(f"The package index {index} lists no pip wheel.")
+            url, name, _, sha = max(links, key=lambda link: tuple(int(p) for p in link[2].split(".")))
+            dest = self.data / "cache" / name
+            with urllib.request.urlopen(urllib.parse.urljoin(f"{index}/pip/", url), timeout=120) as response:
+                body = response.read()
+        except SetupError:
+            raise
+        except Exception as exc:  # urllib's errors: no network, proxy, TLS
+            self._log(f"pip download: {exc!r}")
+            raise SetupError(explain_failure(repr(exc) + " NewConnectionError", self.data, self.env, "pip")) from None
+        if sha and hashlib.sha256(body).hexdigest() != sha:
+            raise SetupError(f"The pip wheel from {index} does not match its checksum; press Set up again.")
+        dest.write_bytes(body)
+        return dest
+
+    def _install(self, report: Report, start: float, end: float) -> None:
+        """``pip install`` the engine, its progress read from pip's lines (each package collected, then installed)."""
+        args = [
+            str(self.python), "-m", "pip", "install", "--upgrade", "--progress-bar", "off",
+            "--disable-pip-version-check", "--no-input", self.bundle.target,
+        ]  # fmt: skip
+        collected = 0
+        expected = 16  # the engine's dependency tree today; the bar only needs an estimate
+
+        def on_line(line: str) -> None:
+            nonlocal collected
+            if line.startswith("Collecting ") or line.startswith("Requirement already satisfied"):
+                collected += 1
+                name = line.split()[1] if line.startswith("Collecting") else line.split(":")[1].split()[0]
+                share = min(collected / expected, 1.0) * 0.7
+                report(start + (end - start) * share, f"Downloading {name}...")
+            elif line.startswith("Installing collected packages"):
+                report(start + (end - start) * 0.75, "Installing the downloaded packages...")
+
+        report(start, f"Installing the engine {self.bundle.version} and its dependencies...")
+        self._step(args, "Installing the engine", on_line=on_line)
+
+    # -- processes -------------------------------------------------------------
+    def _step(
+        self, args: list[str], what: str, on_line: Callable[[str], None] | None = None, quiet: bool = False
+    ) -> str:
+        """Run one command, logging its output; a failure raises SetupError with what to do."""
+        self._check_cancel()
+        self._log("$ " + " ".join(args))
+        env = {k: v for k, v in self.env.items() if k not in ("PYTHONHOME", "PYTHONPATH", "PYTHONSTARTUP")}
+        env.update(PIP_CACHE_DIR=str(self.data / "cache"), PYTHONUNBUFFERED="1", PYTHONIOENCODING="utf-8")
+        try:
+            proc = subprocess.Popen(
+                args, stdout=subprocess.PIPE, stderr=subprocess.STDOUT, stdin=subprocess.DEVNULL,
+                text=True, encoding="utf-8", errors="replace", env=env, **_no_window(),
+            )  # fmt: skip
+        except OSError as exc:
+            raise SetupError(explain_failure(str(exc), self.data, self.env, what)) from None
+        self._proc = proc
+        lines: list[str] = []
+        watcher = threading.Thread(target=self._kill_on_cancel, args=(proc,), daemon=True)
+        watcher.start()
+        assert proc.stdout is not None
+        with open(self.log_path, "a", encoding="utf-8") as log:
+            for line in proc.stdout:
+                log.write(line)
+                lines.append(line)
+                if on_line is not None:
+                    on_line(line.strip())
+        code = proc.wait()
+        self._proc = None
+        self._check_cancel()
+        output = "".join(lines)
+        if code != 0:
+            if quiet:
+                raise SetupError(output)
+            raise SetupError(explain_failure(output, self.data, self.env, what))
+        return output
+
+    def _kill_on_cancel(self, proc: subprocess.Popen) -> None:
+        while proc.poll() is None:
+            if self._cancelled.wait(0.2):
+                proc.kill()
+                return
+
+    def _check_cancel(self) -> None:
+        if self._cancelled.is_set():
+            self._log("cancelled")
+            raise SetupCancelled("The set-up was cancelled; press Set up to resume it.")
+
+    def _log(self, text: str) -> None:
+        try:
+            with open(self.log_path, "a", encoding="utf-8") as log:
+                log.write(text + "\n")
+        except OSError:
+            pass
+
+
+@dataclass
+class SetupEvent:
+    """What the UI shows: progress ``fraction`` and ``text``; ``done`` at the end, with ``error`` if it failed."""
+
+    fraction: float
+    text: str
+    done: bool = False
+    error: str = ""
+    cancelled: bool = False
+
+
+class SetupJob:
+    """An :class:`EngineSetup` on a thread of its own; the UI polls :meth:`events` from its timer."""
+
+    def __init__(self, setup: EngineSetup) -> None:
+        self.setup = setup
+        self._events: list[SetupEvent] = []
+        self._lock = threading.Lock()
+        self._cancel = threading.Event()
+        self._thread = threading.Thread(target=self._run, name="ssn-shadow set-up", daemon=True)
+
+    def start(self) -> SetupJob:
+        self._thread.start()
+        return self
+
+    def cancel(self) -> None:
+        self._cancel.set()
+
+    @property
+    def running(self) -> bool:
+        return self._thread.is_alive()
+
+    def events(self) -> list[SetupEvent]:
+        """The events since the last call."""
+        with self._lock:
+            events, self._events = self._events, []
+        return events
+
+    def wait(self, timeout: float | None = None) -> None:
+        self._thread.join(timeout)
+
+    def _push(self, event: SetupEvent) -> None:
+        with self._lock:
+            self._events.append(event)
+
+    def _run(self) -> None:
+        try:
+            self.setup.run(lambda f, t: self._push(SetupEvent(f, t)), self._cancel)
+        except SetupCancelled as exc:
+            self._push(SetupEvent(0.0, str(exc), done=True, error=str(exc), cancelled=True))
+        except SetupError as exc:
+            self._push(SetupEvent(0.0, str(exc), done=True, error=str(exc)))
+        except Exception as exc:  # never let a thread die silently: the panel must say it
+            self.setup._log(f"unexpected: {exc!r}")
+            self._push(SetupEvent(0.0, f"The set-up stopped: {exc}", done=True, error=str(exc)))
+        else:
+            self._push(SetupEvent(1.0, f"The shadow engine {self.setup.bundle.version} is set up.", done=True))
