@@ -28,6 +28,7 @@ import subprocess
 import sys
 import threading
 import time
+import urllib.error
 import urllib.parse
 import urllib.request
 from collections.abc import Callable, Mapping, Sequence
@@ -259,11 +260,21 @@ _FAILURES: tuple[tuple[str, str], ...] = (
      "The secure connection to {index} failed (a proxy or firewall that intercepts HTTPS?). Set pip's 'cert' "
      "setting to your organisation's certificate, then press Set up again."),
     (r"NewConnectionError|Failed to establish a new connection|Temporary failure in name resolution|"
-     r"Network is unreachable|Connection refused|ConnectTimeout|Read timed out|No matching distribution found|"
-     r"Could not find a version that satisfies",
+     r"Network is unreachable|Connection refused|ConnectTimeout|Read timed out|No matching distribution found",
      "Cannot reach the package index ({index}). Check the network connection (or the proxy), then press Set up "
      "again: what was downloaded is kept."),
 )
+
+
+def index_reachable(url: str, timeout: float = 15.0) -> bool:
+    """Whether the index answers at all (pip says only "no matching distribution" when it cannot reach it)."""
+    try:
+        with urllib.request.urlopen(url.rstrip("/") + "/", timeout=timeout):
+            return True
+    except urllib.error.HTTPError:
+        return True  # it answered
+    except Exception:
+        return False
 
 
 def explain_failure(output: str, data: Path, env: Mapping[str, str], what: str) -> str:
@@ -326,7 +337,8 @@ class EngineSetup:
         self._install(report, 0.12, 0.93)
         report(0.94, "Checking the engine...")
         version = self._step(
-            [str(self.python), "-c", "import onnxruntime, ssn_engine; print(ssn_engine.__version__)"], "Checking the engine"
+            [str(self.python), "-I", "-c", "import onnxruntime, ssn_engine; print(ssn_engine.__version__)"],
+            "Checking the engine",
         ).strip().splitlines()[-1]
         if version != self.bundle.version:
             raise SetupError(f"The environment holds engine {version}, not {self.bundle.version}; press Set up again.")
@@ -404,7 +416,21 @@ class EngineSetup:
                 report(start + (end - start) * 0.75, "Installing the downloaded packages...")
 
         report(start, f"Installing the engine {self.bundle.version} and its dependencies...")
-        self._step(args, "Installing the engine", on_line=on_line)
+        try:
+            self._step(args, "Installing the engine", on_line=on_line)
+        except SetupCancelled:
+            raise
+        except SetupError as exc:
+            index = index_url(self.env)
+            if "Cannot reach the package index" in str(exc) and index_reachable(index):
+                missing = re.findall(r"No matching distribution found for (\S+)", self._tail())
+                raise SetupError(
+                    f"The package index {index} has no {missing[-1] if missing else 'such package'} for this Python "
+                    f"and system. The log {self.log_path} names what is missing."
+                ) from None
+            raise
+        if self.bundle.wheel is not None:  # a rebuilt wheel of the same version replaces the one installed
+            self._step([*args[:4], "--force-reinstall", "--no-deps", *args[4:]], "Installing the engine")
 
     # -- processes -------------------------------------------------------------
     def _step(
@@ -417,7 +443,7 @@ class EngineSetup:
         env.update(PIP_CACHE_DIR=str(self.data / "cache"), PYTHONUNBUFFERED="1", PYTHONIOENCODING="utf-8")
         try:
             proc = subprocess.Popen(
-                args, stdout=subprocess.PIPE, stderr=subprocess.STDOUT, stdin=subprocess.DEVNULL,
+                args, stdout=subprocess.PIPE, stderr=subprocess.STDOUT, stdin=subprocess.DEVNULL, cwd=self.data,
                 text=True, encoding="utf-8", errors="replace", env=env, **_no_window(),
             )  # fmt: skip
         except OSError as exc:
@@ -453,6 +479,12 @@ class EngineSetup:
         if self._cancelled.is_set():
             self._log("cancelled")
             raise SetupCancelled("The set-up was cancelled; press Set up to resume it.")
+
+    def _tail(self, size: int = 20000) -> str:
+        try:
+            return self.log_path.read_text(encoding="utf-8", errors="replace")[-size:]
+        except OSError:
+            return ""
 
     def _log(self, text: str) -> None:
         try:
