@@ -130,9 +130,11 @@ case "$cmd" in
         [ $# -eq 1 ] || die "gimp-eval: give the Python code as one argument"
         extra=()
         [ -n "${SSN_GIMP3_DIRECTORY:-}" ] && extra+=("GIMP3_DIRECTORY=$SSN_GIMP3_DIRECTORY")
-        [ -n "${SSN_SHADOW_DIALOG_SELFTEST:-}" ] && extra+=("SSN_SHADOW_DIALOG_SELFTEST=$SSN_SHADOW_DIALOG_SELFTEST")
-        [ -n "${SSN_SHADOW_DIALOG_SCREENSHOT:-}" ] && extra+=("SSN_SHADOW_DIALOG_SCREENSHOT=$SSN_SHADOW_DIALOG_SCREENSHOT")
-        [ -n "${SSN_SHADOW_SCREEN_SCREENSHOT:-}" ] && extra+=("SSN_SHADOW_SCREEN_SCREENSHOT=$SSN_SHADOW_SCREEN_SCREENSHOT")
+        # the plug-in's test hooks, its data folder, and the certificates a set-up inside needs to reach the index
+        for name in SSN_SHADOW_DIALOG_SELFTEST SSN_SHADOW_DIALOG_SCREENSHOT SSN_SHADOW_SCREEN_SCREENSHOT \
+            SSN_SHADOW_SETUP_TEST SSN_SHADOW_DATA SSL_CERT_FILE PIP_CERT; do
+            [ -n "${!name:-}" ] && extra+=("$name=${!name}")
+        done
         screen="${SSN_GIMP_SCREEN:-1280x1024x24}"
         [[ "$screen" =~ ^[0-9]+x[0-9]+x[0-9]+$ ]] || die "SSN_GIMP_SCREEN must read WIDTHxHEIGHTxDEPTH, not '$screen'"
         xvfb=()

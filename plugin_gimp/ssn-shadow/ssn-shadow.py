@@ -100,7 +100,7 @@ class SoftShadow(Gimp.PlugIn):
             for name, value in {**host.image_camera(), **host.image_geometry()}.items():  # geometry are this one's
                 config.set_property(name, value)
         wait = EngineWait()  # GIMP's progress while the engine works; its Cancel stops this plug-in
-        engine = connect(on_wait=wait)
+        engine = connect_or_set_up(run_mode, wait)
         try:
             if run_mode == Gimp.RunMode.INTERACTIVE:
                 import ssn_dialog
@@ -120,6 +120,21 @@ class SoftShadow(Gimp.PlugIn):
         return Gimp.ValueArray.new_from_values(
             [GObject.Value(Gimp.PDBStatusType, Gimp.PDBStatusType.SUCCESS), GObject.Value(Gimp.Layer, layer)]
         )
+
+
+def connect_or_set_up(run_mode: Gimp.RunMode, wait: EngineWait) -> engine_client.EngineClient:
+    """The engine; a packaged plug-in without one offers Set up first (interactive runs; others say how)."""
+    try:
+        return connect(on_wait=wait)
+    except engine_config.EngineSetupNeeded as needed:
+        if run_mode != Gimp.RunMode.INTERACTIVE:
+            menu = " > ".join([*MENU_PATH.split("/")[1:], MENU_LABEL.replace("_", "")])
+            raise engine_config.EngineConfigError(f"{needed} Open {menu} once and press Set up.") from None
+        import ssn_setup_dialog
+
+        if not ssn_setup_dialog.run_setup_dialog(needed, MENU_LABEL.replace("_", "").rstrip(".")):
+            raise engine_client.Cancelled("set-up") from None
+        return connect(on_wait=wait)
 
 
 if __name__ == "__main__":

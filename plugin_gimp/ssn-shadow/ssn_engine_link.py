@@ -14,14 +14,14 @@ from typing import TYPE_CHECKING
 
 if TYPE_CHECKING:  # the copy is this package
     from ssn_engine.host_kit import *  # noqa: F403
-    from ssn_engine.host_kit import client, engine_config, geometry_clamp, geometry_rules  # noqa: F401 - for the others
+    from ssn_engine.host_kit import client, engine_config, engine_setup, geometry_clamp, geometry_rules  # noqa: F401
 else:
     try:  # installed: the copy made by `ssn-shadow install-plugin`
         from host_kit import *  # noqa: F403
-        from host_kit import client, engine_config, geometry_clamp, geometry_rules  # noqa: F401 - for the others
+        from host_kit import client, engine_config, engine_setup, geometry_clamp, geometry_rules  # noqa: F401
     except ImportError:  # running from the repository (tests)
         from ssn_engine.host_kit import *  # noqa: F403
-        from ssn_engine.host_kit import client, engine_config, geometry_clamp, geometry_rules  # noqa: F401 - for the others
+        from ssn_engine.host_kit import client, engine_config, engine_setup, geometry_clamp, geometry_rules  # noqa: F401
 
 PLUGIN_DIR = Path(__file__).resolve().parent
 WORKER_STATE = "worker.json"  # the shared worker's address and token (this user only)

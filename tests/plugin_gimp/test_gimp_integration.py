@@ -23,6 +23,7 @@ import subprocess
 import sys
 import tempfile
 import time
+import zipfile
 from pathlib import Path
 
 import numpy as np
@@ -44,6 +45,9 @@ UNDO_SCRIPT = Path(__file__).with_name("gimp_undo_check.py")
 SCENE_SCRIPT = Path(__file__).with_name("gimp_pawn_scene.py")
 KIT_SCRIPT = Path(__file__).with_name("gimp_check_kit.py")  # what the check scripts share: they import it
 RELAY_SCRIPT = Path(__file__).with_name("stdio_relay.py")
+SETUP_SCRIPT = Path(__file__).with_name("gimp_setup_check.py")
+SETUP_PRESS = Path(__file__).with_name("gimp_setup_press.py")
+HOST_CERTIFICATES = Path("/etc/ssl/certs/ca-certificates.crt")  # this machine's trust (a proxy's CA included)
 IN_CI = os.environ.get("CI") == "true"
 
 W, H = 320, 240
@@ -314,10 +318,12 @@ def workdir(chroot, worker):
         shutil.rmtree(work, ignore_errors=True)
 
 
-def run_gimp(inner: str, code: str, profile: str = "profile", **env: str) -> tuple[subprocess.CompletedProcess, float]:
+def run_gimp(
+    inner: str, code: str, profile: str = "profile", timeout_s: float = 240, **env: str
+) -> tuple[subprocess.CompletedProcess, float]:
     env = {**os.environ, "SSN_GIMP3_DIRECTORY": f"{inner}/{profile}", **env}
     start = time.monotonic()
-    run = subprocess.run([str(TOOL), "gimp-eval", code], env=env, capture_output=True, text=True, timeout=240)
+    run = subprocess.run([str(TOOL), "gimp-eval", code], env=env, capture_output=True, text=True, timeout=timeout_s)
     return run, time.monotonic() - start
 
 
@@ -587,3 +593,59 @@ def test_spawned_worker(workdir, worker):
     assert result["status"] == "success", result.get("error")
     assert result["layers_after"] == ["Pawn", "Shadow: Pawn", "Background"]
     assert result["source_unchanged"] and result["selection_unchanged"]
+
+
+def unpack(archive: Path, dest: Path) -> None:
+    """Unpack a zip as an artist's unzip does: with the modes it records (GIMP runs only an executable script)."""
+    with zipfile.ZipFile(archive) as zf:
+        for info in zf.infolist():
+            path = Path(zf.extract(info, dest))
+            mode = (info.external_attr >> 16) & 0o777
+            if mode and not info.is_dir():
+                path.chmod(mode)
+
+
+def test_the_gimp_package_sets_up_its_engine_inside_gimps_system(chroot):
+    """The one-file GIMP package unpacked into a fresh profile of the Debian 13 system GIMP runs in, where nothing
+    of ssn-shadow is installed and Python has no ensurepip: a batch call says how to set up; the interactive one
+    offers Set up, which makes the engine's environment there (pip fetched from the index), and the shadow follows
+    from that engine."""
+    from plugin_gimp import install as gimp_install
+    from ssn_engine.plugin_package import package
+
+    work = Path(tempfile.mkdtemp(prefix="ssn-gimp-setup-", dir=chroot / "tmp"))
+    inner = "/tmp/" + work.name
+    try:
+        unpack(package(gimp_install, work / "ssn-shadow-gimp.zip"), work / "profile-setup" / "plug-ins")
+        (work / "out").mkdir()
+        env = {
+            "SSN_GIMP_XVFB": "1",
+            "SSN_SHADOW_DIALOG_SELFTEST": "1",
+            "SSN_SHADOW_SETUP_TEST": inner + "/press.py",
+            "SSN_SHADOW_DATA": inner + "/data",
+        }
+        if HOST_CERTIFICATES.is_file():  # the machine's network as this machine trusts it
+            shutil.copy(HOST_CERTIFICATES, work / "certificates.crt")
+            env.update(SSL_CERT_FILE=inner + "/certificates.crt", PIP_CERT=inner + "/certificates.crt")
+        shutil.copy(SETUP_SCRIPT, work / "setup.py")
+        shutil.copy(SETUP_PRESS, work / "press.py")
+        code = f'OUT_PATH = "{inner}/out/setup.json"; {_exec_scene_then(work, inner, "setup.py")}'
+        run, seconds = run_gimp(inner, code, profile="profile-setup", timeout_s=1200, **env)
+        log = run.stdout + run.stderr
+        print(f"\ngimp set-up session: {seconds:.1f} s")
+        assert (work / "out" / "setup.json").exists(), log[-6000:]
+        result = json.loads((work / "out" / "setup.json").read_text())
+        batch = result["batch"]
+        assert batch["status"] == "execution-error" and batch["layers"] == ["Pawn", "Background"], batch
+        assert "not set up yet" in batch["error"], batch
+        assert "Open Filters > Light and Shadow > Soft Shadow (SSN)... once and press Set up." in batch["error"]
+        assert "ssn-shadow set-up dialog: offered '_Set up'" in log, log[-6000:]
+        assert re.search(r"set-up dialog: 0\.\d\d Installing the engine", log), log[-6000:]
+        assert result["status"] == "success", (result.get("error"), log[-6000:])
+        assert result["layers"] == ["Pawn", "Shadow: Pawn", "Background"]
+        setup_log = (work / "data" / "setup.log").read_text()
+        assert "--without-pip" in setup_log and "/pip install --no-index" in setup_log  # no ensurepip: pip from the index
+        assert setup_log.rstrip().endswith("done"), setup_log[-3000:]
+        assert (work / "data" / "engine" / "bin" / "python").exists()
+    finally:
+        shutil.rmtree(work, ignore_errors=True)
