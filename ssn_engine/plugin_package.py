@@ -105,9 +105,7 @@ def write_archive(root: Path, out: Path) -> Path:
     return Path(tmp.replace(out))
 
 
-def package(
-    host_install: ModuleType, out: Path, wheel: Path | None = None, requirement: str | None = None
-) -> Path:
+def package(host_install: ModuleType, out: Path, wheel: Path | None = None, requirement: str | None = None) -> Path:
     """Build the host's one-file package at ``out``: ``host_install`` is the host's installer module (its
     ``stage(root)`` lays the plug-in out under ``root``); the engine is ``wheel``, else ``requirement``, else a
     wheel built from this source checkout."""

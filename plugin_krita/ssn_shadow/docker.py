@@ -3,7 +3,7 @@
 from __future__ import annotations
 
 from krita import DockWidget, Krita
-from PyQt5.QtWidgets import QApplication
+from PyQt5.QtWidgets import QApplication, QVBoxLayout
 
 from .adapters.host import KritaHost
 from .controller import ShadowController
@@ -29,7 +29,9 @@ class SoftShadowDocker(DockWidget):
         self.panel = ShadowPanel(self.controller)  # its controls scroll in a short dock, Generate stays in view
         self.setup_box = SetupBox(PLUGIN_DIR)  # a packaged plug-in's Set up, shown while its engine is missing
         self.setup_box.finished.connect(self._set_up)
-        self.panel.layout().insertWidget(0, self.setup_box)  # above the controls, hidden once set up
+        layout = self.panel.layout()
+        assert isinstance(layout, QVBoxLayout)
+        layout.insertWidget(0, self.setup_box)  # above the controls, hidden once set up
         self.setWidget(self.panel)
         self.controller.watch_history()
         host.watch_closing(self._document_closed)

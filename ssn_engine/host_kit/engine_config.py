@@ -136,7 +136,8 @@ def load_engine_config(plugin_dir: Path, host: str) -> EngineConfig:
         if state.status != "ready":
             raise EngineSetupNeeded(state.describe(bundle), bundle, state)
         # its own environment: none of the host's Python paths (an embedded Python's PYTHONPATH) may leak in
-        return EngineConfig(command=(str(state.python), *DEFAULT_ARGS), env={"PYTHONPATH": ""}, source=str(state.python))
+        command = (str(state.python), *DEFAULT_ARGS)
+        return EngineConfig(command=command, env={"PYTHONPATH": ""}, source=str(state.python))
     exe = shutil.which("ssn-shadow")
     if exe:
         return EngineConfig(command=(exe, "serve"), source="PATH")

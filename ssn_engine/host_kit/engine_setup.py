@@ -45,6 +45,7 @@ PROBE = (
     "'version': list(sys.version_info[:3]), 'venv': u.find_spec('venv') is not None, "
     "'ensurepip': u.find_spec('ensurepip') is not None}))"
 )
+PIP_LINK = r'href="([^"]*?/?(pip-(\d+(?:\.\d+)*)-py3-none-any\.whl)(?:#sha256=([0-9a-f]+))?)"'  # simple API
 Report = Callable[[float, str], None]
 
 
@@ -135,8 +136,8 @@ class State:
                 "its engine (only the engine is downloaded again)."
             )
         return (
-            "The shadow engine is not set up yet. Set up installs it into a folder of its own "
-            "(about 250 MB, downloaded from the Python package index); it takes a few minutes."
+            "The shadow engine is not set up yet. Set up installs it into a folder of its own: about 105 MB "
+            "downloaded from the Python package index, 450 MB on disk; a minute or a few, by your connection."
         )
 
 
@@ -237,8 +238,10 @@ def find_python(
         return (with_pip or usable)[0]
     if too_old:
         old = ", ".join(f"{p.executable} ({'.'.join(map(str, p.version))})" for p in too_old)
-        raise SetupError(f"The engine needs Python 3.10 or newer; found only {old}. {install_python_hint()}, then "
-                         "press Set up again.")
+        raise SetupError(
+            f"The engine needs Python 3.10 or newer; found only {old}. {install_python_hint()}, then "
+            "press Set up again."
+        )
     raise SetupError(f"No Python with its venv module was found. {install_python_hint()}, then press Set up again.")
 
 
@@ -248,21 +251,31 @@ def index_url(env: Mapping[str, str]) -> str:
 
 
 _FAILURES: tuple[tuple[str, str], ...] = (
-    (r"No space left on device|\[Errno 28\]",
-     "The disk is full: {data} needs about 600 MB free. Free some space and press Set up again (it resumes)."),
-    (r"Read-only file system|Permission denied|\[Errno 13\]|\[Errno 30\]",
-     "Cannot write to {data}. Make that folder writable (or set SSN_SHADOW_DATA to a writable folder before "
-     "starting the program) and press Set up again."),
-    (r"ProxyError|Cannot connect to proxy|407 Proxy Authentication",
-     "The proxy refused the connection to {index}. Set HTTPS_PROXY (with its user and password if it needs them) "
-     "or pip's proxy setting (pip.conf), then press Set up again."),
-    (r"CERTIFICATE_VERIFY_FAILED|SSLError",
-     "The secure connection to {index} failed (a proxy or firewall that intercepts HTTPS?). Set pip's 'cert' "
-     "setting to your organisation's certificate, then press Set up again."),
-    (r"NewConnectionError|Failed to establish a new connection|Temporary failure in name resolution|"
-     r"Network is unreachable|Connection refused|ConnectTimeout|Read timed out|No matching distribution found",
-     "Cannot reach the package index ({index}). Check the network connection (or the proxy), then press Set up "
-     "again: what was downloaded is kept."),
+    (
+        r"No space left on device|\[Errno 28\]",
+        "The disk is full: {data} needs about 600 MB free. Free some space and press Set up again (it resumes).",
+    ),
+    (
+        r"Read-only file system|Permission denied|\[Errno 13\]|\[Errno 30\]",
+        "Cannot write to {data}. Make that folder writable (or set SSN_SHADOW_DATA to a writable folder before "
+        "starting the program) and press Set up again.",
+    ),
+    (
+        r"ProxyError|Cannot connect to proxy|407 Proxy Authentication",
+        "The proxy refused the connection to {index}. Set HTTPS_PROXY (with its user and password if it needs them) "
+        "or pip's proxy setting (pip.conf), then press Set up again.",
+    ),
+    (
+        r"CERTIFICATE_VERIFY_FAILED|SSLError",
+        "The secure connection to {index} failed (a proxy or firewall that intercepts HTTPS?). Set pip's 'cert' "
+        "setting to your organisation's certificate, then press Set up again.",
+    ),
+    (
+        r"NewConnectionError|Failed to establish a new connection|Temporary failure in name resolution|"
+        r"Network is unreachable|Connection refused|ConnectTimeout|Read timed out|No matching distribution found",
+        "Cannot reach the package index ({index}). Check the network connection (or the proxy), then press Set up "
+        "again: what was downloaded is kept.",
+    ),
 )
 
 
@@ -336,10 +349,14 @@ class EngineSetup:
         self._ensure_pip()
         self._install(report, 0.12, 0.93)
         report(0.94, "Checking the engine...")
-        version = self._step(
-            [str(self.python), "-I", "-c", "import onnxruntime, ssn_engine; print(ssn_engine.__version__)"],
-            "Checking the engine",
-        ).strip().splitlines()[-1]
+        version = (
+            self._step(
+                [str(self.python), "-I", "-c", "import onnxruntime, ssn_engine; print(ssn_engine.__version__)"],
+                "Checking the engine",
+            )
+            .strip()
+            .splitlines()[-1]
+        )
         if version != self.bundle.version:
             raise SetupError(f"The environment holds engine {version}, not {self.bundle.version}; press Set up again.")
         done = {"version": version, "identity": self.bundle.identity, "python": str(found.executable)}
@@ -379,7 +396,7 @@ class EngineSetup:
         try:
             with urllib.request.urlopen(f"{index}/pip/", timeout=60) as page:
                 html = page.read().decode("utf-8", "replace")
-            links = re.findall(r'href="([^"]*?/?(pip-(\d+(?:\.\d+)*)-py3-none-any\.whl)(?:#sha256=([0-9a-f]+))?)"', html)
+            links = re.findall(PIP_LINK, html)
             if not links:
                 raise SetupError(f"The package index {index} lists no pip wheel.")
             url, name, _, sha = max(links, key=lambda link: tuple(int(p) for p in link[2].split(".")))

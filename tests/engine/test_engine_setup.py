@@ -85,8 +85,9 @@ def test_candidates_put_the_hosts_own_python_first():
     win = engine_setup.python_candidates("win32", "C:/Krita/bin/krita.exe", "C:/Krita/python", (3, 10), paths.get)
     assert win[0] == [str(Path("C:/Krita/python/python.exe"))] and win[-1] == ["C:/Windows/py.exe", "-3"]
     assert ["C:/Krita/bin/krita.exe"] not in win
-    mac = engine_setup.python_candidates("darwin", "", "/Applications/krita.app/Contents/Frameworks/Python", (3, 10),
-                                         lambda name: None)  # fmt: skip
+    mac = engine_setup.python_candidates(
+        "darwin", "", "/Applications/krita.app/Contents/Frameworks/Python", (3, 10), lambda name: None
+    )
     assert mac[0] == [str(Path("/Applications/krita.app/Contents/Frameworks/Python/bin/python3.10"))]
 
 
@@ -140,8 +141,9 @@ def test_set_up_then_ready_then_an_update_upgrades_in_place(tmp_path):
     assert state.status == "outdated" and "(0.2.0 -> 0.3.0)" in state.describe(new)
     EngineSetup(new, data, [SYSTEM_PYTHON], local_env()).run(lambda f, text: None)
     assert engine_setup.engine_state(new, data).status == "ready"
-    out = subprocess.run([str(python), "-I", "-c", "import ssn_engine; print(ssn_engine.__version__)"], capture_output=True,
-                         text=True)  # fmt: skip
+    out = subprocess.run(
+        [str(python), "-I", "-c", "import ssn_engine; print(ssn_engine.__version__)"], capture_output=True, text=True
+    )
     assert out.stdout.strip() == "0.3.0"
     assert "reusing the environment" in (data / "setup.log").read_text()
 
@@ -184,8 +186,9 @@ def test_an_index_without_the_package_says_what_is_missing(tmp_path):
     server, index = _serve(Empty)
     try:
         with pytest.raises(SetupError, match=rf"The package index {index} has no ssn-shadow==0.2.0 for this Python"):
-            EngineSetup(Bundle("0.2.0", requirement="ssn-shadow==0.2.0"), tmp_path / "data", [SYSTEM_PYTHON],
-                        offline_env(index)).run(lambda f, text: None)  # fmt: skip
+            EngineSetup(
+                Bundle("0.2.0", requirement="ssn-shadow==0.2.0"), tmp_path / "data", [SYSTEM_PYTHON], offline_env(index)
+            ).run(lambda f, text: None)
     finally:
         server.shutdown()
 
@@ -257,8 +260,13 @@ def test_a_read_only_folder_says_which_and_what_to_do(tmp_path):
             "try:\n    s.EngineSetup(b, s.Path(sys.argv[2]), [['/usr/bin/python3']]).run(lambda f, t: None)\n"
             "except s.SetupError as e:\n    print(json.dumps(str(e)))\n"
         )
-        out = subprocess.run(["/usr/bin/python3", "-c", script, str(public), str(data)], capture_output=True,
-                             text=True, preexec_fn=_unprivileged(), timeout=60)  # fmt: skip
+        out = subprocess.run(
+            ["/usr/bin/python3", "-c", script, str(public), str(data)],
+            capture_output=True,
+            text=True,
+            preexec_fn=_unprivileged(),
+            timeout=60,
+        )
         message = json.loads(out.stdout)
         assert message.startswith(f"Cannot write to {data}. Make that folder writable"), message
         assert "SSN_SHADOW_DATA" in message
@@ -308,7 +316,7 @@ def test_a_python_without_ensurepip_gets_pip_from_the_index(tmp_path):
     assert out.returncode == 0 and out.stdout.startswith("pip "), out
 
 
-# -- the plug-in finds it ------------------------------------------------------------------------------------------------
+# -- the plug-in finds it ---------------------------------------------------------------------------------------------
 def test_a_packaged_plugin_asks_for_set_up_then_runs_the_environment(tmp_path, monkeypatch):
     for name in (engine_config.ADDRESS_ENV, engine_config.CONFIG_ENV):
         monkeypatch.delenv(name, raising=False)
@@ -327,4 +335,3 @@ def test_a_packaged_plugin_asks_for_set_up_then_runs_the_environment(tmp_path, m
     (plugin / "setup.json").write_text("{")
     with pytest.raises(engine_config.EngineConfigError, match="damaged.*import the plug-in's file again"):
         engine_config.load_engine_config(plugin, "krita")
-

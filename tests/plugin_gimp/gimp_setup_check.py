@@ -18,8 +18,11 @@ OUT = globals().get("OUT_PATH", "/tmp/ssn-setup.json")
 
 out = {}
 batch = call_filter(image, layer, Gimp.RunMode.NONINTERACTIVE)
-out["batch"] = {"status": batch.index(0).value_nick, "error": Gimp.get_pdb().get_last_error(),
-                "layers": layer_names(image)}  # fmt: skip
+out["batch"] = {
+    "status": batch.index(0).value_nick,
+    "error": Gimp.get_pdb().get_last_error(),
+    "layers": layer_names(image),
+}
 result = call_filter(image, layer, Gimp.RunMode.INTERACTIVE)
 out["status"] = result.index(0).value_nick
 out["layers"] = layer_names(image)

@@ -40,8 +40,9 @@ def test_the_krita_package_sets_up_its_engine_and_makes_a_shadow(tmp_path):
     (home / ".config").mkdir(parents=True)
     (home / ".config" / "kritadisplayrc").write_text("[General]\nOpenGLRenderer=none\n")
     env = {"HOME": str(home), "XDG_CONFIG_HOME": str(home / ".config"), "XDG_DATA_HOME": str(home / "data")}
-    data = run_kritarunner(pykrita, "krita_setup_driver", "main", tmp_path / "r.json", env, with_repo=False,
-                           timeout_s=1200)  # fmt: skip
+    data = run_kritarunner(
+        pykrita, "krita_setup_driver", "main", tmp_path / "r.json", env, with_repo=False, timeout_s=1200
+    )
 
     assert data["engine_importable_in_krita"] is False  # nothing but the plug-in: the engine is what Set up makes
     before = data["before"]
