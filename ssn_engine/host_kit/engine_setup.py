@@ -40,6 +40,7 @@ DATA_ENV = "SSN_SHADOW_DATA"  # overrides the data folder (tests, administrators
 DONE_NAME = "setup-done.json"  # inside the environment, written last
 MIN_PYTHON = (3, 10)
 DEFAULT_INDEX = "https://pypi.org/simple"
+PROXY_NAMES = ("HTTPS_PROXY", "https_proxy", "ALL_PROXY", "all_proxy")
 PROBE = (
     "import json, sys, importlib.util as u; print(json.dumps({'executable': sys.executable, "
     "'version': list(sys.version_info[:3]), 'venv': u.find_spec('venv') is not None, "
@@ -273,16 +274,26 @@ _FAILURES: tuple[tuple[str, str], ...] = (
     (
         r"NewConnectionError|Failed to establish a new connection|Temporary failure in name resolution|"
         r"Network is unreachable|Connection refused|ConnectTimeout|Read timed out|No matching distribution found",
-        "Cannot reach the package index ({index}). Check the network connection (or the proxy), then press Set up "
-        "again: what was downloaded is kept.",
+        "Cannot reach the package index ({index}){proxy}. Check the network connection (or the proxy), then press "
+        "Set up again: what was downloaded is kept.",
     ),
 )
 
 
-def index_reachable(url: str, timeout: float = 15.0) -> bool:
+def url_opener(env: Mapping[str, str]) -> urllib.request.OpenerDirector:
+    """urllib with the proxies of ``env`` (the set-up's environment, which pip gets too), not only this process's."""
+    proxies = {}
+    for scheme in ("http", "https"):
+        proxy = env.get(f"{scheme.upper()}_PROXY") or env.get(f"{scheme}_proxy") or env.get("ALL_PROXY")
+        if proxy:
+            proxies[scheme] = proxy
+    return urllib.request.build_opener(urllib.request.ProxyHandler(proxies))
+
+
+def index_reachable(url: str, env: Mapping[str, str], timeout: float = 15.0) -> bool:
     """Whether the index answers at all (pip says only "no matching distribution" when it cannot reach it)."""
     try:
-        with urllib.request.urlopen(url.rstrip("/") + "/", timeout=timeout):
+        with url_opener(env).open(url.rstrip("/") + "/", timeout=timeout):
             return True
     except urllib.error.HTTPError:
         return True  # it answered
@@ -294,7 +305,8 @@ def explain_failure(output: str, data: Path, env: Mapping[str, str], what: str) 
     """A message for people from a failed step's output."""
     for pattern, message in _FAILURES:
         if re.search(pattern, output):
-            return message.format(data=data, index=index_url(env))
+            proxy = next((env[k] for k in PROXY_NAMES if env.get(k)), "")
+            return message.format(data=data, index=index_url(env), proxy=f" through the proxy {proxy}" if proxy else "")
     lines = [line.strip() for line in output.splitlines() if line.strip()]
     last = lines[-1] if lines else "no output"
     return f"{what} failed ({last}). The log {Path(data) / 'setup.log'} has the details; press Set up to try again."
@@ -394,14 +406,15 @@ class EngineSetup:
         """The newest ``pip-*-py3-none-any.whl`` of the index's simple page, checked against its sha256."""
         index = index_url(self.env).rstrip("/")
         try:
-            with urllib.request.urlopen(f"{index}/pip/", timeout=60) as page:
+            opener = url_opener(self.env)
+            with opener.open(f"{index}/pip/", timeout=60) as page:
                 html = page.read().decode("utf-8", "replace")
             links = re.findall(PIP_LINK, html)
             if not links:
                 raise SetupError(f"The package index {index} lists no pip wheel.")
             url, name, _, sha = max(links, key=lambda link: tuple(int(p) for p in link[2].split(".")))
             dest = self.data / "cache" / name
-            with urllib.request.urlopen(urllib.parse.urljoin(f"{index}/pip/", url), timeout=120) as response:
+            with opener.open(urllib.parse.urljoin(f"{index}/pip/", url), timeout=120) as response:
                 body = response.read()
         except SetupError:
             raise
@@ -439,7 +452,7 @@ class EngineSetup:
             raise
         except SetupError as exc:
             index = index_url(self.env)
-            if "Cannot reach the package index" in str(exc) and index_reachable(index):
+            if "Cannot reach the package index" in str(exc) and index_reachable(index, self.env):
                 missing = re.findall(r"No matching distribution found for (\S+)", self._tail())
                 raise SetupError(
                     f"The package index {index} has no {missing[-1] if missing else 'such package'} for this Python "

@@ -172,6 +172,15 @@ def test_an_unreachable_index_says_so_and_leaves_no_engine(tmp_path):
     assert "No matching distribution found" in (data / "setup.log").read_text()
 
 
+def test_a_dead_proxy_is_named(tmp_path):
+    """Behind a proxy that does not answer, the message names it (pip and the reachability check both use it)."""
+    env = dict(offline_env("https://pypi.org/simple"), HTTPS_PROXY="http://127.0.0.1:9")
+    with pytest.raises(SetupError, match=r"\(https://pypi.org/simple\) through the proxy http://127.0.0.1:9\. Check"):
+        EngineSetup(Bundle("0.2.0", requirement="ssn-shadow==0.2.0"), tmp_path / "data", [SYSTEM_PYTHON], env).run(
+            lambda f, text: None
+        )
+
+
 def test_an_index_without_the_package_says_what_is_missing(tmp_path):
     """A reachable index that lacks a package (another system's wheels only, say) is not a network problem."""
 
