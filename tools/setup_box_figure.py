@@ -19,7 +19,7 @@ from PIL import Image
 from PyQt5.QtWidgets import QApplication
 
 from ssn_engine import __version__
-from ssn_engine.host_kit import engine_setup
+from ssn_engine.host_kit import engine_setup, setup_failures
 
 
 class Job:
@@ -70,11 +70,11 @@ def main(argv: list[str] | None = None) -> int:
         box.setup_button.setEnabled(False)
         box.cancel_button.setVisible(True)
         box.progress.setVisible(True)
-        box.job = Job(engine_setup.SetupEvent(0.41, "Downloading scipy>=1.9..."))
+        box.job = Job(engine_setup.SetupEvent(0.41, "Getting scipy>=1.9..."))
         box._poll()
         shots.append(grab(box, app))  # installing
-        env = {"PIP_INDEX_URL": engine_setup.DEFAULT_INDEX}
-        failed = engine_setup.explain_failure("NewConnectionError", data, env, "Installing the engine")
+        env = {"PIP_INDEX_URL": setup_failures.DEFAULT_INDEX}
+        failed = setup_failures.explain_failure("NewConnectionError", data, env, "Installing the engine")
         box.job = Job(engine_setup.SetupEvent(0.0, failed, done=True, error=failed))
         box._poll()
         shots.append(grab(box, app))  # failed

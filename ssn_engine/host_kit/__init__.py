@@ -22,6 +22,8 @@ from . import (
     light_map_picture,
     light_size,
     protocol,
+    python_finder,
+    setup_failures,
     shadow_notes,
     sky_map,
 )
@@ -39,6 +41,8 @@ __all__ = [
     "light_map_picture",
     "light_size",
     "protocol",
+    "python_finder",
+    "setup_failures",
     "shadow_notes",
     "sky_map",
 ]

@@ -28,34 +28,20 @@ import subprocess
 import sys
 import threading
 import time
-import urllib.error
 import urllib.parse
-import urllib.request
 from collections.abc import Callable, Mapping, Sequence
 from dataclasses import dataclass
 from pathlib import Path
 
+from .python_finder import PythonFound, find_python, no_window, probe_python, python_candidates
+from .setup_failures import SetupCancelled, SetupError, explain_failure, index_reachable, index_url, url_opener
+
+
 SETUP_NAME = "setup.json"  # beside a packaged plug-in: what Set up installs
 DATA_ENV = "SSN_SHADOW_DATA"  # overrides the data folder (tests, administrators)
 DONE_NAME = "setup-done.json"  # inside the environment, written last
-MIN_PYTHON = (3, 10)
-DEFAULT_INDEX = "https://pypi.org/simple"
-PROXY_NAMES = ("HTTPS_PROXY", "https_proxy", "ALL_PROXY", "all_proxy")
-PROBE = (
-    "import json, sys, importlib.util as u; print(json.dumps({'executable': sys.executable, "
-    "'version': list(sys.version_info[:3]), 'venv': u.find_spec('venv') is not None, "
-    "'ensurepip': u.find_spec('ensurepip') is not None}))"
-)
 PIP_LINK = r'href="([^"]*?/?(pip-(\d+(?:\.\d+)*)-py3-none-any\.whl)(?:#sha256=([0-9a-f]+))?)"'  # simple API
 Report = Callable[[float, str], None]
-
-
-class SetupError(RuntimeError):
-    """The set-up cannot go on; the message says what to do."""
-
-
-class SetupCancelled(SetupError):
-    """The artist pressed Cancel."""
 
 
 # -- where things are ------------------------------------------------------------------------------------------------
@@ -157,166 +143,16 @@ def engine_state(bundle: Bundle, data: Path) -> State:
     return State("ready", python, str(done.get("version", "")))
 
 
-# -- finding a Python ------------------------------------------------------------------------------------------------
-@dataclass(frozen=True)
-class PythonFound:
-    executable: str
-    version: tuple[int, ...]
-    ensurepip: bool
-
-
-def python_candidates(
-    platform: str | None = None,
-    executable: str | None = None,
-    base_prefix: str | None = None,
-    version: Sequence[int] | None = None,
-    which: Callable[[str], str | None] = shutil.which,
-) -> list[list[str]]:
-    """Commands that may start a Python, best first: the host's own (its ``sys.executable`` when that is a Python,
-    else the interpreter in its ``sys.base_prefix``: Krita and GIMP embed one), then those on PATH, newest first."""
-    platform = platform or sys.platform
-    executable = sys.executable if executable is None else executable
-    base_prefix = sys.base_prefix if base_prefix is None else base_prefix
-    major, minor = tuple(version or sys.version_info[:2])[:2]
-    found: list[list[str]] = []
-    windows = platform.startswith("win")
-    if executable and Path(executable).name.lower().startswith("python"):
-        found.append([executable])
-    if base_prefix:
-        base = Path(base_prefix)
-        own = [base / "python.exe"] if windows else [base / "bin" / f"python{major}.{minor}", base / "bin" / "python3"]
-        found += [[str(p)] for p in own]
-    names = [f"python3.{m}" for m in range(14, MIN_PYTHON[1] - 1, -1)] + ["python3", "python"]
-    for name in names:
-        path = which(name)
-        if path:
-            found.append([path])
-    if windows and which("py"):
-        found.append([str(which("py")), "-3"])
-    unique: list[list[str]] = []
-    for command in found:
-        if command not in unique:
-            unique.append(command)
-    return unique
-
-
-def probe_python(command: Sequence[str], timeout: float = 30.0) -> PythonFound | None:
-    """Ask a candidate what it is; None if it does not start or has no ``venv`` module."""
-    try:
-        out = subprocess.run(
-            [*command, "-I", "-c", PROBE], capture_output=True, text=True, timeout=timeout, **_no_window()
-        )
-        info = json.loads(out.stdout.strip().splitlines()[-1])
-    except (OSError, subprocess.SubprocessError, ValueError, IndexError):
-        return None
-    if out.returncode != 0 or not info.get("venv"):
-        return None
-    return PythonFound(str(info["executable"]), tuple(int(v) for v in info["version"]), bool(info["ensurepip"]))
-
-
-def install_python_hint(platform: str | None = None) -> str:
-    """What to install, in words, for this system."""
-    platform = platform or sys.platform
-    if platform.startswith("win"):
-        return "Install Python 3.10 or newer from https://www.python.org/downloads/ (tick 'Add python.exe to PATH')"
-    if platform == "darwin":
-        return "Install Python 3.10 or newer from https://www.python.org/downloads/ (or 'brew install python')"
-    return "Install Python 3.10 or newer with its venv module (Debian/Ubuntu: 'sudo apt install python3 python3-venv')"
-
-
-def find_python(
-    candidates: Sequence[Sequence[str]], probe: Callable[[Sequence[str]], PythonFound | None] = probe_python
-) -> PythonFound:
-    """The first candidate that is a Python 3.10+ with ``venv`` (one with ``ensurepip`` preferred)."""
-    usable, too_old = [], []
-    for command in candidates:
-        found = probe(command)
-        if found is None:
-            continue
-        (usable if found.version[:2] >= MIN_PYTHON else too_old).append(found)
-    with_pip = [p for p in usable if p.ensurepip]
-    if with_pip or usable:
-        return (with_pip or usable)[0]
-    if too_old:
-        old = ", ".join(f"{p.executable} ({'.'.join(map(str, p.version))})" for p in too_old)
-        raise SetupError(
-            f"The engine needs Python 3.10 or newer; found only {old}. {install_python_hint()}, then "
-            "press Set up again."
-        )
-    raise SetupError(f"No Python with its venv module was found. {install_python_hint()}, then press Set up again.")
-
-
-# -- what went wrong -------------------------------------------------------------------------------------------------
-def index_url(env: Mapping[str, str]) -> str:
-    return env.get("PIP_INDEX_URL") or DEFAULT_INDEX
-
-
-_FAILURES: tuple[tuple[str, str], ...] = (
-    (
-        r"No space left on device|\[Errno 28\]",
-        "The disk is full: {data} needs about 600 MB free. Free some space and press Set up again (it resumes).",
-    ),
-    (
-        r"Read-only file system|Permission denied|\[Errno 13\]|\[Errno 30\]",
-        "Cannot write to {data}. Make that folder writable (or set SSN_SHADOW_DATA to a writable folder before "
-        "starting the program) and press Set up again.",
-    ),
-    (
-        r"ProxyError|Cannot connect to proxy|407 Proxy Authentication",
-        "The proxy refused the connection to {index}. Set HTTPS_PROXY (with its user and password if it needs them) "
-        "or pip's proxy setting (pip.conf), then press Set up again.",
-    ),
-    (
-        r"CERTIFICATE_VERIFY_FAILED|SSLError",
-        "The secure connection to {index} failed (a proxy or firewall that intercepts HTTPS?). Set pip's 'cert' "
-        "setting to your organisation's certificate, then press Set up again.",
-    ),
-    (
-        r"NewConnectionError|Failed to establish a new connection|Temporary failure in name resolution|"
-        r"Network is unreachable|Connection refused|ConnectTimeout|Read timed out|No matching distribution found",
-        "Cannot reach the package index ({index}){proxy}. Check the network connection (or the proxy), then press "
-        "Set up again: what was downloaded is kept.",
-    ),
-)
-
-
-def url_opener(env: Mapping[str, str]) -> urllib.request.OpenerDirector:
-    """urllib with the proxies of ``env`` (the set-up's environment, which pip gets too), not only this process's."""
-    proxies = {}
-    for scheme in ("http", "https"):
-        proxy = env.get(f"{scheme.upper()}_PROXY") or env.get(f"{scheme}_proxy") or env.get("ALL_PROXY")
-        if proxy:
-            proxies[scheme] = proxy
-    return urllib.request.build_opener(urllib.request.ProxyHandler(proxies))
-
-
-def index_reachable(url: str, env: Mapping[str, str], timeout: float = 15.0) -> bool:
-    """Whether the index answers at all (pip says only "no matching distribution" when it cannot reach it)."""
-    try:
-        with url_opener(env).open(url.rstrip("/") + "/", timeout=timeout):
-            return True
-    except urllib.error.HTTPError:
-        return True  # it answered
-    except Exception:
-        return False
-
-
-def explain_failure(output: str, data: Path, env: Mapping[str, str], what: str) -> str:
-    """A message for people from a failed step's output."""
-    for pattern, message in _FAILURES:
-        if re.search(pattern, output):
-            proxy = next((env[k] for k in PROXY_NAMES if env.get(k)), "")
-            return message.format(data=data, index=index_url(env), proxy=f" through the proxy {proxy}" if proxy else "")
-    lines = [line.strip() for line in output.splitlines() if line.strip()]
-    last = lines[-1] if lines else "no output"
-    return f"{what} failed ({last}). The log {Path(data) / 'setup.log'} has the details; press Set up to try again."
-
-
-def _no_window() -> dict:
-    """Keep Windows from opening a console for each child process."""
-    if sys.platform.startswith("win"):
-        return {"creationflags": getattr(subprocess, "CREATE_NO_WINDOW", 0)}
-    return {}
+def package_named(line: str) -> str:
+    """The package a line of ``pip install`` starts on ("Collecting numpy>=1.24", "Processing /x/numpy-2.4-...whl",
+    "Requirement already satisfied: numpy in ..."), or ""."""
+    if line.startswith("Collecting "):
+        return line.split()[1]
+    if line.startswith("Processing "):
+        return Path(line.split(None, 1)[1]).name.split("-")[0]
+    if line.startswith("Requirement already satisfied:"):
+        return line.split(":", 1)[1].split()[0]
+    return ""
 
 
 # -- the set-up ------------------------------------------------------------------------------------------------------
@@ -437,11 +273,11 @@ class EngineSetup:
 
         def on_line(line: str) -> None:
             nonlocal collected
-            if line.startswith("Collecting ") or line.startswith("Requirement already satisfied"):
+            name = package_named(line)
+            if name:
                 collected += 1
-                name = line.split()[1] if line.startswith("Collecting") else line.split(":")[1].split()[0]
                 share = min(collected / expected, 1.0) * 0.7
-                report(start + (end - start) * share, f"Downloading {name}...")
+                report(start + (end - start) * share, f"Getting {name}...")
             elif line.startswith("Installing collected packages"):
                 report(start + (end - start) * 0.75, "Installing the downloaded packages...")
 
@@ -474,7 +310,7 @@ class EngineSetup:
         try:
             proc = subprocess.Popen(
                 args, stdout=subprocess.PIPE, stderr=subprocess.STDOUT, stdin=subprocess.DEVNULL, cwd=self.data,
-                text=True, encoding="utf-8", errors="replace", env=env, **_no_window(),
+                text=True, encoding="utf-8", errors="replace", env=env, **no_window(),
             )  # fmt: skip
         except OSError as exc:
             raise SetupError(explain_failure(str(exc), self.data, self.env, what)) from None

@@ -17,8 +17,10 @@ from pathlib import Path
 
 import pytest
 
-from ssn_engine.host_kit import engine_config, engine_setup
-from ssn_engine.host_kit.engine_setup import Bundle, EngineSetup, PythonFound, SetupError, SetupJob
+from ssn_engine.host_kit import engine_config, engine_setup, python_finder, setup_failures
+from ssn_engine.host_kit.engine_setup import Bundle, EngineSetup, SetupJob
+from ssn_engine.host_kit.python_finder import PythonFound
+from ssn_engine.host_kit.setup_failures import SetupError
 
 SYSTEM_PYTHON = [sys.executable]
 
@@ -79,13 +81,13 @@ def test_data_folder_per_os():
 def test_candidates_put_the_hosts_own_python_first():
     paths = {"python3.12": "/usr/bin/python3.12", "python3": "/usr/bin/python3", "py": "C:/Windows/py.exe"}
     # Krita on Linux: its sys.executable is Debian's python3
-    linux = engine_setup.python_candidates("linux", "/usr/bin/python3", "/usr", (3, 11), paths.get)
+    linux = python_finder.python_candidates("linux", "/usr/bin/python3", "/usr", (3, 11), paths.get)
     assert linux[0] == ["/usr/bin/python3"] and ["/usr/bin/python3.11"] in linux and ["/usr/bin/python3.12"] in linux
     # Krita on Windows: sys.executable is krita.exe; its embedded Python's folder is sys.base_prefix
-    win = engine_setup.python_candidates("win32", "C:/Krita/bin/krita.exe", "C:/Krita/python", (3, 10), paths.get)
+    win = python_finder.python_candidates("win32", "C:/Krita/bin/krita.exe", "C:/Krita/python", (3, 10), paths.get)
     assert win[0] == [str(Path("C:/Krita/python/python.exe"))] and win[-1] == ["C:/Windows/py.exe", "-3"]
     assert ["C:/Krita/bin/krita.exe"] not in win
-    mac = engine_setup.python_candidates(
+    mac = python_finder.python_candidates(
         "darwin", "", "/Applications/krita.app/Contents/Frameworks/Python", (3, 10), lambda name: None
     )
     assert mac[0] == [str(Path("/Applications/krita.app/Contents/Frameworks/Python/bin/python3.10"))]
@@ -98,20 +100,20 @@ def test_find_python_takes_a_recent_one_with_pip_and_says_what_to_install_otherw
         "full": PythonFound("/opt/python3.12", (3, 12, 1), True),
     }
     probe = lambda command: found.get(command[0])
-    assert engine_setup.find_python([["old"], ["bare"], ["full"]], probe).executable == "/opt/python3.12"
-    assert engine_setup.find_python([["old"], ["bare"]], probe).executable == "/usr/bin/python3.11"
+    assert python_finder.find_python([["old"], ["bare"], ["full"]], probe).executable == "/opt/python3.12"
+    assert python_finder.find_python([["old"], ["bare"]], probe).executable == "/usr/bin/python3.11"
     with pytest.raises(SetupError, match=r"needs Python 3.10 or newer; found only /usr/bin/python3.8 \(3.8.10\)"):
-        engine_setup.find_python([["old"], ["missing"]], probe)
+        python_finder.find_python([["old"], ["missing"]], probe)
     with pytest.raises(SetupError, match="No Python with its venv module was found. Install Python 3.10"):
-        engine_setup.find_python([["missing"]], probe)
-    real = engine_setup.probe_python(SYSTEM_PYTHON)
+        python_finder.find_python([["missing"]], probe)
+    real = python_finder.probe_python(SYSTEM_PYTHON)
     assert real is not None and real.version[:2] == sys.version_info[:2]
-    assert engine_setup.probe_python(["/no/such/python"]) is None
+    assert python_finder.probe_python(["/no/such/python"]) is None
 
 
 def test_each_failure_is_said_in_words(tmp_path):
     env = {"PIP_INDEX_URL": "https://mirror.example/simple"}
-    say = lambda out: engine_setup.explain_failure(out, tmp_path, env, "Installing the engine")
+    say = lambda out: setup_failures.explain_failure(out, tmp_path, env, "Installing the engine")
     assert "disk is full" in say("OSError: [Errno 28] No space left on device")
     assert f"Cannot write to {tmp_path}" in say("PermissionError: [Errno 13] Permission denied: '/x'")
     assert "proxy refused" in say("ProxyError('Cannot connect to proxy.')")
@@ -120,6 +122,15 @@ def test_each_failure_is_said_in_words(tmp_path):
     )
     other = say("Some other error\nValueError: bad wheel")
     assert other.startswith("Installing the engine failed (ValueError: bad wheel)") and "setup.log" in other
+
+
+def test_the_progress_names_each_package_pip_starts_on():
+    assert engine_setup.package_named("Collecting onnxruntime>=1.16") == "onnxruntime>=1.16"
+    line = "Processing /opt/files/scikit_image-0.26.0-cp311-cp311-manylinux_2_24_x86_64.whl"
+    assert engine_setup.package_named(line) == "scikit_image"
+    line = "Requirement already satisfied: numpy>=1.24 in ./engine/lib/python3.11/site-packages (2.4.6)"
+    assert engine_setup.package_named(line) == "numpy>=1.24"
+    assert engine_setup.package_named("  Downloading onnxruntime-1.32.0-cp311.whl (27.8 MB)") == ""
 
 
 # -- the set-up for real -----------------------------------------------------------------------------------------------

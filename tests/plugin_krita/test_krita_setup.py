@@ -50,7 +50,7 @@ def test_the_krita_package_sets_up_its_engine_and_makes_a_shadow(tmp_path):
     assert "not set up yet" in before["text"], before
     assert any("not set up yet" in text for level, text in [data["generate_before"]]), data["generate_before"]
     # cancelled while installing: said, and Set up resumes it
-    assert any("Installing" in text or "Downloading" in text for text in data["first"]), data["first"]
+    assert any("Installing" in text or "Getting" in text for text in data["first"]), data["first"]
     assert "cancelled" in data["cancelled"]["text"] and data["cancelled"]["button"] == "Resume", data["cancelled"]
     assert data["second"][-1].startswith(f"The shadow engine {__version__} is set up"), data["second"]
     assert not data["after"]["shown"] and "press Generate" in data["after"]["status"][1], data["after"]
