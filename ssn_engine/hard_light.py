@@ -75,6 +75,9 @@ DEPTH_SIZE = 128  # pixels: the object's depth is worked out on a copy reduced t
 RADIUS_STEP = 1.25  # ratio of the local radii the depth map tells apart
 FADE_STEP = 3.0  # pixels of shift: a pixel's shadow fades out in steps of falling value at most this long
 MAX_FADE_STEPS = 8  # steps at most (a long fade's are longer)
+# pixels of the cutout: a shorter fade ends its pixel's depth crisply; its few steps, each pixel's ending where its
+# own depth does, would show as hairs and a flat grey band, magnified by the ground's projection under a low sun
+MIN_FADE = 8.0
 SWEEP_BLUR_SHARE = 10.0  # percent of a card's rows blurred less than the pixel of the copy its depth is swept on
 SWEEP_SIZE = 400  # pixels: a larger card is swept through its depth on a copy reduced to about this size
 MIN_INCIDENCE = 10.0  # degrees: the card turns just enough that a light's horizontal direction meets it at least so
@@ -618,7 +621,8 @@ class CardTracer:
         size = ((x1 - x0) * fine, (y1 - y0) * fine)
         if self.depth > 0 or self.front > 0:
             k = _sweep_reduction(card, sigma_rows)
-            swept, (sx, sy) = self._swept(card, source, w, 2.0 * sigma_rows, k)
+            fade = 2.0 * sigma_rows  # where a pixel's depth ends: as blurred as its row (a short one drawn crisp)
+            swept, (sx, sy) = self._swept(card, source, w, np.where(fade < MIN_FADE, 0.0, fade), k)
             values = _warp(swept, np.array([[1.0 / k, 0, sx], [0, 1.0 / k, sy], [0, 0, 1.0]]) @ to_card, size)
             if k > 1:  # swept on a reduced copy: the card itself, crisp, where that copy's shadow is partial
                 values = _warp(self._at_card(card, source), to_card, size, values, within=True)

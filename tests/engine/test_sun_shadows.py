@@ -192,3 +192,30 @@ def test_no_speckles_in_the_shadow_of_the_sample_pawn(pawn_frame, preset_name):
     outside = ndimage.binary_erosion(pawn_frame < 0.01, iterations=2, border_value=0)  # off the cutout and border
     assert shadow[outside].max() > 0.2  # a shadow is cast
     assert pits[outside].max() < 0.04
+
+
+def test_a_low_suns_shadow_has_a_clean_far_edge(tmp_path, pawn_rgba):
+    """The demo's low sun traced at the canvas's resolution: the far edge of the pawn's shadow goes from light to
+    dark within a pixel or two, with no hairs (runs of partial shadow above it, one per traced row) and no flat
+    grey band (a short fade's steps, magnified by the ground's projection, drew both)."""
+    from PIL import Image
+
+    from ssn_engine.cli import main
+
+    Image.fromarray(pawn_rgba, "RGBA").save(tmp_path / "pawn.png")
+    layer = tmp_path / "shadow.png"
+    args = ["render", str(tmp_path / "pawn.png"), "--preset", "low-sun-left", "--method", "geometric"]
+    assert main([*args, "--opacity", "1", "--layer", str(layer)]) == 0
+    s = np.asarray(Image.open(layer))[..., 3].astype(np.float32) / 255
+    gaps, hairy = [], 0
+    for x in range(440, 1000):  # the columns of the shadow beside and behind the pawn, its far edge above
+        column = s[600:800, x]
+        lit, dark = np.flatnonzero(column >= 0.1), np.flatnonzero(column >= 0.9)
+        if lit.size == 0 or dark.size == 0:
+            continue
+        gaps.append(dark[0] - lit[0])
+        above = column[: dark[0]] > 0.1
+        hairy += int(np.count_nonzero(np.diff(above.astype(int)) == 1) > 1)
+    assert len(gaps) > 400, len(gaps)
+    assert np.percentile(gaps, 90) <= 3, np.percentile(gaps, 90)  # was 11 pixels (a grey band)
+    assert hairy <= 0.08 * len(gaps), hairy  # was 86 of 560 columns
