@@ -629,6 +629,8 @@ def test_the_gimp_package_sets_up_its_engine_inside_gimps_system(chroot):
             env.update(SSL_CERT_FILE=inner + "/certificates.crt", PIP_CERT=inner + "/certificates.crt")
         shutil.copy(SETUP_SCRIPT, work / "setup.py")
         shutil.copy(SETUP_PRESS, work / "press.py")
+        if os.environ.get("SSN_GIMP_SETUP_SCREENSHOT"):  # a picture of the dialog while it installs, for the docs
+            (work / "shot.txt").write_text(inner + "/out/setup.png")
         code = f'OUT_PATH = "{inner}/out/setup.json"; {_exec_scene_then(work, inner, "setup.py")}'
         run, seconds = run_gimp(inner, code, profile="profile-setup", timeout_s=1200, **env)
         log = run.stdout + run.stderr
@@ -648,5 +650,7 @@ def test_the_gimp_package_sets_up_its_engine_inside_gimps_system(chroot):
         assert "--without-pip" in setup_log and "/pip install --no-index" in setup_log
         assert setup_log.rstrip().endswith("done"), setup_log[-3000:]
         assert (work / "data" / "engine" / "bin" / "python").exists()
+        if os.environ.get("SSN_GIMP_SETUP_SCREENSHOT"):
+            shutil.copy(work / "out" / "setup.png", os.environ["SSN_GIMP_SETUP_SCREENSHOT"])
     finally:
         shutil.rmtree(work, ignore_errors=True)
