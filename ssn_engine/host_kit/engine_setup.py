@@ -120,7 +120,7 @@ class State:
         if self.status == "outdated":
             return (
                 f"The plug-in was updated ({self.installed_version} -> {bundle.version}): press Update to update "
-                "its engine (only the engine is downloaded again)."
+                "its engine (the dependencies it has are kept)."
             )
         return (
             "The shadow engine is not set up yet. Set up installs it into a folder of its own: about 105 MB "
@@ -172,7 +172,6 @@ class EngineSetup:
         self.env_dir = self.data / "engine"
         self.python = env_python(self.env_dir)
         self.log_path = self.data / "setup.log"
-        self._proc: subprocess.Popen | None = None
         self._cancelled = threading.Event()
 
     # -- steps -----------------------------------------------------------------
@@ -189,7 +188,7 @@ class EngineSetup:
         (self.env_dir / DONE_NAME).unlink(missing_ok=True)
         report(0.0, "Looking for Python 3.10 or newer...")
         found = find_python(self.candidates)
-        self._log(f"python: {found.executable} {'.'.join(map(str, found.version))}")
+        self.log(f"python: {found.executable} {'.'.join(map(str, found.version))}")
         self._check_cancel()
         report(0.04, f"Creating the engine's environment with Python {'.'.join(map(str, found.version[:2]))}...")
         self._make_environment(found)
@@ -211,7 +210,7 @@ class EngineSetup:
         tmp = self.env_dir / (DONE_NAME + ".tmp")
         tmp.write_text(json.dumps(done, indent=2) + "\n", encoding="utf-8")
         os.replace(tmp, self.env_dir / DONE_NAME)
-        self._log("done")
+        self.log("done")
         report(1.0, f"The shadow engine {version} is set up.")
         return self.python
 
@@ -220,9 +219,9 @@ class EngineSetup:
         if self.python.exists():
             ok = probe_python([str(self.python)])
             if ok is not None and ok.version[:2] == found.version[:2]:
-                self._log("reusing the environment")
+                self.log("reusing the environment")
                 return
-            self._log("the environment is broken or of another Python: made anew")
+            self.log("the environment is broken or of another Python: made anew")
         if self.env_dir.exists():
             shutil.rmtree(self.env_dir, ignore_errors=True)
         args = [found.executable, "-m", "venv", *([] if found.ensurepip else ["--without-pip"]), str(self.env_dir)]
@@ -255,7 +254,7 @@ class EngineSetup:
         except SetupError:
             raise
         except Exception as exc:  # urllib's errors: no network, proxy, TLS
-            self._log(f"pip download: {exc!r}")
+            self.log(f"pip download: {exc!r}")
             raise SetupError(explain_failure(repr(exc) + " NewConnectionError", self.data, self.env, "pip")) from None
         if sha and hashlib.sha256(body).hexdigest() != sha:
             raise SetupError(f"The pip wheel from {index} does not match its checksum; press Set up again.")
@@ -304,7 +303,7 @@ class EngineSetup:
     ) -> str:
         """Run one command, logging its output; a failure raises SetupError with what to do."""
         self._check_cancel()
-        self._log("$ " + " ".join(args))
+        self.log("$ " + " ".join(args))
         env = {k: v for k, v in self.env.items() if k not in ("PYTHONHOME", "PYTHONPATH", "PYTHONSTARTUP")}
         env.update(PIP_CACHE_DIR=str(self.data / "cache"), PYTHONUNBUFFERED="1", PYTHONIOENCODING="utf-8")
         try:
@@ -314,7 +313,6 @@ class EngineSetup:
             )  # fmt: skip
         except OSError as exc:
             raise SetupError(explain_failure(str(exc), self.data, self.env, what)) from None
-        self._proc = proc
         lines: list[str] = []
         watcher = threading.Thread(target=self._kill_on_cancel, args=(proc,), daemon=True)
         watcher.start()
@@ -326,7 +324,6 @@ class EngineSetup:
                 if on_line is not None:
                     on_line(line.strip())
         code = proc.wait()
-        self._proc = None
         self._check_cancel()
         output = "".join(lines)
         if code != 0:
@@ -343,7 +340,7 @@ class EngineSetup:
 
     def _check_cancel(self) -> None:
         if self._cancelled.is_set():
-            self._log("cancelled")
+            self.log("cancelled")
             raise SetupCancelled("The set-up was cancelled; press Set up to resume it.")
 
     def _tail(self, size: int = 20000) -> str:
@@ -352,7 +349,8 @@ class EngineSetup:
         except OSError:
             return ""
 
-    def _log(self, text: str) -> None:
+    def log(self, text: str) -> None:
+        """Append a line to the set-up's log (never failing the set-up for it)."""
         try:
             with open(self.log_path, "a", encoding="utf-8") as log:
                 log.write(text + "\n")
@@ -412,8 +410,11 @@ class SetupJob:
             self._push(SetupEvent(0.0, str(exc), done=True, error=str(exc), cancelled=True))
         except SetupError as exc:
             self._push(SetupEvent(0.0, str(exc), done=True, error=str(exc)))
+        except OSError as exc:  # writing in the data folder: a full disk, a folder made read-only meanwhile
+            message = explain_failure(str(exc), self.setup.data, self.setup.env, "Writing the engine's files")
+            self._push(SetupEvent(0.0, message, done=True, error=message))
         except Exception as exc:  # never let a thread die silently: the panel must say it
-            self.setup._log(f"unexpected: {exc!r}")
+            self.setup.log(f"unexpected: {exc!r}")
             self._push(SetupEvent(0.0, f"The set-up stopped: {exc}", done=True, error=str(exc)))
         else:
             self._push(SetupEvent(1.0, f"The shadow engine {self.setup.bundle.version} is set up.", done=True))
