@@ -48,15 +48,21 @@ class Host:
         return document.horizontalGuides()
 
 
+def docked_app() -> QApplication:
+    """The Qt application with Krita's 8 pt UI font, the docker's widgets drawn as they are docked."""
+    app = QApplication.instance() or QApplication(sys.argv)
+    font = app.font()
+    font.setPointSizeF(8.0)
+    app.setFont(font)
+    return app
+
+
 def main(argv: list[str] | None = None) -> int:
     p = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     p.add_argument("--out", default="docs/img/krita-docker.png")
     p.add_argument("--camera-out", default="docs/img/krita-camera-read.png")
     args = p.parse_args(argv)
-    app = QApplication.instance() or QApplication(sys.argv)
-    font = app.font()
-    font.setPointSizeF(8.0)
-    app.setFont(font)
+    app = docked_app()
     pawn = pawn_cutout()
     session = ShadowSession(pawn[..., 3], load_method("auto").method)
     u8 = lambda a: np.rint(np.clip(a, 0, 1) * 255).astype(np.uint8).tobytes()  # noqa: E731

@@ -16,20 +16,25 @@ from pathlib import Path
 
 import numpy as np
 from PIL import Image
-from PyQt5.QtWidgets import QApplication
+from krita_docker_figure import docked_app
 
 from ssn_engine import __version__
 from ssn_engine.host_kit import engine_setup, setup_failures
 
 
 class Job:
-    """Stands in for the set-up thread: the events a real run reports at that point."""
+    """Stands in for the set-up thread (SetupBox.start makes one): the events a real run reports at that point."""
 
-    def __init__(self, *events: engine_setup.SetupEvent) -> None:
-        self._events, self.running = list(events), True
+    events_next: list[engine_setup.SetupEvent] = []
+
+    def __init__(self, setup: engine_setup.EngineSetup) -> None:
+        self.running = True
+
+    def start(self) -> Job:
+        return self
 
     def events(self) -> list[engine_setup.SetupEvent]:
-        events, self._events = self._events, []
+        events, Job.events_next = Job.events_next, []
         return events
 
 
@@ -48,11 +53,8 @@ def main(argv: list[str] | None = None) -> int:
     p = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     p.add_argument("--out", default="docs/img/krita-setup.png")
     args = p.parse_args(argv)
-    app = QApplication.instance() or QApplication(sys.argv)
-    font = app.font()
-    font.setPointSizeF(8.0)
-    app.setFont(font)
-    from plugin_krita.ssn_shadow.ui.setup_box import SetupBox
+    app = docked_app()
+    from plugin_krita.ssn_shadow.ui import setup_box
 
     with tempfile.TemporaryDirectory() as tmp:
         plugin, data = Path(tmp) / "ssn_shadow", Path(tmp) / "data"
@@ -61,21 +63,18 @@ def main(argv: list[str] | None = None) -> int:
         (plugin / "setup.json").write_text(json.dumps({"version": __version__, "wheel": wheel, "sha256": "0" * 64}))
         os.environ[engine_setup.DATA_ENV] = str(data)
         shots = []
-        box = SetupBox(plugin)
+        box = setup_box.SetupBox(plugin)
         shots.append(grab(box, app))  # offered
         data.mkdir()
         (data / "setup.log").write_text("")
-        box.start = lambda: None
-        box._show_idle("", "Set up")
-        box.setup_button.setEnabled(False)
-        box.cancel_button.setVisible(True)
-        box.progress.setVisible(True)
-        box.job = Job(engine_setup.SetupEvent(0.41, "Getting scipy>=1.9..."))
+        setup_box.engine_setup.SetupJob = Job  # Set up pressed: the box's own start, with the stand-in thread
+        box.setup_button.click()
+        Job.events_next = [engine_setup.SetupEvent(0.41, "Getting scipy>=1.9...")]
         box._poll()
         shots.append(grab(box, app))  # installing
         env = {"PIP_INDEX_URL": setup_failures.DEFAULT_INDEX}
         failed = setup_failures.explain_failure("NewConnectionError", data, env, "Installing the engine")
-        box.job = Job(engine_setup.SetupEvent(0.0, failed, done=True, error=failed))
+        Job.events_next = [engine_setup.SetupEvent(0.0, failed, done=True, error=failed)]
         box._poll()
         shots.append(grab(box, app))  # failed
     height = max(s.shape[0] for s in shots)

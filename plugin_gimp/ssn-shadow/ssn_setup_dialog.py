@@ -24,8 +24,8 @@ def run_setup_dialog(needed: engine_config.EngineSetupNeeded, title: str) -> boo
     """Offer Set up (or Update); True once the engine is set up, False if the dialog was closed without it."""
     GimpUi.init("ssn-shadow")
     dialog = Gtk.Dialog(title=f"{title}: set up the engine")
-    close = dialog.add_button("_Close", Gtk.ResponseType.CLOSE)
-    log_button = dialog.add_button("Open _log", LOG)
+    dialog.add_button("_Close", Gtk.ResponseType.CLOSE)
+    dialog.add_button("Open _log", LOG)
     action = dialog.add_button("_Update" if needed.state.status == "outdated" else "_Set up", SETUP)
     message = Gtk.Label(label=str(needed), xalign=0.0)
     message.set_line_wrap(True)
@@ -47,12 +47,11 @@ def run_setup_dialog(needed: engine_config.EngineSetupNeeded, title: str) -> boo
             message.set_text(event.text)
             if event.done:
                 state.ready = not event.error
-                action.set_sensitive(True)
-                action.set_label("_Resume" if event.cancelled else "_Try again")
-                close.set_label("_Continue" if state.ready else "_Close")
-                action.set_visible(not state.ready)
-                if state.ready:
+                if state.ready:  # on to the filter's dialog
                     dialog.response(Gtk.ResponseType.CLOSE)
+                else:
+                    action.set_sensitive(True)
+                    action.set_label("_Resume" if event.cancelled else "_Try again")
                 return False
         return True
 
@@ -77,7 +76,6 @@ def run_setup_dialog(needed: engine_config.EngineSetupNeeded, title: str) -> boo
 
     dialog.connect("response", on_response)
     dialog.connect("delete-event", lambda *_: on_response(dialog, Gtk.ResponseType.CLOSE) or True)
-    log_button.set_sensitive(True)
     script = os.environ.get(TEST_SCRIPT_ENV, "")
     if script:
         parts = SimpleNamespace(dialog=dialog, message=message, progress=progress, action=action, state=state)

@@ -40,6 +40,7 @@ from .setup_failures import SetupCancelled, SetupError, explain_failure, index_r
 SETUP_NAME = "setup.json"  # beside a packaged plug-in: what Set up installs
 DATA_ENV = "SSN_SHADOW_DATA"  # overrides the data folder (tests, administrators)
 DONE_NAME = "setup-done.json"  # inside the environment, written last
+READY = "The shadow engine {version} is set up."
 PIP_LINK = r'href="([^"]*?/?(pip-(\d+(?:\.\d+)*)-py3-none-any\.whl)(?:#sha256=([0-9a-f]+))?)"'  # simple API
 Report = Callable[[float, str], None]
 
@@ -115,8 +116,7 @@ class State:
     installed_version: str = ""
 
     def describe(self, bundle: Bundle) -> str:
-        if self.status == "ready":
-            return f"The shadow engine {bundle.version} is set up."
+        """What the host says of an engine not ready for ``bundle``: what Set up (or Update) will do."""
         if self.status == "outdated":
             return (
                 f"The plug-in was updated ({self.installed_version} -> {bundle.version}): press Update to update "
@@ -211,7 +211,7 @@ class EngineSetup:
         tmp.write_text(json.dumps(done, indent=2) + "\n", encoding="utf-8")
         os.replace(tmp, self.env_dir / DONE_NAME)
         self.log("done")
-        report(1.0, f"The shadow engine {version} is set up.")
+        report(1.0, READY.format(version=version))
         return self.python
 
     def _make_environment(self, found: PythonFound) -> None:
@@ -417,4 +417,4 @@ class SetupJob:
             self.setup.log(f"unexpected: {exc!r}")
             self._push(SetupEvent(0.0, f"The set-up stopped: {exc}", done=True, error=str(exc)))
         else:
-            self._push(SetupEvent(1.0, f"The shadow engine {self.setup.bundle.version} is set up.", done=True))
+            self._push(SetupEvent(1.0, READY.format(version=self.setup.bundle.version), done=True))
