@@ -82,6 +82,14 @@ def _row(name: str, ms: np.ndarray, median: float, ratio: float | None) -> str:
     return f"{name:44s} {median:9.1f} {np.percentile(ms, 95):9.1f} {judged}"
 
 
+def _moved(light_map: LightMap, du: float) -> LightMap:
+    """``light_map`` with every light moved ``du`` round the azimuth."""
+    moved = light_map.copy()
+    for i, light in enumerate(moved.lights):
+        moved.move(i, light.u + du, light.v)
+    return moved
+
+
 def big_cutout(width: int = 4000, height: int = 3000) -> np.ndarray:
     """The sample pawn scaled onto a 4000 x 3000 RGBA canvas."""
     small = Image.fromarray(pawn_cutout())
@@ -138,8 +146,9 @@ def run_benchmark(repeats: int = 20, method: str = "auto") -> dict[str, np.ndarr
     session = open_session(cutout[..., 3], m)
     e2e_repeats = max(3, repeats // 4)
     results["end to end 4000x3000 (frame+AO+SR+layer)"] = time_calls(end_to_end, e2e_repeats, warmup=1)
+    moved = _alternating([_moved(light, 0.01 * k) for k in range(VARIANTS)])  # a new light map every render
     results["light moved 4000x3000 (SR+to canvas+layer)"] = time_calls(
-        lambda: shadow_layer(session.render(light)), e2e_repeats, warmup=1
+        lambda: shadow_layer(session.render(moved())), e2e_repeats, warmup=1
     )
     single = session if isinstance(session, ShadowSession) else session.parts[0]  # (the pawn is one object)
     results["tracer analysis 4000x3000 (surface, cards)"] = time_calls(lambda: single.make_tracer(False), repeats)

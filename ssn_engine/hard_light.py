@@ -59,6 +59,7 @@ from __future__ import annotations
 import math
 from collections.abc import Callable
 from dataclasses import dataclass, replace
+from functools import cached_property
 
 import numpy as np
 from PIL import Image, ImageFilter
@@ -170,6 +171,12 @@ class _Source:
     offset_x: float
     offset_y: float
 
+    @cached_property
+    def lit_rows(self) -> int:
+        """One past its last row holding any of the cutout (below it lie the ground's rows down to the foot)."""
+        rows = np.flatnonzero(self.alpha.any(axis=1))
+        return int(rows[-1]) + 1 if rows.size else 0
+
 
 # a card's blurred copies of its cutout, kept for a card of the same cutout and another foot: its pad and, per
 # scale and level, the rows blurred and the copy
@@ -231,6 +238,8 @@ class CardTracer:
         horizon, focal = camera if camera is not None else (None, None)
         self.camera, self.height = camera_for_span(framing.n, top, base, horizon, focal)
         self._world_per_pixel = s * self._mid_depth() / float(self.camera.focal)  # at the card, per alpha pixel
+        # a floating object's lowest point: the world height of its card's foot row before the lift
+        self._floor = float(self._frame_row_geometry(np.array([base - lift * s]))[0][0]) if lift > 0 else 0.0
         lowest, width = int(rows[-1]) + 1, alpha.shape[1]
         thick = (
             np.zeros((lowest, width), np.float32) if thickness is None else np.asarray(thickness[:lowest], np.float32)
@@ -261,13 +270,20 @@ class CardTracer:
             out[pad : pad + lowest, pad : pad + width] = values
             return out
 
+        def spread(values: np.ndarray) -> np.ndarray:  # with the pad, each pad pixel as its nearest border pixel
+            return np.pad(values, ((pad, foot - lowest), (pad, pad)), mode="edge")
+
         alpha = padded(alpha)
-        self._far = {1: padded(far)}  # per reduction: depth behind the card, its pixels
-        self._near = {1: padded(near)}  # the same of the surface the pixel shows
+        # the surface's depth reaches into the pad as it does around the outline within the crop (the blurred
+        # copies spread there): a part read behind its card takes its blurred edge with it, leaving no trace of
+        # it on the card; the pad sweeps no depth of its own (a part's edge is thin: the round cross-section)
+        near = spread(near)
+        self._near = {1: near}  # per reduction: depth behind the card of the surface each pixel shows, its pixels
+        self._far = {1: near + padded(far - near[pad : pad + lowest, pad : pad + width])}  # and of its far end
         self._full = _Source(alpha, s, framing.offset_x + (x0 - pad) * s, framing.offset_y + (y0 - pad) * s)
         self._sources: dict[int, _Source] = {}
         self._swept_depths: dict[tuple[int, int], tuple[np.ndarray, np.ndarray]] = {}  # per reduction and sweep's
-        self._on_card: dict[int, np.ndarray | None] = {}  # per reduction: the pixels whose surface is the card's
+        self._on_card: dict[int, np.ndarray | None] = {}  # per reduction: the pixels whose surface is off the card
         # per scale, level: rows, blurred; those of the same alpha with the same pad (a card whose foot moved) hold
         self._pad = pad
         self._levels: dict[float, dict[int, tuple[int, int, _Level]]] = (
@@ -304,15 +320,17 @@ class CardTracer:
         (each level serves a band of rows), and over all rows once another light needs others."""
         levels = self._levels.setdefault(source.scale, {})
         kept = levels.get(k)
-        if kept is not None and kept[0] <= r0 and r1 <= kept[1]:
-            return kept[2]
+        sigma = MIN_SIGMA * 2.0 ** ((k - 1) / LEVELS_PER_OCTAVE)
+        margin = math.ceil(4 * sigma) + 2  # rows beyond [lo, hi) that reach into it
+        # below the cutout's rows and their blur lies nothing, however far down the foot (a lift's ground rows)
+        r1 = min(r1, source.lit_rows + (margin if k > 0 else 0))
+        if r1 <= r0 or (kept is not None and kept[0] <= r0 and r1 <= kept[1]):
+            return kept[2] if kept is not None else _Level.of(np.zeros((0, 0), np.float32))
         # a level asked for more rows (another light's, another lift's) is blurred over all of them, once
-        lo, hi = (r0, r1) if kept is None else (0, source.alpha.shape[0])
+        lo, hi = (r0, r1) if kept is None else (0, min(source.alpha.shape[0], source.lit_rows + margin))
         if k == 0:
             lo, hi, level = 0, source.alpha.shape[0], _Level.of(source.alpha)
         else:
-            sigma = MIN_SIGMA * 2.0 ** ((k - 1) / LEVELS_PER_OCTAVE)
-            margin = math.ceil(4 * sigma) + 2  # rows beyond [lo, hi) that reach into it
             a, b = max(0, lo - margin), min(source.alpha.shape[0], hi + margin)
             level = _Level.of(_blur(source.alpha[a:b], sigma)[lo - a : hi - a])
             level = replace(level, y=level.y + lo)
@@ -418,6 +436,19 @@ class CardTracer:
         """The world height above the ground of each source row on the card's centre line."""
         return self._row_geometry(source)[0]
 
+    def _frame_row_geometry(self, rows: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+        """Per frame row (``rows``): the height above the ground and the camera depth of the card's centre line
+        there."""
+        cam = self.camera
+        # the card's centre line: the frame row of (0, h, 0) is linear-fractional in h; invert it per row
+        c, v, up, f = cam.centre, cam.view, cam.up, float(cam.focal)
+        k = (np.asarray(rows, np.float64) - 0.5 * cam.n - float(cam.shift)) / f  # row = n/2 + shift - f up / depth
+        # up + k depth = 0 with up, depth linear in h: (up_h + k depth_h) h = -(up_0 + k depth_0)
+        up0, uph = -c[1] * up[1] - c[2] * up[2], up[1]
+        d0, dh = -c[1] * v[1] - c[2] * v[2], v[1]
+        h = np.clip(-(up0 + k * d0) / (uph + k * dh), 0.0, self.height)
+        return h, d0 + dh * h
+
     def _sigma_rows(self, source: _Source, w: np.ndarray, angle: float) -> np.ndarray:
         """The blur (sigma, source pixels) of each source row for a disk of ``angle`` degrees along ``w``: half
         the radius D tan(angle / 2) of the disk's footprint on the card, D = h / w_y, in pixels at that height."""
@@ -427,16 +458,7 @@ class CardTracer:
 
     def _row_geometry(self, source: _Source) -> tuple[np.ndarray, np.ndarray]:
         """Per source row: the height above the ground and the camera depth of the card's centre line there."""
-        cam = self.camera
-        rows = (np.arange(source.alpha.shape[0]) + 0.5) * source.scale + source.offset_y  # frame rows
-        # the card's centre line: the frame row of (0, h, 0) is linear-fractional in h; invert it per row
-        c, v, up, f = cam.centre, cam.view, cam.up, float(cam.focal)
-        k = (rows - 0.5 * cam.n - float(cam.shift)) / f  # row = n/2 + shift - f up / depth
-        # up + k depth = 0 with up, depth linear in h: (up_h + k depth_h) h = -(up_0 + k depth_0)
-        up0, uph = -c[1] * up[1] - c[2] * up[2], up[1]
-        d0, dh = -c[1] * v[1] - c[2] * v[2], v[1]
-        h = np.clip(-(up0 + k * d0) / (uph + k * dh), 0.0, self.height)
-        return h, d0 + dh * h
+        return self._frame_row_geometry((np.arange(source.alpha.shape[0]) + 0.5) * source.scale + source.offset_y)
 
     def _depth_ray(self, height: np.ndarray | float | None = None) -> np.ndarray:
         """The camera's ray through the card's centre line at ``height`` (default: half the card's), scaled to
@@ -544,22 +566,27 @@ class CardTracer:
 
     def _above(self, source: _Source) -> np.ndarray:
         """(rows, 1) per row of ``source``: how deep (its pixels) a point can lie behind the card along the
-        camera's ray before that ray meets the ground."""
+        camera's ray before that ray meets the ground, or, where the object floats, the height of its lowest
+        point (:attr:`_floor`): no part of it lies lower."""
         heights = self._row_heights(source)
         k = round(source.scale / self._full.scale)
         drop = np.maximum(0.0, -self._depth_ray(heights)[:, 1]) * self._world_per_pixel * k  # per pixel of depth
-        return (heights / np.maximum(drop, 1e-9))[:, None]
+        return (np.maximum(heights - self._floor, 0.0) / np.maximum(drop, 1e-9))[:, None]
 
     def _at_card(self, card: np.ndarray, source: _Source) -> np.ndarray:
         """``card`` (of ``source``) where its pixels' surfaces lie within a pixel behind the card or in front of
         it (their spans reach the card's plane: a part in front reaches back to it), all of it where every one
         does."""
         k = round(source.scale / self._full.scale)
-        if k not in self._on_card:
-            near = self._near[k]
-            self._on_card[k] = (np.minimum(near, self._above(source)) < 1.0) if near.any() else None
-        on_card = self._on_card[k]
-        return card if on_card is None else card * on_card
+        if k not in self._on_card:  # the pixels whose surface lies off the card
+            off = np.minimum(self._near[k], self._above(source)) >= 1.0
+            self._on_card[k] = off if off.any() else None
+        off = self._on_card[k]
+        if off is None:
+            return card
+        card = card.copy()
+        card[off] = 0
+        return card
 
     def _surface_depth(self, feet: np.ndarray, framing: Framing, y0: int, base: float) -> np.ndarray:
         """How deep (pixels of ``alpha``) behind the card each pixel's surface lies, from its foot's row

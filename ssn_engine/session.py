@@ -129,6 +129,10 @@ class ShadowSession:
         self.opacity = self.body_opacity * check_layer_opacity(layer_opacity)
         self.edits: list[dict[str, Any]] = []
         self._card: GeometricCard | None = None  # traces long shadows for methods without a card of their own
+        # the network's last inputs (which lights, their ELMs, the camera), the AO it took and its frames
+        self._frames_memo: tuple[tuple, np.ndarray, np.ndarray] | None = None
+        # and what they made on a canvas last: the lights, clip and framing, those frames and the canvas shadows
+        self._on_canvas_memo: tuple[tuple, np.ndarray, tuple[CanvasShadow, CanvasShadow | None]] | None = None
         self.lift, self.thickness = 0.0, None  # the artist's geometry (:meth:`set_geometry`)
         self.set_camera(horizon, fov, read, clamp)
 
@@ -256,12 +260,20 @@ class ShadowSession:
         if not lit:
             return out
         elms = np.stack([render_light_map(maps[i], NETWORK_SHAPE[0]) for i in lit])
+        # the network's inputs as last time (a lift or thickness dragged under the same light): its frames again
+        key = (tuple(lit), elms.tobytes(), None if self.used_cameras is None else self.used_cameras.tobytes())
+        memo = self._frames_memo
+        if memo is not None and memo[0] == key and memo[1] is self.ao:
+            out[lit] = memo[2] * np.float32(self.opacity)
+            return out
         # one light between small and broad is in both parts as one map (up to its intensity): one pass
         same = len(lit) == 2 and np.allclose(network_elm(elms[0]), network_elm(elms[1]), rtol=0.0, atol=1e-6)
         runs = elms[:1] if same else elms
         masks, ao = np.repeat(self.mask[None], len(runs), 0), np.repeat(self.ao[None], len(runs), 0)
         cameras = None if self.used_cameras is None else np.repeat(self.used_cameras, len(runs), 0)
-        out[lit] = self.method.render(masks, ao, runs, cameras) * np.float32(self.opacity)
+        frames = self.method.render(masks, ao, runs, cameras)
+        self._frames_memo = (key, self.ao, frames)
+        out[lit] = frames * np.float32(self.opacity)
         return out
 
     def to_canvas(
@@ -282,20 +294,31 @@ class ShadowSession:
     ) -> CanvasShadow:
         """:meth:`to_canvas`, the network's frames taken from ``frames()`` once the small lights are traced (so
         that :meth:`render_plan` can make them meanwhile)."""
+        key = (plan.broad, plan.network_view if plan.traced else None, clip, framing)
+        if self._on_canvas_memo is not None and self._on_canvas_memo[0] != key:
+            self._on_canvas_memo = None  # another light or canvas: not kept while the new one is traced
         parts = self._traced(plan, clip, framing)
-        nets = self._network_shadows(frames(), plan, clip, framing)
+        nets = self._network_shadows(frames(), plan, clip, framing, key)
         return _combined(nets, parts, plan, self._hedge)
 
     def _network_shadows(
-        self, frames: np.ndarray, plan: LightPlan, clip: bool, framing: Framing
+        self, frames: np.ndarray, plan: LightPlan, clip: bool, framing: Framing, key: tuple
     ) -> tuple[CanvasShadow, CanvasShadow | None]:
         """The network's frames on ``framing``'s canvas: of the broad lights (without traced ones, the whole
-        shadow), and of the traced lights as Gaussians (None without them)."""
+        shadow), and of the traced lights as Gaussians (None without them). The same frames of the same lights on
+        the same canvas (``key``) as last time (a lift or thickness dragged) give the same shadows, enlarged
+        once."""
+        memo = self._on_canvas_memo
+        if memo is not None and memo[0] == key and np.array_equal(memo[1], frames):
+            return memo[2]
         if not plan.traced:
-            return self._network_canvas(frames[0], plan.broad, clip, framing), None
-        broad = plan.broad
-        wide = CanvasShadow.nothing() if broad.is_dark else self._network_canvas(frames[0], broad, clip, framing)
-        return wide, self._network_canvas(frames[1], plan.network_view, clip, framing)
+            shadows = self._network_canvas(frames[0], plan.broad, clip, framing), None
+        else:
+            broad = plan.broad
+            wide = CanvasShadow.nothing() if broad.is_dark else self._network_canvas(frames[0], broad, clip, framing)
+            shadows = wide, self._network_canvas(frames[1], plan.network_view, clip, framing)
+        self._on_canvas_memo = (key, frames.copy(), shadows)
+        return shadows
 
     def _traced(self, plan: LightPlan, clip: bool, framing: Framing) -> list[tuple[float, np.ndarray, int, int]]:
         """The traced lights' shadows on ``framing``'s canvas, each with its share of their E0, scaled by the

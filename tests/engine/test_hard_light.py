@@ -8,6 +8,7 @@ import json
 import numpy as np
 import pytest
 from PIL import Image
+from scipy import ndimage
 
 from ssn_engine.cli import main
 from ssn_engine import hard_light
@@ -395,3 +396,49 @@ def test_a_pixel_s_shadow_starts_and_ends_where_its_own_depths_say_whatever_the_
         assert covered.size == covered[-1] - covered[0] + 1  # one run, no holes
         assert abs(covered[-1] - (col - near[r, col])) <= 1.0
         assert abs(covered[0] - (col - far[r, col])) <= 1.5
+
+
+def test_no_part_of_a_floating_object_reaches_below_its_lowest_point(post):
+    """The post lifted 100 rows, read as very deep and looked at from above: each pixel's depth runs along its own
+    camera ray, which descends, and ends no lower than the post's lowest point (the object floats whole); the same
+    post resting reaches down to the ground."""
+    _, framing = frame_alpha(post, 256)
+    x0, y0, x1, y1 = framing.bbox
+    crop = post[y0:y1, x0:x1].astype(np.float32) / 255
+    lowest = FOOT - y0  # rows of the crop
+    deep = np.full(crop.shape, 2000.0, np.float32)
+    camera = (-150.0, 300.0)  # horizon above the frame, focal length (frame pixels): looking down
+    for lift in (0, 100):
+        card = CardTracer(crop, framing, camera, foot=lowest + lift, thickness=deep, lift=lift)
+        source = card._full
+        heights = card._row_heights(source)
+        drop = -card._depth_ray(heights)[:, 1] * card._world_per_pixel  # world height lost per pixel of depth
+        _, far = card._sweep_depths(source, 1)
+        rows = np.flatnonzero(source.alpha.any(axis=1))
+        ends = heights[rows] - far[rows].max(axis=1) * drop[rows]  # the height where each row's depth ends
+        assert drop[rows].min() > 0  # looking down
+        bottom = card._frame_row_geometry(np.array([(y0 + lowest) * framing.scale + framing.offset_y]))[0][0]
+        if lift:
+            assert bottom > 0.1 * card.height and ends.min() >= bottom - 1e-6, (ends.min(), bottom)
+        else:
+            assert ends.min() < 1e-3 * card.height
+
+
+@pytest.mark.parametrize("u, v", [(0.1, 0.6), (0.45, 0.7), (0.9, 0.7)])
+def test_a_part_read_behind_its_card_leaves_no_line_where_the_card_stands(post, u, v):
+    """The post read as standing 40 rows behind its lowest row casts its shadow from there; the blurred edges of
+    its copy (its sides, at the crop's border) go back with it, so nothing is left on the ground where the card's
+    own shadow would lie: before, its two edges stayed, thin lines up to 0.35 dark that a low sun drew out into a
+    dotted line (the README horse's)."""
+    _, framing = frame_alpha(post, 256)
+    x0, y0, x1, y1 = framing.bbox
+    crop = post[y0:y1, x0:x1].astype(np.float32) / 255
+    behind = _canvas(
+        (CardTracer(crop, framing, None, feet=np.full(crop.shape, FOOT - y0 - 40, np.float32)), framing), u, v, 0.53
+    )
+    flat = _canvas((CardTracer(crop, framing, None), framing), u, v, 0.53)
+    where_the_card_casts = ndimage.binary_dilation(flat > 0.02, iterations=2)
+    away_from_its_shadow = ~ndimage.binary_dilation(behind > 0.5, iterations=8)
+    left = behind[where_the_card_casts & away_from_its_shadow]
+    assert left.size > 2000  # the two shadows lie apart
+    assert left.max() < 1 / 255

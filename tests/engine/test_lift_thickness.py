@@ -105,6 +105,30 @@ def test_a_dragged_lift_casts_what_a_fresh_one_does(method):
         np.testing.assert_allclose(got, want, atol=2 / 255)
 
 
+def test_a_lift_dragged_near_the_ground_runs_the_network_once_and_an_ao_edit_runs_it_again(method, monkeypatch):
+    """Near the ground the network's shadow still hedges the traced one (fading as the ball rises). Dragged there
+    under one light, each step casts what a fresh session casts, the network run once for them all; an AO edit
+    between two steps is the network's input changed: it runs again and the shadow shows the edit."""
+    ball = disc(W, H, *BALL)
+    light = sun(0.45)
+    lifts = (1.0, 2.0, 3.0, 5.0)
+    fresh = [shadow_of(method, ball, light, lift) for lift in lifts]
+    dragged = open_session(ball, method, *CAMERA)
+    runs = []
+    render = method.render
+    monkeypatch.setattr(method, "render", lambda *args: runs.append(1) or render(*args))
+    for lift, want in zip(lifts, fresh, strict=True):
+        dragged.set_geometry(lift)
+        assert 0.0 < dragged.lifted < 1.0  # the network's part still shows
+        np.testing.assert_allclose(dragged.render(light).full_canvas(W, H), want, atol=2 / 255)
+    assert len(runs) == 1, runs
+    before = dragged.render(light).full_canvas(W, H)
+    dragged.set_ao_edits([{"op": "brush", "x": 0.5, "y": 0.5, "radius": 0.5, "strength": -1.0}])
+    after = dragged.render(light).full_canvas(W, H)
+    assert len(runs) == 2
+    assert np.abs(after - before).max() > 0.05
+
+
 def test_every_object_of_a_layer_floats(method):
     alpha = np.maximum(disc(W, H, 250, 400, 70), disc(W, H, 650, 380, 60))
     session = open_session(alpha, method, *CAMERA)
