@@ -277,13 +277,13 @@ class CardTracer:
         # the surface's depth reaches into the pad as it does around the outline within the crop (the blurred
         # copies spread there): a part read behind its card takes its blurred edge with it, leaving no trace of
         # it on the card; the pad sweeps no depth of its own (a part's edge is thin: the round cross-section)
-        near = spread(near)
-        self._near = {1: near}  # per reduction: depth behind the card of the surface each pixel shows, its pixels
-        self._far = {1: near + padded(far - near[pad : pad + lowest, pad : pad + width])}  # and of its far end
+        self._near = {1: spread(near)}  # per reduction: depth behind the card of the surface each pixel shows, its
+        self._far = {1: self._near[1].copy()}  # pixels; and of its far end
+        self._far[1][pad : pad + lowest, pad : pad + width] = far
         self._full = _Source(alpha, s, framing.offset_x + (x0 - pad) * s, framing.offset_y + (y0 - pad) * s)
         self._sources: dict[int, _Source] = {}
         self._swept_depths: dict[tuple[int, int], tuple[np.ndarray, np.ndarray]] = {}  # per reduction and sweep's
-        self._on_card: dict[int, np.ndarray | None] = {}  # per reduction: the pixels whose surface is off the card
+        self._on_card: dict[int, np.ndarray | None] = {}  # per reduction: the pixels whose surface is on the card
         # per scale, level: rows, blurred; those of the same alpha with the same pad (a card whose foot moved) hold
         self._pad = pad
         self._levels: dict[float, dict[int, tuple[int, int, _Level]]] = (
@@ -578,15 +578,12 @@ class CardTracer:
         it (their spans reach the card's plane: a part in front reaches back to it), all of it where every one
         does."""
         k = round(source.scale / self._full.scale)
-        if k not in self._on_card:  # the pixels whose surface lies off the card
-            off = np.minimum(self._near[k], self._above(source)) >= 1.0
-            self._on_card[k] = off if off.any() else None
-        off = self._on_card[k]
-        if off is None:
-            return card
-        card = card.copy()
-        card[off] = 0
-        return card
+        if k not in self._on_card:  # 1 where the pixel's surface lies on the card, 0 where off it
+            on = np.less(self._near[k], 1.0)
+            on[self._above(source)[:, 0] < 1.0] = True  # a row whose ray meets the ground within a pixel
+            self._on_card[k] = None if on.all() else on.view(np.uint8)
+        on = self._on_card[k]
+        return card if on is None else np.multiply(card, on, dtype=np.uint8)
 
     def _surface_depth(self, feet: np.ndarray, framing: Framing, y0: int, base: float) -> np.ndarray:
         """How deep (pixels of ``alpha``) behind the card each pixel's surface lies, from its foot's row
