@@ -27,6 +27,13 @@ from .model_card import MIX_RECORD
 from .onnx_graphs import TOL, export_graph, mirror_concat, parity, session
 
 HEAD = re.compile(r"((?:net\.)+)(?:nets\.(\d+)\.)?unet\.encoder\.0\.0\.0\.weight")  # a U-Net's first weight
+HALF = "_half"  # onnx_graphs.half_weights: a weight stored in half precision under its name and this suffix
+
+
+def _parameter(init) -> tuple[str, np.ndarray]:
+    """An initializer's parameter name and its value in float32 (a half-stored weight under its own name)."""
+    name, array = init.name, numpy_helper.to_array(init)
+    return (name[: -len(HALF)], array.astype(np.float32)) if name.endswith(HALF) else (name, array)
 
 
 def _heads(model: onnx.ModelProto) -> tuple[str, int]:
@@ -73,7 +80,7 @@ def graph_config(model: onnx.ModelProto, groups: int = 8, member: int | None = N
     inputs = {i.name: i for i in model.graph.input}
     module = "sr" if "elm" in inputs else "aop"
     r = inputs["mask"].type.tensor_type.shape.dim[-1].dim_value
-    pattern = re.escape(weights_prefix(model, member)) + r"unet\.encoder\.(\d+)\.0\.0\.weight"
+    pattern = re.escape(weights_prefix(model, member)) + r"unet\.encoder\.(\d+)\.0\.0\.weight(?:_half)?"
     convs = {int(m.group(1)): i for i in model.graph.initializer if (m := re.fullmatch(pattern, i.name))}
     widths = tuple(int(convs[k].dims[0]) for k in sorted(convs))
     return module, UNetConfig(
@@ -88,7 +95,7 @@ def state_dict_from_graph(
     one after the other; shapes checked; every parameter must be found)."""
     inits, prefix = model.graph.initializer, weights_prefix(model, member)
     head, count = _heads(model)
-    named = {i.name[len(prefix) :]: numpy_helper.to_array(i) for i in inits if i.name.startswith(prefix)}
+    named = {name[len(prefix) :]: array for name, array in map(_parameter, inits) if name.startswith(prefix)}
     folded = [a.reshape(-1) for a in folded_constants(inits, lambda name: name.startswith(head))]
     target = net.state_dict()
     if count:  # the members' constants follow one another

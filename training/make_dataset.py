@@ -40,9 +40,10 @@ def parse_args(argv: list[str] | None = None) -> argparse.Namespace:
     p.add_argument("--shard", default="0/1", help="i/k: this process renders items i, i+k, i+2k, ...")
     p.add_argument("--elm-rows", type=int, default=16, help="basis grid rows Hb (grid Hb x 2Hb)")
     p.add_argument("--samples", type=int, default=16, help="directions per texel (a square number)")
-    p.add_argument("--sources", default=",".join(SOURCES), help="comma list of mesh,procedural,anny")
+    p.add_argument("--sources", default=",".join(SOURCES), help="comma list of mesh,procedural,anny,quadruped")
     p.add_argument("--procedural", type=int, default=160, help="number of procedural shapes")
     p.add_argument("--humans", type=int, default=120, help="number of anny humans")
+    p.add_argument("--quadrupeds", type=int, default=0, help="number of procedural animals")
     p.add_argument("--limit", type=int, default=0, help="only the first LIMIT items of the ordered list")
     p.add_argument("--only", default="", help="comma list of item ids to render")
     p.add_argument("--threads", type=int, default=0, help="numba threads per worker (0: cores / workers)")
@@ -106,7 +107,7 @@ def main(argv: list[str] | None = None) -> int:
     _check_meta(root, meta)
     shard, shards = (int(x) for x in args.shard.split("/"))
     sources = tuple(s for s in args.sources.split(",") if s)
-    items = all_items(sources, args.procedural, args.humans, args.seed)
+    items = all_items(sources, args.procedural, args.humans, args.seed, args.quadrupeds)
     if args.only:
         wanted = set(args.only.split(","))
         items = [it for it in items if it.id in wanted]

@@ -31,6 +31,9 @@ def parse_args(argv: list[str] | None = None) -> argparse.Namespace:
         default=0.0,
         help="stretch each view's shape along x, y and z by up to 1 + STRETCH (or shrink by as much): other shapes",
     )
+    m.add_argument(
+        "--quadrupeds", type=int, default=0, help="how many procedural animals the quadruped source draws (all splits)"
+    )
     t = sub.add_parser("train", help="train the surface model on a folder's train.npz, scored on its val.npz")
     t.add_argument("--data", required=True)
     t.add_argument("--sets", nargs="+", help="the training files' names in --data (default: every train*.npz)")
@@ -51,7 +54,15 @@ def parse_args(argv: list[str] | None = None) -> argparse.Namespace:
 def main(argv: list[str] | None = None) -> None:
     args = parse_args(argv)
     if args.command == "make":
-        make(args.split, args.cameras, Path(args.out), args.seed, tuple(args.sources), stretch=args.stretch)
+        make(
+            args.split,
+            args.cameras,
+            Path(args.out),
+            args.seed,
+            tuple(args.sources),
+            stretch=args.stretch,
+            quadrupeds=args.quadrupeds,
+        )
     elif args.command == "train":
         widths = tuple(args.widths) if args.widths else WIDTHS
         init = Path(args.init) if args.init else None

@@ -22,6 +22,7 @@ import torch
 from ssn_engine.model_config import ModelConfig
 
 from .data.surface_views import R, load
+from .graph_weights import rebuild
 from .model_card import put_section
 from .model.mirror import MirrorAverage
 from .model.unet import AOPNet, UNetConfig
@@ -30,12 +31,13 @@ from .onnx_graphs import export_graph, half_weights, session
 WIDTHS = (12, 24, 48, 96, 160, 256)
 VAL_EVERY = 500
 GRAD_WEIGHT = 1.0
+GROUPS = 4  # the U-Net's GroupNorm groups
 CARD_SECTION = "## Surface model"
 
 
 def build(widths: tuple[int, ...] = WIDTHS) -> AOPNet:
     """The untrained surface network."""
-    return AOPNet(UNetConfig(widths=widths, groups=4, resolution=R, camera=True))
+    return AOPNet(UNetConfig(widths=widths, groups=GROUPS, resolution=R, camera=True))
 
 
 def loss_terms(pred: torch.Tensor, target: torch.Tensor, mask: torch.Tensor) -> tuple[torch.Tensor, torch.Tensor]:
@@ -102,8 +104,8 @@ def train(
     run.mkdir(parents=True, exist_ok=True)
     train_set, val_set = load(sets), load([data / "val.npz"])
     mask, target, camera = _tensors(train_set, device)
-    net = (build(widths) if init is None else load_checkpoint(init).train()).to(device)
-    history = [] if init is None else torch.load(init, map_location="cpu", weights_only=True).get("history", [])
+    net, history = (build(widths), []) if init is None else _start(init)
+    net = net.train().to(device)
     name = torch.cuda.get_device_name(device) if device.startswith("cuda") else "cpu"
     stage = {"views": len(mask), "batch": batch, "lr": lr, "device": name, "init": bool(init)}
     opt = torch.optim.AdamW(net.parameters(), lr=lr, weight_decay=1e-4)
@@ -144,6 +146,20 @@ def train(
     _save(net, run / "last.pt", [*history, {**stage, "steps": step, "minutes": row["seconds"] / 60}], row)
 
 
+def _start(init: Path) -> tuple[AOPNet, list]:
+    """The network to go on from and its training stages: a :func:`train` checkpoint's, or an installed graph's
+    (``surface.onnx``, rebuilt from its weights where its runs are gone; its stages the ``surface_training`` record
+    of the model.json beside it)."""
+    if init.suffix != ".onnx":
+        return load_checkpoint(init), torch.load(init, map_location="cpu", weights_only=True).get("history", [])
+    net = rebuild(init, groups=GROUPS)[0]
+    if not isinstance(net, AOPNet) or not net.config.camera:
+        raise ValueError(f"{init} is not a surface graph (mask and camera in, pixel heights out)")
+    meta = init.with_name("model.json")
+    record = ModelConfig.from_json(meta.read_text()).surface_training if meta.is_file() else None
+    return net, [record or f"rebuilt from {init.name}"]
+
+
 def _save(net: AOPNet, path: Path, history: list[dict], row: dict) -> None:
     """The network (weights in half precision: half the bytes, precision enough), its configuration, the
     training stages that made it (``history``: views, batch, lr, device, steps, minutes each) and its last
@@ -167,7 +183,9 @@ def install(checkpoint: Path, models: Path) -> float:
     diff = export(checkpoint, models / "surface.onnx")
     ck = torch.load(checkpoint, map_location="cpu", weights_only=True)
     stages = "; then ".join(
-        f"{h['steps']} steps of {h['batch']} views ({h['views']} views, learning rate {h['lr']:g}) in "
+        h
+        if isinstance(h, str)
+        else f"{h['steps']} steps of {h['batch']} views ({h['views']} views, learning rate {h['lr']:g}) in "
         f"{h['minutes']:.1f} minutes on {'one ' + h['device'] + ' GPU' if h['device'] != 'cpu' else 'the CPU'}"
         for h in ck["history"]
     )

@@ -125,3 +125,37 @@ def test_a_short_training_run_installs_into_a_model_folder(tmp_path, monkeypatch
     assert isinstance(method, OnnxSSN)
     heights = method.pixel_heights(frame, np.array([[40.0, 300.0]]))
     assert heights is not None and heights.shape == (1, 256, 256) and np.isfinite(heights).all()
+
+
+def test_the_shipped_graph_is_fine_tuned_where_its_runs_are_gone(tmp_path):
+    """``train --init ssn_engine/models/surface.onnx``: the installed graph's network rebuilt (its reading the
+    graph's), trained on, and installed again with its earlier stages in the record."""
+    from training.onnx_graphs import session
+    from training.surface_model import _start, install, train
+
+    graph = ROOT / "ssn_engine" / "models" / "surface.onnx"
+    net, history = _start(graph)
+    shipped = json.loads((ROOT / "ssn_engine" / "models" / "model.json").read_text())["surface_training"]
+    assert history == [shipped]
+    mask = np.zeros((1, 1, R, R), np.float32)
+    mask[0, 0, 40:110, 50:80] = 1.0
+    camera = np.array([[0.25, 1.2]], np.float32)
+    import torch
+
+    with torch.no_grad():  # the graph averages the mask's reading with its mirror image's
+        mine = 0.5 * (
+            net(torch.from_numpy(mask), torch.from_numpy(camera))
+            + net(torch.from_numpy(np.ascontiguousarray(mask[..., ::-1])), torch.from_numpy(camera)).flip(-1)
+        )
+    theirs = session(graph).run(None, {"mask": mask, "camera": camera})[0]
+    assert np.abs(mine.clamp(0, 1).numpy() - theirs).max() < 1e-3
+    rows = np.arange(R, dtype=np.float32)[:, None] + 0.5
+    views = [{"mask": mask[0, 0], "camera": (32.0, 150.0), "height": np.where(mask[0, 0] > 0, 110 - rows, np.nan)}]
+    save(tmp_path / "data" / "train.npz", views * 2, [10.0] * 2)
+    save(tmp_path / "data" / "val.npz", views, [10.0])
+    train(tmp_path / "data", [tmp_path / "data" / "train.npz"], tmp_path / "run", 0.01, 2, 1e-4, "cpu", 0, init=graph)
+    models = tmp_path / "models"
+    shutil.copytree(ROOT / "ssn_engine" / "models", models)
+    assert install(tmp_path / "run" / "last.pt", models) < 1e-4
+    record = json.loads((models / "model.json").read_text())["surface_training"]
+    assert record.startswith(f"widths [16, 32, 64, 128, 192, 256], {shipped}; then ") and "steps of 2 views" in record

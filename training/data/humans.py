@@ -23,6 +23,10 @@ from .items import Item, split_for
 from .meshes import Mesh
 
 POSES = ("standing", "walking", "arms_raised", "arms_crossed", "arm_out", "hands_on_hips")
+# The ``anny_poses`` source's families: off the standing frame (their own source, so that the sets made of POSES
+# stay as they were); a lying person is one of the others laid down (``LIE``)
+MORE_POSES = ("running", "sitting", "crouching", "kneeling", "lying")
+LIE = ("back", "front", "side")
 PHENOTYPES = ("gender", "age", "muscle", "weight", "height", "proportions")
 LIMITS = {  # (axis, lo, hi) per joint role, degrees, in the left side's convention
     "upperarm_y": (-160.0, 60.0),
@@ -30,9 +34,9 @@ LIMITS = {  # (axis, lo, hi) per joint role, degrees, in the left side's convent
     "upperarm_z": (-60.0, 60.0),
     "elbow_x": (-140.0, 0.0),
     "elbow_z": (-110.0, 40.0),
-    "hip_x": (-70.0, 30.0),
+    "hip_x": (-125.0, 30.0),
     "hip_y": (-25.0, 25.0),
-    "knee_x": (0.0, 110.0),
+    "knee_x": (0.0, 150.0),
     "spine_x": (-20.0, 20.0),
     "spine_z": (-25.0, 25.0),
     "head_z": (-45.0, 45.0),
@@ -79,6 +83,24 @@ def _angles(pose: str, rng: np.random.Generator) -> dict[str, float]:
             a[f"knee_x_{side}"] = max(0.0, 45 * sgn * math.sin(phase + 1.2)) + u(0, 8)
             a[f"upperarm_x_{side}"] = 0.8 * stride * s
             a[f"elbow_x_{side}"] = u(-35, -5)
+    elif pose == "running":
+        phase, stride = u(0, 2 * math.pi), u(30, 55)
+        for side, sgn in (("L", 1.0), ("R", -1.0)):
+            s = sgn * math.sin(phase)
+            a[f"hip_x_{side}"] = -stride * s
+            a[f"knee_x_{side}"] = 25 + 70 * max(0.0, sgn * math.sin(phase + 1.2)) + u(0, 15)
+            a[f"upperarm_x_{side}"] = 1.1 * stride * s
+            a[f"elbow_x_{side}"] = u(-110, -70)
+    elif pose in ("sitting", "crouching"):  # on the ground: the thighs forward, the knees bent by as much
+        hip, knee = ((-100, -75), (0, 100)) if pose == "sitting" else ((-125, -95), (115, 150))
+        _draw(a, rng, ("L", "R"), {"hip_x": hip, "knee_x": knee, "upperarm_x": (-60, 10), "elbow_x": (-70, 0)})
+    elif pose == "kneeling":  # on both knees, or on one with the other foot forward
+        _draw(a, rng, ("L", "R"), {"hip_x": (-15, 5), "knee_x": (80, 100)})
+        if rng.random() < 0.5:
+            side = "L" if rng.random() < 0.5 else "R"
+            a[f"hip_x_{side}"], a[f"knee_x_{side}"] = u(-100, -80), u(80, 100)
+    elif pose == "lying":  # one of the others, laid down (build turns it)
+        return _angles(str(rng.choice(POSES[:2] + ("arms_raised", "arm_out"))), rng)
     elif pose in ARMS:
         sides = ("L", "R")
         if pose == "arms_raised" and rng.random() >= 0.6:
@@ -98,23 +120,27 @@ def _angles(pose: str, rng: np.random.Generator) -> dict[str, float]:
     return out
 
 
-def draw_params(seed: int) -> dict:
-    """Phenotypes (uniform in [0, 1], age in [0.25, 1]), pose family and joint angles of one person."""
+def draw_params(seed: int, poses: tuple[str, ...] = POSES) -> dict:
+    """Phenotypes (uniform in [0, 1], age in [0.25, 1]), pose family (one of ``poses``) and joint angles of one
+    person; a lying one's side it lies on (``lie``, :data:`LIE`)."""
     rng = np.random.default_rng([seed, 7])
     pheno = {k: float(rng.uniform(0.25 if k == "age" else 0.0, 1.0)) for k in PHENOTYPES}
-    pose = POSES[int(rng.integers(len(POSES)))]
-    return {"seed": int(seed), "phenotypes": pheno, "pose": pose, "angles": _angles(pose, rng)}
+    pose = poses[int(rng.integers(len(poses)))]
+    params = {"seed": int(seed), "phenotypes": pheno, "pose": pose, "angles": _angles(pose, rng)}
+    return params | ({"lie": str(rng.choice(LIE))} if pose == "lying" else {})
 
 
-def human_items(count: int, seed: int) -> list[Item]:
-    """``count`` anny people; split by index (80/10/10)."""
+def human_items(count: int, seed: int, poses: tuple[str, ...] = POSES) -> list[Item]:
+    """``count`` anny people in ``poses`` (:data:`POSES`: the ``anny`` source; :data:`MORE_POSES`: ``anny_poses``);
+    split by index (80/10/10)."""
+    source, prefix = ("anny", "anny") if poses == POSES else ("anny_poses", "annyp")
     out = []
     for i in range(count):
-        params = draw_params(int(seed) * 100003 + i) | {
+        params = draw_params(int(seed) * 100003 + i, poses) | {
             "licence": "CC0-1.0 (MakeHuman body data via anny, Apache-2.0 code)",
             "attribution": "anny (NAVER Corp.) / MakeHuman",
         }
-        out.append(Item(f"anny_{seed}_{i:04d}", split_for(i), "human", f"anny_{params['pose']}", "anny", params))
+        out.append(Item(f"{prefix}_{seed}_{i:04d}", split_for(i), "human", f"anny_{params['pose']}", source, params))
     return out
 
 
@@ -167,4 +193,12 @@ def build(params: dict) -> Mesh:
         )
     v = out["vertices"][0].double().numpy()
     # anny: x left, -y forward, z up -> world: y up, the person facing +z (towards the yaw-0 camera).
-    return Mesh(np.stack([v[:, 0], v[:, 2], -v[:, 1]], axis=1), faces)
+    world = np.stack([v[:, 0], v[:, 2], -v[:, 1]], axis=1)
+    lie = params.get("lie")
+    if lie == "back":  # the face up: (x, y, z) -> (x, -z, y)
+        world = np.stack([world[:, 0], -world[:, 2], world[:, 1]], axis=1)
+    elif lie == "front":
+        world = np.stack([world[:, 0], world[:, 2], -world[:, 1]], axis=1)
+    elif lie == "side":  # on the left side: (x, y, z) -> (-y, x, z)
+        world = np.stack([-world[:, 1], world[:, 0], world[:, 2]], axis=1)
+    return Mesh(world, faces)

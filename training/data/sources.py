@@ -1,4 +1,5 @@
-"""The list of shapes a dataset is made from: shared meshes, procedural shapes, anny humans.
+"""The list of shapes a dataset is made from: shared meshes, procedural shapes, anny humans (standing, or in the
+poses off their feet), procedural animals.
 
 Every item records how to rebuild its mesh (file, or generator and seed), so
 the set is reproducible. Items are ordered by a hash of their id, so any
@@ -10,12 +11,14 @@ from __future__ import annotations
 
 from . import meshes
 from .humans import build as build_human
-from .humans import human_items
+from .humans import MORE_POSES, human_items
 from .items import Item, stable_hash
 from .procedural import build as build_procedural
 from .procedural import procedural_items
+from .quadrupeds import build as build_quadruped
+from .quadrupeds import quadruped_items
 
-SOURCES = ("mesh", "procedural", "anny")
+SOURCES = ("mesh", "procedural", "anny", "anny_poses", "quadruped")
 
 
 def manifest_items() -> list[Item]:
@@ -42,7 +45,11 @@ def manifest_items() -> list[Item]:
 
 
 def all_items(
-    sources: tuple[str, ...] = SOURCES, n_procedural: int = 0, n_humans: int = 0, seed: int = 0
+    sources: tuple[str, ...] = SOURCES,
+    n_procedural: int = 0,
+    n_humans: int = 0,
+    seed: int = 0,
+    n_quadrupeds: int = 0,
 ) -> list[Item]:
     """Items of the chosen sources, ordered by a stable hash of their id."""
     items: list[Item] = []
@@ -52,6 +59,10 @@ def all_items(
         items += procedural_items(n_procedural, seed)
     if "anny" in sources and n_humans:
         items += human_items(n_humans, seed)
+    if "anny_poses" in sources and n_humans:
+        items += human_items(n_humans, seed, MORE_POSES)
+    if "quadruped" in sources and n_quadrupeds:
+        items += quadruped_items(n_quadrupeds, seed)
     return sorted(items, key=lambda it: (stable_hash(it.id), it.id))
 
 
@@ -61,8 +72,10 @@ def build_mesh(item: Item) -> meshes.Mesh:
         mesh = meshes.read_ply(meshes.SHARED_MESHES / item.params["file"])
     elif item.source == "procedural":
         mesh = build_procedural(item.params)
-    elif item.source == "anny":
+    elif item.source in ("anny", "anny_poses"):
         mesh = build_human(item.params)
+    elif item.source == "quadruped":
+        mesh = build_quadruped(item.params)
     else:
         raise ValueError(f"unknown source {item.source!r}")
     return meshes.normalise(meshes.clean(mesh))

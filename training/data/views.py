@@ -57,7 +57,12 @@ def pitch_groups(pitches: list[float]) -> dict[str, list[int]]:
 
 def add_split_arguments(parser: argparse.ArgumentParser) -> None:
     """The arguments of a command that writes a split's views to one file: --split, --cameras, --out, --seed."""
-    parser.add_argument("--split", required=True, choices=("train", "val", "test"))
+    parser.add_argument(
+        "--split",
+        required=True,
+        choices=("train", "val", "test", "outsource"),
+        help="outsource: the out-of-source meshes (SSN_MESHES=data/outsource_meshes, docs/canvas_eval.md)",
+    )
     parser.add_argument("--cameras", nargs="+", default=["continuous"], choices=CAMERAS)
     parser.add_argument("--out", required=True)
     parser.add_argument("--seed", type=int, default=0, help="the items' seed (procedural shapes and people)")
