@@ -44,7 +44,10 @@ def parse_args(argv: list[str] | None = None) -> argparse.Namespace:
     t.add_argument("--device", default="cuda", help="torch device (cuda, cpu)")
     t.add_argument("--seed", type=int, default=0)
     t.add_argument("--widths", type=int, nargs="+", help="the U-Net's width per stage (default: the shipped one's)")
-    t.add_argument("--init", help="a checkpoint to go on from (fine-tuning it; its widths)")
+    t.add_argument(
+        "--init", help="a checkpoint or an installed surface.onnx to go on from (fine-tuning it; its widths)"
+    )
+    t.add_argument("--resume", action="store_true", help="go on with the run in --run where it stopped")
     e = sub.add_parser("install", help="a checkpoint's graph into a model folder (model.json and the card too)")
     e.add_argument("checkpoint")
     e.add_argument("--models", required=True, help="the model folder (ssn_engine/models)")
@@ -68,7 +71,19 @@ def main(argv: list[str] | None = None) -> None:
         init = Path(args.init) if args.init else None
         data = Path(args.data)
         sets = [data / f"{name}.npz" for name in args.sets] if args.sets else sorted(data.glob("train*.npz"))
-        train(data, sets, Path(args.run), args.minutes, args.batch, args.lr, args.device, args.seed, widths, init)
+        train(
+            data,
+            sets,
+            Path(args.run),
+            args.minutes,
+            args.batch,
+            args.lr,
+            args.device,
+            args.seed,
+            widths,
+            init,
+            args.resume,
+        )
     else:
         diff = install(Path(args.checkpoint), Path(args.models))
         print(f"installed {args.checkpoint} into {args.models} (graph within {diff:.1e} of torch)")

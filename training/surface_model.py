@@ -95,24 +95,42 @@ def train(
     seed: int,
     widths: tuple[int, ...] = WIDTHS,
     init: Path | None = None,
+    resume: bool = False,
 ) -> None:
     """Train on the views of ``sets`` (:func:`training.data.surface_views.make` files) for ``minutes``, scoring
-    ``data``/val.npz; writes ``run``/last.pt and ``run``/log.jsonl. ``init``: a checkpoint to go on from (its
-    widths, not ``widths``)."""
+    ``data``/val.npz; writes ``run``/last.pt (every ``VAL_EVERY`` steps) and ``run``/log.jsonl. ``init``: a
+    checkpoint or an installed graph to go on from (its widths, not ``widths``). ``resume``: go on with the run
+    ``run``/last.pt was saved by (its network, optimiser, step and time spent: the schedule continues where it
+    stopped, so a run cut short by the end of a session finishes as if it had not been)."""
     torch.manual_seed(seed)
-    rng = np.random.default_rng(seed)
     run.mkdir(parents=True, exist_ok=True)
     train_set, val_set = load(sets), load([data / "val.npz"])
     mask, target, camera = _tensors(train_set, device)
-    net, history = (build(widths), []) if init is None else _start(init)
+    state = torch.load(run / "last.pt", map_location="cpu", weights_only=True) if resume else None
+    if state is not None:
+        net, history = load_checkpoint(run / "last.pt"), state["history"][:-1]  # its last stage is this one
+    else:
+        net, history = (build(widths), []) if init is None else start_from(init)
     net = net.train().to(device)
     name = torch.cuda.get_device_name(device) if device.startswith("cuda") else "cpu"
     stage = {"views": len(mask), "batch": batch, "lr": lr, "device": name, "init": bool(init)}
     opt = torch.optim.AdamW(net.parameters(), lr=lr, weight_decay=1e-4)
+    step, spent = 0, 0.0
+    if state is not None:
+        opt.load_state_dict(state["optimizer"])
+        step, spent, stage = state["step"], state["seconds"], state["history"][-1] | {"views": len(mask)}
+    rng = np.random.default_rng([seed, step])  # a resumed run draws other batches than its start did
     cuda = device.startswith("cuda")
-    budget, start, step = minutes * 60.0, time.time(), 0
-    log = (run / "log.jsonl").open("w")
-    print(f"{len(mask)} training views, {len(val_set['mask'])} validation views", flush=True)
+    budget, start = minutes * 60.0, time.time() - spent
+    log = (run / "log.jsonl").open("a" if state is not None else "w")
+    print(f"{len(mask)} training views, {len(val_set['mask'])} validation views, from step {step}", flush=True)
+
+    def save(row: dict) -> None:
+        stages = [*history, {**stage, "steps": step, "minutes": row["seconds"] / 60}]
+        _save(
+            net, run / "last.pt", stages, row, {"step": step, "seconds": row["seconds"], "optimizer": opt.state_dict()}
+        )
+
     while True:
         done = (time.time() - start) / budget
         if done >= 1.0:
@@ -137,16 +155,16 @@ def train(
             log.write(json.dumps(row) + "\n")
             log.flush()
             print(row, flush=True)
-            _save(net, run / "last.pt", [*history, {**stage, "steps": step, "minutes": row["seconds"] / 60}], row)
+            save(row)
     row = {"step": step, "seconds": round(time.time() - start, 1)}
     row.update({f"val {k}": v for k, v in evaluate(net, val_set, device).items()})
     log.write(json.dumps(row) + "\n")
     log.close()
     print(row, flush=True)
-    _save(net, run / "last.pt", [*history, {**stage, "steps": step, "minutes": row["seconds"] / 60}], row)
+    save(row)
 
 
-def _start(init: Path) -> tuple[AOPNet, list]:
+def start_from(init: Path) -> tuple[AOPNet, list]:
     """The network to go on from and its training stages: a :func:`train` checkpoint's, or an installed graph's
     (``surface.onnx``, rebuilt from its weights where its runs are gone; its stages the ``surface_training`` record
     of the model.json beside it)."""
@@ -160,12 +178,15 @@ def _start(init: Path) -> tuple[AOPNet, list]:
     return net, [record or f"rebuilt from {init.name}"]
 
 
-def _save(net: AOPNet, path: Path, history: list[dict], row: dict) -> None:
+def _save(net: AOPNet, path: Path, history: list, row: dict, progress: dict) -> None:
     """The network (weights in half precision: half the bytes, precision enough), its configuration, the
-    training stages that made it (``history``: views, batch, lr, device, steps, minutes each) and its last
-    validation scores."""
+    training stages that made it (``history``: views, batch, lr, device, steps, minutes each), its last
+    validation scores, and where its run stands (``progress``: step, seconds spent, the optimiser's state) for
+    ``train --resume``. Written beside and then moved over ``path``: a run killed while saving keeps its last."""
     state = {k: v.detach().half().cpu() for k, v in net.state_dict().items()}
-    torch.save({"state": state, "config": net.config.to_dict(), "history": history, "scores": row}, path)
+    part = path.with_suffix(".part")
+    torch.save({"state": state, "config": net.config.to_dict(), "history": history, "scores": row, **progress}, part)
+    part.replace(path)
 
 
 def load_checkpoint(path: Path) -> AOPNet:

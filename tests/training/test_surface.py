@@ -131,10 +131,10 @@ def test_the_shipped_graph_is_fine_tuned_where_its_runs_are_gone(tmp_path):
     """``train --init ssn_engine/models/surface.onnx``: the installed graph's network rebuilt (its reading the
     graph's), trained on, and installed again with its earlier stages in the record."""
     from training.onnx_graphs import session
-    from training.surface_model import _start, install, train
+    from training.surface_model import install, start_from, train
 
     graph = ROOT / "ssn_engine" / "models" / "surface.onnx"
-    net, history = _start(graph)
+    net, history = start_from(graph)
     shipped = json.loads((ROOT / "ssn_engine" / "models" / "model.json").read_text())["surface_training"]
     assert history == [shipped]
     mask = np.zeros((1, 1, R, R), np.float32)
@@ -159,3 +159,34 @@ def test_the_shipped_graph_is_fine_tuned_where_its_runs_are_gone(tmp_path):
     assert install(tmp_path / "run" / "last.pt", models) < 1e-4
     record = json.loads((models / "model.json").read_text())["surface_training"]
     assert record.startswith(f"widths [16, 32, 64, 128, 192, 256], {shipped}; then ") and "steps of 2 views" in record
+
+
+def test_a_run_cut_short_goes_on_where_it_stopped(tmp_path, monkeypatch):
+    """``train --resume``: the second call continues the first's steps, time and stage (one stage in the record,
+    its steps the sum), appending to the log, from the saved optimiser."""
+    import training.surface_model as surface_model
+
+    monkeypatch.setattr(surface_model, "VAL_EVERY", 2)
+    mask = np.zeros((R, R), np.float32)
+    mask[30:90, 50:70] = 1.0
+    rows = np.arange(R, dtype=np.float32)[:, None] + 0.5
+    views = [{"mask": mask, "camera": (20.0, 160.0), "height": np.where(mask > 0, 90 - rows, np.nan)}] * 2
+    save(tmp_path / "data" / "train.npz", views, [10.0] * 2)
+    save(tmp_path / "data" / "val.npz", views[:1], [10.0])
+    args = (tmp_path / "data", [tmp_path / "data" / "train.npz"], tmp_path / "run")
+    surface_model.train(*args, 0.01, 2, 1e-3, "cpu", 0, (4, 8, 8))
+    first = torch_load(tmp_path / "run" / "last.pt")
+    assert first["step"] >= 1 and "optimizer" in first and len(first["history"]) == 1
+    surface_model.train(*args, 0.1, 2, 1e-3, "cpu", 0, (4, 8, 8), resume=True)
+    second = torch_load(tmp_path / "run" / "last.pt")
+    assert second["step"] > first["step"] and second["seconds"] > first["seconds"]
+    assert len(second["history"]) == 1 and second["history"][0]["steps"] == second["step"]
+    log = [json.loads(line) for line in (tmp_path / "run" / "log.jsonl").read_text().splitlines()]
+    assert [r["step"] for r in log] == sorted(r["step"] for r in log) and log[-1]["step"] == second["step"]
+    assert any(r["step"] <= first["step"] for r in log) and not (tmp_path / "run" / "last.part").exists()
+
+
+def torch_load(path: Path) -> dict:
+    import torch
+
+    return torch.load(path, map_location="cpu", weights_only=True)
