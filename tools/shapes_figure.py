@@ -18,7 +18,9 @@ from training.data import meshes
 from training.data.humans import MORE_POSES, human_items
 from training.data.quadrupeds import quadruped_items
 from training.data.sources import build_mesh
-from training.data.surface_views import R, view_record
+from training.data.surface_views import view_record
+
+from surface_reading_figure import crop_square, shade_heights  # the tools folder: the script's own
 
 TILE = 160
 YAWS = (90.0, 35.0, 0.0)
@@ -26,13 +28,8 @@ YAWS = (90.0, 35.0, 0.0)
 
 def _tile(view: dict) -> np.ndarray:
     mask, height = view["mask"] > 0.5, np.nan_to_num(view["height"])
-    ys, xs = np.nonzero(mask)
-    size = int(max(np.ptp(ys), np.ptp(xs)) * 1.15) + 4
-    cy, cx = (ys.min() + ys.max()) // 2, (xs.min() + xs.max()) // 2
-    top, left = (int(np.clip(c - size // 2, 0, max(R - size, 0))) for c in (cy, cx))
-    shade = np.where(mask, np.clip(height / (R / 2), 0.0, 1.0) * 200.0 + 30.0, 255.0)
-    crop = shade[top : top + size, left : left + size].astype(np.uint8)
-    return np.asarray(Image.fromarray(crop).resize((TILE, TILE), Image.Resampling.BILINEAR))
+    rgb = shade_heights(height, mask)[crop_square(mask)].astype(np.uint8)
+    return np.asarray(Image.fromarray(rgb).resize((TILE, TILE), Image.Resampling.BILINEAR))
 
 
 def sheet(animals: int, people: int) -> Image.Image:
@@ -48,7 +45,7 @@ def sheet(animals: int, people: int) -> Image.Image:
     if len(tiles) % 2:
         tiles.append(np.full_like(tiles[0], 255))
     rows = [
-        np.concatenate([np.pad(t, 2, constant_values=255) for t in tiles[i : i + 2]], 1)
+        np.concatenate([np.pad(t, ((2, 2), (2, 2), (0, 0)), constant_values=255) for t in tiles[i : i + 2]], 1)
         for i in range(0, len(tiles), 2)
     ]
     return Image.fromarray(np.concatenate(rows, axis=0))

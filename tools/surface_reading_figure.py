@@ -2,7 +2,7 @@
 the true pixel heights, then each graph's reading and its error map with its mean (rows of R = 128).
 
     PYTHONPATH=. python tools/surface_reading_figure.py --sets data/surface_q/val_q.npz data/surface_q/oos.npz \
-        --graphs ssn_engine/models/surface.onnx runs/surface_q/surface.onnx --names shipped fine-tuned \
+        --graphs ssn_engine/models/surface.onnx DIR/surface.onnx --names shipped fine-tuned \
         --rows 4 --out docs/img/surface_reading.png
 
 Pixel heights are drawn dark (0) to light (half a frame and more) on the object, the ground white; an error map
@@ -24,7 +24,7 @@ TILE = 192  # each tile: the view's object, cropped square with a margin, drawn 
 ERROR_FULL = 8.0  # rows of R: an error map's full red
 
 
-def _crop(mask: np.ndarray) -> tuple[slice, slice]:
+def crop_square(mask: np.ndarray) -> tuple[slice, slice]:
     """A square around the object's pixels with a tenth of its size as margin, inside the frame."""
     ys, xs = np.nonzero(mask > 0)
     size = int(max(np.ptp(ys), np.ptp(xs)) * 1.2) + 4
@@ -40,7 +40,8 @@ def _tile(rgb: np.ndarray, crop: tuple[slice, slice], label: str) -> Image.Image
     return tile
 
 
-def _heights(height: np.ndarray, mask: np.ndarray) -> np.ndarray:
+def shade_heights(height: np.ndarray, mask: np.ndarray) -> np.ndarray:
+    """Pixel heights (rows of R) as RGB: dark (0) to light (half a frame and more) where ``mask``, white elsewhere."""
     shade = np.clip(height / (R / 2), 0.0, 1.0) * 200.0 + 30.0
     return np.repeat(np.where(mask > 0, shade, 255.0)[..., None], 3, axis=-1)
 
@@ -61,13 +62,13 @@ def sheet(sets: list[Path], graphs: list[Path], names: list[str], rows: int, see
         views = load([path])
         for i in rng.choice(len(views["mask"]), rows, replace=False):
             mask, truth = views["mask"][i], views["height"][i]
-            crop = _crop(mask)
+            crop = crop_square(mask)
             feed = {"mask": mask[None, None], "camera": views["camera"][i][None].astype(np.float32)}
-            row = [_tile(_heights(truth, mask), crop, f"{path.stem} #{i}, pitch {views['pitch'][i]:.0f}: truth")]
+            row = [_tile(shade_heights(truth, mask), crop, f"{path.stem} #{i}, pitch {views['pitch'][i]:.0f}: truth")]
             for name, sess in zip(names, sessions, strict=True):
                 read = np.asarray(sess.run(None, feed)[0])[0, 0] * R
                 error = np.abs(read - truth)
-                row.append(_tile(_heights(read, mask), crop, f"{name}"))
+                row.append(_tile(shade_heights(read, mask), crop, f"{name}"))
                 row.append(_tile(_errors(error, mask), crop, f"error {error[mask > 0].mean():.2f} rows"))
             tiles.append(row)
     w, h = tiles[0][0].size

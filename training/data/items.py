@@ -26,6 +26,11 @@ def stable_hash(text: str) -> int:
     return zlib.crc32(text.encode())
 
 
+def item_seed(seed: int, index: int) -> int:
+    """The seed of a generated source's ``index``-th item in the set of ``seed`` (each set's items distinct)."""
+    return int(seed) * 100003 + index
+
+
 def split_for(index: int) -> str:
     """80/10/10 split of generated shapes by their index (split by shape, never by view)."""
     r = index % 10
