@@ -23,7 +23,7 @@ from training.data.card import write_card
 from training.data.contact_sheet import write_contact_sheet
 from training.data.generate import render_item
 from training.data.render_bases import set_threads
-from training.data.sources import SOURCES, all_items
+from training.data.sources import DEFAULT_SOURCES, SOURCES, all_items
 from training.data.store import DATASET_JSON
 from training.data.views import CAMERA_TEXT, CAMERAS, FOV_RANGE, PITCH_RANGE, PITCHES, VIEWS, YAW_RANGE, YAWS
 from training.progress import Progress
@@ -40,7 +40,7 @@ def parse_args(argv: list[str] | None = None) -> argparse.Namespace:
     p.add_argument("--shard", default="0/1", help="i/k: this process renders items i, i+k, i+2k, ...")
     p.add_argument("--elm-rows", type=int, default=16, help="basis grid rows Hb (grid Hb x 2Hb)")
     p.add_argument("--samples", type=int, default=16, help="directions per texel (a square number)")
-    p.add_argument("--sources", default=",".join(SOURCES), help=f"comma list of {','.join(SOURCES)}")
+    p.add_argument("--sources", default=",".join(DEFAULT_SOURCES), help=f"comma list of {','.join(SOURCES)}")
     p.add_argument("--procedural", type=int, default=160, help="number of procedural shapes")
     p.add_argument("--humans", type=int, default=120, help="number of anny humans")
     p.add_argument("--quadrupeds", type=int, default=0, help="number of procedural animals")

@@ -14,7 +14,7 @@ import argparse
 from pathlib import Path
 
 from .data.surface_views import make
-from .data.sources import SOURCES
+from .data.sources import DEFAULT_SOURCES, SOURCES
 from .data.views import add_split_arguments
 from .surface_model import WIDTHS, install, train
 
@@ -24,7 +24,13 @@ def parse_args(argv: list[str] | None = None) -> argparse.Namespace:
     sub = p.add_subparsers(dest="command", required=True)
     m = sub.add_parser("make", help="masks, camera inputs and pixel heights of a split's views")
     add_split_arguments(m)
-    m.add_argument("--sources", nargs="+", choices=SOURCES, default=list(SOURCES), help="the kinds of items viewed")
+    m.add_argument(
+        "--sources",
+        nargs="+",
+        choices=SOURCES,
+        default=list(DEFAULT_SOURCES),
+        help="the kinds of items viewed (default: %(default)s)",
+    )
     m.add_argument(
         "--stretch",
         type=float,

@@ -88,6 +88,9 @@ def test_people_off_their_feet_are_their_own_source_and_leave_the_standing_ones_
     assert {it.source for it in posed} == {"anny_poses"} and {it.kind for it in posed} == {"human"}
     assert {it.params["pose"] for it in posed} == set(humans.MORE_POSES)
     assert not {it.id for it in posed} & {it.id for it in humans.human_items(40, seed=5)}
+    # A set made without naming its sources is made of the ones every set was made of before these were added.
+    default = sources.all_items(n_procedural=4, n_humans=4, seed=5, n_quadrupeds=4)
+    assert {it.source for it in default} == {"mesh", "procedural", "anny"}
     upright = np.ptp(sources.build_mesh(standing[0]).vertices, axis=0)
     assert upright[1] > 3.0 * upright[2]  # standing: over three times as tall as deep (front to back)
     for pose in ("lying", "crouching", "kneeling"):

@@ -24,7 +24,7 @@ from .generate import view_rng
 from .meshes import yawed
 from .render_bases import mask_coverage, view_camera
 from .items import Item
-from .sources import SOURCES, all_items, build_mesh
+from .sources import DEFAULT_SOURCES, all_items, build_mesh
 from .views import VIEWS, draw_view
 
 __all__ = ["ESTIMATOR_KEYS", "KEYS", "KIND_NAMES", "R", "load", "make", "split_views", "view_record"]
@@ -60,7 +60,7 @@ def split_views(
     procedural: int = 36,
     humans: int = 48,
     view_seed: int | None = None,
-    sources: tuple[str, ...] = SOURCES,
+    sources: tuple[str, ...] = DEFAULT_SOURCES,
     quadrupeds: int = 0,
 ) -> Iterator[tuple[Item, meshes.Mesh, meshes.Topology, tuple[float, float, float]]]:
     """Every view of ``split``'s items of ``sources`` under each camera set, drawn as ``training.make_dataset``

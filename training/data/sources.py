@@ -19,6 +19,9 @@ from .quadrupeds import build as build_quadruped
 from .quadrupeds import quadruped_items
 
 SOURCES = ("mesh", "procedural", "anny", "anny_poses", "quadruped")
+# What a set is made of unless told: the sources every set was made of before the people off their feet and the
+# animals were added, so that a command made before makes the same set.
+DEFAULT_SOURCES = ("mesh", "procedural", "anny")
 
 
 def manifest_items() -> list[Item]:
@@ -45,7 +48,7 @@ def manifest_items() -> list[Item]:
 
 
 def all_items(
-    sources: tuple[str, ...] = SOURCES,
+    sources: tuple[str, ...] = DEFAULT_SOURCES,
     n_procedural: int = 0,
     n_humans: int = 0,
     seed: int = 0,

@@ -26,7 +26,7 @@ from .camera_views import split_views
 from .items import stable_hash
 from .meshes import yawed
 from .render_bases import mask_coverage, view_camera
-from .sources import SOURCES
+from .sources import DEFAULT_SOURCES
 
 __all__ = ["HEIGHT_STEPS", "R", "load", "make", "pixel_heights", "save", "stretched", "view_record"]
 
@@ -66,7 +66,7 @@ def make(
     cameras: list[str],
     out: Path,
     seed: int = 0,
-    sources: tuple[str, ...] = SOURCES,
+    sources: tuple[str, ...] = DEFAULT_SOURCES,
     procedural: int = 36,
     humans: int = 48,
     stretch: float = 0.0,
