@@ -1,8 +1,12 @@
-"""The surface model: a pixel height for each pixel of a cutout. ``python -m training.surface make|train|export``.
+"""The surface model: a pixel height for each pixel of a cutout.
+
+``python -m training.surface make|train|average|install``:
 
     python -m training.surface make --split train --cameras continuous paper --out data/surface128/train.npz
     python -m training.surface make --split val --cameras continuous paper --out data/surface128/val.npz
     python -m training.surface train --data data/surface128 --run runs/surface --minutes 7
+    python -m training.surface average ssn_engine/models/surface.onnx runs/surface/last.pt --share 0.5 \
+        --data data/surface128 --out runs/surface/average.pt
     python -m training.surface install runs/surface/last.pt --models ssn_engine/models
 
 What a view holds: :mod:`training.data.surface_views`; the network and its loss: :mod:`training.surface_model`.
@@ -16,7 +20,7 @@ from pathlib import Path
 from .data.surface_views import make
 from .data.sources import DEFAULT_SOURCES, SOURCES
 from .data.views import add_split_arguments
-from .surface_model import WIDTHS, install, train
+from .surface_model import WIDTHS, average, install, train
 
 
 def parse_args(argv: list[str] | None = None) -> argparse.Namespace:
@@ -54,6 +58,12 @@ def parse_args(argv: list[str] | None = None) -> argparse.Namespace:
         "--init", help="a checkpoint or an installed surface.onnx to go on from (fine-tuning it; its widths)"
     )
     t.add_argument("--resume", action="store_true", help="go on with the run in --run where it stopped")
+    a = sub.add_parser("average", help="a checkpoint whose weights lie between two networks' (scored on val.npz)")
+    a.add_argument("first", help="a checkpoint or an installed surface.onnx (the network started from)")
+    a.add_argument("second", help="a checkpoint or an installed surface.onnx of the same shape (the one trained on)")
+    a.add_argument("--share", type=float, required=True, help="how much of the second's weights (0 to 1)")
+    a.add_argument("--data", required=True, help="the folder whose val.npz scores the average")
+    a.add_argument("--out", required=True, help="the checkpoint written")
     e = sub.add_parser("install", help="a checkpoint's graph into a model folder (model.json and the card too)")
     e.add_argument("checkpoint")
     e.add_argument("--models", required=True, help="the model folder (ssn_engine/models)")
@@ -90,6 +100,9 @@ def main(argv: list[str] | None = None) -> None:
             init,
             args.resume,
         )
+    elif args.command == "average":
+        row = average(Path(args.first), Path(args.second), args.share, Path(args.data), Path(args.out))
+        print(f"wrote {args.out}: " + ", ".join(f"{k} {v:.3f}" for k, v in row.items()))
     else:
         diff = install(Path(args.checkpoint), Path(args.models))
         print(f"installed {args.checkpoint} into {args.models} (graph within {diff:.1e} of torch)")

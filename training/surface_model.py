@@ -176,7 +176,33 @@ def start_from(init: Path) -> tuple[AOPNet, list]:
         raise ValueError(f"{init} is not a surface graph (mask and camera in, pixel heights out)")
     meta = init.with_name("model.json")
     record = ModelConfig.from_json(meta.read_text()).surface_training if meta.is_file() else None
-    return net, [record or f"rebuilt from {init.name}"]
+    return net, [_stages(record) if record else f"rebuilt from {init.name}"]
+
+
+def _stages(record: str) -> str:
+    """The training stages of an installed ``surface_training`` record (:func:`install`), without its widths and
+    validation scores, which the record of a network trained on from it states anew."""
+    stages = record.split("; validation mean absolute error")[0]
+    return stages.split("], ", 1)[1] if stages.startswith("widths [") else stages
+
+
+def average(first: Path, second: Path, share: float, data: Path, out: Path) -> dict[str, float]:
+    """A checkpoint ``out`` whose weights are ``1 - share`` of ``first``'s and ``share`` of ``second``'s (checkpoints
+    or installed graphs of one network shape): a fine-tuned network taken only part of the way from the one it
+    started from keeps more of what that one knew. Scored on ``data``/val.npz (the scores returned); its stages
+    are ``second``'s and the average."""
+    if not 0.0 <= share <= 1.0:
+        raise ValueError(f"share must be in [0, 1], got {share}")
+    net, _ = start_from(first)
+    other, history = start_from(second)
+    a, b = net.state_dict(), other.state_dict()
+    if a.keys() != b.keys() or any(a[k].shape != b[k].shape for k in a):
+        raise ValueError(f"{first} and {second} are networks of different shapes")
+    net.load_state_dict({k: (1.0 - share) * a[k] + share * b[k] if a[k].is_floating_point() else b[k] for k in a})
+    row = {f"val {k}": v for k, v in evaluate(net, load([data / "val.npz"]), "cpu").items()}
+    stage = f"averaged with {first.name}: {share:g} of these weights, {1.0 - share:g} of its"
+    _save(net, out, [*history, stage], row, {})
+    return row
 
 
 def _save(net: AOPNet, path: Path, history: list, row: dict, progress: dict) -> None:

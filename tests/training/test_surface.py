@@ -136,7 +136,8 @@ def test_the_shipped_graph_is_fine_tuned_where_its_runs_are_gone(tmp_path):
     graph = ROOT / "ssn_engine" / "models" / "surface.onnx"
     net, history = start_from(graph)
     shipped = json.loads((ROOT / "ssn_engine" / "models" / "model.json").read_text())["surface_training"]
-    assert history == [shipped]
+    stages = shipped.split("], ", 1)[1].split("; validation")[0]  # its widths and scores are the new record's
+    assert history == [stages] and stages.startswith("7942 steps of 64 views")
     mask = np.zeros((1, 1, R, R), np.float32)
     mask[0, 0, 40:110, 50:80] = 1.0
     camera = np.array([[0.25, 1.2]], np.float32)
@@ -158,7 +159,29 @@ def test_the_shipped_graph_is_fine_tuned_where_its_runs_are_gone(tmp_path):
     shutil.copytree(ROOT / "ssn_engine" / "models", models)
     assert install(tmp_path / "run" / "last.pt", models) < 1e-4
     record = json.loads((models / "model.json").read_text())["surface_training"]
-    assert record.startswith(f"widths [16, 32, 64, 128, 192, 256], {shipped}; then ") and "steps of 2 views" in record
+    assert record.startswith(f"widths [16, 32, 64, 128, 192, 256], {stages}; then ") and "steps of 2 views" in record
+    assert record.count("widths") == 1 and record.count("validation") == 1
+    # ``average``: the weights part of the way from the graph to the fine-tuned ones; none of the way reads as the
+    # graph, and the record says what was averaged
+    from training.surface_model import average, load_checkpoint
+
+    tuned = load_checkpoint(tmp_path / "run" / "last.pt").state_dict()
+    for share in (0.0, 0.25):
+        row = average(graph, tmp_path / "run" / "last.pt", share, tmp_path / "data", tmp_path / f"avg{share}.pt")
+        assert np.isfinite(row["val mae"])
+    between = load_checkpoint(tmp_path / "avg0.25.pt").state_dict()
+    start = net.state_dict()
+    key = next(k for k in start if k.endswith("weight") and start[k].ndim == 4 and not torch.equal(start[k], tuned[k]))
+    want = 0.75 * start[key] + 0.25 * tuned[key]
+    assert torch.allclose(between[key], want, atol=2e-3 * float(want.abs().max()))
+    with torch.no_grad():
+        none = load_checkpoint(tmp_path / "avg0.0.pt")(torch.from_numpy(mask), torch.from_numpy(camera))
+        assert np.abs(none.numpy() - net(torch.from_numpy(mask), torch.from_numpy(camera)).numpy()).max() < 2e-3
+    install(tmp_path / "avg0.25.pt", models)
+    record = json.loads((models / "model.json").read_text())["surface_training"]
+    assert "; then averaged with surface.onnx: 0.25 of these weights, 0.75 of its; validation" in record
+    with pytest.raises(ValueError, match="share"):
+        average(graph, tmp_path / "run" / "last.pt", 1.5, tmp_path / "data", tmp_path / "bad.pt")
 
 
 def test_a_run_cut_short_goes_on_where_it_stopped(tmp_path, monkeypatch):
