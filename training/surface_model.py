@@ -33,6 +33,7 @@ VAL_EVERY = 500
 GRAD_WEIGHT = 1.0
 GROUPS = 4  # the U-Net's GroupNorm groups
 CARD_SECTION = "## Surface model"
+SCORES_MARK = "; validation mean absolute error"  # in an installed record: where its stages end and its scores begin
 
 
 def build(widths: tuple[int, ...] = WIDTHS) -> AOPNet:
@@ -182,7 +183,7 @@ def start_from(init: Path) -> tuple[AOPNet, list]:
 def _stages(record: str) -> str:
     """The training stages of an installed ``surface_training`` record (:func:`install`), without its widths and
     validation scores, which the record of a network trained on from it states anew."""
-    stages = record.split("; validation mean absolute error")[0]
+    stages = record.split(SCORES_MARK)[0]
     return stages.split("], ", 1)[1] if stages.startswith("widths [") else stages
 
 
@@ -244,7 +245,7 @@ def install(checkpoint: Path, models: Path) -> float:
     scores = ck["scores"]
     by_pitch = ", ".join(f"{k[len('val pitch ') :]}: {v:.2f}" for k, v in scores.items() if k.startswith("val pitch"))
     training = (
-        f"widths {list(ck['config']['widths'])}, {stages}; validation mean absolute error "
+        f"widths {list(ck['config']['widths'])}, {stages}{SCORES_MARK} "
         f"{scores['val mae']:.2f} rows of R = {R} (pitch {by_pitch})"
     )
     meta = models / "model.json"
