@@ -1,4 +1,5 @@
-"""A sheet of generated shapes: the procedural animals and the people off their feet, from three sides.
+"""A sheet of generated shapes: the procedural animals, the people off their feet and the objects with flat parts
+on the ground, from three sides.
 
     PYTHONPATH=. python tools/shapes_figure.py --out docs/img/new_shapes.png
 
@@ -15,6 +16,7 @@ import numpy as np
 from PIL import Image
 
 from training.data import meshes
+from training.data.grounded import grounded_items
 from training.data.humans import MORE_POSES, human_items
 from training.data.quadrupeds import quadruped_items
 from training.data.sources import build_mesh
@@ -32,11 +34,12 @@ def _tile(view: dict) -> np.ndarray:
     return np.asarray(Image.fromarray(rgb).resize((TILE, TILE), Image.Resampling.BILINEAR))
 
 
-def sheet(animals: int, people: int) -> Image.Image:
-    """Rows of validation shapes (``animals`` procedural animals, then ``people`` anny people off their feet), each
-    from :data:`YAWS`; two shapes a row."""
+def sheet(animals: int, people: int, grounded: int) -> Image.Image:
+    """Rows of validation shapes (``animals`` procedural animals, ``people`` anny people off their feet, then
+    ``grounded`` objects with parts on the ground), each from :data:`YAWS`; two shapes a row."""
     items = [it for it in quadruped_items(200, 0) if it.split == "val"][:animals]
     items += [it for it in human_items(60, 0, MORE_POSES) if it.split == "val"][:people]
+    items += [it for it in grounded_items(200, 0) if it.split == "val"][:grounded]
     tiles = []
     for item in items:
         mesh = build_mesh(item)
@@ -55,9 +58,10 @@ def main() -> None:
     p = argparse.ArgumentParser(description=(__doc__ or "").split("\n")[0])
     p.add_argument("--animals", type=int, default=10)
     p.add_argument("--people", type=int, default=6)
+    p.add_argument("--grounded", type=int, default=8)
     p.add_argument("--out", type=Path, required=True)
     args = p.parse_args()
-    sheet(args.animals, args.people).save(args.out, optimize=True)
+    sheet(args.animals, args.people, args.grounded).save(args.out, optimize=True)
 
 
 if __name__ == "__main__":

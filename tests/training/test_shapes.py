@@ -146,6 +146,34 @@ def test_procedural_animals_stand_in_their_pose_and_rebuild_from_their_seed():
         assert v[v[:, 0] < v[:, 0].min() + 0.1, 1].min() < 0.2 * v[:, 1].max()
 
 
+def test_grounded_objects_lay_their_flat_parts_on_the_ground_and_rebuild_from_their_seed():
+    """Every family in every split, reproducible, a source only when named; the cord, the mat, the legs and the
+    litter lie on the ground out beyond the body: the low parts reach farther than the raised ones."""
+    from training.data import grounded
+
+    items = grounded.grounded_items(80, seed=3)
+    assert {it.source for it in items} == {"grounded"} and {it.split for it in items} == {"train", "val", "test"}
+    for split in ("train", "val", "test"):
+        assert {it.params["kind"] for it in items if it.split == split} == set(grounded.KINDS)
+    assert not {it.source for it in sources.all_items(n_procedural=4, n_humans=4, seed=3, n_grounded=8)} & {
+        "grounded"
+    }
+    assert len(sources.all_items(("grounded",), seed=3, n_grounded=8)) == 8
+    for kind in grounded.KINDS:
+        reach = []
+        for it in [it for it in items if it.params["kind"] == kind][:6]:
+            mesh = sources.build_mesh(it)
+            np.testing.assert_array_equal(mesh.vertices, sources.build_mesh(it).vertices)
+            v = mesh.vertices
+            lo, hi = v.min(0), v.max(0)
+            assert abs(np.linalg.norm(hi - lo) - 1) < 1e-9 and abs(lo[1]) < 1e-12
+            low = v[:, 1] < 0.25 * hi[1]
+            centre = (v[~low].min(0) + v[~low].max(0)) / 2  # the raised parts' middle
+            out = np.hypot(v[:, 0] - centre[0], v[:, 2] - centre[2])
+            reach.append(out[low].max() / out[~low].max())
+        assert np.median(reach) > 1.2, (kind, reach)
+
+
 def test_procedural_animals_cast_the_shadow_of_a_solid():
     """The union of closed, outward parts: each part a 2-manifold, and a sun overhead casts no shadow wider than
     the animal's own footprint."""

@@ -112,7 +112,8 @@ def tilt(mesh: Mesh, angle: float) -> Mesh:
     return Mesh(v - [0.0, v[:, 1].min(), 0.0], mesh.faces)
 
 
-def _random_part(rng: np.random.Generator, y: float) -> Mesh:
+def random_part(rng: np.random.Generator, y: float) -> Mesh:
+    """A seeded box, cylinder or sphere standing at height ``y`` near the y axis."""
     kind = rng.integers(3)
     if kind == 0:
         size = rng.uniform(0.1, 0.6, 3)
@@ -165,7 +166,7 @@ def generate(kind: str, seed: int) -> Mesh:
     if kind == "compound":  # stacked random primitives
         parts, y = [], 0.0
         for _ in range(rng.integers(2, 6)):
-            p = _random_part(rng, y)
+            p = random_part(rng, y)
             parts.append(p)
             y = p.vertices[:, 1].max() * rng.uniform(0.6, 1.0)
         return merge(parts)

@@ -1,5 +1,5 @@
 """The list of shapes a dataset is made from: shared meshes, procedural shapes, anny humans (standing, or in the
-poses off their feet), procedural animals.
+poses off their feet), procedural animals, procedural objects with flat parts on the ground.
 
 Every item records how to rebuild its mesh (file, or generator and seed), so
 the set is reproducible. Items are ordered by a hash of their id, so any
@@ -12,13 +12,15 @@ from __future__ import annotations
 from . import meshes
 from .humans import build as build_human
 from .humans import MORE_POSES, human_items
+from .grounded import build as build_grounded
+from .grounded import grounded_items
 from .items import Item, stable_hash
 from .procedural import build as build_procedural
 from .procedural import procedural_items
 from .quadrupeds import build as build_quadruped
 from .quadrupeds import quadruped_items
 
-SOURCES = ("mesh", "procedural", "anny", "anny_poses", "quadruped")
+SOURCES = ("mesh", "procedural", "anny", "anny_poses", "quadruped", "grounded")
 # What a set is made of unless told: the sources every set was made of before the people off their feet and the
 # animals were added, so that a command made before makes the same set.
 DEFAULT_SOURCES = ("mesh", "procedural", "anny")
@@ -53,6 +55,7 @@ def all_items(
     n_humans: int = 0,
     seed: int = 0,
     n_quadrupeds: int = 0,
+    n_grounded: int = 0,
 ) -> list[Item]:
     """Items of the chosen sources, ordered by a stable hash of their id."""
     items: list[Item] = []
@@ -66,6 +69,8 @@ def all_items(
         items += human_items(n_humans, seed, MORE_POSES)
     if "quadruped" in sources and n_quadrupeds:
         items += quadruped_items(n_quadrupeds, seed)
+    if "grounded" in sources and n_grounded:
+        items += grounded_items(n_grounded, seed)
     return sorted(items, key=lambda it: (stable_hash(it.id), it.id))
 
 
@@ -79,6 +84,8 @@ def build_mesh(item: Item) -> meshes.Mesh:
         mesh = build_human(item.params)
     elif item.source == "quadruped":
         mesh = build_quadruped(item.params)
+    elif item.source == "grounded":
+        mesh = build_grounded(item.params)
     else:
         raise ValueError(f"unknown source {item.source!r}")
     return meshes.normalise(meshes.clean(mesh))
