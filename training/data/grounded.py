@@ -52,7 +52,9 @@ def body(rng: np.random.Generator, base: float = 0.0) -> Mesh:
     return Mesh(mesh.vertices - [mesh.vertices[:, 0].mean(), 0.0, mesh.vertices[:, 2].mean()], mesh.faces)
 
 
-def _path(start: np.ndarray, heading: float, steps: int, step: float, wander: float, rng) -> np.ndarray:
+def _path(
+    start: np.ndarray, heading: float, steps: int, step: float, wander: float, rng: np.random.Generator
+) -> np.ndarray:
     """A random walk on the ground from ``start`` (x, z), turning by up to ``wander`` radians a step."""
     points = [np.asarray(start, float)]
     for _ in range(steps):
