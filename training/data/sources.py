@@ -10,10 +10,10 @@ order does not change when other items are added.
 from __future__ import annotations
 
 from . import meshes
-from .humans import build as build_human
-from .humans import MORE_POSES, human_items
 from .grounded import build as build_grounded
 from .grounded import grounded_items
+from .humans import build as build_human
+from .humans import MORE_POSES, human_items
 from .items import Item, stable_hash
 from .procedural import build as build_procedural
 from .procedural import procedural_items
