@@ -61,7 +61,7 @@ def sheet(sets: list[Path], graphs: list[Path], names: list[str], rows: int, see
     for path in sets:
         views = load([path])
         for i in rng.choice(len(views["mask"]), rows, replace=False):
-            mask, truth = views["mask"][i], views["height"][i]
+            mask, truth = views["mask"][i].astype(np.float32), views["height"][i].astype(np.float32)
             crop = crop_square(mask)
             feed = {"mask": mask[None, None], "camera": views["camera"][i][None].astype(np.float32)}
             row = [_tile(shade_heights(truth, mask), crop, f"{path.stem} #{i}, pitch {views['pitch'][i]:.0f}: truth")]

@@ -83,8 +83,15 @@ def graph_config(model: onnx.ModelProto, groups: int = 8, member: int | None = N
     pattern = re.escape(weights_prefix(model, member)) + r"unet\.encoder\.(\d+)\.0\.0\.weight(?:_half)?"
     convs = {int(m.group(1)): i for i in model.graph.initializer if (m := re.fullmatch(pattern, i.name))}
     widths = tuple(int(convs[k].dims[0]) for k in sorted(convs))
+    head = re.escape(weights_prefix(model, member)) + r"unet\.head\.weight(?:_half)?"
+    outputs = next((int(i.dims[0]) for i in model.graph.initializer if re.fullmatch(head, i.name)), 1)
     return module, UNetConfig(
-        widths=widths, groups=groups, resolution=int(r), card="card" in inputs, camera="camera" in inputs
+        widths=widths,
+        groups=groups,
+        resolution=int(r),
+        card="card" in inputs,
+        camera="camera" in inputs,
+        outputs=outputs,
     )
 
 

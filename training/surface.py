@@ -59,6 +59,11 @@ def parse_args(argv: list[str] | None = None) -> argparse.Namespace:
         "--init", help="a checkpoint or an installed surface.onnx to go on from (fine-tuning it; its widths)"
     )
     t.add_argument("--resume", action="store_true", help="go on with the run in --run where it stopped")
+    t.add_argument(
+        "--depth",
+        action="store_true",
+        help="read the object's depth at each pixel too (a second output; one added to an --init network's)",
+    )
     a = sub.add_parser("average", help="a checkpoint whose weights lie between two networks' (scored on val.npz)")
     a.add_argument("first", help="a checkpoint or an installed surface.onnx (the network started from)")
     a.add_argument("second", help="a checkpoint or an installed surface.onnx of the same shape (the one trained on)")
@@ -101,6 +106,7 @@ def main(argv: list[str] | None = None) -> None:
             widths,
             init,
             args.resume,
+            args.depth,
         )
     elif args.command == "average":
         row = average(Path(args.first), Path(args.second), args.share, Path(args.data), Path(args.out))

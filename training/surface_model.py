@@ -1,11 +1,12 @@
 """The surface model's training and export: mask and camera input -> each pixel's pixel height.
 
 The network is the AOP's U-Net taking the camera input (:class:`training.model.unet.AOPNet`, ``camera=True``),
-wider, its output the pixel height in frames (rows / R) of :mod:`training.data.surface_views`. Loss: L1 on the
-covered pixels, plus L1 on the height's differences to the right and below within them (so that a leg in front
-of a body keeps its step). Mirrored half of the time (a pixel height does not change in a mirror). Trained for a
-fixed time, the learning rate falling along a cosine over it; scored on the validation split every
-``VAL_EVERY`` steps (mean absolute error in rows of R, by pitch).
+wider, its output the pixel height in frames (rows / R) of :mod:`training.data.surface_views`, and with
+``--depth`` a second channel, the depth (the visible surface's pixel height less the far surface's). Loss: L1 on
+the covered pixels, plus L1 on the differences to the right and below within them (so that a leg in front of a
+body keeps its step), summed over the channels. Mirrored half of the time (a pixel height does not change in a
+mirror). Trained for a fixed time, the learning rate falling along a cosine over it; scored on the validation
+split every ``VAL_EVERY`` steps (mean absolute error in rows of R, by pitch).
 """
 
 from __future__ import annotations
@@ -31,14 +32,30 @@ from .onnx_graphs import export_graph, half_weights, session
 WIDTHS = (12, 24, 48, 96, 160, 256)
 VAL_EVERY = 500
 GRAD_WEIGHT = 1.0
+DEPTH_START = 0.02  # frames: a new depth channel's first reading (the training sets' mean depth, 2.5 rows of R)
 GROUPS = 4  # the U-Net's GroupNorm groups
 CARD_SECTION = "## Surface model"
 SCORES_MARK = "; validation mean absolute error"  # in an installed record: where its stages end and its scores begin
 
 
-def build(widths: tuple[int, ...] = WIDTHS) -> AOPNet:
-    """The untrained surface network."""
-    return AOPNet(UNetConfig(widths=widths, groups=GROUPS, resolution=R, camera=True))
+def build(widths: tuple[int, ...] = WIDTHS, outputs: int = 1) -> AOPNet:
+    """The untrained surface network: ``outputs`` 1 (the pixel height) or 2 (and the depth)."""
+    return AOPNet(UNetConfig(widths=widths, groups=GROUPS, resolution=R, camera=True, outputs=outputs))
+
+
+def with_depth(net: AOPNet) -> AOPNet:
+    """``net`` reading the depth as well: a one-output network given a second output channel whose reading starts
+    at ``DEPTH_START`` everywhere (its first channel unchanged); a two-output one as it is."""
+    if net.config.outputs == 2:
+        return net
+    wider = AOPNet(dataclasses.replace(net.config, outputs=2))
+    state = net.state_dict()
+    wider.load_state_dict({k: v for k, v in state.items() if not k.startswith("unet.head.")}, strict=False)
+    weight = torch.zeros_like(wider.unet.head.weight)
+    weight[:1] = state["unet.head.weight"]
+    bias = torch.tensor([float(state["unet.head.bias"][0]), DEPTH_START])
+    wider.unet.head.load_state_dict({"weight": weight, "bias": bias})
+    return wider
 
 
 def loss_terms(pred: torch.Tensor, target: torch.Tensor, mask: torch.Tensor) -> tuple[torch.Tensor, torch.Tensor]:
@@ -54,30 +71,42 @@ def loss_terms(pred: torch.Tensor, target: torch.Tensor, mask: torch.Tensor) -> 
     return l1, grad
 
 
-def _tensors(data: dict[str, np.ndarray], device: str) -> tuple[torch.Tensor, torch.Tensor, torch.Tensor]:
+def _tensors(data: dict[str, np.ndarray], device: str, outputs: int) -> tuple[torch.Tensor, torch.Tensor, torch.Tensor]:
+    """Masks (n, 1, R, R) uint8, targets (n, ``outputs``, R, R) float16 in rows of R (the pixel height, and the
+    depth), cameras (n, 2): kept small, each batch made float by :func:`_batch`."""
+    target = np.stack([data["height"], data["depth"]][:outputs], axis=1)
     return (
         torch.from_numpy(data["mask"][:, None]).to(device),
-        torch.from_numpy(data["height"][:, None] / R).to(device),
+        torch.from_numpy(target).to(device),
         torch.from_numpy(data["camera"].astype(np.float32)).to(device),
     )
 
 
+def _batch(mask: torch.Tensor, target: torch.Tensor, idx: torch.Tensor | slice) -> tuple[torch.Tensor, torch.Tensor]:
+    """Views ``idx`` of :func:`_tensors`' masks and targets, float32, the targets in frames."""
+    return mask[idx].float(), target[idx].float() / R
+
+
 def evaluate(net: AOPNet, data: dict[str, np.ndarray], device: str, batch: int = 256) -> dict[str, float]:
     """Mean absolute error (rows of R) of the pixel height over covered pixels, all views and by pitch (0-10,
-    10-20, 20+ degrees)."""
-    mask, target, camera = _tensors(data, device)
+    10-20, 20+ degrees); a network reading the depth: its error too (``depth``)."""
+    outputs = net.config.outputs
+    mask, target, camera = _tensors(data, device, outputs)
     err, count = [], []
     net.eval()
     with torch.no_grad():
         for i in range(0, len(mask), batch):
-            m = mask[i : i + batch]
+            m, t = _batch(mask, target, slice(i, i + batch))
             pred = net(m, camera[i : i + batch]).float()
-            err.append(((pred - target[i : i + batch]).abs() * m).sum(dim=(1, 2, 3)).cpu().numpy() * R)
+            err.append(((pred - t).abs() * m).sum(dim=(2, 3)).cpu().numpy() * R)
             count.append(m.sum(dim=(1, 2, 3)).cpu().numpy())
     net.train()
     e, c = np.concatenate(err), np.concatenate(count)
     pitch = data["pitch"]
-    out = {"mae": float(e.sum() / c.sum())}
+    out = {"mae": float(e[:, 0].sum() / c.sum())}
+    if outputs == 2:
+        out["depth"] = float(e[:, 1].sum() / c.sum())
+    e = e[:, 0]
     for name, lo, hi in (("pitch 0-10", -1, 10), ("pitch 10-20", 10, 20), ("pitch 20+", 20, 90)):
         sel = (pitch >= lo) & (pitch < hi)
         if sel.any():
@@ -97,21 +126,26 @@ def train(
     widths: tuple[int, ...] = WIDTHS,
     init: Path | None = None,
     resume: bool = False,
+    depth: bool = False,
 ) -> None:
     """Train on the views of ``sets`` (:func:`training.data.surface_views.make` files) for ``minutes``, scoring
     ``data``/val.npz; writes ``run``/last.pt (every ``VAL_EVERY`` steps) and ``run``/log.jsonl. ``init``: a
     checkpoint or an installed graph to go on from (its widths, not ``widths``). ``resume``: go on with the run
     ``run``/last.pt was saved by (its network, optimiser, step and time spent: the schedule continues where it
-    stopped, so a run cut short by the end of a session finishes as if it had not been)."""
+    stopped, so a run cut short by the end of a session finishes as if it had not been). ``depth``: read the depth
+    too (a second output: :func:`with_depth` of ``init``'s network)."""
     torch.manual_seed(seed)
     run.mkdir(parents=True, exist_ok=True)
-    train_set, val_set = load(sets), load([data / "val.npz"])
-    mask, target, camera = _tensors(train_set, device)
+    val_set = load([data / "val.npz"])
     state = torch.load(run / "last.pt", map_location="cpu", weights_only=True) if resume else None
     if state is not None:
         net, history = _network(state), state["history"][:-1]  # its last stage is this one
     else:
-        net, history = (build(widths), []) if init is None else start_from(init)
+        net, history = (build(widths, 2 if depth else 1), []) if init is None else start_from(init)
+        net = with_depth(net) if depth else net
+    train_set = load(sets)
+    mask, target, camera = _tensors(train_set, device, net.config.outputs)
+    del train_set  # its arrays live on in the tensors, the targets stacked anew
     net = net.train().to(device)
     name = torch.cuda.get_device_name(device) if device.startswith("cuda") else "cpu"
     stage = {"views": len(mask), "batch": batch, "lr": lr, "device": name, "init": bool(init)}
@@ -139,7 +173,7 @@ def train(
         for group in opt.param_groups:
             group["lr"] = lr * min(1.0, (step + 1) / 200) * 0.5 * (1.0 + math.cos(math.pi * done))
         idx = torch.from_numpy(rng.integers(0, len(mask), batch)).to(device)
-        m, t, c = mask[idx], target[idx], camera[idx]
+        (m, t), c = _batch(mask, target, idx), camera[idx]
         if rng.random() < 0.5:
             m, t = m.flip(-1), t.flip(-1)
         with torch.autocast("cuda", dtype=torch.bfloat16, enabled=cuda):
@@ -189,13 +223,16 @@ def _stages(record: str) -> str:
 
 def average(first: Path, second: Path, share: float, data: Path, out: Path) -> dict[str, float]:
     """A checkpoint ``out`` whose weights are ``1 - share`` of ``first``'s and ``share`` of ``second``'s (checkpoints
-    or installed graphs of one network shape): a fine-tuned network taken only part of the way from the one it
-    started from keeps more of what that one knew. Scored on ``data``/val.npz (the scores returned); its stages
-    are ``second``'s and the average."""
+    or installed graphs of one network shape; a first that does not read the depth is given a depth channel first,
+    as ``train --depth`` starts one: :func:`with_depth`): a fine-tuned network taken only part of the way from the
+    one it started from keeps more of what that one knew. Scored on ``data``/val.npz (the scores returned); its
+    stages are ``second``'s and the average."""
     if not 0.0 <= share <= 1.0:
         raise ValueError(f"share must be in [0, 1], got {share}")
     net, _ = start_from(first)
     other, history = start_from(second)
+    if other.config.outputs == 2:
+        net = with_depth(net)
     a, b = net.state_dict(), other.state_dict()
     if a.keys() != b.keys() or any(a[k].shape != b[k].shape for k in a):
         raise ValueError(f"{first} and {second} are networks of different shapes")
@@ -244,18 +281,22 @@ def install(checkpoint: Path, models: Path) -> float:
     )
     scores = ck["scores"]
     by_pitch = ", ".join(f"{k[len('val pitch ') :]}: {v:.2f}" for k, v in scores.items() if k.startswith("val pitch"))
+    depth = f", of the depth {scores['val depth']:.2f}" if "val depth" in scores else ""
     training = (
         f"widths {list(ck['config']['widths'])}, {stages}{SCORES_MARK} "
-        f"{scores['val mae']:.2f} rows of R = {R} (pitch {by_pitch})"
+        f"{scores['val mae']:.2f} rows of R = {R} (pitch {by_pitch}){depth}"
     )
     meta = models / "model.json"
     config = ModelConfig.from_json(meta.read_text())
     meta.write_text(dataclasses.replace(config, surface="surface.onnx", surface_training=training).to_json())
     section = (
         f"{CARD_SECTION}\n\n`surface.onnx` reads each pixel's pixel height (how far below it the image of the ground "
-        "straight below the surface it shows lies) from the mask and the camera input, mirror-averaged (run on the "
-        "mask and on its mirror image, the two readings averaged); the hard-light tracer places each pixel's "
-        "surface with it (docs/hard_light.md). Trained by `python -m training.surface` "
+        "straight below the surface it shows lies)"
+        + (", and the object's depth there (that height less the far surface's)," if depth else "")
+        + " from the mask and the camera input, mirror-averaged (run on the mask and on its mirror image, the two "
+        "readings averaged); the hard-light tracer places each pixel's surface with it"
+        + (" and ends its segment where the depth does" if depth else "")
+        + " (docs/hard_light.md). Trained by `python -m training.surface` "
         f"(training/reproduce.sh, stage 7): {training}.\n\n"
     )
     put_section(models / "MODEL_CARD.md", CARD_SECTION, section)
@@ -263,11 +304,11 @@ def install(checkpoint: Path, models: Path) -> float:
 
 
 def export(checkpoint: Path, out: Path) -> float:
-    """Write the checkpoint's network as ONNX ("mask" [b, 1, R, R], "camera" [b, 2] -> "height" [b, 1, R, R],
-    frames, clamped to [0, 1]; the weights stored in half precision), mirror-averaged (:class:`MirrorAverage`:
-    run on the mask and on its mirror image, the second reading mirrored back and the two averaged: the
-    camera has no roll, so the mirrored scene is as likely, and the average is nearer the truth); returns the
-    largest difference of onnxruntime's output to torch's."""
+    """Write the checkpoint's network as ONNX ("mask" [b, 1, R, R], "camera" [b, 2] -> "height" [b, C, R, R]: the
+    pixel height, and for a network reading the depth the depth, frames, clamped to [0, 1]; the weights stored in
+    half precision), mirror-averaged (:class:`MirrorAverage`: run on the mask and on its mirror image, the second
+    reading mirrored back and the two averaged: the camera has no roll, so the mirrored scene is as likely, and
+    the average is nearer the truth); returns the largest difference of onnxruntime's output to torch's."""
     net = MirrorAverage(load_checkpoint(checkpoint)).eval()
     out.parent.mkdir(parents=True, exist_ok=True)
     export_graph(net, "aop", R, out, output="height")

@@ -212,6 +212,7 @@ def test_a_checkpoint_rebuilt_from_the_graph_fine_tunes(exported, tmp_path):
         "resolution": 32,
         "card": False,
         "camera": False,
+        "outputs": 1,
     }
     run = tmp_path / "finetune"
     args = ["--module", "sr", "--run", str(run), *TINY, "--init-from", str(out)]

@@ -35,7 +35,7 @@ def test_a_box_s_front_stands_on_its_bottom_edge_and_its_top_reaches_back():
     their column); its top face's, farther back, higher in the picture."""
     vertices, faces = _box()
     cam = Camera(R, 0.5, fov=40.0, pitch=25.0).frame_top(vertices)
-    h = pixel_heights(vertices, faces, cam)
+    h, far = pixel_heights(vertices, faces, cam)
     col = R // 2
     covered = np.flatnonzero(np.isfinite(h[:, col]))
     feet = h[covered, col] + covered + 0.5
@@ -46,6 +46,13 @@ def test_a_box_s_front_stands_on_its_bottom_edge_and_its_top_reaches_back():
     assert np.abs(feet[front] - bottom).max() < 1.0
     top = feet[~front]  # the top face's feet: behind the front's, the farther the higher in the picture
     assert np.all(np.diff(top) > 0) and top[-1] < bottom and top[0] < bottom - 10.0
+    # the far surface lies behind: across the front face, the back face (feet on its bottom edge) or, low down,
+    # the bottom (on the ground: feet on the pixel's own row), whichever is lower in the picture
+    far_feet = far[covered, col] + covered + 0.5
+    assert np.all(far_feet <= feet + 1e-3)
+    back = cam.project_xyz(np.array([0.0]), np.array([0.0]), np.array([-0.2]))[1][0]  # the bottom back edge
+    assert np.abs(far_feet[front] - np.maximum(back, covered + 0.5)[front]).max() < 1.5
+    assert (far_feet[front] < feet[front] - 10.0).sum() > 5
 
 
 def test_a_stretched_shape_is_another_shape_standing_as_the_conventions_say():
@@ -69,11 +76,14 @@ def test_views_travel_packed_and_come_back(tmp_path):
     rng = np.random.default_rng(0)
     mask = np.zeros((R, R), np.float32)
     mask[30:90, 50:70] = 1.0
-    height = np.where(mask > 0, rng.uniform(0, 100, (R, R)), np.nan).astype(np.float32)
-    save(tmp_path / "v.npz", [{"mask": mask, "camera": (10.0, 150.0), "height": height}] * 2, [15.0, 20.0])
+    height = np.where(mask > 0, rng.uniform(20, 100, (R, R)), np.nan).astype(np.float32)
+    depth = rng.uniform(0, 20, (R, R)).astype(np.float32)
+    view = {"mask": mask, "camera": (10.0, 150.0), "height": height, "far": height - depth}
+    save(tmp_path / "v.npz", [view] * 2, [15.0, 20.0])
     back = load([tmp_path / "v.npz"])
     assert back["mask"].shape == (2, R, R) and np.array_equal(back["mask"][1], mask)
     assert np.abs(back["height"][0] - np.nan_to_num(height)).max() <= 0.25  # half rows, rounded
+    assert np.abs(back["depth"][0] - depth * mask).max() <= 0.25
     assert np.allclose(back["camera"][0], np.array([10.0, 150.0]) / R) and list(back["pitch"]) == [15.0, 20.0]
 
 
@@ -87,8 +97,8 @@ def test_a_set_of_one_source_holds_its_items_views_alone(tmp_path):
 
 
 def test_a_short_training_run_installs_into_a_model_folder(tmp_path, monkeypatch):
-    """A few steps on the CPU, then installed: the graph within 1e-4 of torch, model.json naming it, the engine
-    reading pixel heights through it."""
+    """A few steps on the CPU of a network reading the depth too, then installed: the graph within 1e-4 of torch,
+    model.json naming it, the engine reading both surfaces' pixel heights through it."""
     from training.onnx_graphs import session
     from training.surface_model import install, train
 
@@ -99,12 +109,24 @@ def test_a_short_training_run_installs_into_a_model_folder(tmp_path, monkeypatch
         top, left = rng.integers(10, 50, 2)
         mask[top : top + 60, left : left + 20] = 1.0
         rows = np.arange(R, dtype=np.float32)[:, None] + 0.5
-        views.append({"mask": mask, "camera": (20.0, 160.0), "height": np.where(mask > 0, top + 60 - rows, np.nan)})
+        height = np.where(mask > 0, top + 60 - rows, np.nan)
+        views.append({"mask": mask, "camera": (20.0, 160.0), "height": height, "far": height - 6.0})
     save(tmp_path / "data" / "train.npz", views, [10.0] * 4)
     save(tmp_path / "data" / "val.npz", views[:2], [10.0] * 2)
-    train(tmp_path / "data", [tmp_path / "data" / "train.npz"], tmp_path / "run", 0.02, 2, 1e-3, "cpu", 0, (4, 8, 8))
+    train(
+        tmp_path / "data",
+        [tmp_path / "data" / "train.npz"],
+        tmp_path / "run",
+        0.02,
+        2,
+        1e-3,
+        "cpu",
+        0,
+        (4, 8, 8),
+        depth=True,
+    )
     log = [json.loads(line) for line in (tmp_path / "run" / "log.jsonl").read_text().splitlines()]
-    assert log[-1]["step"] >= 1 and np.isfinite(log[-1]["val mae"])
+    assert log[-1]["step"] >= 1 and np.isfinite(log[-1]["val mae"]) and np.isfinite(log[-1]["val depth"])
     models = tmp_path / "models"
     shutil.copytree(ROOT / "ssn_engine" / "models", models)
     assert install(tmp_path / "run" / "last.pt", models) < 1e-4
@@ -123,8 +145,9 @@ def test_a_short_training_run_installs_into_a_model_folder(tmp_path, monkeypatch
     frame[0, 60:200, 100:140] = 1.0
     method = load_method("ssn").method
     assert isinstance(method, OnnxSSN)
-    heights = method.pixel_heights(frame, np.array([[40.0, 300.0]]))
-    assert heights is not None and heights.shape == (1, 256, 256) and np.isfinite(heights).all()
+    heights = method.pixel_heights(frame, np.array([[40.0, 300.0]]))  # the visible surface's, and the far one's
+    assert heights is not None and heights.shape == (1, 2, 256, 256) and np.isfinite(heights).all()
+    assert np.all(heights[0, 1] <= heights[0, 0] + 1e-3)
 
 
 def test_the_shipped_graph_is_fine_tuned_where_its_runs_are_gone(tmp_path):
@@ -151,7 +174,8 @@ def test_the_shipped_graph_is_fine_tuned_where_its_runs_are_gone(tmp_path):
     theirs = session(graph).run(None, {"mask": mask, "camera": camera})[0]
     assert np.abs(mine.clamp(0, 1).numpy() - theirs).max() < 1e-3
     rows = np.arange(R, dtype=np.float32)[:, None] + 0.5
-    views = [{"mask": mask[0, 0], "camera": (32.0, 150.0), "height": np.where(mask[0, 0] > 0, 110 - rows, np.nan)}]
+    height = np.where(mask[0, 0] > 0, 110 - rows, np.nan)
+    views = [{"mask": mask[0, 0], "camera": (32.0, 150.0), "height": height, "far": height}]
     save(tmp_path / "data" / "train.npz", views * 2, [10.0] * 2)
     save(tmp_path / "data" / "val.npz", views, [10.0])
     train(tmp_path / "data", [tmp_path / "data" / "train.npz"], tmp_path / "run", 0.01, 2, 1e-4, "cpu", 0, init=graph)
@@ -193,7 +217,8 @@ def test_a_run_cut_short_goes_on_where_it_stopped(tmp_path, monkeypatch):
     mask = np.zeros((R, R), np.float32)
     mask[30:90, 50:70] = 1.0
     rows = np.arange(R, dtype=np.float32)[:, None] + 0.5
-    views = [{"mask": mask, "camera": (20.0, 160.0), "height": np.where(mask > 0, 90 - rows, np.nan)}] * 2
+    height = np.where(mask > 0, 90 - rows, np.nan)
+    views = [{"mask": mask, "camera": (20.0, 160.0), "height": height, "far": height - 3.0}] * 2
     save(tmp_path / "data" / "train.npz", views, [10.0] * 2)
     save(tmp_path / "data" / "val.npz", views[:1], [10.0])
     args = (tmp_path / "data", [tmp_path / "data" / "train.npz"], tmp_path / "run")

@@ -1,14 +1,16 @@
-"""The surface model's data: each view's mask, camera input and the pixel height of the surface it shows.
+"""The surface model's data: each view's mask, camera input and the pixel heights of the surfaces it shows.
 
 A covered pixel's *pixel height* is how many rows below it the image of its visible surface point's foot lies:
 the point's ground projection straight below it, projected back into the frame (Sheng et al.'s pixel height, SSG
 / PixHt-Lab). With the camera it places each pixel's surface in 3D, which the outline alone does not tell: the
-hard-light tracer (:mod:`ssn_engine.hard_light`) starts each pixel's segment there.
+hard-light tracer (:mod:`ssn_engine.hard_light`) starts each pixel's segment there. The pixel height of the far
+surface (the last face the pixel's ray meets) says where that segment ends: how deep the object is there.
 
 Each view's camera is drawn exactly as ``training.make_dataset`` draws it; its mask is the dataset's coverage at
 N = 256 resampled to R; the surface is the mesh's nearest face at each pixel centre of R. ``python -m
 training.surface make`` writes a split's views to one npz file (:func:`make`): masks bit-packed at 0.5 coverage,
-heights as 8 bits (``HEIGHT_STEPS`` a frame) on the covered pixels only, so that a split travels small.
+heights and depths (the visible surface's pixel height less the far one's) as 8 bits (``HEIGHT_STEPS`` a frame)
+on the covered pixels only, so that a split travels small.
 """
 
 from __future__ import annotations
@@ -35,29 +37,37 @@ R = 128
 HEIGHT_STEPS = 2 * R  # an 8-bit pixel height counts half rows of R: up to 127.5 rows (a frame)
 
 
-def pixel_heights(vertices: np.ndarray, faces: np.ndarray, cam: Camera) -> np.ndarray:
-    """(n, n) the pixel height (rows of ``cam``'s frame) of the mesh's visible surface at each pixel centre of
-    ``cam``'s frame; nan where no face is."""
+def pixel_heights(vertices: np.ndarray, faces: np.ndarray, cam: Camera) -> tuple[np.ndarray, np.ndarray]:
+    """(n, n) each, the pixel heights (rows of ``cam``'s frame) at each pixel centre of ``cam``'s frame of the
+    mesh's visible surface and of its far surface (the last face the pixel's ray meets: where the object's depth
+    there ends); nan where no face is."""
     n = cam.n
-    front, _ = surface_depths(vertices, faces, cam, n, n, 1)
+    front, back = surface_depths(vertices, faces, cam, n, n, 1)
     yy, xx = np.nonzero(np.isfinite(front))
-    points = cam.centre + front[yy, xx, None] * cam.rays(xx + 0.5, yy + 0.5)
-    _, foot_row = cam.project_xyz(points[:, 0], np.zeros(len(points)), points[:, 2])
-    out = np.full((n, n), np.nan, np.float32)
-    out[yy, xx] = foot_row - (yy + 0.5)
-    return out
+    rays = cam.rays(xx + 0.5, yy + 0.5)
+    out = []
+    for depth in (front, back):
+        points = cam.centre + depth[yy, xx, None] * rays
+        _, foot_row = cam.project_xyz(points[:, 0], np.zeros(len(points)), points[:, 2])
+        heights = np.full((n, n), np.nan, np.float32)
+        heights[yy, xx] = foot_row - (yy + 0.5)
+        out.append(heights)
+    return out[0], out[1]
 
 
 def view_record(mesh: meshes.Mesh, topo: meshes.Topology, yaw: float, pitch: float, fov: float) -> dict:
-    """One view at R: its mask (coverage), camera input (horizon row, focal length) and pixel heights (rows)."""
+    """One view at R: its mask (coverage), camera input (horizon row, focal length), and the pixel heights (rows)
+    of its visible and far surfaces (:func:`pixel_heights`)."""
     v = np.ascontiguousarray(yawed(mesh.vertices, yaw))
     cam = view_camera(v, FRAME, fov, pitch)
     frame_mask = mask_coverage(v, mesh.faces, topo, cam, 4)
     small = Camera(R, cam.target_height, fov=fov, pitch=pitch, shift=cam.shift * R / FRAME)
+    near, far = pixel_heights(v, mesh.faces, small)
     return {
         "mask": resample_frames(frame_mask[None], R)[0],
         "camera": (small.horizon, float(small.focal)),
-        "height": pixel_heights(v, mesh.faces, small),
+        "height": near,
+        "far": far,
     }
 
 
@@ -100,38 +110,50 @@ def stretched(mesh: meshes.Mesh, rng: np.random.Generator, stretch: float) -> me
 
 def save(out: Path, views: list[dict], pitches: list[float]) -> None:
     """Write :func:`view_record` views and their pitches to ``out`` as :func:`make` does."""
-    masks, heights = [], []
+    masks, heights, depths = [], [], []
+
+    def steps(rows: np.ndarray) -> np.ndarray:
+        return np.clip(np.round(rows * HEIGHT_STEPS / R), 0, 255).astype(np.uint8)
+
     for view in views:
         solid = view["mask"] > 0.5
         masks.append(np.packbits(solid.ravel()))
-        h = np.nan_to_num(nearest_fill(view["height"], np.isfinite(view["height"])))[solid]
-        heights.append(np.clip(np.round(h * HEIGHT_STEPS / R), 0, 255).astype(np.uint8))
+        hit = np.isfinite(view["height"])
+        near = np.nan_to_num(nearest_fill(view["height"], hit))
+        far = np.nan_to_num(nearest_fill(view["far"], hit))
+        heights.append(steps(near[solid]))
+        depths.append(steps(np.maximum(near - far, 0.0)[solid]))
     out.parent.mkdir(parents=True, exist_ok=True)
     np.savez_compressed(
         out,
         masks=np.asarray(masks),
         heights=np.concatenate(heights),
+        depths=np.concatenate(depths),
         camera=np.asarray([v["camera"] for v in views], np.float32),
         pitch=np.asarray(pitches, np.float32),
     )
 
 
 def load(paths: list[Path]) -> dict[str, np.ndarray]:
-    """The views of several :func:`make` files: ``mask`` (n, R, R) float32 in {0, 1}, ``height`` (n, R, R) rows of
-    R (0 off the mask), ``camera`` (n, 2) in frames (horizon row / R, focal length / R), ``pitch``."""
-    masks, heights, cams, pitches = [], [], [], []
-    for p in paths:
-        f = np.load(p)
+    """The views of several :func:`make` files: ``mask`` (n, R, R) uint8 in {0, 1}, ``height`` (n, R, R) rows of R
+    (0 off the mask), ``depth`` (n, R, R) how many rows less the far surface's pixel height is (0 off the mask),
+    both float16 (the files' half rows, exactly: tens of thousands of views fit in memory), ``camera`` (n, 2) in
+    frames (horizon row / R, focal length / R), ``pitch``."""
+    files = [np.load(p) for p in paths]
+    for p, f in zip(paths, files, strict=True):
+        if "depths" not in f:
+            raise ValueError(f"{p} holds no far surfaces (made before they were recorded): make it again")
+    n = sum(len(f["camera"]) for f in files)
+    out = {key: np.zeros((n, R, R), dtype) for key, dtype in (("mask", np.uint8), ("height", np.float16))}
+    out["depth"] = np.zeros((n, R, R), np.float16)
+    i = 0
+    for f in files:
         m = np.unpackbits(f["masks"], axis=1)[:, : R * R].reshape(-1, R, R).astype(bool)
-        h = np.zeros(m.shape, np.float32)
-        h[m] = f["heights"].astype(np.float32) * R / HEIGHT_STEPS
-        masks.append(m.astype(np.float32))
-        heights.append(h)
-        cams.append(f["camera"] / R)
-        pitches.append(f["pitch"])
-    return {
-        "mask": np.concatenate(masks),
-        "height": np.concatenate(heights),
-        "camera": np.concatenate(cams),
-        "pitch": np.concatenate(pitches),
-    }
+        part = slice(i, i + len(m))
+        out["mask"][part] = m
+        for key, name in (("heights", "height"), ("depths", "depth")):
+            out[name][part][m] = f[key].astype(np.float32) * R / HEIGHT_STEPS
+        i += len(m)
+    out["camera"] = np.concatenate([f["camera"] / R for f in files])
+    out["pitch"] = np.concatenate([f["pitch"] for f in files])
+    return out

@@ -29,6 +29,7 @@ class UNetConfig:
     resolution: int = 128
     card: bool = False  # SR only: geometry-guided, takes the geometric card's shadow (SRNet)
     camera: bool = False  # AOP only: takes the camera input as ground-geometry channels (AOPNet)
+    outputs: int = 1  # output channels (the surface model's: the visible surface's pixel height and the depth)
 
     @property
     def depth(self) -> int:
@@ -47,6 +48,7 @@ class UNetConfig:
             resolution=d["resolution"],
             card=d.get("card", False),
             camera=d.get("camera", False),
+            outputs=d.get("outputs", 1),
         )
 
 
@@ -100,7 +102,7 @@ class UNet(nn.Module):
         )
         self.inject = ConvNormReLU(w[-1] + bottleneck_extra, w[-1], g) if bottleneck_extra else None
         self.decoder = nn.ModuleList([Up(w[i], w[i - 1], g) for i in range(len(w) - 1, 0, -1)])
-        self.head = nn.Conv2d(w[0], 1, 1)
+        self.head = nn.Conv2d(w[0], config.outputs, 1)
 
     def forward(self, x: torch.Tensor, code: torch.Tensor | None = None) -> torch.Tensor:
         skips = []
