@@ -200,12 +200,17 @@ class CardTracer:
     foot : int or None
         The row of ``alpha`` (one past it) on which the card stands, at or below its lowest row (default: that).
     thickness : np.ndarray or None
-        (h, w) how deep (pixels) each pixel reaches behind its surface (:func:`depth_map`); None: a flat card.
+        (h, w) how deep (pixels) each pixel reaches behind its surface (:func:`depth_map`); None: to its far
+        surface where ``far_feet`` are given, else nothing (a flat card).
     feet : np.ndarray or None
         (h, w) the row of ``alpha`` (continuous) of each pixel's foot: the image of the ground point straight
         below the surface the pixel shows (:func:`foot_rows`). Where it lies above the card's foot, the pixel's
         surface lies behind the card by the ground's distance between the two (:meth:`_surface_depth`); None:
         every surface on the card.
+    far_feet : np.ndarray or None
+        (h, w) as ``feet``, of each pixel's far surface (where the object's depth there ends, read by the surface
+        model): with ``feet``, how deep each pixel reaches (:attr:`deepest_read`: the deepest, in pixels), which
+        it does where ``thickness`` is None.
     lift : int
         How many of the rows down to ``foot`` are the artist's lift (the cutout floats): the pad above and beside
         the cutout grows with it in steps.
@@ -223,6 +228,7 @@ class CardTracer:
         foot: int | None = None,
         thickness: np.ndarray | None = None,
         feet: np.ndarray | None = None,
+        far_feet: np.ndarray | None = None,
         lift: int = 0,
         blurred: Blurred | None = None,
     ) -> None:
@@ -241,14 +247,19 @@ class CardTracer:
         # a floating object's lowest point: the world height of its card's foot row before the lift
         self._floor = float(self._frame_row_geometry(np.array([base - lift * s]))[0][0]) if lift > 0 else 0.0
         lowest, width = int(rows[-1]) + 1, alpha.shape[1]
-        thick = (
-            np.zeros((lowest, width), np.float32) if thickness is None else np.asarray(thickness[:lowest], np.float32)
-        )
         near = (
             np.zeros((lowest, width), np.float32)
             if feet is None
             else self._surface_depth(feet, framing, y0, base)[:lowest]
         )
+        read = None
+        if feet is not None and far_feet is not None:
+            read = np.maximum(self._surface_depth(far_feet, framing, y0, base)[:lowest] - near, 0.0)
+        self.deepest_read = 0.0 if read is None else float(read.max())
+        if thickness is not None:
+            thick = np.asarray(thickness[:lowest], np.float32)
+        else:
+            thick = np.zeros((lowest, width), np.float32) if read is None else read
         # a surface in front of its card (a ball's, a lowered head's) lies no farther in front than its own depth:
         # every part reaches back to the card's plane (the surface model's pixel heights are noisy)
         near = np.maximum(near, -thick)
@@ -1071,42 +1082,46 @@ class ContactReading:
     """What a cutout's tracer reads from it once, whatever the artist's lift and thickness: the cutout's alpha,
     its contact line's bands (:func:`contact_bands`: columns and foot row each), its depth (:func:`depth_map`)
     and the thickness that reads as, and, with the frame's pixel heights, each pixel's foot row
-    (:func:`foot_rows`)."""
+    (:func:`foot_rows`) and, where the surface model reads the depth, its far surface's."""
 
     alpha: np.ndarray
     bands: list[tuple[int, int, int]]
     depth: np.ndarray
     thickness_read: float
     feet: np.ndarray | None
+    far_feet: np.ndarray | None = None
 
     @classmethod
     def of(
         cls, alpha: np.ndarray, framing: Framing, camera: tuple[float, float] | None, heights: np.ndarray | None = None
     ) -> ContactReading:
-        """The reading of ``alpha`` (the cutout's crop at ``framing.bbox``) with ``camera``; ``heights`` (N, N),
-        optional: the frame's pixel heights."""
+        """The reading of ``alpha`` (the cutout's crop at ``framing.bbox``) with ``camera``; ``heights`` (C, N, N),
+        optional: the frame's pixel heights of the visible surface, and (C = 2) of the far surface."""
         alpha = np.clip(np.asarray(alpha, np.float32), 0.0, 1.0)
         depth = depth_map(alpha)
+        feet = [] if heights is None else [foot_rows(alpha.shape, framing, h) for h in heights]
         return cls(
             alpha,
             contact_bands(alpha, footprint_rise(alpha, framing, camera)),
             depth,
             read_thickness(alpha, depth),
-            None if heights is None else foot_rows(alpha.shape, framing, heights),
+            feet[0] if feet else None,
+            feet[1] if len(feet) > 1 else None,
         )
 
 
 class ContactTracer:
     """The cutout as cards standing on its contact line: one :class:`CardTracer` per band of
-    :func:`contact_bands`, cross-faded where two meet, their shadows added; ``heights`` (N, N), optional: the
-    frame's pixel heights (:func:`foot_rows`), which place each pixel's surface behind its card.
+    :func:`contact_bands`, cross-faded where two meet, their shadows added; ``heights`` (C, N, N), optional: the
+    frame's pixel heights (:func:`foot_rows`), which place each pixel's surface behind its card, and (C = 2) its
+    far surface's, where its depth ends (else :func:`depth_map`'s round cross-section).
 
     The artist's geometry (conventions, "Lift and thickness"): ``lift`` (pixels of ``alpha``) lowers every
     card's foot and every pixel's foot that many rows, so the object floats above the ground that far (its
     cards stand nearer, on the ground beneath it); ``thickness``, where given, scales the depth each pixel
     reaches behind its surface so that the object's depth over its width is that (:func:`read_thickness` is the
-    reading it replaces). :meth:`of_reading` makes the cards of a reading already made (a new lift or thickness:
-    the cutout is not read again)."""
+    reading it replaces; the round cross-section scaled, in place of a far surface read). :meth:`of_reading`
+    makes the cards of a reading already made (a new lift or thickness: the cutout is not read again)."""
 
     def __init__(
         self,
@@ -1151,9 +1166,11 @@ class ContactTracer:
         self.cards: list[CardTracer] = []
         self.blurred_copies: dict[int, Blurred] = {}  # per band: its card's (:attr:`CardTracer.blurred_copies`)
         width = alpha.shape[1]
-        self.thickness_read = reading.thickness_read
-        if thickness is not None:
-            depth = depth * np.float32(thickness / self.thickness_read) if self.thickness_read > 0 else depth * 0
+        self.thickness_read = reading.thickness_read  # the outline's; below, the far surface's where one is read
+        far_feet = reading.far_feet
+        if thickness is not None:  # the artist's replaces the reading: the round cross-section scaled
+            outline = reading.thickness_read
+            depth = depth * np.float32(thickness / outline) if outline > 0 else depth * 0
         rows = int(round(lift))
         for i, (c0, c1, foot) in enumerate(bands):
             foot += rows
@@ -1176,8 +1193,9 @@ class ContactTracer:
                 camera,
                 origin=(x0 + a, y0),
                 foot=foot,
-                thickness=depth[:, a:b],
+                thickness=depth[:, a:b] if thickness is not None or far_feet is None else None,
                 feet=None if reading.feet is None else reading.feet[:, a:b] + np.float32(rows),
+                far_feet=None if far_feet is None else far_feet[:, a:b] + np.float32(rows),
                 lift=rows,
                 blurred=blurred.get(i),
             )
@@ -1185,6 +1203,9 @@ class ContactTracer:
                 self.cards.append(card)
                 self.blurred_copies[i] = card.blurred_copies
         self.empty = not self.cards
+        solid = np.flatnonzero((alpha > SOLID).any(axis=0))
+        if far_feet is not None and self.cards and solid.size:  # the reading's own depth over the width
+            self.thickness_read = max(c.deepest_read for c in self.cards) / float(solid[-1] + 1 - solid[0])
 
     def shadow(
         self, u: float, v: float, angle: float, framing: Framing, clip: bool = True

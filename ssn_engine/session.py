@@ -203,7 +203,8 @@ class ShadowSession:
 
     @property
     def thickness_read(self) -> float:
-        """The thickness the outline reads as (:func:`ssn_engine.hard_light.read_thickness`)."""
+        """The thickness the outline reads as: the surface model's deepest reading over the width, for a model that
+        reads the object's depth, else :func:`ssn_engine.hard_light.read_thickness`'s round cross-section."""
         return self.tracer.thickness_read
 
     @property

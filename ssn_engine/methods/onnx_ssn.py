@@ -14,9 +14,11 @@ A model folder holds ``model.json`` (:class:`ssn_engine.model_config.ModelConfig
   [b, 2], the camera input read from the mask (:mod:`ssn_engine.methods.camera_estimate`), used when a call
   gives none
 - surface.onnx (optional, named by ``surface``): "mask" [b, 1, R, R] (0 or 1: coverage above 0.5), "camera"
-  [b, 2] (as aop_camera's) -> "height" [b, 1, R, R], each covered pixel's pixel height in frames (how far below
+  [b, 2] (as aop_camera's) -> "height" [b, C, R, R], each covered pixel's pixel height in frames (how far below
   it, / R, the image of the ground straight below the surface it shows lies; :meth:`OnnxSSN.pixel_heights`),
-  which places each pixel's surface for the hard-light tracer (:mod:`ssn_engine.hard_light`)
+  which places each pixel's surface for the hard-light tracer (:mod:`ssn_engine.hard_light`); with C = 2 also
+  the object's depth there (the far surface's pixel height is the visible one's less it), where the pixel's
+  segment ends
 The ELM goes in normalised by :func:`ssn_engine.hemisphere.network_elm`.
 ``model.json`` may set ``output_floor``: shadow values below it are the network's
 residual noise and are removed by :func:`apply_floor` (chosen on the validation split);
@@ -214,21 +216,26 @@ class OnnxSSN:
             raise ModelError(f"sr output has shape {s.shape}, expected {mask.shape}")
 
     def pixel_heights(self, masks: np.ndarray, cameras: np.ndarray | None) -> np.ndarray | None:
-        """Each frame pixel's pixel height (b, N, N), frame rows, read by the surface model from the masks and
-        the camera inputs (the given ones, else the estimator's reading); off the mask, the height that puts
-        its foot on its nearest covered pixel's (a pixel the cutout's blur or fringe reaches stands on the
-        surface beside it, not that many rows higher). None for a model without a surface model, or with no
-        camera to read it with."""
+        """Each frame pixel's pixel heights (b, C, N, N), frame rows, read by the surface model from the masks and
+        the camera inputs (the given ones, else the estimator's reading): of the surface it shows, and for a model
+        that reads the object's depth (C = 2) of its far surface (where the depth there ends). Off the mask, the
+        heights that put the feet on the nearest covered pixel's (a pixel the cutout's blur or fringe reaches
+        stands on the surface beside it, not that many rows higher). None for a model without a surface model, or
+        with no camera to read it with."""
         cameras = self.cameras_for(masks, cameras)
         if self._surface is None or cameras is None:
             return None
         m = (resample_frames(masks, self.model_resolution) > 0.5).astype(np.float32)
         frames = (np.asarray(cameras, np.float64) / FRAME).astype(np.float32)
-        heights = _run(self._surface, "height", {"mask": m[:, None], "camera": frames})[:, 0]
-        rows = ((np.arange(heights.shape[1], dtype=np.float32) + 0.5) / heights.shape[1])[:, None]
-        for b in range(len(heights)):
-            heights[b] = nearest_fill(heights[b] + rows, m[b] > 0) - rows  # the feet filled, not the heights
-        return resample_frames(heights, FRAME) * FRAME
+        heights = _run(self._surface, "height", {"mask": m[:, None], "camera": frames})
+        if heights.shape[1] > 1:  # the depth: the far surface's pixel height is the visible one's less it
+            heights = np.concatenate([heights[:, :1], heights[:, :1] - heights[:, 1:2]], axis=1)
+        b, c, r = heights.shape[:3]
+        rows = ((np.arange(r, dtype=np.float32) + 0.5) / r)[:, None]
+        for i in range(b):
+            for k in range(c):  # the feet filled, not the heights
+                heights[i, k] = nearest_fill(heights[i, k] + rows, m[i] > 0) - rows
+        return resample_frames(heights.reshape(b * c, r, r), FRAME).reshape(b, c, FRAME, FRAME) * FRAME
 
     def predict_ao(self, masks: np.ndarray, cameras: np.ndarray | None = None) -> np.ndarray:
         """The AO maps (from the camera-taking AOP where the call gives the camera input and the model has one); a

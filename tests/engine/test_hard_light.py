@@ -355,6 +355,38 @@ def test_a_surface_read_in_front_of_the_card_casts_from_there_within_its_own_dep
     assert np.abs(thin - flat).max() < 2 / 255
 
 
+def test_a_far_surface_read_ends_each_pixel_s_depth_there_unless_the_artist_gives_the_thickness(post):
+    """Pixel heights of two surfaces (a surface model reading the object's depth): the post's visible surface on
+    its lowest row, its far surface 40 rows farther back. Each pixel reaches from the one to the other: under a
+    light from behind the camera the shadow starts at the post's foot and ends where the top of a post standing
+    40 rows back casts it. A thickness the artist gives replaces the reading (the round cross-section, scaled); the
+    thickness read, shown beside it, is the reading's."""
+    _, framing = frame_alpha(post, 256)
+    x0, y0, x1, y1 = framing.bbox
+    crop = post[y0:y1, x0:x1].astype(np.float32) / 255
+    u, v = 0.1, 0.6  # from behind the camera and its left: the shadow falls away, up the canvas
+    rows = np.arange(framing.n, dtype=np.float32) + 0.5
+    near = np.repeat((framing.to_frame(0.0, FOOT)[1] - rows)[:, None], framing.n, axis=1)
+    heights = np.stack([near, near - 40 * framing.scale])  # frame rows
+    deep = ContactTracer(crop, framing, None, heights)
+    s = _canvas((deep, framing), u, v, 0.53)
+    centre = 0.5 * (LEFT + RIGHT)
+    column = slice(int(centre) - 2, int(centre) + 3)
+    assert np.flatnonzero((s[:, column] > 0.5).any(axis=1)).max() + 1 == FOOT  # from the visible surface
+    tip = _cast_at(deep.cards[0], framing, FOOT - 40, FOOT - 300 + 0.5, u, v)
+    yy, xx = np.nonzero(s > 0.5)
+    measured = np.array([xx[yy <= yy.min() + 2].mean(), yy.min() + 0.5])
+    length = np.hypot(*(tip - (centre, FOOT)))
+    assert length > 100
+    assert np.hypot(*(measured - tip)) < 0.03 * length, (measured, tip)  # to the far one
+    given = ContactTracer(crop, framing, None, heights, thickness=0.5)
+    plain = ContactTracer(crop, framing, None, heights[:1], thickness=0.5)
+    assert np.abs(_canvas((given, framing), u, v, 0.53) - _canvas((plain, framing), u, v, 0.53)).max() < 2 / 255
+    # the thickness read is the reading's (its deepest segment over the post's width), set or not
+    assert plain.thickness_read == pytest.approx(1.0, abs=0.1)  # the round cross-section: as deep as wide
+    assert given.thickness_read == deep.thickness_read > 2.0
+
+
 def test_each_span_of_depth_is_covered_by_its_copies_from_its_start_to_its_end():
     """A pixel's span of depth is drawn as one or two copies of a segment a power of two long: together they
     start at its start and end at its end, with no gap (a span shorter than a unit: one unit from its start)."""

@@ -382,7 +382,7 @@ def test_a_mirrored_cutout_is_read_as_the_mirror_image_of_its_surface():
     # (off the mask, and where the enlarging reaches off it, a pixel stands on its nearest covered pixel's foot, ties
     # broken one way)
     inside = ndimage.binary_erosion(mask[0] > 0, iterations=4)
-    assert np.abs(mirrored - heights[..., ::-1])[0][inside].max() < 0.5  # rows (a lone reading: 21 off here)
+    assert np.abs(mirrored - heights[..., ::-1])[0, 0][inside].max() < 0.5  # rows (a lone reading: 21 off here)
 
 
 def test_the_surface_model_reads_a_post_as_standing_on_its_lowest_row(tmp_path, monkeypatch):
@@ -395,12 +395,12 @@ def test_the_surface_model_reads_a_post_as_standing_on_its_lowest_row(tmp_path, 
     mask[0, 60:220, 118:138] = 1.0
     camera = np.array([[40.0, 300.0]])
     heights = method.pixel_heights(mask, camera)
-    assert heights is not None and heights.shape == (1, 256, 256)
+    assert heights is not None and heights.shape == (1, 1, 256, 256)  # the visible surface's alone
     rows = np.arange(256) + 0.5
-    feet = heights[0, 60:220, 118:138] + rows[60:220, None]
+    feet = heights[0, 0, 60:220, 118:138] + rows[60:220, None]
     assert np.median(np.abs(feet - 220.0)) < 8.0  # within 5 % of the post's height
     # off the mask, a pixel stands on its nearest covered pixel's foot: the corner on the top's
-    assert abs((heights[0, 10, 10] + 10.5) - (heights[0, 60, 118] + 60.5)) < 1.0
+    assert abs((heights[0, 0, 10, 10] + 10.5) - (heights[0, 0, 60, 118] + 60.5)) < 1.0
     monkeypatch.setenv("SSN_SHADOW_MODEL_DIR", str(make_model_dir(tmp_path / "m")))
     plain = load_method("ssn").method
     assert isinstance(plain, OnnxSSN) and plain.pixel_heights(mask, camera) is None

@@ -437,8 +437,9 @@ def test_the_oracle_casts_the_true_solid_as_the_renderer_does():
 
 def test_the_product_given_the_true_pixel_heights_casts_the_renderer_s_shadow():
     """The oracle's true pixel heights (each frame pixel's visible surface's foot less its row) of a box on the
-    ground: its lowest pixels stand on their own rows, its top's feet lie below them; the product's tracer given
-    them casts the renderer's own shadow under a 0.53-degree sun."""
+    ground: its lowest pixels stand on their own rows, its top's feet lie below them, its far surface's feet
+    behind them; the product's tracer given them (with or without the far surface) casts the renderer's own
+    shadow under a 0.53-degree sun."""
     mesh = _box_on_ground()
     v = np.ascontiguousarray(meshes.yawed(mesh.vertices, 20.0))
     canvas = render.canvas_camera(v, 320, 240, 15.0)
@@ -447,15 +448,20 @@ def test_the_product_given_the_true_pixel_heights_casts_the_renderer_s_shadow():
     mask = render.canvas_mask(v, mesh.faces, meshes.topology(mesh), canvas)
     alpha = np.round(mask * 255).astype(np.uint8)
     session = ShadowSession(alpha, load_method("ssn").method, canvas.horizon, canvas.fov)
-    heights = oracle.true_heights(v, mesh.faces, canvas.camera, (240, 320), session)
+    heights, far = oracle.true_heights(v, mesh.faces, canvas.camera, (240, 320), session)
     covered = session.mask > 0.5
     rows = np.flatnonzero(covered.any(axis=1))
     lowest = covered[rows[-1] - 1]
     assert np.abs(heights[rows[-1] - 1][lowest]).max() < 2.0  # frame rows: on the ground
     assert heights[rows[0] + 1][covered[rows[0] + 1]].min() > 5.0  # the top stands above its feet
-    given = ShadowSession(alpha, cast(Any, oracle.GivenHeights(session.method, heights)), canvas.horizon, canvas.fov)
+    assert np.all(far[covered] <= heights[covered] + 0.5)  # its back's feet lie behind its front's, higher up
+    assert (heights - far)[covered].max() > 5.0
     u, v_ = (150.0 + 180.0) / 360.0, 1.0 - 35.0 / 90.0
-    shadow = oracle.on_canvas(CanvasShadow(*given.tracer.shadow(u, v_, 0.53, given.framing)), (240, 320))
     ground = metrics.ground_region(mask, canvas.horizon)
     assert truth[ground].sum() > 500
-    assert metrics.region_zncc(shadow, truth, ground) > 0.9
+    for given_heights in (heights[None], np.stack([heights, far])):  # as deep as the outline says; as the box is
+        given = ShadowSession(
+            alpha, cast(Any, oracle.GivenHeights(session.method, given_heights)), canvas.horizon, canvas.fov
+        )
+        shadow = oracle.on_canvas(CanvasShadow(*given.tracer.shadow(u, v_, 0.53, given.framing)), (240, 320))
+        assert metrics.region_zncc(shadow, truth, ground) > 0.9

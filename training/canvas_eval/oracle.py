@@ -23,7 +23,10 @@ as the product traces a 0.53-degree sun (:class:`ssn_engine.hard_light.ContactTr
 - ``traced, model's heights``: the traced part alone, at the surface model's reading (what ships);
 - ``traced, true heights``: the traced part alone, at the mesh's visible surface's pixel heights;
 - ``product, true heights``: the whole shadow (the traced part with the network's, as the CLI gives it) at
-  the true pixel heights: what a perfect surface model would give.
+  the true pixel heights: what a perfect surface model reading the visible surface would give;
+- ``traced, true heights and depths`` and ``product, true heights and depths``: the same, each pixel's segment
+  ending at the pixel height of its far surface (the last face its ray meets), as a perfect surface model
+  reading the object's depth as well would place it.
 
 Each splatted variant is a hard shadow (no penumbra: compare it with the 0.53-degree truths), splatted from
 ``SUPERSAMPLE`` x ``SUPERSAMPLE`` rays a pixel and ``SAMPLES`` points along each, the holes between splats
@@ -64,7 +67,13 @@ VARIANTS = (
     "smooth surface, round depth",
     "column's surface, round depth",
 )
-TRACED = ("traced, model's heights", "traced, true heights", "product, true heights")  # the product's tracer
+TRACED = (  # the product's tracer
+    "traced, model's heights",
+    "traced, true heights",
+    "product, true heights",
+    "traced, true heights and depths",
+    "product, true heights and depths",
+)
 FINE_METRICS = ("bandpass_zncc", "gradient_energy")  # scored beside ZNCC: "<variant>, <metric>"
 
 
@@ -204,21 +213,26 @@ def hard_shadows(group: cases.Group, alpha: np.ndarray, w: np.ndarray, ss: int =
 def true_heights(
     vertices: np.ndarray, faces: np.ndarray, cam: Camera, size: tuple[int, int], session: ShadowSession
 ) -> np.ndarray:
-    """The pixel heights (N, N) on ``session``'s frame of the mesh seen by ``cam`` on a canvas of ``size``
+    """The pixel heights (2, N, N) on ``session``'s frame of the mesh seen by ``cam`` on a canvas of ``size``
     (height, width): at each frame pixel its visible surface's foot (the image of the ground straight below
-    it) less its own row, frame rows (off the mesh, standing on its nearest covered pixel's foot)."""
+    it) less its own row, and its far surface's (the last face its ray meets), frame rows (off the mesh,
+    standing on its nearest covered pixel's feet)."""
     height, width = size
-    front, _ = surface_depths(vertices, faces, cam, width, height, 1)
+    surfaces = surface_depths(vertices, faces, cam, width, height, 1)
     n, framing = session.mask.shape[0], session.framing
     fy, fx = np.mgrid[0:n, 0:n] + 0.5
     cx, cy = (fx - framing.offset_x) / framing.scale, (fy - framing.offset_y) / framing.scale  # canvas points
-    t = front[np.clip(cy.astype(int), 0, height - 1), np.clip(cx.astype(int), 0, width - 1)]
-    hit = np.isfinite(t) & (cx >= 0) & (cy >= 0) & (cx < width) & (cy < height)
-    points = cam.centre + t[hit][:, None] * cam.rays(cx[hit], cy[hit])
-    _, foot = cam.project_xyz(points[:, 0], np.zeros(len(points)), points[:, 2])  # canvas rows
-    feet = np.zeros((n, n), np.float32)
-    feet[hit] = foot * framing.scale + framing.offset_y  # frame rows
-    return nearest_fill(feet, hit) - fy
+    at = np.clip(cy.astype(int), 0, height - 1), np.clip(cx.astype(int), 0, width - 1)
+    hit = np.isfinite(surfaces[0][at]) & (cx >= 0) & (cy >= 0) & (cx < width) & (cy < height)
+    rays = cam.rays(cx[hit], cy[hit])
+    out = np.zeros((2, n, n), np.float32)
+    for k, depth in enumerate(surfaces):
+        points = cam.centre + depth[at][hit][:, None] * rays
+        _, foot = cam.project_xyz(points[:, 0], np.zeros(len(points)), points[:, 2])  # canvas rows
+        feet = np.zeros((n, n), np.float32)
+        feet[hit] = foot * framing.scale + framing.offset_y  # frame rows
+        out[k] = nearest_fill(feet, hit) - fy
+    return out
 
 
 def traced_shadows(
@@ -231,18 +245,18 @@ def traced_shadows(
     u, v = light.lights[0].u, light.lights[0].v
     vertices, mesh, _, canvas = render_set.group_scene(group)
     heights = true_heights(vertices, mesh.faces, canvas.camera, (group.height, group.width), session)
-    given = typing.cast(ShadowMethod, GivenHeights(method, heights))
-    standing = ShadowSession(cutout, given, group.horizon, group.fov)  # on the true surface
-    shown = {
-        TRACED[0]: CanvasShadow(*session.tracer.shadow(u, v, angle, session.framing)),
-        TRACED[1]: CanvasShadow(*standing.tracer.shadow(u, v, angle, standing.framing)),
-        TRACED[2]: standing.render(light),
-    }
+    shown = {TRACED[0]: CanvasShadow(*session.tracer.shadow(u, v, angle, session.framing))}
+    for given, (traced, product) in ((heights[:1], TRACED[1:3]), (heights, TRACED[3:5])):
+        method_given = typing.cast(ShadowMethod, GivenHeights(method, given))
+        standing = ShadowSession(cutout, method_given, group.horizon, group.fov)  # on the true surface
+        shown[traced] = CanvasShadow(*standing.tracer.shadow(u, v, angle, standing.framing))
+        shown[product] = standing.render(light)
     return {k: on_canvas(v, (group.height, group.width)) for k, v in shown.items()}
 
 
 class GivenHeights:
-    """``method``, reading ``heights`` (N, N) as every mask's pixel heights."""
+    """``method``, reading ``heights`` (C, N, N) as every mask's pixel heights (of the visible surface, and of
+    the far surface where C = 2)."""
 
     def __init__(self, method: ShadowMethod, heights: np.ndarray) -> None:
         self._method, self._heights = method, heights
@@ -269,6 +283,8 @@ SHORT = {  # the sheet's captions
     TRACED[0]: "traced, model",
     TRACED[1]: "traced, true heights",
     TRACED[2]: "product, true heights",
+    TRACED[3]: "traced, true depths",
+    TRACED[4]: "product, true depths",
 }
 
 
