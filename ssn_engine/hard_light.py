@@ -1203,8 +1203,8 @@ class ContactTracer:
                 self.cards.append(card)
                 self.blurred_copies[i] = card.blurred_copies
         self.empty = not self.cards
-        solid = np.flatnonzero((alpha > SOLID).any(axis=0))
-        if far_feet is not None and self.cards and solid.size:  # the reading's own depth over the width
+        solid = np.flatnonzero((alpha > SOLID).any(axis=0)) if far_feet is not None and self.cards else []
+        if len(solid):  # the far surface read: the reading's own depth over the width
             self.thickness_read = max(c.deepest_read for c in self.cards) / float(solid[-1] + 1 - solid[0])
 
     def shadow(
