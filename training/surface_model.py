@@ -32,7 +32,7 @@ from .onnx_graphs import export_graph, half_weights, session
 WIDTHS = (12, 24, 48, 96, 160, 256)
 VAL_EVERY = 500
 GRAD_WEIGHT = 1.0
-DEPTH_START = 0.02  # frames: a new depth channel's first reading (the training sets' mean depth, 2.5 rows of R)
+DEPTH_START = 0.02  # frames: a new depth channel's first reading, 2.5 rows of R (most pixels' depths are a few rows)
 GROUPS = 4  # the U-Net's GroupNorm groups
 CARD_SECTION = "## Surface model"
 SCORES_MARK = "; validation mean absolute error"  # in an installed record: where its stages end and its scores begin
@@ -59,8 +59,8 @@ def with_depth(net: AOPNet) -> AOPNet:
 
 
 def loss_terms(pred: torch.Tensor, target: torch.Tensor, mask: torch.Tensor) -> tuple[torch.Tensor, torch.Tensor]:
-    """Mean L1 of the height over the covered pixels, and of its differences to the right and below over pairs of
-    covered pixels."""
+    """Mean L1 of the height (and the depth) over the covered pixels, and of its differences to the right and below
+    over pairs of covered pixels, each summed over the channels."""
     n = mask.sum().clamp(min=1.0)
     l1 = ((pred - target).abs() * mask).sum() / n
     grad = pred.new_zeros(())
