@@ -1160,7 +1160,8 @@ class ContactTracer:
         thickness: float | None,
         blurred: dict[int, Blurred] | None = None,
     ) -> None:
-        alpha, bands, depth = reading.alpha, reading.bands, reading.depth
+        alpha, bands = reading.alpha, reading.bands
+        depth: np.ndarray | None = reading.depth
         blurred = blurred or {}
         x0, y0 = framing.bbox[:2]
         self.cards: list[CardTracer] = []
@@ -1171,6 +1172,8 @@ class ContactTracer:
         if thickness is not None:  # the artist's replaces the reading: the round cross-section scaled
             outline = reading.thickness_read
             depth = depth * np.float32(thickness / outline) if outline > 0 else depth * 0
+        elif far_feet is not None:  # each pixel as deep as its far surface
+            depth = None
         rows = int(round(lift))
         for i, (c0, c1, foot) in enumerate(bands):
             foot += rows
@@ -1193,7 +1196,7 @@ class ContactTracer:
                 camera,
                 origin=(x0 + a, y0),
                 foot=foot,
-                thickness=depth[:, a:b] if thickness is not None or far_feet is None else None,
+                thickness=None if depth is None else depth[:, a:b],
                 feet=None if reading.feet is None else reading.feet[:, a:b] + np.float32(rows),
                 far_feet=None if far_feet is None else far_feet[:, a:b] + np.float32(rows),
                 lift=rows,
@@ -1203,9 +1206,8 @@ class ContactTracer:
                 self.cards.append(card)
                 self.blurred_copies[i] = card.blurred_copies
         self.empty = not self.cards
-        solid = np.flatnonzero((alpha > SOLID).any(axis=0)) if far_feet is not None and self.cards else []
-        if len(solid):  # the far surface read: the reading's own depth over the width
-            self.thickness_read = max(c.deepest_read for c in self.cards) / float(solid[-1] + 1 - solid[0])
+        if far_feet is not None and self.cards:  # the far surface read: its deepest segment over the width
+            self.thickness_read = read_thickness(alpha, np.asarray(max(c.deepest_read for c in self.cards)))
 
     def shadow(
         self, u: float, v: float, angle: float, framing: Framing, clip: bool = True

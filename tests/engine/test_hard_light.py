@@ -70,6 +70,13 @@ def _cast_at(card: CardTracer, framing: Framing, foot: float, row: float, u: flo
     return np.array(framing.to_canvas(*[float(c[0]) for c in cam.project_xyz(*[np.array([g]) for g in ground])]))
 
 
+def _far_end(s: np.ndarray) -> np.ndarray:
+    """Where (canvas x, y) a shadow falling away up the canvas ends: the middle of its top rows (s > 0.5), the
+    shadow of the post's top edge."""
+    yy, xx = np.nonzero(s > 0.5)
+    return np.array([xx[yy <= yy.min() + 2].mean(), yy.min() + 0.5])
+
+
 def _edge_width(row: np.ndarray) -> float:
     """Pixels over which a row's profile across the shadow rises from 10 % to 90 % of its peak, on its left
     edge (the mean over both edges)."""
@@ -318,9 +325,7 @@ def test_a_surface_read_behind_the_card_casts_from_where_it_stands(post, back):
     # where the top's shadow lies: the ground below the foot's row, the top pixel's ray at its distance
     centre = 0.5 * (LEFT + RIGHT)
     tip = _cast_at(card, framing, FOOT - back, FOOT - 300 + 0.5, u, v)
-    yy, xx = np.nonzero(s > 0.5)
-    end = yy <= yy.min() + 2  # the far end, up the canvas: the shadow of the post's top edge
-    measured = np.array([xx[end].mean(), yy.min() + 0.5])
+    measured = _far_end(s)
     length = np.hypot(*(tip - (centre, FOOT - back)))
     assert length > 100
     assert np.hypot(*(measured - tip)) < 0.03 * length, (measured, tip)
@@ -374,8 +379,7 @@ def test_a_far_surface_read_ends_each_pixel_s_depth_there_unless_the_artist_give
     column = slice(int(centre) - 2, int(centre) + 3)
     assert np.flatnonzero((s[:, column] > 0.5).any(axis=1)).max() + 1 == FOOT  # from the visible surface
     tip = _cast_at(deep.cards[0], framing, FOOT - 40, FOOT - 300 + 0.5, u, v)
-    yy, xx = np.nonzero(s > 0.5)
-    measured = np.array([xx[yy <= yy.min() + 2].mean(), yy.min() + 0.5])
+    measured = _far_end(s)
     length = np.hypot(*(tip - (centre, FOOT)))
     assert length > 100
     assert np.hypot(*(measured - tip)) < 0.03 * length, (measured, tip)  # to the far one

@@ -140,6 +140,13 @@ def surface_depths(vertices: np.ndarray, faces: np.ndarray, cam: Camera, width: 
     return front, back
 
 
+def foot_image_rows(cam: Camera, rays: np.ndarray, depth: np.ndarray) -> np.ndarray:
+    """The image rows on ``cam`` of the feet (the ground points straight below) of the points at camera depth
+    ``depth`` (n,) along ``rays`` (n, 3)."""
+    points = cam.centre + depth[:, None] * rays
+    return cam.project_xyz(points[:, 0], np.zeros(len(points)), points[:, 2])[1]
+
+
 def cast(
     cam: Camera,
     cols: np.ndarray,
@@ -227,10 +234,8 @@ def true_heights(
     rays = cam.rays(cx[hit], cy[hit])
     out = np.zeros((2, n, n), np.float32)
     for k, depth in enumerate(surfaces):
-        points = cam.centre + depth[at][hit][:, None] * rays
-        _, foot = cam.project_xyz(points[:, 0], np.zeros(len(points)), points[:, 2])  # canvas rows
         feet = np.zeros((n, n), np.float32)
-        feet[hit] = foot * framing.scale + framing.offset_y  # frame rows
+        feet[hit] = foot_image_rows(cam, rays, depth[at][hit]) * framing.scale + framing.offset_y  # frame rows
         out[k] = nearest_fill(feet, hit) - fy
     return out
 
@@ -333,6 +338,7 @@ __all__ = [
     "VARIANTS",
     "GivenHeights",
     "cast",
+    "foot_image_rows",
     "hard_shadows",
     "on_canvas",
     "run_oracle",

@@ -22,7 +22,7 @@ import numpy as np
 from ssn_engine.camera import Camera
 from ssn_engine.frames import nearest_fill, resample_frames
 
-from ..canvas_eval.oracle import surface_depths
+from ..canvas_eval.oracle import foot_image_rows, surface_depths
 from . import meshes
 from .camera_views import split_views
 from .items import stable_hash
@@ -47,10 +47,8 @@ def pixel_heights(vertices: np.ndarray, faces: np.ndarray, cam: Camera) -> tuple
     rays = cam.rays(xx + 0.5, yy + 0.5)
     out = []
     for depth in (front, back):
-        points = cam.centre + depth[yy, xx, None] * rays
-        _, foot_row = cam.project_xyz(points[:, 0], np.zeros(len(points)), points[:, 2])
         heights = np.full((n, n), np.nan, np.float32)
-        heights[yy, xx] = foot_row - (yy + 0.5)
+        heights[yy, xx] = foot_image_rows(cam, rays, depth[yy, xx]) - (yy + 0.5)
         out.append(heights)
     return out[0], out[1]
 
@@ -144,8 +142,11 @@ def load(paths: list[Path]) -> dict[str, np.ndarray]:
         if "depths" not in f:
             raise ValueError(f"{p} holds no far surfaces (made before they were recorded): make it again")
     n = sum(len(f["camera"]) for f in files)
-    out = {key: np.zeros((n, R, R), dtype) for key, dtype in (("mask", np.uint8), ("height", np.float16))}
-    out["depth"] = np.zeros((n, R, R), np.float16)
+    out = {
+        "mask": np.zeros((n, R, R), np.uint8),
+        "height": np.zeros((n, R, R), np.float16),
+        "depth": np.zeros((n, R, R), np.float16),
+    }
     i = 0
     for f in files:
         m = np.unpackbits(f["masks"], axis=1)[:, : R * R].reshape(-1, R, R).astype(bool)
