@@ -170,7 +170,7 @@ def test_grounded_objects_lay_their_flat_parts_on_the_ground_and_rebuild_from_th
             centre = (v[~low].min(0) + v[~low].max(0)) / 2  # the raised parts' middle
             out = np.hypot(v[:, 0] - centre[0], v[:, 2] - centre[2])
             reach.append(out[low].max() / out[~low].max())
-        assert np.median(reach) > 1.2, (kind, reach)
+        assert np.median(reach) > 1.1, (kind, reach)  # a high spider's knees reach out up to 0.6 of its feet
 
 
 def test_procedural_animals_cast_the_shadow_of_a_solid():

@@ -5,10 +5,11 @@ boards and sticks: seen from above, each flat part lies behind or beside the obj
 outline alone, looks like a back or a raised head. Each item is a body (:func:`body`: a low rounded lump, an
 upright post with a cap, or a stack of primitives) with its ground parts, one family of :data:`KINDS`:
 
-- ``cord``: a cord (a chain of thin ellipsoids) wandering on the ground from the body's back;
+- ``cord``: a cord (a chain of thin ellipsoids) wandering on the ground from the body's back, or wound there in
+  a bundle of loops;
 - ``mat``: the body standing on a plate or a cloth larger than its footprint, off its centre;
 - ``sprawl``: a small body held up by four to eight legs, each from the body over a knee to a foot far out on the
-  ground (a spider), or lying flat along it (a starfish);
+  ground (a spider, its body on the ground or held high), or lying flat along it (a starfish);
 - ``litter``: thin boards, sheets and sticks lying around the body.
 
 Seeded like the other generated sources: each item records its seed, so :func:`build` rebuilds the same mesh.
@@ -63,6 +64,21 @@ def _path(
     return np.array(points)
 
 
+def _coil(start: np.ndarray, rng: np.random.Generator) -> np.ndarray:
+    """A cord wound in two to four loops on the ground, each an ellipse of its own size about a centre behind
+    ``start`` (x, z), as a cable bundled and laid down."""
+    u = rng.uniform
+    radius = u(0.04, 0.12)
+    centre = start + [-radius * u(1.0, 1.5), u(-0.5, 0.5) * radius]
+    turn = u(0, np.pi)
+    points = []
+    for _ in range(int(rng.integers(2, 5))):
+        a, b = radius * u(0.7, 1.3), radius * u(0.3, 1.0)
+        t = np.linspace(0, 2 * np.pi, 13)[:-1] + turn
+        points.append(np.stack([a * np.cos(t), b * np.sin(t)], 1) + centre + u(-0.3, 0.3, 2) * radius)
+    return np.concatenate(points)
+
+
 def _footprint(mesh: Mesh) -> float:
     """The radius of ``mesh``'s footprint about the y axis."""
     return float(np.hypot(mesh.vertices[:, 0], mesh.vertices[:, 2]).max())
@@ -79,6 +95,8 @@ def generate(kind: str, seed: int) -> Mesh:
         path = _path(
             np.array([back + 2 * r, 0.0]), np.pi + u(-0.5, 0.5), int(rng.integers(6, 17)), u(0.04, 0.12), 0.7, rng
         )
+        if rng.random() < 0.4:  # the rest of the cord wound in a bundle of loops behind the body
+            path = np.concatenate([path[:3], _coil(path[2], rng)])
         cord = [ellipsoid((a[0], r, a[1]), (b[0], r, b[1]), r) for a, b in zip(path[:-1], path[1:], strict=True)]
         return merge([main, *cord])
     if kind == "mat":
@@ -93,10 +111,11 @@ def generate(kind: str, seed: int) -> Mesh:
         shift = u(0.2, 0.6) * reach * np.array([np.cos(a := u(0, 2 * np.pi)), 0.0, np.sin(a)])
         return merge([Mesh(main.vertices + shift, main.faces), plate])
     if kind == "sprawl":
-        r_body, lift = u(0.05, 0.15), u(0.0, 0.2)
+        flat = rng.random() < 0.3  # a starfish's legs lie along the ground; a spider's rise over a knee
+        r_body = u(0.05, 0.15)
+        lift = 0.0 if flat else u(0.0, 0.45)  # a spider's body from on the ground to held high on its legs
         centre = np.array([0.0, lift + r_body, 0.0])
         parts = [ellipsoid(centre - [r_body * u(1, 2), 0, 0], centre + [r_body * u(1, 2), 0, 0], r_body)]
-        flat = rng.random() < 0.3  # a starfish's legs lie along the ground; a spider's rise over a knee
         leg_r = u(0.005, 0.02)
         n = int(rng.integers(4, 9))
         for a in 2 * np.pi * (np.arange(n) + u(-0.3, 0.3, n)) / n:
