@@ -3,11 +3,10 @@
 The network is the AOP's U-Net taking the camera input (:class:`training.model.unet.AOPNet`, ``camera=True``),
 wider, its output the pixel height in frames (rows / R) of :mod:`training.data.surface_views`, and with
 ``--depth`` a second channel, the depth (the visible surface's pixel height less the far surface's). Loss: L1 on
-the covered pixels (the depth's weighted towards deep pixels), plus L1 on the differences to the right and
-below within them (so that a leg in front of a body keeps its step), summed over the channels. Mirrored half of
-the time (a pixel height does not change in a mirror). Trained for a fixed time, the learning rate falling along
-a cosine over it; scored on the validation split every ``VAL_EVERY`` steps (mean absolute error in rows of R, by
-pitch).
+the covered pixels, plus L1 on the differences to the right and below within them (so that a leg in front of a
+body keeps its step), summed over the channels. Mirrored half of the time (a pixel height does not change in a
+mirror). Trained for a fixed time, the learning rate falling along a cosine over it; scored on the validation
+split every ``VAL_EVERY`` steps (mean absolute error in rows of R, by pitch).
 """
 
 from __future__ import annotations
@@ -34,7 +33,6 @@ WIDTHS = (12, 24, 48, 96, 160, 256)
 VAL_EVERY = 500
 GRAD_WEIGHT = 1.0
 DEPTH_START = 0.02  # frames: a new depth channel's first reading, 2.5 rows of R (most pixels' depths are a few rows)
-DEPTH_WEIGHT = 4.0  # rows of R: a pixel this deep weighs twice a flat one in the depth's loss
 GROUPS = 4  # the U-Net's GroupNorm groups
 CARD_SECTION = "## Surface model"
 SCORES_MARK = "; validation mean absolute error"  # in an installed record: where its stages end and its scores begin
@@ -62,15 +60,9 @@ def with_depth(net: AOPNet) -> AOPNet:
 
 def loss_terms(pred: torch.Tensor, target: torch.Tensor, mask: torch.Tensor) -> tuple[torch.Tensor, torch.Tensor]:
     """Mean L1 of the height (and the depth) over the covered pixels, and of its differences to the right and below
-    over pairs of covered pixels, each summed over the channels. The depth's L1 is a mean weighted by 1 + the true
-    depth / ``DEPTH_WEIGHT`` rows: most pixels are shallow, and a plain mean reads a deep body, whose outline a
-    shallow one could also have, too shallow."""
+    over pairs of covered pixels, each summed over the channels."""
     n = mask.sum().clamp(min=1.0)
-    err = (pred - target).abs() * mask
-    l1 = err[:, :1].sum() / n
-    if pred.shape[1] == 2:
-        w = (1.0 + target[:, 1:] * (R / DEPTH_WEIGHT)) * mask
-        l1 = l1 + (err[:, 1:] * w).sum() / w.sum().clamp(min=1.0)
+    l1 = ((pred - target).abs() * mask).sum() / n
     grad = pred.new_zeros(())
     for dim in (-1, -2):
         pair = mask.narrow(dim, 1, R - 1) * mask.narrow(dim, 0, R - 1)

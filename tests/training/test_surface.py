@@ -96,27 +96,6 @@ def test_a_set_of_one_source_holds_its_items_views_alone(tmp_path):
     assert (views["mask"].sum(axis=(1, 2)) > 50).all() and (views["height"] > 0).any()
 
 
-def test_the_depth_s_loss_leans_an_unsure_reading_to_the_deep_pixels():
-    """Two pixels of one outline, one flat and one 40 rows deep: read as either, the plain L1 is level; the depth's
-    loss prefers the deep reading, and leaves the pixel height's loss a plain mean."""
-    import torch
-
-    from training.surface_model import loss_terms
-
-    mask = torch.zeros(1, 1, R, R)
-    mask[0, 0, 0, :2] = 1.0
-    target = torch.zeros(1, 2, R, R)
-    target[0, 1, 0, 1] = 40.0 / R
-
-    def l1(height: float, depth: float) -> float:
-        pred = torch.zeros(1, 2, R, R)
-        pred[0, 0], pred[0, 1] = height / R, depth / R
-        return float(loss_terms(pred, target, mask)[0]) * R
-
-    assert l1(0.0, 40.0) < 0.5 * l1(0.0, 0.0)
-    assert l1(4.0, 0.0) - l1(0.0, 0.0) == pytest.approx(4.0, rel=1e-5)
-
-
 def test_a_short_training_run_installs_into_a_model_folder(tmp_path, monkeypatch):
     """A few steps on the CPU of a network reading the depth too, then installed: the graph within 1e-4 of torch,
     model.json naming it, the engine reading both surfaces' pixel heights through it."""
