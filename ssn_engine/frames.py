@@ -31,9 +31,9 @@ def resample_frames(frames: np.ndarray, size: int) -> np.ndarray:
 
 
 def nearest_fill(values: np.ndarray, known: np.ndarray) -> np.ndarray:
-    """``values`` (h, w) with each pixel where ``known`` (bool, (h, w)) is False given its nearest known pixel's
-    value (as it is where every pixel or none is known)."""
+    """``values`` (..., h, w) with each pixel where ``known`` (bool, (h, w)) is False given its nearest known
+    pixel's value, in every leading slice alike (as it is where every pixel or none is known)."""
     if known.all() or not known.any():
         return values
     _, (iy, ix) = ndimage.distance_transform_edt(~known, return_indices=True)  # type: ignore[misc]
-    return values[iy, ix]
+    return values[..., iy, ix]

@@ -232,9 +232,8 @@ class OnnxSSN:
             heights = np.concatenate([heights[:, :1], heights[:, :1] - heights[:, 1:2]], axis=1)
         b, c, r = heights.shape[:3]
         rows = ((np.arange(r, dtype=np.float32) + 0.5) / r)[:, None]
-        for i in range(b):
-            for k in range(c):  # the feet filled, not the heights
-                heights[i, k] = nearest_fill(heights[i, k] + rows, m[i] > 0) - rows
+        for i in range(b):  # the feet filled, not the heights
+            heights[i] = nearest_fill(heights[i] + rows, m[i] > 0) - rows
         return resample_frames(heights.reshape(b * c, r, r), FRAME).reshape(b, c, FRAME, FRAME) * FRAME
 
     def predict_ao(self, masks: np.ndarray, cameras: np.ndarray | None = None) -> np.ndarray:

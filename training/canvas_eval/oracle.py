@@ -232,12 +232,10 @@ def true_heights(
     at = np.clip(cy.astype(int), 0, height - 1), np.clip(cx.astype(int), 0, width - 1)
     hit = np.isfinite(surfaces[0][at]) & (cx >= 0) & (cy >= 0) & (cx < width) & (cy < height)
     rays = cam.rays(cx[hit], cy[hit])
-    out = np.zeros((2, n, n), np.float32)
+    feet = np.zeros((2, n, n), np.float32)
     for k, depth in enumerate(surfaces):
-        feet = np.zeros((n, n), np.float32)
-        feet[hit] = foot_image_rows(cam, rays, depth[at][hit]) * framing.scale + framing.offset_y  # frame rows
-        out[k] = nearest_fill(feet, hit) - fy
-    return out
+        feet[k][hit] = foot_image_rows(cam, rays, depth[at][hit]) * framing.scale + framing.offset_y  # frame rows
+    return nearest_fill(feet, hit) - fy
 
 
 def traced_shadows(

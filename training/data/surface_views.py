@@ -117,8 +117,7 @@ def save(out: Path, views: list[dict], pitches: list[float]) -> None:
         solid = view["mask"] > 0.5
         masks.append(np.packbits(solid.ravel()))
         hit = np.isfinite(view["height"])
-        near = np.nan_to_num(nearest_fill(view["height"], hit))
-        far = np.nan_to_num(nearest_fill(view["far"], hit))
+        near, far = np.nan_to_num(nearest_fill(np.stack([view["height"], view["far"]]), hit))
         heights.append(steps(near[solid]))
         depths.append(steps(np.maximum(near - far, 0.0)[solid]))
     out.parent.mkdir(parents=True, exist_ok=True)
