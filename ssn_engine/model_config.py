@@ -41,8 +41,10 @@ class ModelConfig:
     ----------
     resolution
         R, the frame size the graphs run at (a multiple of 16).
-    aop, sr, aop_camera, camera, surface
-        The graph files in the folder (``aop_camera``, ``camera``, ``surface``: optional).
+    aop, sr, aop_camera, camera, surface, surface_second
+        The graph files in the folder (``aop_camera``, ``camera``, ``surface``, ``surface_second``: optional;
+        ``surface_second`` only beside ``surface``: a second surface graph, each pixel's height the higher of the
+        two readings).
     elm_shape
         The network's light map shape, ``NETWORK_SHAPE``.
     output_floor, output_floor_small_lights
@@ -76,6 +78,7 @@ class ModelConfig:
     camera: str | None = None
     camera_training: str | None = None
     surface: str | None = None
+    surface_second: str | None = None
     surface_training: str | None = None
 
     def __post_init__(self) -> None:
@@ -162,8 +165,10 @@ def _check(config: ModelConfig) -> None:
         raise ModelConfigError(
             f"card_blur must be a number of pixels in [0, {MAX_CARD_BLUR}], got {config.card_blur!r}"
         )
-    optional = ("aop_camera", "camera", "surface")
+    optional = ("aop_camera", "camera", "surface", "surface_second")
     for name in ("aop", "sr", *optional):
         value = getattr(config, name)
         if not (value is None and name in optional) and (not isinstance(value, str) or not value):
             raise ModelConfigError(f"{name} must name a graph file, got {value!r}")
+    if config.surface_second is not None and config.surface is None:
+        raise ModelConfigError("surface_second needs surface: it is a second reading beside that graph's")

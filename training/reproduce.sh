@@ -7,10 +7,12 @@
 #   5. the camera estimator: its data, then its training
 #   6. the export: the graphs, model.json and the model card in OUT, then the estimator installed there
 #   7. the surface model (the hard-light tracer's pixel heights): its data, training on a GPU, then installed in OUT
+#   8. the surface model fine-tuned on the CPU with new kinds of shapes and the depth, installed with the graph of
+#      stage 7 kept as the second reading (each pixel's height the higher of the two)
 # On this project's 2-core CPU machine the stages took about: datasets 1 to 2 worker-hours each, AOPs 45 and
 # 42 min, SR 59 + 85 + 27 + 42 min, the camera AOPs 28 min side by side, the estimator 35 min (docs/training.md);
 # the surface model's data about 3 minutes a set (the later sets 1 minute, or 25 s of people), its training
-# 7.3 + 4.1 + 5.6 minutes on one H200 GPU (SURFACE_DEVICE).
+# 7.3 + 4.1 + 5.6 minutes on one H200 GPU (SURFACE_DEVICE), its fine-tuning 60 minutes on the CPU.
 # Every training stage resumes from its run's last.pt, so re-running the script continues a stopped stage.
 # Install the result with: cp OUT/*.onnx OUT/model.json OUT/MODEL_CARD.md ssn_engine/models/
 # Usage: training/reproduce.sh [DATA] [RUNS] [OUT]   (env: DRY_RUN=1 prints the commands without running them)
@@ -104,3 +106,33 @@ done
 run python -m training.surface train --data "$SURFACE" --run "$RUNS/surface_d" --minutes 5.6 --batch 128 \
     --lr 1e-3 --init "$RUNS/surface_c/last.pt" --device "${SURFACE_DEVICE:-cuda}"
 run python -m training.surface install "$RUNS/surface_d/last.pt" --models "$OUT"
+
+# 8. The surface model fine-tuned (docs/training.md, "The surface model"): on the CPU, from stage 7's graph, on
+# sets of the meshes and procedural shapes, people standing and off their feet, procedural animals and objects
+# with parts on the ground, reading the depth too; installed with stage 7's graph kept as the second reading.
+FT="$DATA/surface_ft"
+run python -m training.surface make --split train --cameras continuous paper --out "$FT/train.npz"
+run python -m training.surface make --split val --cameras continuous paper --out "$FT/val.npz"
+for seed in $(seq 9 14); do
+    run python -m training.surface make --split train --cameras continuous --seed "$seed" --sources mesh procedural \
+        --out "$FT/train_p$seed.npz"
+done
+for seed in $(seq 13 24); do
+    run python -m training.surface make --split train --cameras continuous --seed "$seed" --sources anny \
+        --stretch 0.25 --out "$FT/train_h$seed.npz"
+done
+for seed in $(seq 41 46); do
+    run python -m training.surface make --split train --cameras continuous --seed "$seed" --sources quadruped \
+        --quadrupeds 200 --out "$FT/train_q$seed.npz"
+done
+for seed in $(seq 61 66); do
+    run python -m training.surface make --split train --cameras continuous --seed "$seed" --sources anny_poses \
+        --out "$FT/train_a$seed.npz"
+done
+for seed in $(seq 81 86); do
+    run python -m training.surface make --split train --cameras continuous --seed "$seed" --sources grounded \
+        --grounded 200 --out "$FT/train_g$seed.npz"
+done
+run python -m training.surface train --data "$FT" --run "$RUNS/surface_e" --minutes 60 --batch 32 --lr 3e-4 \
+    --device cpu --init "$RUNS/surface_d/last.pt" --depth --depth-weight 4
+run python -m training.surface install "$RUNS/surface_e/last.pt" --models "$OUT" --second "$OUT/surface.onnx"

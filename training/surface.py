@@ -64,6 +64,12 @@ def parse_args(argv: list[str] | None = None) -> argparse.Namespace:
         action="store_true",
         help="read the object's depth at each pixel too (a second output; one added to an --init network's)",
     )
+    t.add_argument(
+        "--depth-weight",
+        type=float,
+        default=0.0,
+        help="rows of R: the depth's L1 weighted by 1 + the true depth / this (0: a plain mean)",
+    )
     a = sub.add_parser("average", help="a checkpoint whose weights lie between two networks' (scored on val.npz)")
     a.add_argument("first", help="a checkpoint or an installed surface.onnx (the network started from)")
     a.add_argument("second", help="a checkpoint or an installed surface.onnx of the same shape (the one trained on)")
@@ -73,6 +79,11 @@ def parse_args(argv: list[str] | None = None) -> argparse.Namespace:
     e = sub.add_parser("install", help="a checkpoint's graph into a model folder (model.json and the card too)")
     e.add_argument("checkpoint")
     e.add_argument("--models", required=True, help="the model folder (ssn_engine/models)")
+    e.add_argument(
+        "--second",
+        help="an installed surface.onnx kept beside it (the one replaced, say): each pixel's height the higher of "
+        "the two readings",
+    )
     return p.parse_args(argv)
 
 
@@ -107,12 +118,14 @@ def main(argv: list[str] | None = None) -> None:
             init,
             args.resume,
             args.depth,
+            args.depth_weight,
         )
     elif args.command == "average":
         row = average(Path(args.first), Path(args.second), args.share, Path(args.data), Path(args.out))
         print(f"wrote {args.out}: " + ", ".join(f"{k} {v:.3f}" for k, v in row.items()))
     else:
-        diff = install(Path(args.checkpoint), Path(args.models))
+        second = Path(args.second) if args.second else None
+        diff = install(Path(args.checkpoint), Path(args.models), second)
         print(f"installed {args.checkpoint} into {args.models} (graph within {diff:.1e} of torch)")
 
 

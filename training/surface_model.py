@@ -14,6 +14,7 @@ from __future__ import annotations
 import dataclasses
 import json
 import math
+import shutil
 import time
 from pathlib import Path
 
@@ -36,6 +37,8 @@ DEPTH_START = 0.02  # frames: a new depth channel's first reading, 2.5 rows of R
 GROUPS = 4  # the U-Net's GroupNorm groups
 CARD_SECTION = "## Surface model"
 SCORES_MARK = "; validation mean absolute error"  # in an installed record: where its stages end and its scores begin
+SECOND = "surface_second.onnx"  # a second surface graph kept by ``install --second``
+PAIR_MARK = "; each pixel's height the higher of this reading and"  # in a record: where the second's begins
 
 
 def build(widths: tuple[int, ...] = WIDTHS, outputs: int = 1) -> AOPNet:
@@ -58,11 +61,19 @@ def with_depth(net: AOPNet) -> AOPNet:
     return wider
 
 
-def loss_terms(pred: torch.Tensor, target: torch.Tensor, mask: torch.Tensor) -> tuple[torch.Tensor, torch.Tensor]:
+def loss_terms(
+    pred: torch.Tensor, target: torch.Tensor, mask: torch.Tensor, depth_weight: float = 0.0
+) -> tuple[torch.Tensor, torch.Tensor]:
     """Mean L1 of the height (and the depth) over the covered pixels, and of its differences to the right and below
-    over pairs of covered pixels, each summed over the channels."""
+    over pairs of covered pixels, each summed over the channels. ``depth_weight`` (rows of R; 0: a plain mean): the
+    depth's L1 a mean weighted by 1 + the true depth / ``depth_weight`` (most pixels are shallow, and a plain mean
+    may read a deep body, whose outline a shallow one could also have, too shallow)."""
     n = mask.sum().clamp(min=1.0)
-    l1 = ((pred - target).abs() * mask).sum() / n
+    err = (pred - target).abs() * mask
+    l1 = err[:, :1].sum() / n
+    if pred.shape[1] == 2:
+        w = (1.0 + target[:, 1:] * (R / depth_weight)) * mask if depth_weight > 0 else mask
+        l1 = l1 + (err[:, 1:] * w).sum() / w.sum().clamp(min=1.0)
     grad = pred.new_zeros(())
     for dim in (-1, -2):
         pair = mask.narrow(dim, 1, R - 1) * mask.narrow(dim, 0, R - 1)
@@ -127,13 +138,15 @@ def train(
     init: Path | None = None,
     resume: bool = False,
     depth: bool = False,
+    depth_weight: float = 0.0,
 ) -> None:
     """Train on the views of ``sets`` (:func:`training.data.surface_views.make` files) for ``minutes``, scoring
     ``data``/val.npz; writes ``run``/last.pt (every ``VAL_EVERY`` steps) and ``run``/log.jsonl. ``init``: a
     checkpoint or an installed graph to go on from (its widths, not ``widths``). ``resume``: go on with the run
     ``run``/last.pt was saved by (its network, optimiser, step and time spent: the schedule continues where it
     stopped, so a run cut short by the end of a session finishes as if it had not been). ``depth``: read the depth
-    too (a second output: :func:`with_depth` of ``init``'s network)."""
+    too (a second output: :func:`with_depth` of ``init``'s network), its loss weighted by ``depth_weight``
+    (:func:`loss_terms`)."""
     torch.manual_seed(seed)
     run.mkdir(parents=True, exist_ok=True)
     val_set = load([data / "val.npz"])
@@ -149,6 +162,8 @@ def train(
     net = net.train().to(device)
     name = torch.cuda.get_device_name(device) if device.startswith("cuda") else "cpu"
     stage = {"views": len(mask), "batch": batch, "lr": lr, "device": name, "init": bool(init)}
+    if depth_weight > 0:
+        stage["depth_weight"] = depth_weight
     opt = torch.optim.AdamW(net.parameters(), lr=lr, weight_decay=1e-4)
     step, spent = 0, 0.0
     if state is not None:
@@ -178,7 +193,7 @@ def train(
             m, t = m.flip(-1), t.flip(-1)
         with torch.autocast("cuda", dtype=torch.bfloat16, enabled=cuda):
             pred = net(m, c)
-        l1, grad = loss_terms(pred.float(), t, m)
+        l1, grad = loss_terms(pred.float(), t, m, depth_weight)
         loss = l1 + GRAD_WEIGHT * grad
         opt.zero_grad(set_to_none=True)
         loss.backward()
@@ -266,10 +281,21 @@ def _network(ck: dict) -> AOPNet:
     return net.eval()
 
 
-def install(checkpoint: Path, models: Path) -> float:
+def install(checkpoint: Path, models: Path, second: Path | None = None) -> float:
     """Install the checkpoint's network into a model folder: the graph ``surface.onnx`` (:func:`export`), the
     ``surface`` and ``surface_training`` entries of model.json and a section of MODEL_CARD.md; returns the
-    graph's largest difference to torch."""
+    graph's largest difference to torch. ``second``: an installed surface graph (the one this replaces, say) kept
+    beside it as ``surface_second.onnx``, each pixel's height the higher of the two readings; without it a second
+    graph the folder held goes."""
+    kept = models / SECOND
+    second_record = None
+    if second is not None:
+        start_from(second)  # refuses a file that is not a surface graph
+        second_record = _installed_record(second)
+        if second.resolve() != kept.resolve():
+            shutil.copyfile(second, kept)
+    elif kept.is_file():
+        kept.unlink()
     diff = export(checkpoint, models / "surface.onnx")
     ck = torch.load(checkpoint, map_location="cpu", weights_only=True)
     stages = "; then ".join(
@@ -286,9 +312,15 @@ def install(checkpoint: Path, models: Path) -> float:
         f"widths {list(ck['config']['widths'])}, {stages}{SCORES_MARK} "
         f"{scores['val mae']:.2f} rows of R = {R} (pitch {by_pitch}){depth}"
     )
+    pair = ""
+    if second is not None:
+        pair = f"{PAIR_MARK} {SECOND}'s ({second_record or second.name})"
     meta = models / "model.json"
     config = ModelConfig.from_json(meta.read_text())
-    meta.write_text(dataclasses.replace(config, surface="surface.onnx", surface_training=training).to_json())
+    config = dataclasses.replace(
+        config, surface="surface.onnx", surface_second=SECOND if second else None, surface_training=training + pair
+    )
+    meta.write_text(config.to_json())
     section = (
         f"{CARD_SECTION}\n\n`surface.onnx` reads each pixel's pixel height (how far below it the image of the ground "
         "straight below the surface it shows lies)"
@@ -298,9 +330,32 @@ def install(checkpoint: Path, models: Path) -> float:
         + (" and ends its segment where the depth does" if depth else "")
         + " (docs/hard_light.md). Trained by `python -m training.surface` "
         f"(training/reproduce.sh, stage 7): {training}.\n\n"
+        + (
+            f"`{SECOND}` is a second surface graph of the same contract, each pixel's height the higher of the two "
+            f'readings (docs/training.md, "The higher of two readings"): {second_record or second.name}.\n\n'
+            if second is not None
+            else ""
+        )
     )
     put_section(models / "MODEL_CARD.md", CARD_SECTION, section)
     return diff
+
+
+def _installed_record(graph: Path) -> str | None:
+    """The training record of a graph installed in its folder (model.json's ``surface_training``): of its
+    ``surface`` (less what the record says of a second graph), or of its ``surface_second`` (what it says of
+    that); else None."""
+    meta = graph.with_name("model.json")
+    if not meta.is_file():
+        return None
+    config = ModelConfig.from_json(meta.read_text())
+    record = config.surface_training or ""
+    first, _, second = record.partition(f"{PAIR_MARK} {SECOND}'s (")
+    if graph.name == config.surface and first:
+        return first
+    if graph.name == config.surface_second and second:
+        return second.removesuffix(")")
+    return None
 
 
 def export(checkpoint: Path, out: Path) -> float:

@@ -19,6 +19,11 @@ A model folder holds ``model.json`` (:class:`ssn_engine.model_config.ModelConfig
   which places each pixel's surface for the hard-light tracer (:mod:`ssn_engine.hard_light`); with C = 2 also
   the object's depth there (the far surface's pixel height is the visible one's less it), where the pixel's
   segment ends
+- surface_second.onnx (optional, named by ``surface_second``, only beside ``surface``): a second surface graph
+  of the same contract; each pixel's height is the higher of the two readings (the depth is the first's).
+  Two networks trained on different shapes each read some raised parts low (an eye-level spider's body among
+  its legs, a horse's back seen from above); the higher reading keeps what either saw (docs/training.md,
+  "The higher of two readings")
 The ELM goes in normalised by :func:`ssn_engine.hemisphere.network_elm`.
 ``model.json`` may set ``output_floor``: shadow values below it are the network's
 residual noise and are removed by :func:`apply_floor` (chosen on the validation split);
@@ -177,6 +182,8 @@ class OnnxSSN:
         self.card: GeometricCard | None = GeometricCard(FRAME, internal=config.resolution) if takes_card else None
         self._camera = _session(model_dir / config.camera, "camera") if takes_card and config.camera else None
         self._surface = _session(model_dir / config.surface, "surface") if config.surface else None
+        second = config.surface_second
+        self._surface_second = _session(model_dir / second, "surface") if second else None
         self._estimates: dict[bytes, np.ndarray] = {}  # mask digest -> its estimated camera input
         self._check_run()
 
@@ -208,8 +215,9 @@ class OnnxSSN:
             s = _run(self._sr, "shadow", feeds)
             if self._camera is not None:  # (an empty frame would not reach the graph)
                 _run(self._camera, "camera", {"mask": np.zeros((1, 1, INPUT, INPUT), np.float32)})
-            if self._surface is not None:
-                _run(self._surface, "height", {"mask": mask, "camera": np.array([[0.5, 1.2]], np.float32)})
+            for surface in (self._surface, self._surface_second):
+                if surface is not None:
+                    _run(surface, "height", {"mask": mask, "camera": np.array([[0.5, 1.2]], np.float32)})
         except Exception as exc:
             raise ModelError(f"model in {self.config.aop} / {self.config.sr} failed a test run: {exc}") from None
         if s.shape != mask.shape:
@@ -228,6 +236,9 @@ class OnnxSSN:
         m = (resample_frames(masks, self.model_resolution) > 0.5).astype(np.float32)
         frames = (np.asarray(cameras, np.float64) / FRAME).astype(np.float32)
         heights = _run(self._surface, "height", {"mask": m[:, None], "camera": frames})
+        if self._surface_second is not None:
+            second = _run(self._surface_second, "height", {"mask": m[:, None], "camera": frames})
+            np.maximum(heights[:, :1], second[:, :1], out=heights[:, :1])
         if heights.shape[1] > 1:  # the depth: the far surface's pixel height is the visible one's less it
             heights = np.concatenate([heights[:, :1], heights[:, :1] - heights[:, 1:2]], axis=1)
         b, c, r = heights.shape[:3]

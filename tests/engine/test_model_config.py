@@ -42,6 +42,7 @@ def test_unset_fields_are_not_written_and_the_small_light_floor_defaults_to_the_
         ({"shadow_reach": "16"}, "shadow_reach"),
         ({"aop": ""}, "aop"),
         ({"camera": 3}, "camera"),
+        ({"surface": None, "surface_second": "surface_second.onnx"}, "surface_second needs surface"),
     ],
 )
 def test_a_bad_field_is_named(change, fragment):

@@ -224,9 +224,9 @@ def test_graph_with_wrong_input_names(tmp_path, monkeypatch):
     assert "image" in message and "mask" in message
 
 
-@pytest.mark.parametrize("graph", ["camera", "aop_camera", "surface"])
+@pytest.mark.parametrize("graph", ["camera", "aop_camera", "surface", "surface_second"])
 def test_a_bad_optional_graph_is_named(tmp_path, monkeypatch, graph):
-    """The shipped model with its camera estimator, its camera-taking AOP or its surface model missing, or
+    """The shipped model with its camera estimator, its camera-taking AOP or either surface graph missing, or
     replaced by the plain AOP (another contract)."""
     import shutil
 
@@ -235,16 +235,18 @@ def test_a_bad_optional_graph_is_named(tmp_path, monkeypatch, graph):
     (folder / f"{graph}.onnx").unlink()
     _expect_model_error(folder, monkeypatch, "missing", str(folder / f"{graph}.onnx"))
     shutil.copy(folder / "aop.onnx", folder / f"{graph}.onnx")
-    _expect_model_error(folder, monkeypatch, str(folder / f"{graph}.onnx"), f"{graph} contract")
+    contract = graph.removesuffix("_second")  # the second surface graph keeps the first's contract
+    _expect_model_error(folder, monkeypatch, str(folder / f"{graph}.onnx"), f"{contract} contract")
 
 
 def test_the_shipped_model_fits_the_wheel_budget():
-    """Every graph model.json names is a shipped file, and together they stay within the 35 MB budget."""
+    """Every graph model.json names is a shipped file, and together they stay within the 42 MB budget."""
     folder = Path(api.__file__).parent / "models"
     card = json.loads((folder / "model.json").read_text())
-    graphs = [folder / card[k] for k in ("aop", "sr", "aop_camera", "camera", "surface") if card.get(k)]
-    assert len(graphs) == 5 and all(g.is_file() for g in graphs)
-    assert sum(g.stat().st_size for g in graphs) <= 35e6
+    names = ("aop", "sr", "aop_camera", "camera", "surface", "surface_second")
+    graphs = [folder / card[k] for k in names if card.get(k)]
+    assert len(graphs) == 6 and all(g.is_file() for g in graphs)
+    assert sum(g.stat().st_size for g in graphs) <= 42e6
 
 
 def test_graphs_named_in_the_card(tmp_path, monkeypatch, mask):
@@ -395,7 +397,7 @@ def test_the_surface_model_reads_a_post_as_standing_on_its_lowest_row(tmp_path, 
     mask[0, 60:220, 118:138] = 1.0
     camera = np.array([[40.0, 300.0]])
     heights = method.pixel_heights(mask, camera)
-    assert heights is not None and heights.shape == (1, 1, 256, 256)  # the visible surface's alone
+    assert heights is not None and heights.shape == (1, 2, 256, 256)  # the visible surface's and the far one's
     rows = np.arange(256) + 0.5
     feet = heights[0, 0, 60:220, 118:138] + rows[60:220, None]
     assert np.median(np.abs(feet - 220.0)) < 8.0  # within 5 % of the post's height
@@ -404,3 +406,36 @@ def test_the_surface_model_reads_a_post_as_standing_on_its_lowest_row(tmp_path, 
     monkeypatch.setenv("SSN_SHADOW_MODEL_DIR", str(make_model_dir(tmp_path / "m")))
     plain = load_method("ssn").method
     assert isinstance(plain, OnnxSSN) and plain.pixel_heights(mask, camera) is None
+
+
+def test_a_part_either_surface_graph_reads_raised_stands_raised(tmp_path, monkeypatch):
+    """With the shipped second surface graph, each pixel's surface stands at least as high as the first graph
+    alone reads it, and higher where the second reads it higher (a body among thin legs seen at eye level, which
+    one graph reads on the ground and the other raised); its depth is the first graph's."""
+    import shutil
+
+    mask = np.zeros((1, 256, 256), np.float32)
+    mask[0, 90:140, 100:160] = 1.0  # a body
+    for x0 in (40, 70, 170, 200):  # thin legs reaching out and down to the ground
+        for i in range(60):
+            mask[0, 120 + i, x0 + i // 3 : x0 + i // 3 + 4] = 1.0
+    camera = np.array([[120.0, 300.0]])  # at eye level
+    pair = load_method("ssn").method
+    assert isinstance(pair, OnnxSSN)
+    both = pair.pixel_heights(mask, camera)
+    folder = tmp_path / "m"
+    shutil.copytree(Path(api.__file__).parent / "models", folder)
+    card = json.loads((folder / "model.json").read_text())
+    del card["surface_second"]
+    (folder / "model.json").write_text(json.dumps(card))
+    monkeypatch.setenv("SSN_SHADOW_MODEL_DIR", str(folder))
+    first = load_method("ssn").method
+    assert isinstance(first, OnnxSSN)
+    alone = first.pixel_heights(mask, camera)
+    assert both is not None and alone is not None and both.shape == alone.shape == (1, 2, 256, 256)
+    inside = ndimage.binary_erosion(mask[0] > 0, iterations=2)
+    raised = (both - alone)[0, 0][inside]
+    assert raised.min() > -0.5  # rows: never lower (up to the enlarging's rounding)
+    assert np.percentile(raised, 90) > 2.0  # and higher over part of it
+    depth = lambda h: (h[0, 0] - h[0, 1])[inside]  # noqa: E731
+    assert np.abs(depth(both) - depth(alone)).max() < 0.5

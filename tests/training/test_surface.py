@@ -96,9 +96,33 @@ def test_a_set_of_one_source_holds_its_items_views_alone(tmp_path):
     assert (views["mask"].sum(axis=(1, 2)) > 50).all() and (views["height"] > 0).any()
 
 
+def test_the_depth_s_weighted_loss_leans_an_unsure_reading_to_the_deep_pixels():
+    """Two pixels of one outline, one flat and one 40 rows deep: read as either, the plain L1 is level; the depth's
+    loss weighted (``--depth-weight 4``) prefers the deep reading, and leaves the pixel height's loss a plain
+    mean."""
+    import torch
+
+    from training.surface_model import loss_terms
+
+    mask = torch.zeros(1, 1, R, R)
+    mask[0, 0, 0, :2] = 1.0
+    target = torch.zeros(1, 2, R, R)
+    target[0, 1, 0, 1] = 40.0 / R
+
+    def l1(height: float, depth: float, weight: float) -> float:
+        pred = torch.zeros(1, 2, R, R)
+        pred[0, 0], pred[0, 1] = height / R, depth / R
+        return float(loss_terms(pred, target, mask, weight)[0]) * R
+
+    assert l1(0.0, 40.0, 0.0) == pytest.approx(l1(0.0, 0.0, 0.0), rel=1e-5)
+    assert l1(0.0, 40.0, 4.0) < 0.5 * l1(0.0, 0.0, 4.0)
+    assert l1(4.0, 0.0, 4.0) - l1(0.0, 0.0, 4.0) == pytest.approx(4.0, rel=1e-5)
+
+
 def test_a_short_training_run_installs_into_a_model_folder(tmp_path, monkeypatch):
     """A few steps on the CPU of a network reading the depth too, then installed: the graph within 1e-4 of torch,
-    model.json naming it, the engine reading both surfaces' pixel heights through it."""
+    model.json naming it, the engine reading both surfaces' pixel heights through it; installed with a second
+    graph, each pixel stands at least as high as the first reads it."""
     from training.onnx_graphs import session
     from training.surface_model import install, train
 
@@ -148,6 +172,17 @@ def test_a_short_training_run_installs_into_a_model_folder(tmp_path, monkeypatch
     heights = method.pixel_heights(frame, np.array([[40.0, 300.0]]))  # the visible surface's, and the far one's
     assert heights is not None and heights.shape == (1, 2, 256, 256) and np.isfinite(heights).all()
     assert np.all(heights[0, 1] <= heights[0, 0] + 1e-3)
+    # installed without --second, the folder's second surface graph went; with it, it is kept and named
+    assert not (models / "surface_second.onnx").exists() and "surface_second" not in card
+    shipped = ROOT / "ssn_engine" / "models" / "surface_second.onnx"
+    install(tmp_path / "run" / "last.pt", models, second=shipped)
+    card = json.loads((models / "model.json").read_text())
+    assert card["surface_second"] == "surface_second.onnx" and (models / "surface_second.onnx").is_file()
+    assert "each pixel's height the higher of this reading and surface_second.onnx's" in card["surface_training"]
+    paired = load_method("ssn").method
+    assert isinstance(paired, OnnxSSN)
+    raised = paired.pixel_heights(frame, np.array([[40.0, 300.0]]))
+    assert raised is not None and np.all(raised[0, 0] >= heights[0, 0] - 0.5)
 
 
 def test_the_shipped_graph_is_fine_tuned_where_its_runs_are_gone(tmp_path):
