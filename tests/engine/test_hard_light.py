@@ -255,7 +255,8 @@ def test_the_command_line_renders_an_angle_light_file_crisply(tmp_path, post):
     s = np.asarray(Image.open(layer))[..., 3].astype(np.float32) / 255
     assert s.shape == (H, W)
     rows = np.flatnonzero(s[FOOT:].max(axis=1) > 0.5) + FOOT
-    assert rows.size > 40 and s[FOOT + 1, LEFT + 5 : RIGHT - 5].min() > 0.95  # dark from the contact
+    # dark from the contact (within a row of R = 128 of the foot: where the surface model stands the post's base)
+    assert rows.size > 40 and s[FOOT + 3, LEFT + 5 : RIGHT - 5].min() > 0.95
     far = int(rows[int(0.8 * (rows.size - 1))])
     assert np.abs(np.diff(s[far])).max() > 0.2  # a crisp edge: a step of a fifth of full darkness in a pixel
 

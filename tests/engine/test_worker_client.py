@@ -264,8 +264,12 @@ def test_a_preview_of_a_large_canvas_is_its_shadow_scaled_down(client):
     assert expected[ground].min() < 150  # a real shadow to compare
     assert np.abs(image - expected)[ground].mean() < 0.5
     # at edges the two differ: a traced sun's crisp edge meets the network's soft shadow of it in a maximum
-    # taken per preview pixel here, per canvas pixel there (a quarter of full darkness at most)
-    assert np.abs(image - expected)[ground].max() < 50
+    # taken per preview pixel here, per canvas pixel there (a quarter of full darkness at most), and a crisp edge
+    # swept through the read depth may fall one preview pixel over
+    near = np.minimum.reduce(
+        [np.abs(image - np.roll(expected, (dy, dx), (0, 1))) for dy in (-1, 0, 1) for dx in (-1, 0, 1)]
+    )
+    assert near[ground].max() < 50
     with pytest.raises(EngineError, match="scaled down with its aspect ratio") as info:
         client.request("preview", {"background": buf(background[:100])}, cutout=key, preset="softbox")
     assert info.value.kind == "BadRequest"
