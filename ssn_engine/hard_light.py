@@ -58,8 +58,8 @@ from __future__ import annotations
 
 import math
 from collections.abc import Callable
-from dataclasses import dataclass, replace
-from functools import cached_property
+from dataclasses import dataclass, field, replace
+from functools import cached_property, partial
 
 import numpy as np
 from PIL import Image, ImageFilter
@@ -181,6 +181,7 @@ class _Source:
 # a card's blurred copies of its cutout, kept for a card of the same cutout and another foot: its pad and, per
 # scale and level, the rows blurred and the copy
 Blurred = tuple[int, dict[float, dict[int, tuple[int, int, _Level]]]]
+SurfaceDepths = tuple[np.ndarray, np.ndarray | None]  # pixels behind the card: each surface's, its far end's read depth
 
 
 class CardTracer:
@@ -214,6 +215,11 @@ class CardTracer:
     lift : int
         How many of the rows down to ``foot`` are the artist's lift (the cutout floats): the pad above and beside
         the cutout grows with it in steps.
+    at_rest : tuple or None
+        The :attr:`surface_depths` of the card of the same ``alpha`` standing on the ground (lift 0), which a
+        lifted card takes in place of its own reading of ``feet`` and ``far_feet``: the object's shape does not
+        change as it floats (read at the lifted card's foot, nearer the camera, the same rows would make it
+        shallower).
     blurred : tuple or None
         The :attr:`blurred_copies` of a tracer of the same ``alpha`` and origin whose foot or depth differ (the
         artist's lift or thickness changed): taken over where its pad is this one's.
@@ -231,6 +237,7 @@ class CardTracer:
         far_feet: np.ndarray | None = None,
         lift: int = 0,
         blurred: Blurred | None = None,
+        at_rest: SurfaceDepths | None = None,
     ) -> None:
         alpha = np.clip(np.asarray(alpha, np.float32), 0.0, 1.0)
         x0, y0 = origin if origin is not None else framing.bbox[:2]
@@ -247,14 +254,18 @@ class CardTracer:
         # a floating object's lowest point: the world height of its card's foot row before the lift
         self._floor = float(self._frame_row_geometry(np.array([base - lift * s]))[0][0]) if lift > 0 else 0.0
         lowest, width = int(rows[-1]) + 1, alpha.shape[1]
-        near = (
-            np.zeros((lowest, width), np.float32)
-            if feet is None
-            else self._surface_depth(feet, framing, y0, base)[:lowest]
-        )
-        read = None
-        if feet is not None and far_feet is not None:
-            read = np.maximum(self._surface_depth(far_feet, framing, y0, base)[:lowest] - near, 0.0)
+        if at_rest is not None:
+            near, read = at_rest
+        else:
+            near = (
+                np.zeros((lowest, width), np.float32)
+                if feet is None
+                else self._surface_depth(feet, framing, y0, base)[:lowest]
+            )
+            read = None
+            if feet is not None and far_feet is not None:
+                read = np.maximum(self._surface_depth(far_feet, framing, y0, base)[:lowest] - near, 0.0)
+        self.surface_depths: SurfaceDepths = (near, read)
         self.deepest_read = 0.0 if read is None else float(read.max())
         if thickness is not None:
             thick = np.asarray(thickness[:lowest], np.float32)
@@ -1054,6 +1065,37 @@ def read_thickness(alpha: np.ndarray, depth: np.ndarray) -> float:
     return float(depth.max()) / float(cols[-1] + 1 - cols[0])
 
 
+def _band_card(
+    part: np.ndarray,
+    framing: Framing,
+    camera: tuple[float, float] | None,
+    origin: tuple[int, int],
+    foot: int,
+    thickness: np.ndarray | None,
+    feet: np.ndarray | None,
+    far_feet: np.ndarray | None,
+    blurred: Blurred | None,
+    lift: int,
+    at_rest: SurfaceDepths | None = None,
+) -> CardTracer:
+    """The card of one band of a cutout (:class:`ContactTracer`) lifted ``lift`` rows: its foot and every pixel's
+    foot that many rows lower."""
+    shift = np.float32(lift)
+    return CardTracer(
+        part,
+        framing,
+        camera,
+        origin=origin,
+        foot=foot + lift,
+        thickness=thickness,
+        feet=None if feet is None else feet + shift,
+        far_feet=None if far_feet is None else far_feet + shift,
+        lift=lift,
+        blurred=blurred,
+        at_rest=at_rest,
+    )
+
+
 def _enlarged(small: np.ndarray, k: int, shape: tuple[int, int]) -> np.ndarray:
     """``small``, worked out on a copy reduced ``k`` times, enlarged bilinearly (float32) and cut to ``shape``."""
     small = np.ascontiguousarray(small, np.float32)
@@ -1090,6 +1132,8 @@ class ContactReading:
     thickness_read: float
     feet: np.ndarray | None
     far_feet: np.ndarray | None = None
+    # per band: its card's :attr:`CardTracer.surface_depths` standing on the ground, made on a first lift
+    at_rest: dict[int, SurfaceDepths] = field(default_factory=dict, compare=False)
 
     @classmethod
     def of(
@@ -1176,7 +1220,6 @@ class ContactTracer:
             depth = None
         rows = int(round(lift))
         for i, (c0, c1, foot) in enumerate(bands):
-            foot += rows
             weight = np.zeros(width, np.float32)
             weight[c0:c1] = 1.0
             if i > 0:
@@ -1190,18 +1233,26 @@ class ContactTracer:
             used = np.flatnonzero(weight > 0)
             a, b = int(used[0]), int(used[-1]) + 1
             part = alpha[:, a:b] * weight[a:b]
-            card = CardTracer(
+
+            card_at = partial(
+                _band_card,
                 part,
                 framing,
                 camera,
-                origin=(x0 + a, y0),
-                foot=foot,
-                thickness=None if depth is None else depth[:, a:b],
-                feet=None if reading.feet is None else reading.feet[:, a:b] + np.float32(rows),
-                far_feet=None if far_feet is None else far_feet[:, a:b] + np.float32(rows),
-                lift=rows,
-                blurred=blurred.get(i),
+                (x0 + a, y0),
+                foot,
+                None if depth is None else depth[:, a:b],
+                None if reading.feet is None else reading.feet[:, a:b],
+                None if far_feet is None else far_feet[:, a:b],
+                blurred.get(i),
             )
+            if rows > 0 and reading.feet is not None and i not in reading.at_rest:
+                rest = card_at(0)  # the same band standing on the ground: its surfaces as read (once a reading)
+                if not rest.empty:
+                    reading.at_rest[i] = rest.surface_depths
+            card = card_at(rows, reading.at_rest.get(i) if rows > 0 else None)
+            if rows == 0 and not card.empty:
+                reading.at_rest.setdefault(i, card.surface_depths)
             if not card.empty:
                 self.cards.append(card)
                 self.blurred_copies[i] = card.blurred_copies
