@@ -28,6 +28,17 @@ run() {
     fi
 }
 
+# surface_sets DIR NAME "SEEDS" OPTIONS...: one surface training set per seed (continuous cameras), written to
+# DIR/train_NAME<seed>.npz
+surface_sets() {
+    local dir=$1 name=$2 seeds=$3
+    shift 3
+    for seed in $seeds; do
+        run python -m training.surface make --split train --cameras continuous --seed "$seed" "$@" \
+            --out "$dir/train_$name$seed.npz"
+    done
+}
+
 # 1. Datasets (docs/dataset.md): the same items and splits at three settings.
 ITEMS="--workers 2 --seed 0 --procedural 36 --humans 48"
 run python -m training.make_dataset --out "$DATA/ssn128" --res 128 $ITEMS
@@ -95,14 +106,8 @@ run python -m training.surface train --data "$SURFACE" --sets train --run "$RUNS
     --batch 64 --lr 2e-3 --widths 16 32 64 128 192 256 --device "${SURFACE_DEVICE:-cuda}"
 run python -m training.surface train --data "$SURFACE" --sets train train_s1 train_s2 --run "$RUNS/surface_c" \
     --minutes 4.1 --batch 64 --lr 1e-3 --init "$RUNS/surface_b/last.pt" --device "${SURFACE_DEVICE:-cuda}"
-for seed in $(seq 3 32); do
-    run python -m training.surface make --split train --cameras continuous --seed "$seed" --sources mesh procedural \
-        --out "$SURFACE/train_d$seed.npz"
-done
-for seed in $(seq 3 22); do
-    run python -m training.surface make --split train --cameras continuous --seed "$seed" --sources anny \
-        --out "$SURFACE/train_h$seed.npz"
-done
+surface_sets "$SURFACE" d "$(seq 3 32)" --sources mesh procedural
+surface_sets "$SURFACE" h "$(seq 3 22)" --sources anny
 run python -m training.surface train --data "$SURFACE" --run "$RUNS/surface_d" --minutes 5.6 --batch 128 \
     --lr 1e-3 --init "$RUNS/surface_c/last.pt" --device "${SURFACE_DEVICE:-cuda}"
 run python -m training.surface install "$RUNS/surface_d/last.pt" --models "$OUT"
@@ -113,26 +118,11 @@ run python -m training.surface install "$RUNS/surface_d/last.pt" --models "$OUT"
 FT="$DATA/surface_ft"
 run python -m training.surface make --split train --cameras continuous paper --out "$FT/train.npz"
 run python -m training.surface make --split val --cameras continuous paper --out "$FT/val.npz"
-for seed in $(seq 9 14); do
-    run python -m training.surface make --split train --cameras continuous --seed "$seed" --sources mesh procedural \
-        --out "$FT/train_p$seed.npz"
-done
-for seed in $(seq 13 24); do
-    run python -m training.surface make --split train --cameras continuous --seed "$seed" --sources anny \
-        --stretch 0.25 --out "$FT/train_h$seed.npz"
-done
-for seed in $(seq 41 46); do
-    run python -m training.surface make --split train --cameras continuous --seed "$seed" --sources quadruped \
-        --quadrupeds 200 --out "$FT/train_q$seed.npz"
-done
-for seed in $(seq 61 66); do
-    run python -m training.surface make --split train --cameras continuous --seed "$seed" --sources anny_poses \
-        --out "$FT/train_a$seed.npz"
-done
-for seed in $(seq 81 86); do
-    run python -m training.surface make --split train --cameras continuous --seed "$seed" --sources grounded \
-        --grounded 200 --out "$FT/train_g$seed.npz"
-done
+surface_sets "$FT" p "$(seq 9 14)" --sources mesh procedural
+surface_sets "$FT" h "$(seq 13 24)" --sources anny --stretch 0.25
+surface_sets "$FT" q "$(seq 41 46)" --sources quadruped --quadrupeds 200
+surface_sets "$FT" a "$(seq 61 66)" --sources anny_poses
+surface_sets "$FT" g "$(seq 81 86)" --sources grounded --grounded 200
 run python -m training.surface train --data "$FT" --run "$RUNS/surface_e" --minutes 60 --batch 32 --lr 3e-4 \
     --device cpu --init "$RUNS/surface_d/last.pt" --depth --depth-weight 4
 run python -m training.surface install "$RUNS/surface_e/last.pt" --models "$OUT" --second "$OUT/surface.onnx"

@@ -288,10 +288,10 @@ def install(checkpoint: Path, models: Path, second: Path | None = None) -> float
     beside it as ``surface_second.onnx``, each pixel's height the higher of the two readings; without it a second
     graph the folder held goes."""
     kept = models / SECOND
-    second_record = None
+    second_record = ""
     if second is not None:
         start_from(second)  # refuses a file that is not a surface graph
-        second_record = _installed_record(second)
+        second_record = _installed_record(second) or second.name
         if second.resolve() != kept.resolve():
             shutil.copyfile(second, kept)
     elif kept.is_file():
@@ -314,7 +314,7 @@ def install(checkpoint: Path, models: Path, second: Path | None = None) -> float
     )
     pair = ""
     if second is not None:
-        pair = f"{PAIR_MARK} {SECOND}'s ({second_record or second.name})"
+        pair = f"{PAIR_MARK} {SECOND}'s ({second_record})"
     meta = models / "model.json"
     config = ModelConfig.from_json(meta.read_text())
     config = dataclasses.replace(
@@ -332,7 +332,7 @@ def install(checkpoint: Path, models: Path, second: Path | None = None) -> float
         f"(training/reproduce.sh, stage 7): {training}.\n\n"
         + (
             f"`{SECOND}` is a second surface graph of the same contract, each pixel's height the higher of the two "
-            f'readings (docs/training.md, "The higher of two readings"): {second_record or second.name}.\n\n'
+            f'readings (docs/training.md, "The higher of two readings"): {second_record}.\n\n'
             if second is not None
             else ""
         )
