@@ -73,7 +73,9 @@ from .stripes import for_each_stripe
 
 
 DEPTH_SIZE = 128  # pixels: the object's depth is worked out on a copy reduced to about this size
-RADIUS_STEP = 1.25  # ratio of the local radii the depth map tells apart
+RIDGE_RISE = 0.7  # a pixel whose distance to the outline rises towards a neighbour by this share of the step
+# or more lies inside that neighbour's inscribed disk, nearly: it centres no disk of its own (an interior pixel's
+# rise is at least cos 22.5 = 0.92 towards one of its 8 neighbours; the ridge's, across it, about 0)
 FADE_STEP = 3.0  # pixels of shift: a pixel's shadow fades out in steps of falling value at most this long
 MAX_FADE_STEPS = 8  # steps at most (a long fade's are longer)
 # pixels of the cutout: a shorter fade ends its pixel's depth crisply; its few steps, each pixel's ending where its
@@ -93,6 +95,7 @@ __all__ = [
     "depth_map",
     "footprint_rise",
     "light_direction",
+    "local_radius",
     "read_thickness",
     "traced_share",
 ]
@@ -1035,10 +1038,10 @@ def contact_bands(alpha: np.ndarray, max_rise: float | None = None) -> list[tupl
 def depth_map(alpha: np.ndarray) -> np.ndarray:
     """How deep (pixels) the object reaches behind its card at each pixel: a round cross-section. A pixel at
     distance d from the outline, inside a part whose largest inscribed disk holding it has radius R (its local
-    radius: a leg's half-width, a body's half-height), reaches the chord of a circle of radius R there,
-    2 sqrt(2 R d - d^2): as deep as the part is wide at its middle, steep at its edges. Computed on a copy
-    reduced to about ``DEPTH_SIZE`` pixels and enlarged; pixels of the antialiased fringe take their nearest
-    solid pixel's depth."""
+    radius, :func:`local_radius`: a leg's half-width, a body's half-height), reaches the chord of a circle of
+    radius R there, 2 sqrt(2 R d - d^2): as deep as the part is wide at its middle, steep at its edges (a disk
+    is a sphere's chords). Computed on a copy reduced to about ``DEPTH_SIZE`` pixels and enlarged; pixels of the
+    antialiased fringe take their nearest solid pixel's depth."""
     h, w = alpha.shape
     k = max(1, math.ceil(max(h, w) / DEPTH_SIZE))
     small = np.asarray(Image.fromarray(np.asarray(alpha, np.float32), "F").reduce(k)) if k > 1 else alpha
@@ -1046,14 +1049,30 @@ def depth_map(alpha: np.ndarray) -> np.ndarray:
     if not solid.any():
         return np.zeros(alpha.shape, np.float32)
     d = np.asarray(ndimage.distance_transform_edt(solid), np.float32)
-    radius = d.copy()
-    r = 1.0
-    while r <= d.max():  # local radius: each pixel within r of a centre whose disk of radius r fits inside
-        near = np.asarray(ndimage.distance_transform_edt(d < r), np.float32) < r
-        radius[near & (radius < r)] = r
-        r *= RADIUS_STEP
-    depth = 2.0 * k * np.sqrt(np.maximum(0.0, d * (2.0 * radius - d)))
+    depth = 2.0 * k * np.sqrt(np.maximum(0.0, d * (2.0 * local_radius(d) - d)))
     return _enlarged(nearest_fill(depth, solid)[1:-1, 1:-1], k, (h, w))
+
+
+def local_radius(d: np.ndarray) -> np.ndarray:
+    """Each pixel's local radius from ``d`` (float32, its distance to the outline; 0 outside): the radius of the
+    largest disk inside the outline that holds it, d(c) of the centre c with |p - c| <= d(c) for which that is
+    largest, at least the pixel's own d. The disks are painted from their centres (the pixels
+    no neighbour's disk nearly holds, ``RIDGE_RISE``: the outline's ridge), each over its bounding box (a pixel
+    near a corner, held by no ridge pixel's disk, keeps its own d)."""
+    h, w = d.shape
+    padded = np.pad(d, 1)
+    ridge = d > 0
+    for dy, dx in ((-1, -1), (-1, 0), (-1, 1), (0, -1), (0, 1), (1, -1), (1, 0), (1, 1)):
+        ridge &= padded[1 + dy : 1 + dy + h, 1 + dx : 1 + dx + w] < d + RIDGE_RISE * math.hypot(dx, dy)
+    radius = d.copy()
+    ys, xs = np.nonzero(ridge)
+    for y, x in zip(ys.tolist(), xs.tolist(), strict=True):
+        r = float(d[y, x])
+        y0, y1, x0, x1 = max(0, y - int(r)), min(h, y + int(r) + 1), max(0, x - int(r)), min(w, x + int(r) + 1)
+        dist2 = (np.arange(y0, y1)[:, None] - y) ** 2 + (np.arange(x0, x1)[None, :] - x) ** 2
+        view = radius[y0:y1, x0:x1]
+        np.maximum(view, np.where(dist2 <= r * r, np.float32(r), np.float32(0)), out=view)
+    return radius
 
 
 def read_thickness(alpha: np.ndarray, depth: np.ndarray) -> float:

@@ -19,6 +19,8 @@ from ssn_engine.hard_light import (
     contact_bands,
     contact_line,
     depth_map,
+    local_radius,
+    read_thickness,
     footprint_rise,
     traced_share,
 )
@@ -203,6 +205,34 @@ def test_an_object_is_as_deep_as_a_round_cross_section_of_its_local_width():
     assert depth[50, 85:91].max() == pytest.approx(6.0, abs=1.5)  # the leg as deep as it is wide, not the body
     big = depth_map(np.kron(alpha, np.ones((8, 8), np.float32)))  # reduced, worked out, enlarged: the same shape
     assert big[400, 400] == pytest.approx(8 * depth[50, 50], rel=0.05)
+
+
+def test_a_disk_is_as_deep_as_a_sphere_and_reads_as_thick_as_it_is_wide():
+    """The round cross-section of a disk is a ball: each pixel as deep as the sphere's chord through it (the
+    local radius is the disk's own, not a step below it), so a ball's shadow is the ellipse it casts."""
+    yy, xx = np.mgrid[0:200, 0:200] + 0.5
+    rho = np.hypot(xx - 100, yy - 100)
+    disk = (rho < 80).astype(np.float32)
+    depth = depth_map(disk)
+    inner = rho < 72  # the chord is steep at the rim: compared within 0.9 of the radius
+    chord = 2 * np.sqrt(np.maximum(80**2 - rho**2, 0))
+    assert np.abs(depth - chord)[inner].max() < 0.05 * 160
+    assert np.abs(depth - chord)[inner].mean() < 0.01 * 160
+    assert read_thickness(disk, depth) == pytest.approx(1.0, abs=0.03)
+
+
+def test_a_pixel_s_local_radius_is_the_largest_inscribed_disk_that_holds_it():
+    """A dumbbell: a pixel of the bar near a ball lies in the ball's disk only where that disk reaches it."""
+    yy, xx = np.mgrid[0:100, 0:200] + 0.5
+    ball = np.hypot(xx - 50, yy - 50) < 40
+    bar = (np.abs(yy - 50) < 10) & (xx > 50) & (xx < 190)
+    solid = np.pad(ball | bar, 1)
+    d = ndimage.distance_transform_edt(solid).astype(np.float32)
+    radius = local_radius(d)[1:-1, 1:-1]
+    assert radius[50, 50] == pytest.approx(40, abs=1.0)
+    assert radius[30, 30] == pytest.approx(40, abs=1.0)  # off the centre, still in the ball's disk
+    assert radius[50, 150] == pytest.approx(10, abs=1.0)  # the bar's half-width
+    assert radius[45, 85] == pytest.approx(40, abs=1.0)  # the bar's start, within the ball's disk
 
 
 def test_under_a_light_from_the_side_a_deep_object_shades_a_band_as_deep_as_itself(post):
