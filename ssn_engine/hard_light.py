@@ -215,9 +215,6 @@ class CardTracer:
         (h, w) as ``feet``, of each pixel's far surface (where the object's depth there ends, read by the surface
         model): with ``feet``, how deep each pixel reaches (:attr:`deepest_read`: the deepest, in pixels), which
         it does where ``thickness`` is None.
-    least_depth : np.ndarray or None
-        (h, w) with a far surface read: how deep (pixels) each pixel reaches at least (the round cross-section of
-        :func:`depth_map`: the surface model reads a deep body seen end on, and a ball, too shallow).
     lift : int
         How many of the rows down to ``foot`` are the artist's lift (the cutout floats): the pad above and beside
         the cutout grows with it in steps.
@@ -244,7 +241,6 @@ class CardTracer:
         lift: int = 0,
         blurred: Blurred | None = None,
         at_rest: SurfaceDepths | None = None,
-        least_depth: np.ndarray | None = None,
     ) -> None:
         alpha = np.clip(np.asarray(alpha, np.float32), 0.0, 1.0)
         x0, y0 = origin if origin is not None else framing.bbox[:2]
@@ -273,8 +269,6 @@ class CardTracer:
             if feet is not None and far_feet is not None:
                 read = np.maximum(self._surface_depth(far_feet, framing, y0, base)[:lowest] - near, 0.0)
         self.surface_depths: SurfaceDepths = (near, read)
-        if read is not None and least_depth is not None:
-            read = np.maximum(read, np.asarray(least_depth[:lowest], np.float32))
         self.deepest_read = 0.0 if read is None else float(read.max())
         if thickness is not None:
             thick = np.asarray(thickness[:lowest], np.float32)
@@ -1102,7 +1096,6 @@ def _band_card(
     blurred: Blurred | None,
     lift: int,
     at_rest: SurfaceDepths | None = None,
-    least_depth: np.ndarray | None = None,
 ) -> CardTracer:
     """The card of one band of a cutout (:class:`ContactTracer`) lifted ``lift`` rows: its foot and every pixel's
     foot that many rows lower."""
@@ -1119,7 +1112,6 @@ def _band_card(
         lift=lift,
         blurred=blurred,
         at_rest=at_rest,
-        least_depth=least_depth,
     )
 
 
@@ -1243,7 +1235,7 @@ class ContactTracer:
         if thickness is not None:  # the artist's replaces the reading: the round cross-section scaled
             outline = reading.thickness_read
             depth = depth * np.float32(thickness / outline) if outline > 0 else depth * 0
-        elif far_feet is not None:  # each pixel as deep as its far surface, at least the round cross-section
+        elif far_feet is not None:  # each pixel as deep as its far surface
             depth = None
         rows = int(round(lift))
         for i, (c0, c1, foot) in enumerate(bands):
@@ -1272,7 +1264,6 @@ class ContactTracer:
                 None if reading.feet is None else reading.feet[:, a:b],
                 None if far_feet is None else far_feet[:, a:b],
                 blurred.get(i),
-                least_depth=None if far_feet is None else reading.depth[:, a:b],
             )
             if rows > 0 and reading.feet is not None and i not in reading.at_rest:
                 rest = card_at(0)  # the same band standing on the ground: its surfaces as read (once a reading)

@@ -422,23 +422,6 @@ def test_a_far_surface_read_ends_each_pixel_s_depth_there_unless_the_artist_give
     assert given.thickness_read == deep.thickness_read > 2.0
 
 
-def test_a_far_surface_read_shallower_than_the_round_cross_section_reaches_as_deep_as_it(post):
-    """The surface model reads a deep body seen end on too shallow: a far surface read just behind the visible
-    one (2 rows: a sheet) still reaches as deep as the round cross-section (the post as deep as it is wide: the
-    same shadow as with no far surface read), and the thickness read says so."""
-    _, framing = frame_alpha(post, 256)
-    x0, y0, x1, y1 = framing.bbox
-    crop = post[y0:y1, x0:x1].astype(np.float32) / 255
-    u, v = 0.1, 0.6
-    rows = np.arange(framing.n, dtype=np.float32) + 0.5
-    near = np.repeat((framing.to_frame(0.0, FOOT)[1] - rows)[:, None], framing.n, axis=1)
-    shallow = ContactTracer(crop, framing, None, np.stack([near, near - 2 * framing.scale]))
-    rounded = ContactTracer(crop, framing, None, near[None])
-    assert np.abs(_canvas((shallow, framing), u, v, 0.53) - _canvas((rounded, framing), u, v, 0.53)).max() < 2 / 255
-    assert shallow.thickness_read == pytest.approx(rounded.thickness_read, abs=0.05)
-    assert shallow.thickness_read == pytest.approx(1.0, abs=0.1)
-
-
 def test_each_span_of_depth_is_covered_by_its_copies_from_its_start_to_its_end():
     """A pixel's span of depth is drawn as one or two copies of a segment a power of two long: together they
     start at its start and end at its end, with no gap (a span shorter than a unit: one unit from its start)."""
