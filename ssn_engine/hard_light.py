@@ -1056,9 +1056,9 @@ def depth_map(alpha: np.ndarray) -> np.ndarray:
 def local_radius(d: np.ndarray) -> np.ndarray:
     """Each pixel's local radius from ``d`` (float32, its distance to the outline; 0 outside): the radius of the
     largest disk inside the outline that holds it, d(c) of the centre c with |p - c| <= d(c) for which that is
-    largest, at least the pixel's own d. The disks are painted from their centres (the pixels
-    no neighbour's disk nearly holds, ``RIDGE_RISE``: the outline's ridge), each over its bounding box (a pixel
-    near a corner, held by no ridge pixel's disk, keeps its own d)."""
+    largest, at least the pixel's own d. The disks are painted from their centres (the pixels no neighbour's
+    disk nearly holds, ``RIDGE_RISE``: the outline's ridge), each over its bounding box (a pixel near a corner,
+    held by no ridge pixel's disk, keeps its own d)."""
     h, w = d.shape
     padded = np.pad(d, 1)
     ridge = d > 0

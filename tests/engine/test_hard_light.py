@@ -19,9 +19,9 @@ from ssn_engine.hard_light import (
     contact_bands,
     contact_line,
     depth_map,
+    footprint_rise,
     local_radius,
     read_thickness,
-    footprint_rise,
     traced_share,
 )
 from ssn_engine.host_kit.light_map import GaussianLight, LightMap, disk_directions
