@@ -1098,8 +1098,10 @@ def _band_card(
     at_rest: SurfaceDepths | None = None,
 ) -> CardTracer:
     """The card of one band of a cutout (:class:`ContactTracer`) lifted ``lift`` rows: its foot and every pixel's
-    foot that many rows lower."""
+    foot that many rows lower (not worked out where ``at_rest`` gives the surfaces: the card reads no feet then)."""
     shift = np.float32(lift)
+    if at_rest is not None:
+        feet = far_feet = None
     return CardTracer(
         part,
         framing,
