@@ -312,9 +312,7 @@ def install(checkpoint: Path, models: Path, second: Path | None = None) -> float
         f"widths {list(ck['config']['widths'])}, {stages}{SCORES_MARK} "
         f"{scores['val mae']:.2f} rows of R = {R} (pitch {by_pitch}){depth}"
     )
-    pair = ""
-    if second is not None:
-        pair = f"{PAIR_MARK} {SECOND}'s ({second_record})"
+    pair = f"{PAIR_MARK} {SECOND}'s ({second_record})" if second is not None else ""
     meta = models / "model.json"
     config = ModelConfig.from_json(meta.read_text())
     config = dataclasses.replace(
