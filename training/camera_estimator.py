@@ -12,6 +12,10 @@ varies from run to run, while the median of a classifier's distribution stays wi
 graph also averages the mask with its mirror image. With ``--install ssn_engine/models`` the run is then
 installed into the model folder (``--minutes 0``: install the run in ``--out`` without training).
 
+``--data`` may name several folders, ``training.surface make`` ones too: their sets hold many more shapes than the
+dataset's (procedural animals, people in poses, objects with parts on the ground), on which the shipped estimator
+was fine-tuned (``--init-from``, docs/training.md, "Stage 5").
+
 On a GPU machine, where the views do not travel: ``--write-examples FILE`` here packs both splits' inputs (about
 10 MB for 32,160 views), and ``--examples FILE --device cuda`` there trains on them.
 """
@@ -30,7 +34,13 @@ def parse_args(argv: list[str] | None = None) -> argparse.Namespace:
         description=__doc__,
         formatter_class=argparse.RawDescriptionHelpFormatter,
     )
-    parser.add_argument("--data", default="data/heights128", help="a `training.heights make` folder")
+    parser.add_argument(
+        "--data",
+        nargs="+",
+        default=["data/heights128"],
+        help="`training.heights make` folders, or `training.surface make` ones (their many shapes: procedural "
+        "animals, people in poses, objects with parts on the ground)",
+    )
     parser.add_argument("--out", default="runs/camera")
     parser.add_argument("--minutes", type=float, default=30.0, help="training time; 0: only --install")
     parser.add_argument("--batch", type=int, default=64)
@@ -64,7 +74,7 @@ def parse_args(argv: list[str] | None = None) -> argparse.Namespace:
 def main(argv: list[str] | None = None) -> None:
     args = parse_args(argv)
     if args.write_examples:
-        write_examples(Path(args.data), Path(args.write_examples), args.sharp_input)
+        write_examples([Path(d) for d in args.data], Path(args.write_examples), args.sharp_input)
         return
     if args.minutes > 0:
         train(args)

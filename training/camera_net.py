@@ -37,21 +37,28 @@ LABEL_SIGMA = 0.04  # the soft labels' spread, over N
 FOCAL_MEAN, FOCAL_STD = 1.3, 0.35  # focal length over N in the canonical frame (data: median 1.25)
 
 
-def examples(root: Path, split: str, sharp: bool = False) -> tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray]:
+def examples(
+    roots: Path | list[Path], split: str, sharp: bool = False
+) -> tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray]:
     """Inputs (n, INPUT, INPUT), targets (n, 2) (canonical horizon row and focal length over N), pitches (n,) and
-    kinds (n,; indices into ``training.heights.KIND_NAMES``) of a split's views in a ``training.heights make``
-    folder (every ``<split>*.npz``: the dataset's views and any others drawn with ``make --view-seed``): from the
+    kinds (n,; indices into ``training.heights.KIND_NAMES``, -1 unknown) of a split's views in one or more
+    ``training.heights make`` or ``training.surface make`` folders (every ``<split>*.npz``: the dataset's views,
+    any others drawn with ``heights make --view-seed``, the surface sets' other shapes): from the
     128-pixel masks scaled up, as the shipped estimator was trained, or (``sharp``) the inputs ``make`` writes from
     the masks at N = 256, as sharp as the engine's."""
-    paths = sorted(root.glob(f"{split}*.npz"))
+    roots = [roots] if isinstance(roots, Path) else roots
+    paths = sorted(p for root in roots for p in root.glob(f"{split}*.npz"))
     if not paths:
-        raise SystemExit(f"no {split}*.npz in {root}: make them with `python -m training.heights make`")
+        where = ", ".join(map(str, roots))
+        raise SystemExit(f"no {split}*.npz in {where}: make them with `python -m training.heights make`")
     data = load(paths)
     if sharp:
         if "estimator" not in data:
-            raise SystemExit(f"--sharp-input: {root}'s {split}*.npz predate it; make them again with `heights make`")
+            raise SystemExit(f"--sharp-input: some {split}*.npz predate it; make them again with `heights make`")
         x = data["estimator"].astype(np.float32) / 255
         return x, data["estimator_camera"].astype(np.float32), data["pitch"], data["kind"]
+    seen = data["mask"].reshape(len(data["mask"]), -1).max(1) > 0  # a surface set's speck of a view may bin to none
+    data = {k: v[seen] for k, v in data.items()}
     n = data["mask"].shape[-1]
     xs, ys = [], []
     for mask, camera in zip(data["mask"], data["camera"], strict=True):
@@ -63,8 +70,8 @@ def examples(root: Path, split: str, sharp: bool = False) -> tuple[np.ndarray, n
 
 def sampling_weights(kinds: np.ndarray, kind_weights: tuple[float, ...]) -> torch.Tensor:
     """Per-view sampling weights (n,) that draw each kind (object, human, animal) ``kind_weights`` times as often
-    as its share of the views."""
-    return torch.tensor(np.asarray(kind_weights, np.float64)[kinds])
+    as its share of the views; a view of no recorded kind (a surface set's) once."""
+    return torch.tensor(np.where(kinds < 0, 1.0, np.asarray(kind_weights, np.float64)[np.maximum(kinds, 0)]))
 
 
 def _block(cin: int, cout: int) -> nn.Sequential:
@@ -201,11 +208,11 @@ def predict(net: CameraNet, x: np.ndarray) -> np.ndarray:
 EXAMPLE_KEYS = ("x", "y", "pitch", "kind")
 
 
-def write_examples(root: Path, path: Path, sharp: bool = False) -> None:
+def write_examples(roots: list[Path], path: Path, sharp: bool = False) -> None:
     """Both splits' examples in one compressed file (inputs as 8-bit), small enough to travel to a GPU machine."""
     parts = {}
     for split in ("train", "val"):
-        for key, value in zip(EXAMPLE_KEYS, examples(root, split, sharp), strict=True):
+        for key, value in zip(EXAMPLE_KEYS, examples(roots, split, sharp), strict=True):
             parts[f"{split}_{key}"] = np.round(value * 255).astype(np.uint8) if key == "x" else value
     np.savez_compressed(path, **parts)
     print(f"{len(parts['train_x'])} train and {len(parts['val_x'])} val views -> {path}")
@@ -214,7 +221,7 @@ def write_examples(root: Path, path: Path, sharp: bool = False) -> None:
 def read_examples(args: argparse.Namespace, split: str) -> tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray]:
     """:func:`examples` of a split, from ``--examples`` (a :func:`write_examples` file) where given."""
     if not args.examples:
-        return examples(Path(args.data), split, args.sharp_input)
+        return examples([Path(d) for d in args.data], split, args.sharp_input)
     with np.load(args.examples) as data:
         x, y, pitch, kind = (data[f"{split}_{key}"] for key in EXAMPLE_KEYS)
     return x.astype(np.float32) / 255, y, pitch, kind
@@ -271,6 +278,7 @@ def train(args: argparse.Namespace) -> None:
         "best_step": min(history, key=lambda h: h["horizon_px"] + 0.5 * h["focal_px"])["step"],
         "steps": step,
         "train_views": len(x),
+        "init_from": Path(args.init_from).name if args.init_from else None,
         "kind_weights": list(args.kind_weights),
         "minutes": round((time.monotonic() - start) / 60, 1),
         "device": torch.cuda.get_device_name(device) if device.type == "cuda" else "cpu",
@@ -301,9 +309,13 @@ def install(run: Path, models: Path) -> None:
         f"step with the lowest validation error kept ({summary['best_step']}); validation median errors: horizon "
         f"{val['all']['horizon_px']:.1f} px, focal length {val['all']['focal_px']:.1f} px (canonical frame, N = 256)"
     )
+    if summary.get("init_from") and config.camera_training:  # a fine-tune of the installed estimator
+        camera_training = f"{config.camera_training}; then fine-tuned on {camera_training}"
     meta_path.write_text(dataclasses.replace(config, camera="camera.onnx", camera_training=camera_training).to_json())
     rows = "\n".join(
-        f"| {name} | {r['views']} | {r['horizon_px']:.1f} | {r['focal_px']:.1f} |" for name, r in val.items()
+        f"| {name} | {r['views']} | {r['horizon_px']:.1f} | {r['focal_px']:.1f} |"
+        for name, r in val.items()
+        if r["views"]
     )
     section = (
         f"{CARD_SECTION}\n\n"

@@ -89,7 +89,7 @@ def test_a_fragment_alone_casts_a_shadow_and_its_camera_is_never_refused(tmp_pat
     if not camera:
         horizon, fov = READ.search(printed).groups()
         again, _ = render(tmp_path, "again", alpha, capsys, "--horizon", horizon, "--fov", fov)
-        assert again.max() > 0.2
+        assert again.max() > 0.1  # the camera a sliver reads grazes its foot: its shadow is a sliver too
 
 
 @pytest.mark.parametrize("level", [0.5, 0.3])

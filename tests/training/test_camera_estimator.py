@@ -89,6 +89,16 @@ def test_the_estimator_trains_exports_and_installs_into_a_model(tmp_path):
     ao = model.predict_ao(mask)  # blind: the plain AOP (a given camera gets the camera-taking one)
     np.testing.assert_array_equal(model.render(mask, ao, elm), model.render(mask, ao, elm, cameras))
 
+    # a fine-tune of the installed graph (--init-from): its record keeps the training it started from
+    before = json.loads((folder / "model.json").read_text())["camera_training"]
+    tuned = tmp_path / "tuned"
+    main(
+        ["--data", str(tmp_path), "--out", str(tuned), "--minutes", "0.05", "--batch", "4", "--val-every", "1"]
+        + ["--init-from", str(folder / "camera.onnx"), "--install", str(folder)]
+    )
+    after = json.loads((folder / "model.json").read_text())["camera_training"]
+    assert after.startswith(before + "; then fine-tuned on 3 train views")
+
 
 def test_kind_weights_draw_a_kind_more_often():
     """``--kind-weights 1 1 3``: among views of which a quarter are animals, half the draws are animals."""
@@ -168,3 +178,28 @@ def test_the_estimator_learns_from_inputs_as_sharp_as_the_engines(tmp_path):
     np.testing.assert_allclose(y[:, 1], y_old[:, 1], rtol=0.06)  # focal lengths
     partial = lambda a: ((a > 0.05) & (a < 0.95)).sum()  # noqa: E731
     assert partial(x) < 0.8 * partial(x_old)  # fewer blurred edge pixels
+
+
+def test_surface_sets_teach_the_estimator_beside_its_own_views(tmp_path):
+    """A folder of ``training.surface make`` sets (bit-packed masks, no kinds: the procedural animals, people in
+    poses, objects with parts on the ground) trains the estimator too: the same views give nearly the same inputs
+    and targets (their masks cut at half coverage), an empty view is left out, and a view of no recorded kind is
+    drawn as often as any."""
+    from training.camera_net import examples, sampling_weights
+    from training.data import surface_views
+
+    (tmp_path / "own").mkdir()
+    (tmp_path / "surface").mkdir()
+    _box_views(tmp_path / "own")
+    mesh = meshes.normalise(box((0.5, 0.35, 0.3), (0.0, 0.175, 0.0)))
+    topo = meshes.topology(mesh)
+    views = [surface_views.view_record(mesh, topo, yaw, pitch, 45.0) for yaw, pitch in ((0.0, 0.0), (60.0, 15.0))]
+    views.append(views[0] | {"mask": np.zeros_like(views[0]["mask"])})  # a speck that binned to nothing
+    surface_views.save(tmp_path / "surface" / "val_s.npz", views, [0.0, 15.0, 0.0])
+    x_own, y_own, _, _ = examples(tmp_path / "own", "val")
+    x, y, pitch, kind = examples(tmp_path / "surface", "val")
+    assert len(x) == 2 and list(pitch) == [0.0, 15.0] and (kind < 0).all()
+    np.testing.assert_allclose(y[:, 0], y_own[:2, 0], atol=0.02)  # horizon rows over N: the framing follows the
+    np.testing.assert_allclose(y[:, 1], y_own[:2, 1], rtol=0.05)  # mask, a pixel less at its edges cut at half
+    assert np.abs(x - x_own[:2]).mean() < 0.02
+    assert np.allclose(sampling_weights(np.array([-1, 2]), (1.0, 1.0, 3.0)).numpy(), [1.0, 3.0])

@@ -110,9 +110,22 @@ def make(
     np.savez_compressed(out, **arrays, cameras=np.array(cameras))
 
 
+UNKNOWN_KIND = -1  # a view of a surface set, which records no kind
+
+
+def _surface_set(f: Any) -> dict[str, np.ndarray]:
+    """A ``training.surface make`` file's views as :data:`KEYS`: its bit-packed masks (coverage 0 or 1 at R), its
+    cameras at R, its pitches, and :data:`UNKNOWN_KIND`. Its many shapes (procedural animals, people in poses,
+    objects with parts on the ground) teach the camera estimator too."""
+    n = len(f["camera"])
+    masks = np.unpackbits(f["masks"], axis=1)[:, : R * R].reshape(n, R, R).astype(np.float16)
+    return {"mask": masks, "camera": f["camera"], "kind": np.full(n, UNKNOWN_KIND), "pitch": f["pitch"]}
+
+
 def load(paths: list[Path]) -> dict[str, np.ndarray]:
-    """The views of several :func:`make` files, concatenated; the camera estimator's inputs (:data:`ESTIMATOR_KEYS`)
-    too where every file has them (files made without them lack them)."""
-    parts = [np.load(p) for p in paths]
-    keys = KEYS + (ESTIMATOR_KEYS if all(set(ESTIMATOR_KEYS) <= set(p.files) for p in parts) else ())
+    """The views of several :func:`make` files or ``training.surface make`` files, concatenated; the camera
+    estimator's inputs (:data:`ESTIMATOR_KEYS`) too where every file has them (files made without them lack them)."""
+    files = [np.load(p) for p in paths]
+    parts = [_surface_set(f) if "masks" in f.files else {k: f[k] for k in f.files} for f in files]
+    keys = KEYS + (ESTIMATOR_KEYS if all(set(ESTIMATOR_KEYS) <= set(p) for p in parts) else ())
     return {k: np.concatenate([p[k] for p in parts]) for k in keys}
