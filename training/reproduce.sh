@@ -1,5 +1,5 @@
 #!/usr/bin/env bash
-# The shipped model (ssn_engine/models, v3.10) from the meshes: every stage that made it, in order.
+# The shipped model (ssn_engine/models, v3.11) from the meshes: every stage that made it, in order.
 #   1. the datasets: data/ssn128 (the AOP's), data/ssn256 (paper cameras) and data/ssn256c (continuous cameras)
 #   2. the AOP: two networks, the shipped AO map is their mean
 #   3. the geometry-guided SR: a first run and three fine-tunes, each from the one before
@@ -9,17 +9,20 @@
 #   7. the surface model (the hard-light tracer's pixel heights): its data, training on a GPU, then installed in OUT
 #   8. the surface model fine-tuned on the CPU with new kinds of shapes and the depth, installed with the graph of
 #      stage 7 kept as the second reading (each pixel's height the higher of the two)
+#   9. the camera estimator fine-tuned on stage 8's sets (their many shapes), chosen on validation views of their
+#      kinds, installed in OUT
 # On this project's 2-core CPU machine the stages took about: datasets 1 to 2 worker-hours each, AOPs 45 and
 # 42 min, SR 59 + 85 + 27 + 42 min, the camera AOPs 28 min side by side, the estimator 35 min (docs/training.md);
 # the surface model's data about 3 minutes a set (the later sets 1 minute, or 25 s of people), its training
-# 7.3 + 4.1 + 5.6 minutes on one H200 GPU (SURFACE_DEVICE), its fine-tuning 60 minutes on the CPU.
+# 7.3 + 4.1 + 5.6 minutes on one H200 GPU (SURFACE_DEVICE), its fine-tuning 60 minutes on the CPU;
+# the estimator's fine-tuning 40 minutes.
 # Every training stage resumes from its run's last.pt, so re-running the script continues a stopped stage.
 # Install the result with: cp OUT/*.onnx OUT/model.json OUT/MODEL_CARD.md ssn_engine/models/
 # Usage: training/reproduce.sh [DATA] [RUNS] [OUT]   (env: DRY_RUN=1 prints the commands without running them)
 set -eu
 DATA=${1:-data}
 RUNS=${2:-runs}
-OUT=${3:-$RUNS/m_v310}
+OUT=${3:-$RUNS/m_v311}
 
 run() {
     echo "+ $*"
@@ -126,3 +129,15 @@ surface_sets "$FT" g "$(seq 81 86)" --sources grounded --grounded 200
 run python -m training.surface train --data "$FT" --run "$RUNS/surface_e" --minutes 60 --batch 32 --lr 3e-4 \
     --device cpu --init "$RUNS/surface_d/last.pt" --depth --depth-weight 4
 run python -m training.surface install "$RUNS/surface_e/last.pt" --models "$OUT" --second "$OUT/surface.onnx"
+
+# 9. The camera estimator fine-tuned (docs/training.md, "Stage 5"): from the graph installed in stage 6, on stage
+# 8's sets (the meshes and procedural shapes, people standing and in poses, procedural animals, objects with parts
+# on the ground), the step chosen on validation views of the same kinds.
+Q="$DATA/surface_q"
+run python -m training.surface make --split val --cameras continuous paper --sources quadruped --quadrupeds 200 \
+    --out "$Q/val_q.npz"
+run python -m training.surface make --split val --cameras continuous paper --sources anny_poses --out "$Q/val_a.npz"
+run python -m training.surface make --split val --cameras continuous paper --sources grounded --grounded 200 \
+    --out "$Q/val_g.npz"
+run python -m training.camera_estimator --data "$FT" "$Q" --out "$RUNS/camera_ft" --minutes 40 --lr 5e-4 \
+    --init-from "$OUT/camera.onnx" --install "$OUT"
