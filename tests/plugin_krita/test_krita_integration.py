@@ -72,8 +72,9 @@ def test_generate_in_real_krita(pykrita, tmp_path, depth):
     if depth == "U8":
         sel = case["with_selection"]
         assert sel["shadow_index"] == sel["source_index"] - 1
-        # half the cutout selected (its left half, the low sun from the left): a smaller shadow, as long and narrower
-        assert sel["total"]["sum"] < 0.9 * first["total"]["sum"]
+        # half the cutout selected (its left half, the low sun from the left): a smaller shadow, narrower (the
+        # camera read from the half's own outline, so not exactly as long)
+        assert sel["total"]["sum"] < 0.95 * first["total"]["sum"]
         assert case["selection_unchanged"] and case["source_identical_after_selection"]
         # Select All (issue #14, item 4): refused with a warning instead of a shadow over the whole picture
         assert any("whole canvas" in text for level, text in case["select_all_messages"] if level == "warning")
