@@ -37,7 +37,8 @@ def parse_args(argv: list[str] | None = None) -> argparse.Namespace:
     parser.add_argument(
         "--data",
         nargs="+",
-        default=["data/heights128"],
+        type=Path,
+        default=[Path("data/heights128")],
         help="`training.heights make` folders, or `training.surface make` ones (their many shapes: procedural "
         "animals, people in poses, objects with parts on the ground)",
     )
@@ -74,7 +75,7 @@ def parse_args(argv: list[str] | None = None) -> argparse.Namespace:
 def main(argv: list[str] | None = None) -> None:
     args = parse_args(argv)
     if args.write_examples:
-        write_examples([Path(d) for d in args.data], Path(args.write_examples), args.sharp_input)
+        write_examples(args.data, Path(args.write_examples), args.sharp_input)
         return
     if args.minutes > 0:
         train(args)

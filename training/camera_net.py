@@ -221,7 +221,7 @@ def write_examples(roots: list[Path], path: Path, sharp: bool = False) -> None:
 def read_examples(args: argparse.Namespace, split: str) -> tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray]:
     """:func:`examples` of a split, from ``--examples`` (a :func:`write_examples` file) where given."""
     if not args.examples:
-        return examples([Path(d) for d in args.data], split, args.sharp_input)
+        return examples(args.data, split, args.sharp_input)
     with np.load(args.examples) as data:
         x, y, pitch, kind = (data[f"{split}_{key}"] for key in EXAMPLE_KEYS)
     return x.astype(np.float32) / 255, y, pitch, kind

@@ -27,7 +27,7 @@ from .items import Item
 from .sources import DEFAULT_SOURCES, all_items, build_mesh
 from .views import VIEWS, draw_view
 
-__all__ = ["ESTIMATOR_KEYS", "KEYS", "KIND_NAMES", "R", "load", "make", "split_views", "view_record"]
+__all__ = ["ESTIMATOR_KEYS", "KEYS", "KIND_NAMES", "R", "load", "make", "split_views", "unpacked_masks", "view_record"]
 
 FRAME = 256  # the frame the masks are covered at (the engine's N)
 R = 128
@@ -113,19 +113,25 @@ def make(
 UNKNOWN_KIND = -1  # a view of a surface set, which records no kind
 
 
+def unpacked_masks(packed: np.ndarray) -> np.ndarray:
+    """(n, R, R) bool: the bit-packed masks of a ``training.surface make`` file (``masks``, a row of bytes a
+    view)."""
+    return np.unpackbits(packed, axis=1)[:, : R * R].reshape(-1, R, R).astype(bool)
+
+
 def _surface_set(f: Any) -> dict[str, np.ndarray]:
-    """A ``training.surface make`` file's views as :data:`KEYS`: its bit-packed masks (coverage 0 or 1 at R), its
-    cameras at R, its pitches, and :data:`UNKNOWN_KIND`. Its many shapes (procedural animals, people in poses,
-    objects with parts on the ground) teach the camera estimator too."""
-    n = len(f["camera"])
-    masks = np.unpackbits(f["masks"], axis=1)[:, : R * R].reshape(n, R, R).astype(np.float16)
-    return {"mask": masks, "camera": f["camera"], "kind": np.full(n, UNKNOWN_KIND), "pitch": f["pitch"]}
+    """A ``training.surface make`` file's views as :data:`KEYS`: its masks (coverage 0 or 1 at R), its cameras at
+    R, its pitches, and :data:`UNKNOWN_KIND`. Its many shapes (procedural animals, people in poses, objects with
+    parts on the ground) teach the camera estimator too."""
+    masks = unpacked_masks(f["masks"]).astype(np.float16)
+    return {"mask": masks, "camera": f["camera"], "kind": np.full(len(masks), UNKNOWN_KIND), "pitch": f["pitch"]}
 
 
 def load(paths: list[Path]) -> dict[str, np.ndarray]:
     """The views of several :func:`make` files or ``training.surface make`` files, concatenated; the camera
     estimator's inputs (:data:`ESTIMATOR_KEYS`) too where every file has them (files made without them lack them)."""
     files = [np.load(p) for p in paths]
-    parts = [_surface_set(f) if "masks" in f.files else {k: f[k] for k in f.files} for f in files]
-    keys = KEYS + (ESTIMATOR_KEYS if all(set(ESTIMATOR_KEYS) <= set(p) for p in parts) else ())
+    estimator = all(set(ESTIMATOR_KEYS) <= set(f.files) for f in files)
+    keys = KEYS + (ESTIMATOR_KEYS if estimator else ())
+    parts = [_surface_set(f) if "masks" in f.files else {k: f[k] for k in keys} for f in files]
     return {k: np.concatenate([p[k] for p in parts]) for k in keys}

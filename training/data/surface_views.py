@@ -24,7 +24,7 @@ from ssn_engine.frames import nearest_fill, resample_frames
 
 from ..canvas_eval.oracle import foot_image_rows, surface_depths
 from . import meshes
-from .camera_views import split_views
+from .camera_views import split_views, unpacked_masks
 from .items import stable_hash
 from .meshes import yawed
 from .render_bases import mask_coverage, view_camera
@@ -148,7 +148,7 @@ def load(paths: list[Path]) -> dict[str, np.ndarray]:
     }
     i = 0
     for f in files:
-        m = np.unpackbits(f["masks"], axis=1)[:, : R * R].reshape(-1, R, R).astype(bool)
+        m = unpacked_masks(f["masks"])
         part = slice(i, i + len(m))
         out["mask"][part] = m
         for key, name in (("heights", "height"), ("depths", "depth")):
