@@ -186,30 +186,43 @@ def union_box(boxes: list[tuple[int, int, int, int]]) -> tuple[int, int, int, in
 
 
 def placed_sum(
-    parts: list[tuple[float, np.ndarray, int, int]], darker: tuple[np.ndarray, int, int] | None = None
+    parts: list[tuple[float, np.ndarray, int, int]], darker: tuple[CanvasShadow, float] | None = None
 ) -> tuple[np.ndarray, int, int]:
     """Placed values (share, values (h, w), x, y), each array's top-left pixel at (x, y), summed with their
-    shares over the union of their boxes, and where ``darker`` (values, x, y) is darker, that: (values, x, y),
-    clipped to [0, 1]; (0, 0) values when every part is empty."""
-    boxes = [(v, x, y) for _, v, x, y in parts] + ([darker] if darker is not None else [])
-    boxes = [b for b in boxes if b[0].size]
+    shares over the union of their boxes, and where ``darker`` (a shadow, times a scale) is darker, that:
+    (values, x, y), clipped to [0, 1]; (0, 0) values when every part is empty."""
+    boxes = [(x, y, v.shape[1], v.shape[0]) for _, v, x, y in parts if v.size]
+    shade, scale = darker if darker is not None and not darker[0].is_empty else (None, 1.0)
+    if shade is not None:
+        boxes.append((shade.x, shade.y, shade.shape[1], shade.shape[0]))
     if not boxes:
         return np.zeros((0, 0), np.float32), 0, 0
     whole = [(v, x, y) for share, v, x, y in parts if v.size and share == 1.0]
-    if len(boxes) == 1 and darker is None and whole:  # one part, whole: nothing to add up
+    if len(boxes) == 1 and shade is None and whole:  # one part, whole: nothing to add up
         values, x, y = whole[0]
         return np.clip(values, 0.0, 1.0, dtype=np.float32), x, y
-    x0, y0, x1, y1 = union_box([(x, y, v.shape[1], v.shape[0]) for v, x, y in boxes])
-    out = np.zeros((y1 - y0, x1 - x0), np.float32)
-    for share, values, x, y in parts:
-        if values.size:
-            window = out[y - y0 : y - y0 + values.shape[0], x - x0 : x - x0 + values.shape[1]]
-            window += values if share == 1.0 else np.float32(share) * values
-    if darker is not None and darker[0].size:
-        values, x, y = darker
-        window = out[y - y0 : y - y0 + values.shape[0], x - x0 : x - x0 + values.shape[1]]
-        np.maximum(window, values, out=window)
-    return np.clip(out, 0.0, 1.0, out=out), x0, y0
+    x0, y0, x1, y1 = union_box(boxes)
+    out = np.empty((y1 - y0, x1 - x0), np.float32)
+
+    def fill(rows: slice) -> None:  # rows of ``out``, on the machine's cores
+        band = out[rows]
+        band.fill(0.0)
+        for share, values, x, y in parts:
+            a, b = max(rows.start, y - y0), min(rows.stop, y - y0 + values.shape[0])
+            if values.size and b > a:
+                window = band[a - rows.start : b - rows.start, x - x0 : x - x0 + values.shape[1]]
+                part = values[a - (y - y0) : b - (y - y0)]
+                window += part if share == 1.0 else np.float32(share) * part
+        if shade is not None:
+            dy = shade.y - y0
+            a, b = max(rows.start, dy), min(rows.stop, dy + shade.shape[0])
+            if b > a:
+                window = band[a - rows.start : b - rows.start, shade.x - x0 : shade.x - x0 + shade.shape[1]]
+                np.maximum(window, shade.rows(slice(a - dy, b - dy), scale), out=window)
+        np.clip(band, 0.0, 1.0, out=band)
+
+    for_each_stripe(fill, 0, y1 - y0, x1 - x0)
+    return out, x0, y0
 
 
 def as_unit_float(alpha: np.ndarray) -> np.ndarray:

@@ -59,7 +59,7 @@ from __future__ import annotations
 import math
 from collections.abc import Callable
 from dataclasses import dataclass, field, replace
-from functools import cached_property, partial
+from functools import partial
 
 import numpy as np
 from PIL import Image, ImageFilter
@@ -166,19 +166,15 @@ class _Level:
 
 @dataclass(frozen=True)
 class _Source:
-    """The cutout's alpha at one resolution: (h, w) float32 with its foot rows filled, and how its pixels map
-    to frame coordinates: frame = pixel * scale + (offset_x, offset_y)."""
+    """The cutout's alpha at one resolution: (h, w) float32 with its foot rows filled, how its pixels map to
+    frame coordinates: frame = pixel * scale + (offset_x, offset_y), and ``lit_rows``: one past its last row
+    holding any of the cutout (below it lie the ground's rows down to the foot)."""
 
     alpha: np.ndarray
     scale: float
     offset_x: float
     offset_y: float
-
-    @cached_property
-    def lit_rows(self) -> int:
-        """One past its last row holding any of the cutout (below it lie the ground's rows down to the foot)."""
-        rows = np.flatnonzero(self.alpha.any(axis=1))
-        return int(rows[-1]) + 1 if rows.size else 0
+    lit_rows: int
 
 
 # a card's blurred copies of its cutout, kept for a card of the same cutout and another foot: its pad and, per
@@ -295,17 +291,26 @@ class CardTracer:
             out[pad : pad + lowest, pad : pad + width] = values
             return out
 
-        def spread(values: np.ndarray) -> np.ndarray:  # with the pad, each pad pixel as its nearest border pixel
-            return np.pad(values, ((pad, foot - lowest), (pad, pad)), mode="edge")
+        def spread(values: np.ndarray, centre: np.ndarray) -> np.ndarray:  # ``centre`` with the pad, each pad
+            out = np.empty((pad + foot, width + 2 * pad), np.float32)  # pixel as ``values``' nearest border pixel
+            out[pad : pad + lowest, :pad] = values[:, :1]
+            out[pad : pad + lowest, pad : pad + width] = values
+            out[pad : pad + lowest, pad + width :] = values[:, -1:]
+            out[:pad] = out[pad]
+            out[pad + lowest :] = out[pad + lowest - 1]
+            if centre is not values:
+                out[pad : pad + lowest, pad : pad + width] = centre
+            return out
 
         alpha = padded(alpha)
         # the surface's depth reaches into the pad as it does around the outline within the crop (the blurred
         # copies spread there): a part read behind its card takes its blurred edge with it, leaving no trace of
         # it on the card; the pad sweeps no depth of its own (a part's edge is thin: the round cross-section)
-        self._near = {1: spread(near)}  # per reduction: depth behind the card of the surface each pixel shows, its
-        self._far = {1: self._near[1].copy()}  # pixels; and of its far end
-        self._far[1][pad : pad + lowest, pad : pad + width] = far
-        self._full = _Source(alpha, s, framing.offset_x + (x0 - pad) * s, framing.offset_y + (y0 - pad) * s)
+        self._near = {1: spread(near, near)}  # per reduction: depth behind the card of the surface each pixel
+        self._far = {1: spread(near, far)}  # shows, its pixels; and of its far end
+        self._full = _Source(
+            alpha, s, framing.offset_x + (x0 - pad) * s, framing.offset_y + (y0 - pad) * s, pad + lowest
+        )
         self._sources: dict[int, _Source] = {}
         self._swept_depths: dict[tuple[int, int], tuple[np.ndarray, np.ndarray]] = {}  # per reduction and sweep's
         self._on_card: dict[int, np.ndarray | None] = {}  # per reduction: the pixels whose surface is on the card
@@ -333,7 +338,7 @@ class CardTracer:
             h, w = full.alpha.shape
             padded = np.pad(full.alpha, ((0, -h % k), (0, -w % k)))  # zeros below the foot: ground, and right
             small = np.asarray(Image.fromarray(padded, "F").reduce(k))
-            self._sources[k] = _Source(small, full.scale * k, full.offset_x, full.offset_y)
+            self._sources[k] = _Source(small, full.scale * k, full.offset_x, full.offset_y, -(-full.lit_rows // k))
             far, near = (np.pad(d[1], ((0, -h % k), (0, -w % k))) for d in (self._far, self._near))
             self._far[k] = far.reshape(h // k + (h % k > 0), k, -1, k).max(axis=(1, 3)) / k
             self._near[k] = near.reshape(h // k + (h % k > 0), k, -1, k).min(axis=(1, 3)) / k
@@ -509,15 +514,18 @@ class CardTracer:
         b = self._world_per_pixel * source.scale / self._full.scale  # world units per pixel of this source
         fx = (np.asarray(cols, np.float64) + 0.5) * source.scale + source.offset_x
         fy = (np.asarray(rows, np.float64) + 0.5) * source.scale + source.offset_y
-        rays = cam.rays(fx, fy)
-        t = -cam.centre[2] / np.where(np.abs(rays[:, 2]) > 1e-12, rays[:, 2], 1e-12)
-        on_card = cam.centre + t[:, None] * rays  # where the pixel's ray meets the card's plane (z = 0)
-        r = rays / np.hypot(rays[:, 0], rays[:, 2])[:, None]
-        gx, gz = b * (r[:, 0] + r[:, 1] * dx), b * (r[:, 2] + r[:, 1] * dz)  # the ground shift of its shadow
-        x, h = -(dz * gx - dx * gz) / det, -(-az * gx + ax * gz) / det  # on the card, where that content lands
-        project = cam.projection()[:, [0, 1, 3]]  # the card's points (x, h, 0) -> frame
-        p0 = np.stack([on_card[:, 0], on_card[:, 1], np.ones_like(x)], axis=1) @ project.T
-        p1 = np.stack([x, h, np.zeros_like(x)], axis=1) @ project.T
+        m = cam.ray_matrix()  # each pixel's ray, at a unit camera depth
+        rays = [m[i, 0] * fx + m[i, 1] * fy + m[i, 2] for i in range(3)]
+        # where the pixel's ray meets the card's plane (z = 0), t along it, projects back onto the pixel, t deep
+        t = -cam.centre[2] / np.where(np.abs(rays[2]) > 1e-12, rays[2], 1e-12)
+        p0 = np.stack([t * fx, t * fy, t], axis=1)
+        # the ground shift of its shadow, b (r_x + r_y dx, r_z + r_y dz) along the ray r scaled to a unit
+        # horizontal length, lands on the card at x = b (dx r_z - dz r_x) / det, h = b (az r_x - det r_y -
+        # ax r_z) / det: linear in r, as is its projection (the card's points (x, h, 0) -> frame)
+        on_card = b / det * np.array([[-dz, az], [0.0, -det], [dx, -ax]])
+        to_frame = on_card @ cam.projection()[:, :2].T
+        p1 = np.stack(rays, axis=1) @ to_frame
+        p1 /= np.hypot(rays[0], rays[2])[:, None]
         return p0, p1
 
     def _depth_steps(self, source: _Source, w: np.ndarray, cols: np.ndarray, rows: np.ndarray) -> np.ndarray:
@@ -801,24 +809,29 @@ def _sweep_into(out: np.ndarray, part: np.ndarray, origin: np.ndarray, span: np.
     length = float(np.hypot(*span))
     n = max(1, math.ceil(length))
     unit = span / n if length > 0 else np.zeros(2)
-    cur, off = part, np.zeros(2, int)  # cur: the max of part over offsets 0 .. covered-1 steps, its origin ``off``
-    covered = 1
+    shifts, covered = [], 1  # each doubling's shift: the copies so far moved by it cover twice as many offsets
     while covered < n:
         add = min(covered, n - covered)
-        d = np.round(unit * add).astype(int)
-        lo, hi = np.minimum(d, 0), np.maximum(d, 0)
-        h, w = cur.shape
-        grown = np.zeros((h + hi[1] - lo[1], w + hi[0] - lo[0]), np.uint8)
-        grown[-lo[1] : -lo[1] + h, -lo[0] : -lo[0] + w] = cur
-        view = grown[d[1] - lo[1] : d[1] - lo[1] + h, d[0] - lo[0] : d[0] - lo[0] + w]
-        np.maximum(view, cur, out=view)
-        cur, off, covered = grown, off + lo, covered + add
+        shifts.append(np.round(unit * add).astype(int))
+        covered += add
+    steps = np.array(shifts, int).reshape(-1, 2)
+    off = np.minimum(steps, 0).sum(axis=0)  # where, from ``origin``, the swept part's box starts
+    h, w = part.shape
+    size = np.array([w, h]) + np.abs(steps).sum(axis=0)
+    swept = np.zeros((size[1], size[0]), np.uint8)  # one buffer; each doubling maxes its filled box, shifted, in
+    at = -off  # part's corner in ``swept``, then the filled box's
+    swept[at[1] : at[1] + h, at[0] : at[0] + w] = part
+    for d in steps:
+        src = swept[at[1] : at[1] + h, at[0] : at[0] + w]
+        dst = swept[at[1] + d[1] : at[1] + d[1] + h, at[0] + d[0] : at[0] + d[0] + w]
+        np.maximum(dst, src, out=dst)  # (overlapping views: numpy reads a copy of ``src``)
+        at, h, w = np.minimum(at, at + d), h + abs(int(d[1])), w + abs(int(d[0]))
     at = origin + off
     y0, x0 = max(0, at[1]), max(0, at[0])
-    y1, x1 = min(out.shape[0], at[1] + cur.shape[0]), min(out.shape[1], at[0] + cur.shape[1])
+    y1, x1 = min(out.shape[0], at[1] + swept.shape[0]), min(out.shape[1], at[0] + swept.shape[1])
     if y1 > y0 and x1 > x0:
         view = out[y0:y1, x0:x1]
-        np.maximum(view, cur[y0 - at[1] : y1 - at[1], x0 - at[0] : x1 - at[0]], out=view)
+        np.maximum(view, swept[y0 - at[1] : y1 - at[1], x0 - at[0] : x1 - at[0]], out=view)
 
 
 def _warp(
@@ -1253,7 +1266,7 @@ class ContactTracer:
                 weight[c1 - r : c1 + r] = 1.0 - (np.arange(-r, r) + 0.5) / (2 * r)
             used = np.flatnonzero(weight > 0)
             a, b = int(used[0]), int(used[-1]) + 1
-            part = alpha[:, a:b] * weight[a:b]
+            part = alpha[:, a:b] if len(bands) == 1 else alpha[:, a:b] * weight[a:b]  # (a card copies its alpha)
 
             card_at = partial(
                 _band_card,
@@ -1285,4 +1298,6 @@ class ContactTracer:
         self, u: float, v: float, angle: float, framing: Framing, clip: bool = True
     ) -> tuple[np.ndarray, int, int]:
         """As :meth:`CardTracer.shadow`, the cards' shadows added (clipped to 1)."""
+        if len(self.cards) == 1:  # (a card's shadow lies in [0, 1])
+            return self.cards[0].shadow(u, v, angle, framing, clip)
         return placed_sum([(1.0, *c.shadow(u, v, angle, framing, clip)) for c in self.cards])

@@ -12,6 +12,8 @@ right vector r, the world up y, and its horizontal forward vector f, so
 
 from __future__ import annotations
 
+import functools
+
 import numpy as np
 from scipy.special import erf
 
@@ -131,8 +133,13 @@ def _add_disk(out: np.ndarray, light: GaussianLight) -> None:
 def light_power(light_map: LightMap, h: int = NETWORK_SHAPE[0]) -> np.ndarray:
     """Each light's unoccluded irradiance of the ground E0_i = sum_t L_t W_t (conventions, "Shadow value") on
     the (h, 2h) texel grid, shape (lights,): the shares in which their shadows add up."""
-    weights = texel_weights(h)
-    return np.array([float((render_light_map(LightMap([light]), h) * weights).sum()) for light in light_map])
+    return np.array([_light_power(light, h) for light in light_map])
+
+
+@functools.lru_cache(maxsize=64)  # a light kept while the artist drags a lift or changes another light
+def _light_power(light: GaussianLight, h: int) -> float:
+    """One light's E0 (:func:`light_power`)."""
+    return float((render_light_map(LightMap([light]), h) * texel_weights(h)).sum())
 
 
 def network_elm(elm: np.ndarray) -> np.ndarray:

@@ -16,7 +16,6 @@ s = sum_i (E0_i / E0) s_i.
 from __future__ import annotations
 
 import math
-from collections.abc import Callable
 from typing import Any
 
 import numpy as np
@@ -288,19 +287,18 @@ class ShadowSession:
         object's extent in depth, its contact), that is kept: s_small = max(traced, h network), h =
         ``GIVEN_CAMERA_HEDGE`` where the camera is given, else 1 (faded as the object floats: :attr:`lifted`).
         The two parts add up in their shares of E0."""
-        return self._on_canvas(lambda: frames, plan, clip, framing or self.framing)
+        framing = framing or self.framing
+        key = self._canvas_key(plan, clip, framing)
+        parts = self._traced(plan, clip, framing)
+        return _combined(self._network_shadows(frames, plan, clip, framing, key), parts, plan, self._hedge)
 
-    def _on_canvas(
-        self, frames: Callable[[], np.ndarray], plan: LightPlan, clip: bool, framing: Framing
-    ) -> CanvasShadow:
-        """:meth:`to_canvas`, the network's frames taken from ``frames()`` once the small lights are traced (so
-        that :meth:`render_plan` can make them meanwhile)."""
+    def _canvas_key(self, plan: LightPlan, clip: bool, framing: Framing) -> tuple:
+        """What the network's shadows on a canvas depend on besides its frames (:meth:`_network_shadows`); the
+        shadows kept of another are dropped now, not kept while the new ones are made."""
         key = (plan.broad, plan.network_view if plan.traced else None, clip, framing)
         if self._on_canvas_memo is not None and self._on_canvas_memo[0] != key:
-            self._on_canvas_memo = None  # another light or canvas: not kept while the new one is traced
-        parts = self._traced(plan, clip, framing)
-        nets = self._network_shadows(frames(), plan, clip, framing, key)
-        return _combined(nets, parts, plan, self._hedge)
+            self._on_canvas_memo = None
+        return key
 
     def _network_shadows(
         self, frames: np.ndarray, plan: LightPlan, clip: bool, framing: Framing, key: tuple
@@ -366,13 +364,17 @@ class ShadowSession:
 
     def render_plan(self, plan: LightPlan, framing: Framing | None = None, clip: bool = True) -> CanvasShadow:
         """:meth:`to_canvas` of :meth:`render_frame` for a light plan made once by the caller, the network's
-        frames rendered on a thread of their own while the small lights are traced (both release the GIL: a
-        sun's shadow costs about the longer of the two, not their sum)."""
+        frames rendered and brought onto the canvas on a thread of their own while the small lights are traced
+        (both release the GIL: a sun's shadow costs about the longer of the two, not their sum)."""
         framing = framing or self.framing
         if not plan.traced:
             return self.to_canvas(self.render_frame(plan), plan, clip, framing)
-        frames = thread_pool(NETWORK_THREAD, 1).submit(self.render_frame, plan)
-        return self._on_canvas(frames.result, plan, clip, framing)
+        key = self._canvas_key(plan, clip, framing)
+        nets = thread_pool(NETWORK_THREAD, 1).submit(
+            lambda: self._network_shadows(self.render_frame(plan), plan, clip, framing, key)
+        )
+        parts = self._traced(plan, clip, framing)
+        return _combined(nets.result(), parts, plan, self._hedge)
 
     def cover(self, framing: Framing) -> np.ndarray:
         """The cutout's alpha (h, w) on ``framing``'s canvas, resampled from the frame: what hides the shadow
@@ -397,8 +399,7 @@ def _combined(
     if not plan.shares.any():
         return CanvasShadow.nothing()
     small = plan.traced_share
-    darker = net.values if hedge == 1.0 else net.values * np.float32(hedge)
-    values, x, y = placed_sum(parts, (darker, net.x, net.y))
+    values, x, y = placed_sum(parts, (net, hedge))
     if plan.broad.is_dark:
         return CanvasShadow(values, x, y)
     return CanvasShadow(*placed_sum([(small, values, x, y), (1.0 - small, wide.values, wide.x, wide.y)]))
