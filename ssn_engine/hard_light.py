@@ -514,18 +514,16 @@ class CardTracer:
         b = self._world_per_pixel * source.scale / self._full.scale  # world units per pixel of this source
         fx = (np.asarray(cols, np.float64) + 0.5) * source.scale + source.offset_x
         fy = (np.asarray(rows, np.float64) + 0.5) * source.scale + source.offset_y
-        m = cam.ray_matrix()  # each pixel's ray, at a unit camera depth
-        rays = [m[i, 0] * fx + m[i, 1] * fy + m[i, 2] for i in range(3)]
+        rays = cam.rays(fx, fy)  # at a unit camera depth
         # where the pixel's ray meets the card's plane (z = 0), t along it, projects back onto the pixel, t deep
-        t = -cam.centre[2] / np.where(np.abs(rays[2]) > 1e-12, rays[2], 1e-12)
+        t = -cam.centre[2] / np.where(np.abs(rays[:, 2]) > 1e-12, rays[:, 2], 1e-12)
         p0 = np.stack([t * fx, t * fy, t], axis=1)
         # the ground shift of its shadow, b (r_x + r_y dx, r_z + r_y dz) along the ray r scaled to a unit
         # horizontal length, lands on the card at x = b (dx r_z - dz r_x) / det, h = b (az r_x - det r_y -
         # ax r_z) / det: linear in r, as is its projection (the card's points (x, h, 0) -> frame)
-        on_card = b / det * np.array([[-dz, az], [0.0, -det], [dx, -ax]])
-        to_frame = on_card @ cam.projection()[:, :2].T
-        p1 = np.stack(rays, axis=1) @ to_frame
-        p1 /= np.hypot(rays[0], rays[2])[:, None]
+        ray_to_card = b / det * np.array([[-dz, az], [0.0, -det], [dx, -ax]])
+        p1 = rays @ (ray_to_card @ cam.projection()[:, :2].T)
+        p1 /= np.hypot(rays[:, 0], rays[:, 2])[:, None]
         return p0, p1
 
     def _depth_steps(self, source: _Source, w: np.ndarray, cols: np.ndarray, rows: np.ndarray) -> np.ndarray:
