@@ -134,39 +134,49 @@ def fov_from_focal(n: float, focal: float) -> float:
     return float(np.degrees(2 * np.arctan(0.5 * n / focal)))
 
 
-def _axis_row(cam: Camera, y: float) -> float:
-    """The unshifted image row of the point (0, y, 0) (scalar arithmetic: the fit below calls it often)."""
-    ry, rz = y - float(cam.centre[1]), -float(cam.centre[2])
+def _axis_row(cam: Camera, y: float, target: float | None = None) -> float:
+    """The unshifted image row of the point (0, y, 0), seen by ``cam`` or, given ``target``, by ``cam`` looking at
+    (0, ``target``, 0) instead (scalar arithmetic: the fit below calls it often)."""
+    ry, rz = y - _centre_height(cam, target), -float(cam.centre[2])
     depth = ry * float(cam.view[1]) + rz * float(cam.view[2])
     up = ry * float(cam.up[1]) + rz * float(cam.up[2])
     return 0.5 * cam.n - float(cam.focal) * up / depth
+
+
+def _centre_height(cam: Camera, target: float | None) -> float:
+    """The height of ``cam``'s centre, or of its centre looking at (0, ``target``, 0) (as :class:`Camera` places
+    it)."""
+    return float(cam.centre[1]) if target is None else target - DISTANCE * float(cam.view[1])
 
 
 def _fit_span(n: int, fov: float, pitch: float, top: float, base: float) -> Camera | None:
     """The camera of a vertical card standing at the origin whose projection spans rows [top, base):
     its height found by fixed-point iteration, the lens shift putting its foot on row ``base``. None where no
     card does (a camera looking so steeply down through so wide a lens that the card's top would lie behind it)."""
-    height, span = 0.5, None
+    aim = Camera(n, 0.0, fov=fov, pitch=pitch)  # its view and focal length; it looks at each height tried
+    height, span, fitted = 0.5, None, 0.5
     for _ in range(12):
-        cam = Camera(n, height / 2, fov=fov, pitch=pitch)
-        span = _span(cam, height)
+        fitted = height
+        span = _span(aim, height, height / 2)
         if span is None or abs(span - (base - top)) <= SPAN_TOLERANCE * (base - top):
             break
         height *= (base - top) / span
     if span is None or abs(span - (base - top)) > 0.01 * (base - top):  # no card, or the iteration found none
         return None
+    cam = Camera(n, fitted / 2, fov=fov, pitch=pitch)
     cam.shift = base - _axis_row(cam, 0.0)
     return cam
 
 
-def _span(cam: Camera, height: float) -> float | None:
-    """Rows from the top to the foot of a card ``height`` tall, or None where its top or foot is not in front
-    of the camera (or the card shows upside down)."""
+def _span(cam: Camera, height: float, target: float | None = None) -> float | None:
+    """Rows from the top to the foot of a card ``height`` tall, seen by ``cam`` (looking at (0, ``target``, 0)
+    where given), or None where its top or foot is not in front of the camera (or the card shows upside down)."""
+    centre_y = _centre_height(cam, target)
     for y in (0.0, height):
-        ry, rz = y - float(cam.centre[1]), -float(cam.centre[2])
+        ry, rz = y - centre_y, -float(cam.centre[2])
         if ry * float(cam.view[1]) + rz * float(cam.view[2]) <= 1e-6:
             return None
-    span = _axis_row(cam, 0.0) - _axis_row(cam, height)
+    span = _axis_row(cam, 0.0, target) - _axis_row(cam, height, target)
     return span if math.isfinite(span) and span > 0 else None
 
 
