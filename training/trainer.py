@@ -531,8 +531,10 @@ def finish_run(args: argparse.Namespace, run: Path, net: Network, data: TrainDat
 
 
 def end_process(proc: Process) -> None:
-    """Leave the process group of a distributed run."""
+    """Leave the process group of a distributed run, all ranks together: a rank that tore its group down while
+    rank 0 still wrote the run's files could abort at exit ("terminate called without an active exception")."""
     if proc.world > 1:
+        torch.distributed.barrier()
         torch.distributed.destroy_process_group()
 
 
