@@ -177,9 +177,78 @@ class _Source:
     lit_rows: int
 
 
-# a card's blurred copies of its cutout, kept for a card of the same cutout and another foot: its pad and, per
-# scale and level, the rows blurred and the copy
-Blurred = tuple[int, dict[float, dict[int, tuple[int, int, _Level]]]]
+@dataclass(frozen=True)
+class _Padded:
+    """A card's alpha and its surfaces' depths (pixels behind the card: where each pixel's surface lies, ``near``,
+    and where its depth ends, ``far``) with its pad above and beside them, down to its foot and beyond it: the
+    ground's rows, zeros (depths: the last row's), to the foot of the highest lift with the same pad. Read-only: a
+    card whose foot lies lower (a lift dragged) takes them over to its own foot. ``depth``: the artist's
+    thickness they were made with (None: read); ``deepest`` and ``frontmost``: ``far``'s largest and ``-near``'s
+    (pixels); ``cols``: the columns of ``alpha`` (without the pad) that hold any of it."""
+
+    pad: int
+    depth: float | None
+    alpha: np.ndarray
+    near: np.ndarray
+    far: np.ndarray
+    deepest: float
+    frontmost: float
+    cols: tuple[int, int]
+
+    @classmethod
+    def of(
+        cls, alpha: np.ndarray, near: np.ndarray, thick: np.ndarray, pad: int, rows: int, depth: float | None
+    ) -> _Padded:
+        """The arrays of a card of ``alpha`` (its rows down to its lowest lit one), ``near`` and ``thick`` (how deep
+        each pixel reaches behind its surface) over the same rows, padded by ``pad`` to ``rows`` rows in all."""
+        lowest, width = alpha.shape
+        alpha = alpha.copy()
+        solid = np.flatnonzero((alpha > SOLID).any(axis=1))
+        if solid.size:  # the card reaches the ground: below its lowest solid row it continues that row
+            alpha[solid[-1] + 1 :] = alpha[solid[-1]]
+        cols = np.flatnonzero((alpha > 0).any(axis=0))
+        # a surface in front of its card (a ball's, a lowered head's) lies no farther in front than its own depth:
+        # every part reaches back to the card's plane (the surface model's pixel heights are noisy)
+        near = np.maximum(near, -thick)
+        far = near + thick
+        out = np.zeros((rows, width + 2 * pad), np.float32)
+        out[pad : pad + lowest, pad : pad + width] = alpha
+        # the surface's depth reaches into the pad as it does around the outline within the crop (the blurred
+        # copies spread there): a part read behind its card takes its blurred edge with it, leaving no trace of
+        # it on the card; the pad sweeps no depth of its own (a part's edge is thin: the round cross-section)
+        spread = np.empty_like(out)  # each pad pixel as its nearest border pixel (np.pad's "edge", in slices)
+        spread[pad : pad + lowest, :pad] = near[:, :1]
+        spread[pad : pad + lowest, pad : pad + width] = near
+        spread[pad : pad + lowest, pad + width :] = near[:, -1:]
+        spread[:pad] = spread[pad]
+        spread[pad + lowest :] = spread[pad + lowest - 1]
+        ends = spread.copy()
+        ends[pad : pad + lowest, pad : pad + width] = far
+        for values in (out, spread, ends):
+            values.flags.writeable = False
+        return cls(
+            pad,
+            depth,
+            out,
+            spread,
+            ends,
+            max(float(far.max()), 0.0),
+            max(float(-near.min()), 0.0),
+            (int(cols[0]), int(cols[-1]) + 1),
+        )
+
+
+@dataclass(frozen=True)
+class Kept:
+    """What a card keeps for a card of the same cutout whose foot or depth differ (the artist's lift or thickness
+    changed): its pad; per scale and level of its blurred copies, the rows blurred and the copy; its padded
+    arrays."""
+
+    pad: int
+    levels: dict[float, dict[int, tuple[int, int, _Level]]]
+    arrays: _Padded
+
+
 SurfaceDepths = tuple[np.ndarray, np.ndarray | None]  # pixels behind the card: each surface's, its far end's read depth
 
 
@@ -219,9 +288,12 @@ class CardTracer:
         lifted card takes in place of its own reading of ``feet`` and ``far_feet``: the object's shape does not
         change as it floats (read at the lifted card's foot, nearer the camera, the same rows would make it
         shallower).
-    blurred : tuple or None
-        The :attr:`blurred_copies` of a tracer of the same ``alpha`` and origin whose foot or depth differ (the
-        artist's lift or thickness changed): taken over where its pad is this one's.
+    depth : float or None
+        The artist's thickness ``thickness`` was made with (None: the depth is read), which names it to ``kept``.
+    kept : Kept or None
+        The :attr:`kept` of a card of the same ``alpha`` and origin whose foot or depth differ (the artist's lift
+        or thickness changed): its blurred copies taken over where its pad is this one's, its padded arrays where
+        its ``depth`` is this one's too and they reach this card's foot.
     """
 
     def __init__(
@@ -235,8 +307,9 @@ class CardTracer:
         feet: np.ndarray | None = None,
         far_feet: np.ndarray | None = None,
         lift: int = 0,
-        blurred: Blurred | None = None,
         at_rest: SurfaceDepths | None = None,
+        depth: float | None = None,
+        kept: Kept | None = None,
     ) -> None:
         alpha = np.clip(np.asarray(alpha, np.float32), 0.0, 1.0)
         x0, y0 = origin if origin is not None else framing.bbox[:2]
@@ -266,63 +339,39 @@ class CardTracer:
                 read = np.maximum(self._surface_depth(far_feet, framing, y0, base)[:lowest] - near, 0.0)
         self.surface_depths: SurfaceDepths = (near, read)
         self.deepest_read = 0.0 if read is None else float(read.max())
-        if thickness is not None:
-            thick = np.asarray(thickness[:lowest], np.float32)
-        else:
-            thick = np.zeros((lowest, width), np.float32) if read is None else read
-        # a surface in front of its card (a ball's, a lowered head's) lies no farther in front than its own depth:
-        # every part reaches back to the card's plane (the surface model's pixel heights are noisy)
-        near = np.maximum(near, -thick)
-        far = near + thick
-        self.depth = max(float(far.max()), 0.0) * self._world_per_pixel  # world units it reaches behind the card
-        self.front = max(float(-near.min()), 0.0) * self._world_per_pixel  # and in front of it
-        alpha = alpha[:lowest]
-        solid = np.flatnonzero((alpha > SOLID).any(axis=1))
-        if solid.size:  # the card reaches the ground: below its lowest solid row it continues that row
-            alpha[solid[-1] + 1 :] = alpha[solid[-1]]
-        cols = np.flatnonzero((alpha > 0).any(axis=0))
-        self._x_cols = (cols[0] * s + framing.offset_x + x0 * s, (cols[-1] + 1) * s + framing.offset_x + x0 * s)
         # room for the blur above and beside the cutout (not below: ground); a lifted card's grows with the lift in
-        # steps, so that a card whose foot moves a little (a lift dragged) keeps its pad and its blurred copies
-        pad = math.ceil(PAD * max(foot - lift, width)) + PAD_STEP * math.ceil(PAD * lift / PAD_STEP)
-
-        def padded(values: np.ndarray) -> np.ndarray:  # with the pad, and zeros down to the foot (a card standing
-            out = np.zeros((pad + foot, width + 2 * pad), np.float32)  # behind its lowest row)
-            out[pad : pad + lowest, pad : pad + width] = values
-            return out
-
-        def spread(values: np.ndarray) -> np.ndarray:  # with the pad, each pad pixel as its nearest border pixel
-            out = np.empty((pad + foot, width + 2 * pad), np.float32)  # (np.pad's "edge", in slices: faster)
-            out[pad : pad + lowest, :pad] = values[:, :1]
-            out[pad : pad + lowest, pad : pad + width] = values
-            out[pad : pad + lowest, pad + width :] = values[:, -1:]
-            out[:pad] = out[pad]
-            out[pad + lowest :] = out[pad + lowest - 1]
-            return out
-
-        alpha = padded(alpha)
-        # the surface's depth reaches into the pad as it does around the outline within the crop (the blurred
-        # copies spread there): a part read behind its card takes its blurred edge with it, leaving no trace of
-        # it on the card; the pad sweeps no depth of its own (a part's edge is thin: the round cross-section)
-        self._near = {1: spread(near)}  # per reduction: depth behind the card of the surface each pixel shows, its
-        self._far = {1: self._near[1].copy()}  # pixels; and of its far end
-        self._far[1][pad : pad + lowest, pad : pad + width] = far
+        # steps, so that a card whose foot moves a little (a lift dragged) keeps its pad and what it made there
+        steps = math.ceil(PAD * lift / PAD_STEP)
+        pad = math.ceil(PAD * max(foot - lift, width)) + PAD_STEP * steps
+        if kept is not None and kept.pad == pad and kept.arrays.depth == depth and len(kept.arrays.alpha) >= pad + foot:
+            arrays = kept.arrays
+        else:
+            if thickness is not None:
+                thick = np.asarray(thickness[:lowest], np.float32)
+            else:
+                thick = np.zeros((lowest, width), np.float32) if read is None else read
+            highest = int(PAD_STEP * steps / PAD)  # the highest lift with this pad
+            arrays = _Padded.of(alpha[:lowest], near, thick, pad, pad + foot + highest - lift, depth)
+        self.depth = arrays.deepest * self._world_per_pixel  # world units it reaches behind the card
+        self.front = arrays.frontmost * self._world_per_pixel  # and in front of it
+        c0, c1 = arrays.cols
+        self._x_cols = (c0 * s + framing.offset_x + x0 * s, c1 * s + framing.offset_x + x0 * s)
+        self._near = {1: arrays.near[: pad + foot]}  # per reduction: depth behind the card of the surface each pixel
+        self._far = {1: arrays.far[: pad + foot]}  # shows, its pixels; and of its far end
         self._full = _Source(
-            alpha, s, framing.offset_x + (x0 - pad) * s, framing.offset_y + (y0 - pad) * s, pad + lowest
+            arrays.alpha[: pad + foot],
+            s,
+            framing.offset_x + (x0 - pad) * s,
+            framing.offset_y + (y0 - pad) * s,
+            pad + lowest,
         )
         self._sources: dict[int, _Source] = {}
         self._swept_depths: dict[tuple[int, int], tuple[np.ndarray, np.ndarray]] = {}  # per reduction and sweep's
         self._on_card: dict[int, np.ndarray | None] = {}  # per reduction: the pixels whose surface is on the card
         # per scale, level: rows, blurred; those of the same alpha with the same pad (a card whose foot moved) hold
-        self._pad = pad
-        self._levels: dict[float, dict[int, tuple[int, int, _Level]]] = (
-            blurred[1] if blurred is not None and blurred[0] == pad else {}
-        )
-
-    @property
-    def blurred_copies(self) -> Blurred:
-        """Its pad and blurred copies of the cutout, for a card of the same alpha and another foot."""
-        return self._pad, self._levels
+        levels = kept.levels if kept is not None and kept.pad == pad else {}
+        self.kept = Kept(pad, levels, arrays)  # for a card of the same alpha and another foot or depth
+        self._levels = levels
 
     # -- the cutout at the output's resolution ------------------------------------------------------------------
     def _source(self, out_scale: float) -> _Source:
@@ -1103,7 +1152,8 @@ def _band_card(
     thickness: np.ndarray | None,
     feet: np.ndarray | None,
     far_feet: np.ndarray | None,
-    blurred: Blurred | None,
+    depth: float | None,
+    kept: Kept | None,
     lift: int,
     at_rest: SurfaceDepths | None = None,
 ) -> CardTracer:
@@ -1122,8 +1172,9 @@ def _band_card(
         feet=None if feet is None else feet + shift,
         far_feet=None if far_feet is None else far_feet + shift,
         lift=lift,
-        blurred=blurred,
         at_rest=at_rest,
+        depth=depth,
+        kept=kept,
     )
 
 
@@ -1217,13 +1268,12 @@ class ContactTracer:
         camera: tuple[float, float] | None,
         lift: float = 0.0,
         thickness: float | None = None,
-        blurred: dict[int, Blurred] | None = None,
+        kept: dict[int, Kept] | None = None,
     ) -> ContactTracer:
-        """The tracer of a cutout read before (:class:`ContactReading`), with the artist's geometry; ``blurred``:
-        the :attr:`blurred_copies` of a tracer of the same reading (another lift or thickness), which its cards
-        take over."""
+        """The tracer of a cutout read before (:class:`ContactReading`), with the artist's geometry; ``kept``: the
+        :attr:`kept` of a tracer of the same reading (another lift or thickness), which its cards take over."""
         tracer = cls.__new__(cls)
-        tracer._make_cards(reading, framing, camera, lift, thickness, blurred)
+        tracer._make_cards(reading, framing, camera, lift, thickness, kept)
         return tracer
 
     def _make_cards(
@@ -1233,14 +1283,14 @@ class ContactTracer:
         camera: tuple[float, float] | None,
         lift: float,
         thickness: float | None,
-        blurred: dict[int, Blurred] | None = None,
+        kept: dict[int, Kept] | None = None,
     ) -> None:
         alpha, bands = reading.alpha, reading.bands
         depth: np.ndarray | None = reading.depth
-        blurred = blurred or {}
+        kept = kept or {}
         x0, y0 = framing.bbox[:2]
         self.cards: list[CardTracer] = []
-        self.blurred_copies: dict[int, Blurred] = {}  # per band: its card's (:attr:`CardTracer.blurred_copies`)
+        self.kept: dict[int, Kept] = {}  # per band: its card's (:attr:`CardTracer.kept`)
         width = alpha.shape[1]
         self.thickness_read = reading.thickness_read  # the outline's; below, the far surface's where one is read
         far_feet = reading.far_feet
@@ -1275,7 +1325,8 @@ class ContactTracer:
                 None if depth is None else depth[:, a:b],
                 None if reading.feet is None else reading.feet[:, a:b],
                 None if far_feet is None else far_feet[:, a:b],
-                blurred.get(i),
+                thickness,
+                kept.get(i),
             )
             if rows > 0 and reading.feet is not None and i not in reading.at_rest:
                 rest = card_at(0)  # the same band standing on the ground: its surfaces as read (once a reading)
@@ -1286,7 +1337,7 @@ class ContactTracer:
                 reading.at_rest.setdefault(i, card.surface_depths)
             if not card.empty:
                 self.cards.append(card)
-                self.blurred_copies[i] = card.blurred_copies
+                self.kept[i] = card.kept
         self.empty = not self.cards
         if far_feet is not None and self.cards:  # the far surface read: its deepest segment over the width
             self.thickness_read = read_thickness(alpha, np.asarray(max(c.deepest_read for c in self.cards)))

@@ -31,7 +31,7 @@ from .framing import (
     placed_sum,
     shadow_to_canvas,
 )
-from .hard_light import Blurred, ContactReading, ContactTracer
+from .hard_light import ContactReading, ContactTracer, Kept
 from .hemisphere import network_elm, render_light_map
 from .host_kit.camera_rules import DEFAULT_FOV, FOV_RANGE
 from .host_kit.geometry_rules import check_lift, check_thickness, ground_above_horizon
@@ -158,7 +158,7 @@ class ShadowSession:
         self._check_lift(self.lift, used)
         self._tracer: ContactTracer | None = None  # made with the camera, on first use
         self._reading: ContactReading | None = None  # the cutout read for the tracer (the model's pixel heights too)
-        self._blurred: dict[int, Blurred] | None = None  # the cards' blurred copies of it, by band
+        self._kept: dict[int, Kept] | None = None  # what the cards made of it (blurred copies, padded), by band
         self.cameras, self.used_cameras = cameras, used
         # the share of the network's shadow a traced light's shadow is kept no lighter than (:meth:`to_canvas`)
         self.hedge = GIVEN_CAMERA_HEDGE if cameras is not None and not read else 1.0
@@ -245,9 +245,9 @@ class ShadowSession:
             if 0.0 < self.body_opacity < 1.0:
                 np.minimum(cutout / np.float32(self.body_opacity), 1.0, out=cutout)
             self._reading = ContactReading.of(cutout, self.framing, camera, None if heights is None else heights[0])
-            self._blurred = None
-        tracer = ContactTracer.of_reading(self._reading, self.framing, camera, self.lift, self.thickness, self._blurred)
-        self._blurred = tracer.blurred_copies  # another lift or thickness of the same reading takes them over
+            self._kept = None
+        tracer = ContactTracer.of_reading(self._reading, self.framing, camera, self.lift, self.thickness, self._kept)
+        self._kept = tracer.kept  # another lift or thickness of the same reading takes them over
         return tracer
 
     def render_frame(self, plan: LightPlan) -> np.ndarray:
