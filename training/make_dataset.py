@@ -45,7 +45,6 @@ def parse_args(argv: list[str] | None = None) -> argparse.Namespace:
     p.add_argument("--humans", type=int, default=120, help="number of anny humans")
     p.add_argument("--quadrupeds", type=int, default=0, help="number of procedural animals")
     p.add_argument("--grounded", type=int, default=0, help="number of objects with flat parts on the ground")
-    p.add_argument("--lumps", type=int, default=0, help="number of procedural rounded objects")
     p.add_argument("--limit", type=int, default=0, help="only the first LIMIT items of the ordered list")
     p.add_argument("--only", default="", help="comma list of item ids to render")
     p.add_argument("--threads", type=int, default=0, help="numba threads per worker (0: cores / workers)")
@@ -109,7 +108,7 @@ def main(argv: list[str] | None = None) -> int:
     _check_meta(root, meta)
     shard, shards = (int(x) for x in args.shard.split("/"))
     sources = tuple(s for s in args.sources.split(",") if s)
-    items = all_items(sources, args.procedural, args.humans, args.seed, args.quadrupeds, args.grounded, args.lumps)
+    items = all_items(sources, args.procedural, args.humans, args.seed, args.quadrupeds, args.grounded)
     if args.only:
         wanted = set(args.only.split(","))
         items = [it for it in items if it.id in wanted]

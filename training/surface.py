@@ -45,7 +45,6 @@ def parse_args(argv: list[str] | None = None) -> argparse.Namespace:
         "--quadrupeds", type=int, default=0, help="how many procedural animals the quadruped source draws (all splits)"
     )
     m.add_argument("--grounded", type=int, default=0, help="how many objects the grounded source draws (all splits)")
-    m.add_argument("--lumps", type=int, default=0, help="how many rounded objects the lumps source draws (all splits)")
     t = sub.add_parser("train", help="train the surface model on a folder's train.npz, scored on its val.npz")
     t.add_argument("--data", required=True)
     t.add_argument("--sets", nargs="+", help="the training files' names in --data (default: every train*.npz)")
@@ -100,7 +99,6 @@ def main(argv: list[str] | None = None) -> None:
             stretch=args.stretch,
             quadrupeds=args.quadrupeds,
             grounded=args.grounded,
-            lumps=args.lumps,
         )
     elif args.command == "train":
         widths = tuple(args.widths) if args.widths else WIDTHS

@@ -63,13 +63,11 @@ def split_views(
     sources: tuple[str, ...] = DEFAULT_SOURCES,
     quadrupeds: int = 0,
     grounded: int = 0,
-    lumps: int = 0,
 ) -> Iterator[tuple[Item, meshes.Mesh, meshes.Topology, tuple[float, float, float]]]:
     """Every view of ``split``'s items of ``sources`` under each camera set, drawn as ``training.make_dataset``
     draws them (``view_seed``, default ``seed``: other views of the same items): (item, mesh, its topology, (yaw,
     pitch, fov)), with a progress line."""
-    drawn = all_items(sources, procedural, humans, seed, quadrupeds, grounded, lumps)
-    items = [it for it in drawn if it.split == split]
+    items = [it for it in all_items(sources, procedural, humans, seed, quadrupeds, grounded) if it.split == split]
     prog = Progress(len(items) * len(cameras))
     for c, which in enumerate(cameras):
         for q, item in enumerate(items):

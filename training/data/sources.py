@@ -1,6 +1,5 @@
 """The list of shapes a dataset is made from: shared meshes, procedural shapes, anny humans (standing, or in the
-poses off their feet), procedural animals, procedural objects with flat parts on the ground, procedural rounded
-objects.
+poses off their feet), procedural animals, procedural objects with flat parts on the ground.
 
 Every item records how to rebuild its mesh (file, or generator and seed), so
 the set is reproducible. Items are ordered by a hash of their id, so any
@@ -16,14 +15,12 @@ from .grounded import grounded_items
 from .humans import build as build_human
 from .humans import MORE_POSES, human_items
 from .items import Item, stable_hash
-from .lumps import build as build_lumps
-from .lumps import lumps_items
 from .procedural import build as build_procedural
 from .procedural import procedural_items
 from .quadrupeds import build as build_quadruped
 from .quadrupeds import quadruped_items
 
-SOURCES = ("mesh", "procedural", "anny", "anny_poses", "quadruped", "grounded", "lumps")
+SOURCES = ("mesh", "procedural", "anny", "anny_poses", "quadruped", "grounded")
 # What a set is made of unless told: the sources every set was made of before the people off their feet and the
 # animals were added, so that a command made before makes the same set.
 DEFAULT_SOURCES = ("mesh", "procedural", "anny")
@@ -59,7 +56,6 @@ def all_items(
     seed: int = 0,
     n_quadrupeds: int = 0,
     n_grounded: int = 0,
-    n_lumps: int = 0,
 ) -> list[Item]:
     """Items of the chosen sources, ordered by a stable hash of their id."""
     items: list[Item] = []
@@ -75,8 +71,6 @@ def all_items(
         items += quadruped_items(n_quadrupeds, seed)
     if "grounded" in sources and n_grounded:
         items += grounded_items(n_grounded, seed)
-    if "lumps" in sources and n_lumps:
-        items += lumps_items(n_lumps, seed)
     return sorted(items, key=lambda it: (stable_hash(it.id), it.id))
 
 
@@ -92,8 +86,6 @@ def build_mesh(item: Item) -> meshes.Mesh:
         mesh = build_quadruped(item.params)
     elif item.source == "grounded":
         mesh = build_grounded(item.params)
-    elif item.source == "lumps":
-        mesh = build_lumps(item.params)
     else:
         raise ValueError(f"unknown source {item.source!r}")
     return meshes.normalise(meshes.clean(mesh))

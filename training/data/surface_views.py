@@ -80,28 +80,16 @@ def make(
     stretch: float = 0.0,
     quadrupeds: int = 0,
     grounded: int = 0,
-    lumps: int = 0,
 ) -> None:
     """Write every view of ``split``'s items of ``sources`` under each camera set to ``out`` (npz): ``masks``
     bit-packed (mask > 0.5, (n, R * R / 8)), ``heights`` uint8 over the masks' set pixels in order (nearest
     surface's where a set pixel's centre misses the mesh), ``camera`` (n, 2) at R, ``pitch``. ``quadrupeds``,
-    ``grounded``, ``lumps``: how many items the ``quadruped``, ``grounded`` and ``lumps`` sources draw (80 % of them
-    in train).
+    ``grounded``: how many items the ``quadruped`` and ``grounded`` sources draw (80 % of them in train).
     ``stretch`` > 0: each view's shape stretched first (:func:`stretched`, its factors drawn from the seed, the
     item and the view)."""
     views, pitches = [], []
     for k, (item, mesh, topo, (yaw, pitch, fov)) in enumerate(
-        split_views(
-            split,
-            cameras,
-            seed,
-            procedural,
-            humans,
-            sources=sources,
-            quadrupeds=quadrupeds,
-            grounded=grounded,
-            lumps=lumps,
-        )
+        split_views(split, cameras, seed, procedural, humans, sources=sources, quadrupeds=quadrupeds, grounded=grounded)
     ):
         if stretch > 0.0:
             mesh = stretched(mesh, np.random.default_rng([seed, stable_hash(item.id), k]), stretch)
