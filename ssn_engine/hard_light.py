@@ -289,7 +289,8 @@ class CardTracer:
         change as it floats (read at the lifted card's foot, nearer the camera, the same rows would make it
         shallower).
     depth : float or None
-        The artist's thickness ``thickness`` was made with (None: the depth is read), which names it to ``kept``.
+        The artist's thickness that ``thickness`` was scaled to (None: the depth is read): ``kept``'s padded
+        arrays are taken over only if made with the same.
     kept : Kept or None
         The :attr:`kept` of a card of the same ``alpha`` and origin whose foot or depth differ (the artist's lift
         or thickness changed): its blurred copies taken over where its pad is this one's, its padded arrays where
