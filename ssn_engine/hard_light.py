@@ -250,6 +250,7 @@ class Kept:
 
 
 SurfaceDepths = tuple[np.ndarray, np.ndarray | None]  # pixels behind the card: each surface's, its far end's read depth
+BandKey = tuple[tuple[tuple[int, int, int], ...], int]  # a card's bands (c0, c1, foot) and which of them it is
 
 
 class CardTracer:
@@ -1216,7 +1217,7 @@ class ContactReading:
     feet: np.ndarray | None
     far_feet: np.ndarray | None = None
     # per band: its card's :attr:`CardTracer.surface_depths` standing on the ground, made on a first lift
-    at_rest: dict[int, SurfaceDepths] = field(default_factory=dict, compare=False)
+    at_rest: dict[BandKey, SurfaceDepths] = field(default_factory=dict, compare=False)
 
     @classmethod
     def of(
@@ -1269,7 +1270,7 @@ class ContactTracer:
         camera: tuple[float, float] | None,
         lift: float = 0.0,
         thickness: float | None = None,
-        kept: dict[int, Kept] | None = None,
+        kept: dict[BandKey, Kept] | None = None,
     ) -> ContactTracer:
         """The tracer of a cutout read before (:class:`ContactReading`), with the artist's geometry; ``kept``: the
         :attr:`kept` of a tracer of the same reading (another lift or thickness), which its cards take over."""
@@ -1284,14 +1285,16 @@ class ContactTracer:
         camera: tuple[float, float] | None,
         lift: float,
         thickness: float | None,
-        kept: dict[int, Kept] | None = None,
+        kept: dict[BandKey, Kept] | None = None,
     ) -> None:
         alpha, bands = reading.alpha, reading.bands
+        if thickness == 0 and len(bands) > 1:  # a flat sign is one plane: one card, standing at its lowest foot
+            bands = [(bands[0][0], bands[-1][1], max(foot for *_, foot in bands))]
         depth: np.ndarray | None = reading.depth
         kept = kept or {}
         x0, y0 = framing.bbox[:2]
         self.cards: list[CardTracer] = []
-        self.kept: dict[int, Kept] = {}  # per band: its card's (:attr:`CardTracer.kept`)
+        self.kept: dict[BandKey, Kept] = {}  # per band: its card's (:attr:`CardTracer.kept`)
         width = alpha.shape[1]
         self.thickness_read = reading.thickness_read  # the outline's; below, the far surface's where one is read
         far_feet = reading.far_feet
@@ -1300,7 +1303,7 @@ class ContactTracer:
             depth = depth * np.float32(thickness / outline) if outline > 0 else depth * 0
         elif far_feet is not None:  # each pixel as deep as its far surface
             depth = None
-        rows = int(round(lift))
+        rows, layout = int(round(lift)), tuple(bands)
         for i, (c0, c1, foot) in enumerate(bands):
             weight = np.zeros(width, np.float32)
             weight[c0:c1] = 1.0
@@ -1315,6 +1318,7 @@ class ContactTracer:
             used = np.flatnonzero(weight > 0)
             a, b = int(used[0]), int(used[-1]) + 1
             part = alpha[:, a:b] if len(bands) == 1 else alpha[:, a:b] * weight[a:b]  # (a card copies its alpha)
+            key = (layout, i)
 
             card_at = partial(
                 _band_card,
@@ -1327,18 +1331,18 @@ class ContactTracer:
                 None if reading.feet is None else reading.feet[:, a:b],
                 None if far_feet is None else far_feet[:, a:b],
                 thickness,
-                kept.get(i),
+                kept.get(key),
             )
-            if rows > 0 and reading.feet is not None and i not in reading.at_rest:
+            if rows > 0 and reading.feet is not None and key not in reading.at_rest:
                 rest = card_at(0)  # the same band standing on the ground: its surfaces as read (once a reading)
                 if not rest.empty:
-                    reading.at_rest[i] = rest.surface_depths
-            card = card_at(rows, reading.at_rest.get(i) if rows > 0 else None)
+                    reading.at_rest[key] = rest.surface_depths
+            card = card_at(rows, reading.at_rest.get(key) if rows > 0 else None)
             if rows == 0 and not card.empty:
-                reading.at_rest.setdefault(i, card.surface_depths)
+                reading.at_rest.setdefault(key, card.surface_depths)
             if not card.empty:
                 self.cards.append(card)
-                self.kept[i] = card.kept
+                self.kept[key] = card.kept
         self.empty = not self.cards
         if far_feet is not None and self.cards:  # the far surface read: its deepest segment over the width
             self.thickness_read = read_thickness(alpha, np.asarray(max(c.deepest_read for c in self.cards)))

@@ -31,7 +31,7 @@ from .framing import (
     placed_sum,
     shadow_to_canvas,
 )
-from .hard_light import ContactReading, ContactTracer, Kept
+from .hard_light import BandKey, ContactReading, ContactTracer, Kept
 from .hemisphere import network_elm, render_light_map
 from .host_kit.camera_rules import DEFAULT_FOV, FOV_RANGE
 from .host_kit.geometry_rules import check_lift, check_thickness, ground_above_horizon
@@ -158,7 +158,7 @@ class ShadowSession:
         self._check_lift(self.lift, used)
         self._tracer: ContactTracer | None = None  # made with the camera, on first use
         self._reading: ContactReading | None = None  # the cutout read for the tracer (the model's pixel heights too)
-        self._kept: dict[int, Kept] | None = None  # what the cards made of it (blurred copies, padded), by band
+        self._kept: dict[BandKey, Kept] | None = None  # what the cards made of it (blurred copies, padded), by band
         self.cameras, self.used_cameras = cameras, used
         # the share of the network's shadow a traced light's shadow is kept no lighter than (:meth:`to_canvas`)
         self.hedge = GIVEN_CAMERA_HEDGE if cameras is not None and not read else 1.0

@@ -85,6 +85,18 @@ def test_a_thickness_makes_a_sign_flat_and_a_box_deep(method):
     assert areas[0.0] < 0.6 * areas[None] and areas[3.0] > 1.5 * areas[None], areas
 
 
+@pytest.mark.parametrize("lift", [0.0, 80.0], ids=["resting", "lifted"])
+@pytest.mark.parametrize("v", [0.3, 0.75], ids=["high sun", "low sun"])
+def test_a_flat_round_sign_casts_one_unbroken_shadow(method, lift, v):
+    """Thickness 0 makes a disc a flat sign, one plane: its shadow is one piece under a high and a low sun, resting
+    or lifted, not the strips of the cards its round bottom would stand on as a body (a ball's contact line)."""
+    from scipy import ndimage
+
+    shadow = shadow_of(method, disc(W, H, *BALL), sun(v), lift, 0.0)
+    assert (shadow > 0.5).sum() > 500
+    assert ndimage.label(shadow > 0.5)[1] == 1
+
+
 def test_a_lifted_object_is_as_deep_as_it_is_resting(method):
     """Floating changes where the object is, not its shape: the ball's thickness read (the surface model's depth
     reading over its width) is the same at every lift, and so is each of its pixels' depth behind its card."""
@@ -111,7 +123,7 @@ def test_a_dragged_lift_casts_what_a_fresh_one_does(method):
     light = sun(0.45, 3.0)
     dragged = open_session(ball, method, *CAMERA)
     dragged.render(light)
-    for lift, thickness in ((24.0, None), (40.0, None), (40.0, 0.5), (120.0, 0.5), (0.0, None)):
+    for lift, thickness in ((24.0, None), (40.0, None), (40.0, 0.5), (40.0, 0.0), (120.0, 0.5), (0.0, None)):
         dragged.set_geometry(lift, thickness)
         got = dragged.render(light).full_canvas(W, H)
         want = shadow_of(method, ball, light, lift, thickness)
