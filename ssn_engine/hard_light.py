@@ -1288,8 +1288,13 @@ class ContactTracer:
         kept: dict[BandKey, Kept] | None = None,
     ) -> None:
         alpha, bands = reading.alpha, reading.bands
-        if thickness == 0 and len(bands) > 1:  # a flat sign is one plane: one card, standing at its lowest foot
-            bands = [(bands[0][0], bands[-1][1], max(foot for *_, foot in bands))]
+        outline = reading.thickness_read
+        if thickness is not None and thickness < outline and len(bands) > 1:
+            # a contact line rising at the sides stands them farther back; an object given less depth than its
+            # outline reads has a shallower footprint: its bands' feet drawn to the lowest in that share (a flat
+            # sign, thickness 0, is one plane; else a round bottom's cards cast strips apart)
+            lowest, share = max(foot for *_, foot in bands), thickness / outline
+            bands = [(c0, c1, lowest - round((lowest - foot) * share)) for c0, c1, foot in bands]
         depth: np.ndarray | None = reading.depth
         kept = kept or {}
         x0, y0 = framing.bbox[:2]
@@ -1299,7 +1304,6 @@ class ContactTracer:
         self.thickness_read = reading.thickness_read  # the outline's; below, the far surface's where one is read
         far_feet = reading.far_feet
         if thickness is not None:  # the artist's replaces the reading: the round cross-section scaled
-            outline = reading.thickness_read
             depth = depth * np.float32(thickness / outline) if outline > 0 else depth * 0
         elif far_feet is not None:  # each pixel as deep as its far surface
             depth = None

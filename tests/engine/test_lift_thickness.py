@@ -85,16 +85,20 @@ def test_a_thickness_makes_a_sign_flat_and_a_box_deep(method):
     assert areas[0.0] < 0.6 * areas[None] and areas[3.0] > 1.5 * areas[None], areas
 
 
+@pytest.mark.parametrize("thickness", [0.0, 0.05])
 @pytest.mark.parametrize("lift", [0.0, 80.0], ids=["resting", "lifted"])
 @pytest.mark.parametrize("v", [0.3, 0.75], ids=["high sun", "low sun"])
-def test_a_flat_round_sign_casts_one_unbroken_shadow(method, lift, v):
-    """Thickness 0 makes a disc a flat sign, one plane: its shadow is one piece under a high and a low sun, resting
-    or lifted, not the strips of the cards its round bottom would stand on as a body (a ball's contact line)."""
+def test_a_thin_round_sign_casts_one_unbroken_shadow(method, lift, v, thickness):
+    """A disc given (almost) no depth is (almost) a flat sign, one plane: its shadow is one piece under a high and
+    a low sun, resting or lifted, not the strips of the cards its round bottom would stand on as a body (a
+    ball's contact line rising at the sides stands them farther back)."""
     from scipy import ndimage
 
-    shadow = shadow_of(method, disc(W, H, *BALL), sun(v), lift, 0.0)
-    assert (shadow > 0.5).sum() > 500
-    assert ndimage.label(shadow > 0.5)[1] == 1
+    shadow = shadow_of(method, disc(W, H, *BALL), sun(v), lift, thickness)
+    pieces, count = ndimage.label(shadow > 0.5)
+    sizes = np.bincount(pieces.ravel())[1:]
+    assert sizes.sum() > 500
+    assert sizes.max() > 0.98 * sizes.sum(), sorted(sizes)[-5:]
 
 
 def test_a_lifted_object_is_as_deep_as_it_is_resting(method):
