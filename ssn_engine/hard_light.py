@@ -250,7 +250,7 @@ class Kept:
 
 
 SurfaceDepths = tuple[np.ndarray, np.ndarray | None]  # pixels behind the card: each surface's, its far end's read depth
-BandKey = tuple[tuple[tuple[int, int, int], ...], int]  # a card's bands (c0, c1, foot) and which of them it is
+BandKey = tuple[tuple[tuple[int, ...], ...], int]  # a card's bands ((c0, c1) or (c0, c1, foot)), which of them
 
 
 class CardTracer:
@@ -1308,6 +1308,7 @@ class ContactTracer:
         elif far_feet is not None:  # each pixel as deep as its far surface
             depth = None
         rows, layout = int(round(lift)), tuple(bands)
+        columns = tuple((c0, c1) for c0, c1, _ in bands)  # what a card's alpha depends on (its foot: not)
         for i, (c0, c1, foot) in enumerate(bands):
             weight = np.zeros(width, np.float32)
             weight[c0:c1] = 1.0
@@ -1322,7 +1323,7 @@ class ContactTracer:
             used = np.flatnonzero(weight > 0)
             a, b = int(used[0]), int(used[-1]) + 1
             part = alpha[:, a:b] if len(bands) == 1 else alpha[:, a:b] * weight[a:b]  # (a card copies its alpha)
-            key = (layout, i)
+            key = (layout, i)  # its surfaces at rest depend on its foot; what it keeps, on its columns
 
             card_at = partial(
                 _band_card,
@@ -1335,7 +1336,7 @@ class ContactTracer:
                 None if reading.feet is None else reading.feet[:, a:b],
                 None if far_feet is None else far_feet[:, a:b],
                 thickness,
-                kept.get(key),
+                kept.get((columns, i)),
             )
             if rows > 0 and reading.feet is not None and key not in reading.at_rest:
                 rest = card_at(0)  # the same band standing on the ground: its surfaces as read (once a reading)
@@ -1346,7 +1347,7 @@ class ContactTracer:
                 reading.at_rest.setdefault(key, card.surface_depths)
             if not card.empty:
                 self.cards.append(card)
-                self.kept[key] = card.kept
+                self.kept[columns, i] = card.kept
         self.empty = not self.cards
         if far_feet is not None and self.cards:  # the far surface read: its deepest segment over the width
             self.thickness_read = read_thickness(alpha, np.asarray(max(c.deepest_read for c in self.cards)))
