@@ -182,12 +182,12 @@ class _Padded:
     """A card's alpha and its surfaces' depths (pixels behind the card: where each pixel's surface lies, ``near``,
     and where its depth ends, ``far``) with its pad above and beside them, down to its foot and beyond it: the
     ground's rows, zeros (depths: the last row's), to the foot of the highest lift with the same pad. Read-only: a
-    card whose foot lies lower (a lift dragged) takes them over to its own foot. ``depth``: the artist's
-    thickness they were made with (None: read); ``deepest`` and ``frontmost``: ``far``'s largest and ``-near``'s
-    (pixels); ``cols``: the columns of ``alpha`` (without the pad) that hold any of it."""
+    card whose foot lies lower (a lift dragged) takes them over to its own foot. ``given_thickness``: the
+    artist's thickness they were made with (None: read); ``deepest`` and ``frontmost``: ``far``'s largest and
+    ``-near``'s (pixels); ``cols``: the columns of ``alpha`` (without the pad) that hold any of it."""
 
     pad: int
-    depth: float | None
+    given_thickness: float | None
     alpha: np.ndarray
     near: np.ndarray
     far: np.ndarray
@@ -197,7 +197,13 @@ class _Padded:
 
     @classmethod
     def of(
-        cls, alpha: np.ndarray, near: np.ndarray, thick: np.ndarray, pad: int, rows: int, depth: float | None
+        cls,
+        alpha: np.ndarray,
+        near: np.ndarray,
+        thick: np.ndarray,
+        pad: int,
+        rows: int,
+        given_thickness: float | None,
     ) -> _Padded:
         """The arrays of a card of ``alpha`` (its rows down to its lowest lit one), ``near`` and ``thick`` (how deep
         each pixel reaches behind its surface) over the same rows, padded by ``pad`` to ``rows`` rows in all."""
@@ -228,7 +234,7 @@ class _Padded:
             values.flags.writeable = False
         return cls(
             pad,
-            depth,
+            given_thickness,
             out,
             spread,
             ends,
@@ -241,10 +247,9 @@ class _Padded:
 @dataclass(frozen=True)
 class Kept:
     """What a card keeps for a card of the same cutout whose foot or depth differ (the artist's lift or thickness
-    changed): its pad; per scale and level of its blurred copies, the rows blurred and the copy; its padded
-    arrays."""
+    changed): per scale and level of its blurred copies, the rows blurred and the copy; its padded arrays (and
+    their pad, which the copies share)."""
 
-    pad: int
     levels: dict[float, dict[int, tuple[int, int, _Level]]]
     arrays: _Padded
 
@@ -289,13 +294,13 @@ class CardTracer:
         lifted card takes in place of its own reading of ``feet`` and ``far_feet``: the object's shape does not
         change as it floats (read at the lifted card's foot, nearer the camera, the same rows would make it
         shallower).
-    depth : float or None
+    given_thickness : float or None
         The artist's thickness that ``thickness`` was scaled to (None: the depth is read): ``kept``'s padded
         arrays are taken over only if made with the same.
     kept : Kept or None
         The :attr:`kept` of a card of the same ``alpha`` and origin whose foot or depth differ (the artist's lift
         or thickness changed): its blurred copies taken over where its pad is this one's, its padded arrays where
-        its ``depth`` is this one's too and they reach this card's foot.
+        its ``given_thickness`` is this one's too and they reach this card's foot.
     """
 
     def __init__(
@@ -310,7 +315,7 @@ class CardTracer:
         far_feet: np.ndarray | None = None,
         lift: int = 0,
         at_rest: SurfaceDepths | None = None,
-        depth: float | None = None,
+        given_thickness: float | None = None,
         kept: Kept | None = None,
     ) -> None:
         alpha = np.clip(np.asarray(alpha, np.float32), 0.0, 1.0)
@@ -345,7 +350,13 @@ class CardTracer:
         # steps, so that a card whose foot moves a little (a lift dragged) keeps its pad and what it made there
         steps = math.ceil(PAD * lift / PAD_STEP)
         pad = math.ceil(PAD * max(foot - lift, width)) + PAD_STEP * steps
-        if kept is not None and kept.pad == pad and kept.arrays.depth == depth and len(kept.arrays.alpha) >= pad + foot:
+        same_pad = kept is not None and kept.arrays.pad == pad
+        if (
+            kept is not None  # (implied by same_pad; said again for the type checker)
+            and same_pad
+            and kept.arrays.given_thickness == given_thickness
+            and len(kept.arrays.alpha) >= pad + foot
+        ):
             arrays = kept.arrays
         else:
             if thickness is not None:
@@ -353,7 +364,7 @@ class CardTracer:
             else:
                 thick = np.zeros((lowest, width), np.float32) if read is None else read
             highest = int(PAD_STEP * steps / PAD)  # the highest lift with this pad
-            arrays = _Padded.of(alpha[:lowest], near, thick, pad, pad + foot + highest - lift, depth)
+            arrays = _Padded.of(alpha[:lowest], near, thick, pad, pad + foot + highest - lift, given_thickness)
         self.depth = arrays.deepest * self._world_per_pixel  # world units it reaches behind the card
         self.front = arrays.frontmost * self._world_per_pixel  # and in front of it
         c0, c1 = arrays.cols
@@ -371,8 +382,8 @@ class CardTracer:
         self._swept_depths: dict[tuple[int, int], tuple[np.ndarray, np.ndarray]] = {}  # per reduction and sweep's
         self._on_card: dict[int, np.ndarray | None] = {}  # per reduction: the pixels whose surface is on the card
         # per scale, level: rows, blurred; those of the same alpha with the same pad (a card whose foot moved) hold
-        levels = kept.levels if kept is not None and kept.pad == pad else {}
-        self.kept = Kept(pad, levels, arrays)  # for a card of the same alpha and another foot or depth
+        levels = kept.levels if kept is not None and same_pad else {}
+        self.kept = Kept(levels, arrays)  # for a card of the same alpha and another foot or depth
         self._levels = levels
 
     # -- the cutout at the output's resolution ------------------------------------------------------------------
@@ -1154,7 +1165,7 @@ def _band_card(
     thickness: np.ndarray | None,
     feet: np.ndarray | None,
     far_feet: np.ndarray | None,
-    depth: float | None,
+    given_thickness: float | None,
     kept: Kept | None,
     lift: int,
     at_rest: SurfaceDepths | None = None,
@@ -1175,7 +1186,7 @@ def _band_card(
         far_feet=None if far_feet is None else far_feet + shift,
         lift=lift,
         at_rest=at_rest,
-        depth=depth,
+        given_thickness=given_thickness,
         kept=kept,
     )
 
