@@ -1,6 +1,6 @@
 """The reference pages stay reference: every relative link and picture in README.md and docs/*.md points at a
-file of the repository, and no page outside the history archive (docs/notes/) speaks of work sessions or of
-paths in the git-ignored runs/ folder, which a clone does not have."""
+file of the repository, and no page speaks of work sessions (experiment history lives in git) or of paths in
+the git-ignored runs/ folder, which a clone does not have."""
 
 from __future__ import annotations
 
@@ -10,7 +10,6 @@ from pathlib import Path
 import pytest
 
 REPO = Path(__file__).resolve().parents[1]
-NOTES = REPO / "docs" / "notes"
 SKIPPED_DIRS = {".git", "data", "runs", "build", "dist", ".venv", "node_modules", ".pytest_cache", ".ruff_cache"}
 
 # [text](target) and ![alt](target), with an optional "title"; <img src="target">
@@ -25,11 +24,11 @@ def _reference_pages() -> list[Path]:
 
 
 def _all_pages() -> list[Path]:
-    """Every Markdown file of the tree outside the archive and outside ignored or generated folders."""
+    """Every Markdown file of the tree outside ignored or generated folders."""
     pages = []
     for path in sorted(REPO.rglob("*.md")):
         parts = set(path.relative_to(REPO).parts[:-1])
-        if parts & SKIPPED_DIRS or any(p.endswith(".egg-info") for p in parts) or path.is_relative_to(NOTES):
+        if parts & SKIPPED_DIRS or any(p.endswith(".egg-info") for p in parts):
             continue
         pages.append(path)
     return pages
@@ -58,14 +57,8 @@ def test_every_relative_link_and_picture_resolves(page: Path):
     assert not dead, f"{page.relative_to(REPO)} links to what a clone does not have: {dead}"
 
 
-@pytest.mark.parametrize("page", _reference_pages(), ids=lambda p: str(p.relative_to(REPO)))
-def test_reference_pages_do_not_link_the_history_archive(page: Path):
-    linked = [t for t in relative_targets(page.read_text(encoding="utf-8")) if "notes/" in t]
-    assert not linked, f"{page.relative_to(REPO)} links the history archive: {linked}"
-
-
 @pytest.mark.parametrize("page", _all_pages(), ids=lambda p: str(p.relative_to(REPO)))
-def test_no_page_outside_the_archive_counts_sessions(page: Path):
+def test_no_page_counts_sessions(page: Path):
     found = SESSION.findall(page.read_text(encoding="utf-8"))
     assert not found, f"{page.relative_to(REPO)} speaks of work sessions: {found}"
 
