@@ -17,10 +17,11 @@ from scipy import ndimage
 from ssn_engine.framing import CanvasShadow
 from ssn_engine.hemisphere import direction
 from ssn_engine.host_kit.light_map import LightMap
-from ssn_engine.hard_light import light_direction
+from ssn_engine.hard_light import light_direction, lowest_pixel
 from ssn_engine.methods import load_method
 from ssn_engine.session import ShadowSession
 from training.canvas_eval import cases, disk, metrics, oracle, render, score, sheet
+from training.canvas_eval import render_set as render_sets
 from training.canvas_eval.render_set import render_set
 from training.data import meshes, procedural
 from training.data.items import Item
@@ -187,6 +188,28 @@ def test_a_floating_set_lifts_each_shape_and_scores_it_with_its_lift(tmp_path):
     cmd = score.cli_command("py", tmp_path, group, 0.53, "camera", tmp_path / "l.png")
     assert cmd[cmd.index("--lift") + 1] == f"{group.lift:.2f}"
     assert "--lift" not in score.cli_command("py", tmp_path, group, 0.53, "blind", tmp_path / "l.png")
+
+
+def test_a_floating_box_s_lift_is_counted_from_its_lowest_pixel():
+    """The conventions' lift: from the cutout's lowest pixel (the box's front bottom edge, seen from above) down
+    to the image of the ground beneath the surface seen there, not from the image of some lowest vertex (its
+    back bottom corners lie as low, farther away, and rise by fewer rows)."""
+    mesh = _box_on_ground()
+    v = np.ascontiguousarray(meshes.yawed(mesh.vertices, 0.0))
+    v[:, 1] += 0.5  # floating half its height above the ground
+    canvas = render.canvas_camera(v, 320, 240, 30.0)
+    alpha = render.canvas_mask(v, mesh.faces, meshes.topology(mesh), canvas)
+    row, col = lowest_pixel(alpha)
+    cam = canvas.camera
+    ray = cam.rays(col + 0.5, row + 0.5)
+    front = cam.centre + (v[:, 2].max() - cam.centre[2]) / ray[2] * ray  # where the ray meets the front face
+    assert front[1] == pytest.approx(v[:, 1].min(), abs=0.01)  # the pixel shows the front face's bottom edge
+    expected = cam.project(front * np.array([1.0, 0.0, 1.0]))[1] - (row + 0.5)
+    lift = render_sets.true_lift(v, mesh.faces, canvas, alpha)
+    assert lift == pytest.approx(expected, abs=0.05)
+    back = v[np.argmin(v[:, 2] + 10 * v[:, 1])]  # a back bottom corner
+    back_lift = float(np.diff(cam.project(np.array([back, back * np.array([1.0, 0.0, 1.0])]))[:, 1])[0])
+    assert lift > back_lift + 1.0
 
 
 def test_fixture_is_a_readable_test_set():

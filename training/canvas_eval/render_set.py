@@ -8,6 +8,7 @@ from pathlib import Path
 
 import numpy as np
 
+from ssn_engine.hard_light import lowest_pixel
 from training.data import meshes, sources
 from training.data.items import stable_hash
 
@@ -48,12 +49,41 @@ def group_scene(group: cases.Group) -> tuple[np.ndarray, meshes.Mesh, meshes.Top
     return vertices, mesh, meshes.topology(mesh), render.canvas_camera(vertices, group.width, group.height, group.pitch)
 
 
-def true_lift(vertices: np.ndarray, canvas: render.CanvasCamera) -> float:
-    """The lift in canvas rows (conventions, "Lift and thickness") of a shape whose lowest point is its lowest
-    vertex: the rows from that point's image down to the image of the ground point beneath it."""
-    low = vertices[int(np.argmin(vertices[:, 1]))]
-    rows = canvas.camera.project(np.array([low, [low[0], 0.0, low[2]]]))[:, 1]
-    return float(rows[1] - rows[0])
+def first_hit(vertices: np.ndarray, faces: np.ndarray, origin: np.ndarray, ray: np.ndarray) -> float | None:
+    """The smallest t > 0 at which ``origin + t * ray`` meets a face of the mesh (Moller-Trumbore), None where
+    it meets none."""
+    a, b, c = (vertices[faces[:, k]] for k in range(3))
+    e1, e2 = b - a, c - a
+    p = np.cross(ray, e2)
+    det = np.einsum("ij,ij->i", e1, p)
+    ok = np.abs(det) > 1e-12
+    inv = np.where(ok, 1.0 / np.where(ok, det, 1.0), 0.0)
+    s = origin - a
+    u = np.einsum("ij,ij->i", s, p) * inv
+    q = np.cross(s, e1)
+    v = (q @ ray) * inv
+    t = np.einsum("ij,ij->i", e2, q) * inv
+    hit = ok & (u >= 0) & (v >= 0) & (u + v <= 1) & (t > 0)
+    return float(t[hit].min()) if hit.any() else None
+
+
+def true_lift(vertices: np.ndarray, faces: np.ndarray, canvas: render.CanvasCamera, alpha: np.ndarray) -> float:
+    """The lift in canvas rows (conventions, "Lift and thickness") of a floating shape whose cutout's coverage
+    is ``alpha``: the rows from the cutout's :func:`lowest_pixel` (its centre) down to the image of the ground
+    point beneath the surface point seen through it."""
+    row, col = lowest_pixel(alpha)
+    cam = canvas.camera
+    # the centre first; where the faces just miss it (the pixel half covered), the nearest covered point in it
+    points = (np.arange(render.MASK_SAMPLES) + 0.5) / render.MASK_SAMPLES - 0.5
+    offsets = sorted(((dy, dx) for dy in points for dx in points), key=lambda o: o[0] ** 2 + o[1] ** 2)
+    for dy, dx in [(0.0, 0.0), *offsets]:
+        ray = cam.rays(col + 0.5 + dx, row + 0.5 + dy)
+        t = first_hit(vertices, faces, cam.centre, ray)
+        if t is not None:
+            point = cam.centre + t * ray
+            foot = cam.project_xyz(point[:1], np.zeros(1), point[2:])[1]
+            return float(foot[0] - (row + 0.5))
+    raise ValueError(f"no face of the mesh is seen through the cutout's lowest pixel ({row}, {col})")
 
 
 def truth_directions(group: cases.Group, angle: float) -> np.ndarray:
@@ -66,10 +96,12 @@ def render_group(root: Path, group: cases.Group, log=print) -> cases.Group:
     """Render one group's cutout and every missing truth (at each of ``group.angles``); returns the group with
     its canvas camera (and, floating, its lift)."""
     vertices, mesh, topo, canvas = group_scene(group)
-    lift = round(true_lift(vertices, canvas), 2) if group.lift_share > 0 else 0.0
-    group = replace(group, horizon=canvas.horizon, fov=canvas.fov, lift=lift)
     if not cases.cutout_path(root, group).is_file():
         cases.write_cutout(root, group, render.canvas_mask(vertices, mesh.faces, topo, canvas))
+    lift = 0.0
+    if group.lift_share > 0:  # counted on the cutout as the CLI reads it
+        lift = round(true_lift(vertices, mesh.faces, canvas, cases.read_mask(root, group)), 2)
+    group = replace(group, horizon=canvas.horizon, fov=canvas.fov, lift=lift)
     for angle in group.angles:
         if cases.truth_path(root, group, angle).is_file():
             continue
@@ -119,4 +151,12 @@ def render_set(
     return groups
 
 
-__all__ = ["group_scene", "planned_groups", "render_group", "render_set", "true_lift", "truth_directions"]
+__all__ = [
+    "first_hit",
+    "group_scene",
+    "planned_groups",
+    "render_group",
+    "render_set",
+    "true_lift",
+    "truth_directions",
+]
