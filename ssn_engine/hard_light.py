@@ -65,7 +65,7 @@ import numpy as np
 from PIL import Image, ImageFilter
 from scipy import ndimage
 
-from .camera import FORWARD, RIGHT, UP, camera_for_span
+from .camera import FORWARD, RIGHT, UP, Camera, camera_for_span
 from .frames import nearest_fill
 from .framing import Framing, placed_sum
 from .hemisphere import direction
@@ -94,9 +94,12 @@ __all__ = [
     "contact_line",
     "depth_map",
     "footprint_rise",
+    "ground_ahead",
+    "ground_rows",
     "light_direction",
     "local_radius",
     "read_thickness",
+    "rigid_lifts",
     "traced_share",
 ]
 
@@ -688,18 +691,11 @@ class CardTracer:
         k = max(1, math.ceil(max(h, w) / DEPTH_SIZE))  # worked out on a reduced copy (it is smooth) and enlarged
         lowest = cam.horizon + HORIZON_GAP * cam.n  # a foot nearer the horizon than this lies this near it
         rows = np.maximum((np.asarray(feet[::k, ::k], np.float64) + y0) * s + framing.offset_y, lowest)
-        ahead = self._ground_ahead(rows) - self._ground_ahead(np.array([max(base, lowest)]))[0]
+        ahead = ground_ahead(self.camera, rows) - ground_ahead(self.camera, np.array([max(base, lowest)]))[0]
         along = abs(float(self._depth_ray() @ FORWARD))  # the depth ray's unit horizontal length, ahead
         most = MAX_SURFACE_DEPTH * max(h, w)
         pixels = np.clip(ahead / max(along, 1e-9) / self._world_per_pixel, -most, most)
         return _enlarged(pixels, k, (h, w))
-
-    def _ground_ahead(self, rows: np.ndarray) -> np.ndarray:
-        """How far ahead of the camera (world units along the forward axis) the ground lies at frame ``rows``
-        (below the horizon; the same along a row, the camera having no roll)."""
-        rays = self.camera.rays(np.full(rows.shape, 0.5 * self.camera.n), rows)
-        t = -self.camera.centre[1] / np.minimum(rays[..., 1], -1e-12)
-        return (self.camera.centre + t[..., None] * rays) @ FORWARD
 
     def _mid_depth(self) -> float:
         """The camera depth of the card's centre line at half its height."""
@@ -1191,6 +1187,75 @@ def _band_card(
     )
 
 
+def ground_ahead(camera: Camera, rows: np.ndarray) -> np.ndarray:
+    """Where along the forward axis (world units; 0 at the card's foot, as ``camera`` is placed) the ground lies
+    at frame ``rows`` (below the horizon; the same along a row, the camera having no roll)."""
+    rays = camera.rays(np.full(rows.shape, 0.5 * camera.n), rows)
+    t = -camera.centre[1] / np.minimum(rays[..., 1], -1e-12)
+    return (camera.centre + t[..., None] * rays) @ FORWARD
+
+
+def ground_rows(camera: Camera, ahead: np.ndarray) -> np.ndarray:
+    """The frame rows at which the ground lies at ``ahead`` along the forward axis (:func:`ground_ahead`'s
+    inverse)."""
+    below = camera.centre * np.array([1.0, 0.0, 1.0])  # the ground point straight below the camera
+    points = below + (np.asarray(ahead, np.float64) - below @ FORWARD)[:, None] * FORWARD
+    return camera.project(points)[:, 1]
+
+
+def rigid_lifts(camera: Camera, feet: np.ndarray, lowest: float, foot: float, lift: float) -> np.ndarray:
+    """The rows each foot (``feet``, frame rows of ground points on ``camera``'s image) of an object moves down when
+    it floats ``lift`` rows (conventions, "Lift and thickness"): the object's lowest pixel (frame row ``lowest``)
+    shows a surface whose foot lay at frame row ``foot`` as it stood, and ``lift`` rows below it as it floats. The
+    floating object shows the same image as the one read standing, so it is that object scaled about the camera's
+    centre by the share that moves that foot so: every foot's ground point comes that share as far from the camera,
+    and a foot farther back moves by fewer rows (a uniform shift would lift it higher in the world)."""
+    feet = np.asarray(feet, np.float64)
+    here = float(camera.centre @ FORWARD)  # (the ground's distances from the camera, not from the card's foot)
+    k = (ground_ahead(camera, np.array([lowest + lift]))[0] - here) / (ground_ahead(camera, np.array([foot]))[0] - here)
+    return ground_rows(camera, here + k * (ground_ahead(camera, feet) - here)) - feet
+
+
+def _band_lifts(
+    reading: ContactReading, framing: Framing, camera: tuple[float, float] | None, feet: list[int], lift: float
+) -> list[int]:
+    """:func:`rigid_lifts` of a cutout's bands, whose feet are rows of its alpha, lifted ``lift`` of its rows."""
+    if lift <= 0:
+        return [0] * len(feet)
+    alpha = reading.alpha
+    s, y0 = framing.scale, framing.bbox[1]
+    frame = (np.asarray(feet, np.float64) + y0) * s + framing.offset_y
+    row, col = lowest_pixel(alpha)
+    # the lowest pixel's foot as it stood: as the surface model read it (never above the pixel), else the card's
+    foot = (
+        float(frame.max())
+        if reading.feet is None
+        else (max(float(reading.feet[row, col]), row + 0.5) + y0) * s + framing.offset_y
+    )
+    top = (np.flatnonzero((alpha > ROWS_ALPHA).any(axis=1))[0] + y0) * s + framing.offset_y
+    horizon, focal = camera if camera is not None else (None, None)
+    cam = camera_for_span(framing.n, top, float(frame.max()), horizon, focal)[0]
+    moved = rigid_lifts(cam, frame, (row + 0.5 + y0) * s + framing.offset_y, foot, lift * s) / s
+    return [max(0, int(round(m))) for m in moved]
+
+
+def lowest_pixel(alpha: np.ndarray) -> tuple[int, int]:
+    """The pixel (row, col) of ``alpha`` a lift is counted from (conventions, "Lift and thickness"): its lowest row
+    with coverage >= 0.5, at that row's coverage-weighted mean column, or the row's nearest pixel of coverage
+    >= 0.5 where the mean falls on less (a cutout nowhere so opaque: half its highest coverage in place of 0.5)."""
+    peak = float(alpha.max())
+    if peak <= 0:
+        raise ValueError("the cutout is empty")
+    covered = alpha >= min(0.5, 0.5 * peak)
+    row = int(np.flatnonzero(covered.any(axis=1))[-1])
+    weights = alpha[row].astype(np.float64)
+    col = int(np.sum(weights * np.arange(len(weights))) / weights.sum() + 0.5)
+    if not covered[row, col]:
+        cols = np.flatnonzero(covered[row])
+        col = int(cols[np.argmin(np.abs(cols - col))])
+    return row, col
+
+
 def _enlarged(small: np.ndarray, k: int, shape: tuple[int, int]) -> np.ndarray:
     """``small``, worked out on a copy reduced ``k`` times, enlarged bilinearly (float32) and cut to ``shape``."""
     small = np.ascontiguousarray(small, np.float32)
@@ -1318,9 +1383,10 @@ class ContactTracer:
             depth = depth * np.float32(thickness / outline) if outline > 0 else depth * 0
         elif far_feet is not None:  # each pixel as deep as its far surface
             depth = None
-        rows, layout = int(round(lift)), tuple(bands)
+        lifts = _band_lifts(reading, framing, camera, [foot for *_, foot in bands], lift)
+        layout = tuple(bands)
         columns = tuple((c0, c1) for c0, c1, _ in bands)  # what a card's alpha depends on (its foot: not)
-        for i, (c0, c1, foot) in enumerate(bands):
+        for i, ((c0, c1, foot), rows) in enumerate(zip(bands, lifts, strict=True)):
             weight = np.zeros(width, np.float32)
             weight[c0:c1] = 1.0
             if i > 0:

@@ -12,7 +12,9 @@ import pytest
 from engine_helpers import converse, disc
 from PIL import Image
 
+from ssn_engine.camera import FORWARD, camera_for_span
 from ssn_engine.cli import main
+from ssn_engine.hard_light import ground_ahead, ground_rows, rigid_lifts
 from ssn_engine.host_kit.light_map import GaussianLight, LightMap, preset
 from ssn_engine.layer_session import LayerSession, open_session
 from ssn_engine.methods import LoadedMethod, load_method
@@ -112,6 +114,23 @@ def test_a_lifted_object_is_as_deep_as_it_is_resting(method):
         depths.append(np.concatenate([np.ravel(card.surface_depths[0]) for card in session.tracer.cards]))
     assert 0.8 < reads[0] < 1.1 and reads == [reads[0]] * 3, reads
     assert all(np.array_equal(d, depths[0]) for d in depths)
+
+
+@pytest.mark.parametrize("horizon", [40.0, 120.0], ids=["looking down", "near eye level"])
+@pytest.mark.parametrize("above", [0.0, 12.0], ids=["lowest pixel on the ground", "lowest pixel above it"])
+def test_a_lifted_object_rises_as_one_body(horizon, above):
+    """A floating object's feet move as the object scaled about the camera (the same image), so that the whole
+    body rises by one world height: its lowest pixel's foot ends the lift below that pixel (where its surface stood
+    ``above`` rows over the ground, by that much less), a foot farther back moves by fewer rows than a nearer one
+    (a uniform shift in rows would lift the far part higher), every foot's ground point the same share nearer."""
+    cam = camera_for_span(256, 30.0, 200.0, horizon, 300.0)[0]
+    feet, lowest = np.array([150.0, 180.0, 200.0]), 200.0 - above  # the lowest pixel's surface stood on foot 200
+    moved = rigid_lifts(cam, feet, lowest, 200.0, 40.0)
+    assert feet[-1] + moved[-1] == pytest.approx(lowest + 40.0) and 0 < moved[0] < moved[1] < moved[2]
+    here = float(cam.centre @ FORWARD)
+    shares = (ground_ahead(cam, feet + moved) - here) / (ground_ahead(cam, feet) - here)
+    np.testing.assert_allclose(shares, shares[-1], rtol=1e-9)
+    np.testing.assert_allclose(ground_rows(cam, ground_ahead(cam, feet)), feet, atol=1e-9)
 
 
 def test_no_geometry_and_lift_zero_are_the_same_shadow(method):
