@@ -58,7 +58,7 @@ from __future__ import annotations
 
 import math
 from collections.abc import Callable
-from dataclasses import dataclass, field, replace
+from dataclasses import dataclass, field
 from functools import partial
 
 import numpy as np
@@ -152,19 +152,22 @@ class _Level:
     y: int
 
     @classmethod
-    def of(cls, alpha: np.ndarray) -> _Level:
-        """``alpha`` (float in [0, 1]) in 8 bits, cropped to where it is non-zero."""
-        q = np.round(np.asarray(alpha, np.float32) * 255).astype(np.uint8)
+    def of(cls, alpha: np.ndarray, y: int = 0) -> _Level:
+        """``alpha`` (float in [0, 1]; uint8 as it is) in 8 bits, cropped to where it is non-zero; its row 0 is
+        the source's row ``y``."""
+        q = alpha if alpha.dtype == np.uint8 else np.round(np.asarray(alpha, np.float32) * 255).astype(np.uint8)
         rows, cols = np.flatnonzero(q.any(axis=1)), np.flatnonzero(q.any(axis=0))
         if rows.size == 0:
             return cls(np.zeros((0, 0), np.uint8), 0, 0)
-        return cls(q[rows[0] : rows[-1] + 1, cols[0] : cols[-1] + 1].copy(), int(cols[0]), int(rows[0]))
+        return cls(q[rows[0] : rows[-1] + 1, cols[0] : cols[-1] + 1].copy(), int(cols[0]), y + int(rows[0]))
 
-    def paste(self, out: np.ndarray, r0: int, r1: int) -> None:
-        """Write this level's rows [r0, r1) (of the source) into ``out`` (zeros there beforehand)."""
-        a, b = max(r0, self.y), min(r1, self.y + self.values.shape[0])
+    def paste(self, out: np.ndarray, r0: int, r1: int, shift: int = 0) -> None:
+        """Write this level's rows [r0, r1) (of the source, less ``shift``: rows of ``out``) into ``out`` (zeros
+        there beforehand)."""
+        y = self.y + shift
+        a, b = max(r0, y), min(r1, y + self.values.shape[0])
         if b > a:
-            out[a:b, self.x : self.x + self.values.shape[1]] = self.values[a - self.y : b - self.y]
+            out[a:b, self.x : self.x + self.values.shape[1]] = self.values[a - y : b - y]
 
 
 @dataclass(frozen=True)
@@ -410,26 +413,42 @@ class CardTracer:
 
     def _level(self, source: _Source, k: int, r0: int, r1: int) -> _Level:
         """The source blurred by a Gaussian of sigma ``MIN_SIGMA * 2^((k - 1) / LEVELS_PER_OCTAVE)`` pixels
-        (k = 0: unblurred), over at least its rows [r0, r1): blurred first only over the rows a light needs of it
-        (each level serves a band of rows), and over all rows once another light needs others."""
+        (k = 0: unblurred), over at least its rows [r0, r1): blurred only over the rows a light needs of it (each
+        level serves a band of rows); asked for more (another light's, another lift's), it is blurred over the rows
+        it lacks, at least as many as it has (a drag asks a few more each time: they are blurred seldom)."""
         levels = self._levels.setdefault(source.scale, {})
         kept = levels.get(k)
         sigma = MIN_SIGMA * 2.0 ** ((k - 1) / LEVELS_PER_OCTAVE)
         margin = math.ceil(4 * sigma) + 2  # rows beyond [lo, hi) that reach into it
         # below the cutout's rows and their blur lies nothing, however far down the foot (a lift's ground rows)
-        r1 = min(r1, source.lit_rows + (margin if k > 0 else 0))
+        last = min(source.alpha.shape[0], source.lit_rows + (margin if k > 0 else 0))
+        r1 = min(r1, last)
         if r1 <= r0 or (kept is not None and kept[0] <= r0 and r1 <= kept[1]):
             return kept[2] if kept is not None else _Level.of(np.zeros((0, 0), np.float32))
-        # a level asked for more rows (another light's, another lift's) is blurred over all of them, once
-        lo, hi = (r0, r1) if kept is None else (0, min(source.alpha.shape[0], source.lit_rows + margin))
         if k == 0:
             lo, hi, level = 0, source.alpha.shape[0], _Level.of(source.alpha)
+        elif kept is None:
+            lo, hi, level = r0, r1, self._blurred_rows(source, sigma, margin, r0, r1)
         else:
-            a, b = max(0, lo - margin), min(source.alpha.shape[0], hi + margin)
-            level = _Level.of(_blur(source.alpha[a:b], sigma)[lo - a : hi - a])
-            level = replace(level, y=level.y + lo)
+            k0, k1, old = kept
+            grow = k1 - k0
+            lo = min(r0, max(0, k0 - grow)) if r0 < k0 else k0
+            hi = max(r1, min(last, k1 + grow)) if r1 > k1 else k1
+            rows = np.zeros((hi - lo, source.alpha.shape[1]), np.uint8)
+            for a, b in ((lo, k0), (k1, hi)):
+                if b > a:
+                    self._blurred_rows(source, sigma, margin, a, b).paste(rows, a - lo, b - lo, -lo)
+            old.paste(rows, k0 - lo, k1 - lo, -lo)
+            level = _Level.of(rows, lo)
         levels[k] = (lo, hi, level)
         return level
+
+    @staticmethod
+    def _blurred_rows(source: _Source, sigma: float, margin: int, lo: int, hi: int) -> _Level:
+        """The source's rows [lo, hi) blurred by a Gaussian of ``sigma`` (with the ``margin`` rows either side that
+        reach into them)."""
+        a, b = max(0, lo - margin), min(source.alpha.shape[0], hi + margin)
+        return _Level.of(_blur(source.alpha[a:b], sigma)[lo - a : hi - a], lo)
 
     def _blurred(self, source: _Source, sigma_rows: np.ndarray) -> np.ndarray:
         """The source (uint8) blurred row by row: row i by a Gaussian of about sigma ``sigma_rows[i]`` pixels (the
