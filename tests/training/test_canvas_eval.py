@@ -21,8 +21,7 @@ from ssn_engine.hard_light import light_direction, lowest_pixel
 from ssn_engine.methods import load_method
 from ssn_engine.session import ShadowSession
 from training.canvas_eval import cases, disk, metrics, oracle, render, score, sheet
-from training.canvas_eval import render_set as render_sets
-from training.canvas_eval.render_set import render_set
+from training.canvas_eval.render_set import render_set, true_lift
 from training.data import meshes, procedural
 from training.data.items import Item
 from training.data.raycast import ray_hits
@@ -205,7 +204,7 @@ def test_a_floating_box_s_lift_is_counted_from_its_lowest_pixel():
     front = cam.centre + (v[:, 2].max() - cam.centre[2]) / ray[2] * ray  # where the ray meets the front face
     assert front[1] == pytest.approx(v[:, 1].min(), abs=0.01)  # the pixel shows the front face's bottom edge
     expected = cam.project(front * np.array([1.0, 0.0, 1.0]))[1] - (row + 0.5)
-    lift = render_sets.true_lift(v, mesh.faces, canvas, alpha)
+    lift = true_lift(v, mesh.faces, canvas, alpha)
     assert lift == pytest.approx(expected, abs=0.05)
     back = v[np.argmin(v[:, 2] + 10 * v[:, 1])]  # a back bottom corner
     back_lift = float(np.diff(cam.project(np.array([back, back * np.array([1.0, 0.0, 1.0])]))[:, 1])[0])

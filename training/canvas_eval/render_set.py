@@ -11,6 +11,7 @@ import numpy as np
 from ssn_engine.hard_light import lowest_pixel
 from training.data import meshes, sources
 from training.data.items import stable_hash
+from training.data.raycast import ray_distances
 
 from . import cases, disk, out_of_source, render
 
@@ -49,24 +50,6 @@ def group_scene(group: cases.Group) -> tuple[np.ndarray, meshes.Mesh, meshes.Top
     return vertices, mesh, meshes.topology(mesh), render.canvas_camera(vertices, group.width, group.height, group.pitch)
 
 
-def first_hit(vertices: np.ndarray, faces: np.ndarray, origin: np.ndarray, ray: np.ndarray) -> float | None:
-    """The smallest t > 0 at which ``origin + t * ray`` meets a face of the mesh (Moller-Trumbore), None where
-    it meets none."""
-    a, b, c = (vertices[faces[:, k]] for k in range(3))
-    e1, e2 = b - a, c - a
-    p = np.cross(ray, e2)
-    det = np.einsum("ij,ij->i", e1, p)
-    ok = np.abs(det) > 1e-12
-    inv = np.where(ok, 1.0 / np.where(ok, det, 1.0), 0.0)
-    s = origin - a
-    u = np.einsum("ij,ij->i", s, p) * inv
-    q = np.cross(s, e1)
-    v = (q @ ray) * inv
-    t = np.einsum("ij,ij->i", e2, q) * inv
-    hit = ok & (u >= 0) & (v >= 0) & (u + v <= 1) & (t > 0)
-    return float(t[hit].min()) if hit.any() else None
-
-
 def true_lift(vertices: np.ndarray, faces: np.ndarray, canvas: render.CanvasCamera, alpha: np.ndarray) -> float:
     """The lift in canvas rows (conventions, "Lift and thickness") of a floating shape whose cutout's coverage
     is ``alpha``: the rows from the cutout's :func:`lowest_pixel` (its centre) down to the image of the ground
@@ -78,8 +61,8 @@ def true_lift(vertices: np.ndarray, faces: np.ndarray, canvas: render.CanvasCame
     offsets = sorted(((dy, dx) for dy in points for dx in points), key=lambda o: o[0] ** 2 + o[1] ** 2)
     for dy, dx in [(0.0, 0.0), *offsets]:
         ray = cam.rays(col + 0.5 + dx, row + 0.5 + dy)
-        t = first_hit(vertices, faces, cam.centre, ray)
-        if t is not None:
+        t = float(ray_distances(cam.centre[None], ray[None], vertices, faces)[0])
+        if np.isfinite(t):
             point = cam.centre + t * ray
             foot = cam.project_xyz(point[:1], np.zeros(1), point[2:])[1]
             return float(foot[0] - (row + 0.5))
@@ -151,12 +134,4 @@ def render_set(
     return groups
 
 
-__all__ = [
-    "first_hit",
-    "group_scene",
-    "planned_groups",
-    "render_group",
-    "render_set",
-    "true_lift",
-    "truth_directions",
-]
+__all__ = ["group_scene", "planned_groups", "render_group", "render_set", "true_lift", "truth_directions"]

@@ -9,14 +9,14 @@ from __future__ import annotations
 import numpy as np
 
 
-def ray_hits(
+def ray_distances(
     origins: np.ndarray, directions: np.ndarray, vertices: np.ndarray, faces: np.ndarray, eps: float = 1e-12
 ) -> np.ndarray:
-    """Whether each ray origins[k] + t directions[k], t > 0, hits any triangle: (K,) bool."""
+    """The smallest t > 0 at which each ray origins[k] + t directions[k] meets a triangle: (K,), inf where none."""
     a = vertices[faces[:, 0]]
     e1 = vertices[faces[:, 1]] - a
     e2 = vertices[faces[:, 2]] - a
-    hit = np.zeros(len(origins), bool)
+    nearest = np.full(len(origins), np.inf)
     for start in range(0, len(origins), 256):
         o = origins[start : start + 256, None, :]
         d = directions[start : start + 256, None, :]
@@ -30,5 +30,12 @@ def ray_hits(
         v = np.einsum("kfi,kfi->kf", d, q) * inv
         t = np.einsum("fi,kfi->kf", e2, q) * inv
         inside = ok & (u >= 0) & (v >= 0) & (u + v <= 1) & (t > 0)
-        hit[start : start + 256] = inside.any(axis=1)
-    return hit
+        nearest[start : start + 256] = np.where(inside, t, np.inf).min(axis=1)
+    return nearest
+
+
+def ray_hits(
+    origins: np.ndarray, directions: np.ndarray, vertices: np.ndarray, faces: np.ndarray, eps: float = 1e-12
+) -> np.ndarray:
+    """Whether each ray origins[k] + t directions[k], t > 0, hits any triangle: (K,) bool."""
+    return np.isfinite(ray_distances(origins, directions, vertices, faces, eps))
