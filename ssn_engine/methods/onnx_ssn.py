@@ -44,6 +44,8 @@ Frames are N x N (N = 256); a model trained at another R is fed resampled frames
 
 from __future__ import annotations
 
+import os
+from concurrent.futures import ThreadPoolExecutor
 from pathlib import Path
 from typing import TYPE_CHECKING
 
@@ -123,13 +125,16 @@ def floor_for(share: np.ndarray, broad: float, small_lights: float) -> np.ndarra
     return broad + (small_lights - broad) * share
 
 
-def _session(path: Path, role: str) -> ort.InferenceSession:
+def _session(path: Path, role: str, threads: int = 0) -> ort.InferenceSession:
+    """The graph at ``path``, checked against ``role``'s contract; ``threads``: its intra-op threads (0: one a
+    core)."""
     import onnxruntime as ort
 
     if not path.is_file():
         raise ModelError(f"model file missing: {path}")
     options = ort.SessionOptions()
     options.graph_optimization_level = ort.GraphOptimizationLevel.ORT_ENABLE_ALL
+    options.intra_op_num_threads = threads
     # Threads wait without spinning: spinning took ~1 ms off a light change on idle cores, but where another
     # process wants the cores (the host, its UI, any other program) a spinning thread holds one the thread it waits
     # for needs, and the SR graph took 3 to 5 times as long (docs/engine.md, "Speed").
@@ -181,9 +186,12 @@ class OnnxSSN:
         takes_card = "card" in {i.name for i in self._sr.get_inputs()}
         self.card: GeometricCard | None = GeometricCard(FRAME, internal=config.resolution) if takes_card else None
         self._camera = _session(model_dir / config.camera, "camera") if takes_card and config.camera else None
-        self._surface = _session(model_dir / config.surface, "surface") if config.surface else None
-        second = config.surface_second
-        self._surface_second = _session(model_dir / second, "surface") if second else None
+        second = config.surface_second if config.surface else None
+        # a pair of surface graphs runs at once, each on half the cores: a small graph gains little from the second
+        # core (on 2 cores the pair took 40 ms so against 47 one after the other on both)
+        threads = max(1, (os.cpu_count() or 2) // 2) if second else 0
+        self._surface = _session(model_dir / config.surface, "surface", threads) if config.surface else None
+        self._surface_second = _session(model_dir / second, "surface", threads) if second else None
         self._estimates: dict[bytes, np.ndarray] = {}  # mask digest -> its estimated camera input
         self._check_run()
 
@@ -235,9 +243,14 @@ class OnnxSSN:
             return None
         m = (resample_frames(masks, self.model_resolution) > 0.5).astype(np.float32)
         frames = (np.asarray(cameras, np.float64) / FRAME).astype(np.float32)
-        heights = _run(self._surface, "height", {"mask": m[:, None], "camera": frames})
-        if self._surface_second is not None:
-            second = _run(self._surface_second, "height", {"mask": m[:, None], "camera": frames})
+        feeds = {"mask": m[:, None], "camera": frames}
+        if self._surface_second is None:
+            heights = _run(self._surface, "height", feeds)
+        else:
+            with ThreadPoolExecutor(1) as pool:  # (onnxruntime releases the GIL)
+                later = pool.submit(_run, self._surface_second, "height", feeds)
+                heights = _run(self._surface, "height", feeds)
+                second = later.result()
             np.maximum(heights[:, :1], second[:, :1], out=heights[:, :1])
         if heights.shape[1] > 1:  # the depth: the far surface's pixel height is the visible one's less it
             heights = np.concatenate([heights[:, :1], heights[:, :1] - heights[:, 1:2]], axis=1)
