@@ -1185,8 +1185,9 @@ def _band_card(
     lift: int,
     at_rest: SurfaceDepths | None = None,
 ) -> CardTracer:
-    """The card of one band of a cutout (:class:`ContactTracer`) lifted ``lift`` rows: its foot and every pixel's
-    foot that many rows lower (not worked out where ``at_rest`` gives the surfaces: the card reads no feet then)."""
+    """The card of one band of a cutout (:class:`ContactTracer`) whose foot moves ``lift`` rows down (its share of
+    the object's lift, :func:`rigid_lifts`): its foot and every pixel's foot that many rows lower (not worked out
+    where ``at_rest`` gives the surfaces: the card reads no feet then)."""
     shift = np.float32(lift)
     if at_rest is not None:
         feet = far_feet = None
@@ -1339,9 +1340,10 @@ class ContactTracer:
     frame's pixel heights (:func:`foot_rows`), which place each pixel's surface behind its card, and (C = 2) its
     far surface's, where its depth ends (else :func:`depth_map`'s round cross-section).
 
-    The artist's geometry (conventions, "Lift and thickness"): ``lift`` (pixels of ``alpha``) lowers every
-    card's foot and every pixel's foot that many rows, so the object floats above the ground that far (its
-    cards stand nearer, on the ground beneath it); ``thickness``, where given, scales the depth each pixel
+    The artist's geometry (conventions, "Lift and thickness"): ``lift`` (pixels of ``alpha``) puts the foot of
+    the cutout's lowest pixel that many rows below it, the object floating as one body (:func:`rigid_lifts`: each
+    card's foot and its pixels' feet lower, a card farther back by fewer rows; its cards stand nearer, on the
+    ground beneath it); ``thickness``, where given, scales the depth each pixel
     reaches behind its surface so that the object's depth over its width is that (:func:`read_thickness` is the
     reading it replaces; the round cross-section scaled, in place of a far surface read). :meth:`of_reading`
     makes the cards of a reading already made (a new lift or thickness: the cutout is not read again)."""

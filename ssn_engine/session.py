@@ -167,8 +167,9 @@ class ShadowSession:
 
     def set_geometry(self, lift: float = 0.0, thickness: float | None = None) -> None:
         """Set the artist's geometry (conventions, "Lift and thickness"): ``lift`` canvas rows from the cutout's
-        lowest point down to the ground beneath it, ``thickness`` its depth over its width (None: read from the
-        outline). A ValueError names a value out of range, or a lift whose ground lies above the horizon."""
+        lowest pixel down to the image of the ground beneath the surface it shows, ``thickness`` its depth over its
+        width (None: read from the outline). A ValueError names a value out of range, or a lift whose ground lies
+        above the horizon."""
         lift, thickness = self.checked_geometry(lift, thickness)
         if (lift, thickness) != (self.lift, self.thickness):
             self.lift, self.thickness, self._tracer = lift, thickness, None
