@@ -1242,20 +1242,19 @@ def _band_lifts(
     """:func:`rigid_lifts` of a cutout's bands, whose feet are rows of its alpha, lifted ``lift`` of its rows."""
     if lift <= 0:
         return [0] * len(feet)
-    alpha = reading.alpha
-    s, y0 = framing.scale, framing.bbox[1]
-    frame = (np.asarray(feet, np.float64) + y0) * s + framing.offset_y
+    alpha, s, y0 = reading.alpha, framing.scale, framing.bbox[1]
+
+    def on_frame(rows: np.ndarray | list[int] | float) -> np.ndarray:  # rows of alpha -> frame rows
+        return (np.asarray(rows, np.float64) + y0) * s + framing.offset_y
+
+    frame = on_frame(feet)
     row, col = lowest_pixel(alpha)
     # the lowest pixel's foot as it stood: as the surface model read it (never above the pixel), else the card's
-    foot = (
-        float(frame.max())
-        if reading.feet is None
-        else (max(float(reading.feet[row, col]), row + 0.5) + y0) * s + framing.offset_y
-    )
-    top = (np.flatnonzero((alpha > ROWS_ALPHA).any(axis=1))[0] + y0) * s + framing.offset_y
+    foot = frame.max() if reading.feet is None else on_frame(max(float(reading.feet[row, col]), row + 0.5))
+    top = on_frame(np.flatnonzero((alpha > ROWS_ALPHA).any(axis=1))[0])
     horizon, focal = camera if camera is not None else (None, None)
-    cam = camera_for_span(framing.n, top, float(frame.max()), horizon, focal)[0]
-    moved = rigid_lifts(cam, frame, (row + 0.5 + y0) * s + framing.offset_y, foot, lift * s) / s
+    cam = camera_for_span(framing.n, float(top), float(frame.max()), horizon, focal)[0]
+    moved = rigid_lifts(cam, frame, float(on_frame(row + 0.5)), float(foot), lift * s) / s
     return [max(0, int(round(m))) for m in moved]
 
 
