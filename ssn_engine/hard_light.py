@@ -307,6 +307,11 @@ class CardTracer:
         The :attr:`kept` of a card of the same ``alpha`` and origin whose foot or depth differ (the artist's lift
         or thickness changed): its blurred copies taken over where its pad is this one's, its padded arrays where
         its ``given_thickness`` is this one's too and they reach this card's foot.
+    relief : float
+        The share of their read distance behind or in front of the card that the surfaces keep: below 1 where
+        the artist gives the object less depth than its outline reads, 0 for a flat sign, one plane (surfaces
+        read at several depths with no depth to sweep drew a thin shadow's far part as dotted lines).
+        :attr:`surface_depths` and :attr:`deepest_read` are the reading's.
     """
 
     def __init__(
@@ -323,6 +328,7 @@ class CardTracer:
         at_rest: SurfaceDepths | None = None,
         given_thickness: float | None = None,
         kept: Kept | None = None,
+        relief: float = 1.0,
     ) -> None:
         alpha = np.clip(np.asarray(alpha, np.float32), 0.0, 1.0)
         x0, y0 = origin if origin is not None else framing.bbox[:2]
@@ -370,7 +376,8 @@ class CardTracer:
             else:
                 thick = np.zeros((lowest, width), np.float32) if read is None else read
             highest = int(PAD_STEP * steps / PAD)  # the highest lift with this pad
-            arrays = _Padded.of(alpha[:lowest], near, thick, pad, pad + foot + highest - lift, given_thickness)
+            relieved = near if relief == 1.0 else near * np.float32(relief)
+            arrays = _Padded.of(alpha[:lowest], relieved, thick, pad, pad + foot + highest - lift, given_thickness)
         self.depth = arrays.deepest * self._world_per_pixel  # world units it reaches behind the card
         self.front = arrays.frontmost * self._world_per_pixel  # and in front of it
         c0, c1 = arrays.cols
@@ -1182,12 +1189,14 @@ def _band_card(
     far_feet: np.ndarray | None,
     given_thickness: float | None,
     kept: Kept | None,
+    relief: float,
     lift: int,
     at_rest: SurfaceDepths | None = None,
 ) -> CardTracer:
     """The card of one band of a cutout (:class:`ContactTracer`) whose foot moves ``lift`` rows down (its share of
     the object's lift, :func:`rigid_lifts`): its foot and every pixel's foot that many rows lower (not worked out
-    where ``at_rest`` gives the surfaces: the card reads no feet then)."""
+    where ``at_rest`` gives the surfaces: the card reads no feet then); ``relief``: the share of its read depth
+    the object keeps."""
     shift = np.float32(lift)
     if at_rest is not None:
         feet = far_feet = None
@@ -1204,6 +1213,7 @@ def _band_card(
         at_rest=at_rest,
         given_thickness=given_thickness,
         kept=kept,
+        relief=relief,
     )
 
 
@@ -1237,9 +1247,15 @@ def rigid_lifts(camera: Camera, feet: np.ndarray, lowest: float, foot: float, li
 
 
 def _band_lifts(
-    reading: ContactReading, framing: Framing, camera: tuple[float, float] | None, feet: list[int], lift: float
+    reading: ContactReading,
+    framing: Framing,
+    camera: tuple[float, float] | None,
+    feet: list[int],
+    lift: float,
+    relief: float = 1.0,
 ) -> list[int]:
-    """:func:`rigid_lifts` of a cutout's bands, whose feet are rows of its alpha, lifted ``lift`` of its rows."""
+    """:func:`rigid_lifts` of a cutout's bands, whose feet are rows of its alpha, lifted ``lift`` of its rows; its
+    surfaces keep ``relief`` of their read distance from the cards (:class:`CardTracer`)."""
     if lift <= 0:
         return [0] * len(feet)
     alpha, s, y0 = reading.alpha, framing.scale, framing.bbox[1]
@@ -1250,7 +1266,12 @@ def _band_lifts(
     frame = on_frame(feet)
     row, col = lowest_pixel(alpha)
     # the lowest pixel's foot as it stood: as the surface model read it (never above the pixel), else the card's
-    foot = frame.max() if reading.feet is None else on_frame(max(float(reading.feet[row, col]), row + 0.5))
+    foot = frame.max()
+    if reading.feet is not None:
+        read = float(reading.feet[row, col])
+        if relief < 1.0:  # drawn towards the lowest card with the rest of the relief
+            read = max(feet) + (read - max(feet)) * relief
+        foot = on_frame(max(read, row + 0.5))
     top = on_frame(np.flatnonzero((alpha > ROWS_ALPHA).any(axis=1))[0])
     horizon, focal = camera if camera is not None else (None, None)
     cam = camera_for_span(framing.n, float(top), float(frame.max()), horizon, focal)[0]
@@ -1344,7 +1365,8 @@ class ContactTracer:
     card's foot and its pixels' feet lower, a card farther back by fewer rows; its cards stand nearer, on the
     ground beneath it); ``thickness``, where given, scales the depth each pixel
     reaches behind its surface so that the object's depth over its width is that (:func:`read_thickness` is the
-    reading it replaces; the round cross-section scaled, in place of a far surface read). :meth:`of_reading`
+    reading it replaces; the round cross-section scaled, in place of a far surface read), and, below the reading,
+    draws its footprint and its surfaces' relief together in that share (at 0 one plane). :meth:`of_reading`
     makes the cards of a reading already made (a new lift or thickness: the cutout is not read again)."""
 
     def __init__(
@@ -1385,12 +1407,14 @@ class ContactTracer:
     ) -> None:
         alpha, bands = reading.alpha, reading.bands
         outline = reading.thickness_read
-        if thickness is not None and thickness < outline and len(bands) > 1:
+        relief = 1.0  # the share of its read depth the object keeps: less where the artist gives less
+        if thickness is not None and thickness < outline:
             # a contact line rising at the sides stands them farther back; an object given less depth than its
-            # outline reads has a shallower footprint: its bands' feet drawn to the lowest in that share (a flat
-            # sign, thickness 0, is one plane; else a round bottom's cards cast strips apart)
-            lowest, share = max(foot for *_, foot in bands), thickness / outline
-            bands = [(c0, c1, lowest - round((lowest - foot) * share)) for c0, c1, foot in bands]
+            # outline reads has a shallower footprint: its bands' feet drawn to the lowest in that share, and its
+            # surfaces' relief with them (a flat sign, thickness 0, is one plane; else a round bottom's cards cast
+            # strips apart)
+            lowest, relief = max(foot for *_, foot in bands), thickness / outline
+            bands = [(c0, c1, lowest - round((lowest - foot) * relief)) for c0, c1, foot in bands]
         depth: np.ndarray | None = reading.depth
         kept = kept or {}
         x0, y0 = framing.bbox[:2]
@@ -1403,7 +1427,7 @@ class ContactTracer:
             depth = depth * np.float32(thickness / outline) if outline > 0 else depth * 0
         elif far_feet is not None:  # each pixel as deep as its far surface
             depth = None
-        lifts = _band_lifts(reading, framing, camera, [foot for *_, foot in bands], lift)
+        lifts = _band_lifts(reading, framing, camera, [foot for *_, foot in bands], lift, relief)
         layout = tuple(bands)
         columns = tuple((c0, c1) for c0, c1, _ in bands)  # what a card's alpha depends on (its foot: not)
         for i, ((c0, c1, foot), rows) in enumerate(zip(bands, lifts, strict=True)):
@@ -1434,6 +1458,7 @@ class ContactTracer:
                 None if far_feet is None else far_feet[:, a:b],
                 thickness,
                 kept.get((columns, i)),
+                relief,
             )
             if rows > 0 and reading.feet is not None and key not in reading.at_rest:
                 rest = card_at(0)  # the same band standing on the ground: its surfaces as read (once a reading)

@@ -11,6 +11,7 @@ import numpy as np
 import pytest
 from engine_helpers import converse, disc
 from PIL import Image
+from scipy import ndimage
 
 from ssn_engine.camera import FORWARD, camera_for_span
 from ssn_engine.cli import main
@@ -94,13 +95,29 @@ def test_a_thin_round_sign_casts_one_unbroken_shadow(method, lift, v, thickness)
     """A disc given (almost) no depth is (almost) a flat sign, one plane: its shadow is one piece under a high and
     a low sun, resting or lifted, not the strips of the cards its round bottom would stand on as a body (a
     ball's contact line rising at the sides stands them farther back)."""
-    from scipy import ndimage
-
     shadow = shadow_of(method, disc(W, H, *BALL), sun(v), lift, thickness)
     pieces, count = ndimage.label(shadow > 0.5)
     sizes = np.bincount(pieces.ravel())[1:]
     assert sizes.sum() > 500
     assert sizes.max() > 0.98 * sizes.sum(), sorted(sizes)[-5:]
+
+
+@pytest.mark.parametrize("u, v", [(0.2, 0.55), (0.15, 0.6), (0.8, 0.55)])
+def test_a_flat_sign_seen_from_above_casts_one_wedge_and_no_dotted_lines(method, u, v):
+    """A board given thickness 0 is one plane, whatever depths the surface model reads across it: seen from above
+    under a sun from the side its shadow is one thin wedge (s >= 0.5 in one piece). Before, its pixels stayed at
+    the depths read (up to 44 pixels behind its card) with no depth to sweep between them, and the wedge's far
+    part broke into 30 to 61 pieces, dotted lines (the sign of docs/img/lift_thickness.png)."""
+    width, height = 900, 560
+    board = np.zeros((height, width), np.uint8)
+    board[190:370, 340:460] = 255
+    session = open_session(board, method, 150.0, 40.0)
+    session.set_geometry(0.0, 0.0)
+    shadow = session.render(LightMap([GaussianLight.disk(u, v, 0.53, 1.0)])).full_canvas(width, height)
+    pieces, count = ndimage.label(shadow >= 0.5)
+    sizes = np.bincount(pieces.ravel())[1:]
+    assert sizes.sum() > 1000
+    assert count == 1, sorted(sizes)[-5:]
 
 
 def test_a_lifted_object_is_as_deep_as_it_is_resting(method):
