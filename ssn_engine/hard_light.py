@@ -1263,18 +1263,17 @@ def _band_lifts(
     def on_frame(rows: np.ndarray | list[int] | float) -> np.ndarray:  # rows of alpha -> frame rows
         return (np.asarray(rows, np.float64) + y0) * s + framing.offset_y
 
-    frame = on_frame(feet)
+    frame, base = on_frame(feet), max(feet)
     row, col = lowest_pixel(alpha)
-    # the lowest pixel's foot as it stood: as the surface model read it (never above the pixel), else the card's
-    foot = frame.max()
-    if reading.feet is not None:
-        read = float(reading.feet[row, col])
-        if relief < 1.0:  # drawn towards the lowest card with the rest of the relief
-            read = max(feet) + (read - max(feet)) * relief
-        foot = on_frame(max(read, row + 0.5))
+    # the lowest pixel's foot as it stood: as the surface model read it (never above the pixel; drawn towards the
+    # lowest card with the rest of the relief), else the lowest card's
+    read = base if reading.feet is None else float(reading.feet[row, col])
+    if relief < 1.0:
+        read = base + (read - base) * relief
+    foot = on_frame(max(read, row + 0.5))
     top = on_frame(np.flatnonzero((alpha > ROWS_ALPHA).any(axis=1))[0])
     horizon, focal = camera if camera is not None else (None, None)
-    cam = camera_for_span(framing.n, float(top), float(frame.max()), horizon, focal)[0]
+    cam = camera_for_span(framing.n, float(top), float(on_frame(base)), horizon, focal)[0]
     moved = rigid_lifts(cam, frame, float(on_frame(row + 0.5)), float(foot), lift * s) / s
     return [max(0, int(round(m))) for m in moved]
 
