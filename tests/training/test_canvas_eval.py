@@ -21,8 +21,8 @@ from ssn_engine.hard_light import light_direction, lowest_pixel
 from ssn_engine.methods import load_method
 from ssn_engine.session import ShadowSession
 from training.canvas_eval import cases, disk, metrics, oracle, render, score, sheet
-from training.canvas_eval.render_set import render_set, true_lift
-from training.data import meshes, procedural
+from training.canvas_eval.render_set import group_scene, planned_groups, render_set, shadow_share, true_lift
+from training.data import meshes, procedural, sources
 from training.data.items import Item
 from training.data.raycast import ray_hits
 
@@ -187,6 +187,37 @@ def test_a_floating_set_lifts_each_shape_and_scores_it_with_its_lift(tmp_path):
     cmd = score.cli_command("py", tmp_path, group, 0.53, "camera", tmp_path / "l.png")
     assert cmd[cmd.index("--lift") + 1] == f"{group.lift:.2f}"
     assert "--lift" not in score.cli_command("py", tmp_path, group, 0.53, "blind", tmp_path / "l.png")
+
+
+@pytest.mark.parametrize("elevation,azimuth,on_canvas", [(60.0, 180.0, True), (10.0, 0.0, False), (20.0, 90.0, False)])
+def test_a_floating_case_s_light_is_checked_against_where_the_truth_s_shadow_falls(elevation, azimuth, on_canvas):
+    """A box floating its height above the ground at eye level: a light from behind the viewer casts its shadow
+    on the canvas; a low one from the front or the side throws it off, where the truth's shadow is empty."""
+    mesh = _box_on_ground()
+    v = np.ascontiguousarray(meshes.yawed(mesh.vertices, 0.0))
+    v[:, 1] += 1.0
+    canvas = render.canvas_camera(v, 320, 240, 0.0)
+    dirs = canvas.camera.to_world(disk.disk_directions(elevation, azimuth, 0.53, 16))
+    truth = render.disk_shadow(v, mesh.faces, meshes.topology(mesh), canvas, dirs)
+    assert (shadow_share(v, canvas, elevation, azimuth) >= cases.SHADOW_ON_CANVAS) == on_canvas
+    assert ((truth >= 0.5).sum() > 100) == on_canvas
+
+
+def test_a_floating_plan_draws_another_light_where_the_drawn_one_throws_the_shadow_off_the_canvas():
+    if not (meshes.SHARED_MESHES / "manifest.csv").exists():
+        pytest.skip("shared meshes not available")
+    planned = planned_groups(1024, 768, None, 2, 0, floating=True)
+    drawn = cases.make_groups(cases.pick_shapes(sources.manifest_items()), 2, 1024, 768, floating=True)
+    moved = [(a, b) for a, b in zip(drawn, planned, strict=True) if a != b]
+    assert 0 < len(moved) < len(planned) / 2  # a few, not most
+    for a, b in moved:  # only the light changed
+        assert replace(a, elevation=b.elevation, azimuth=b.azimuth) == b
+    for g in planned:
+        v, _, _, canvas = group_scene(g)
+        assert shadow_share(v, canvas, g.elevation, g.azimuth) >= cases.SHADOW_ON_CANVAS
+    assert planned_groups(1024, 768, None, 2, 0) == cases.make_groups(
+        cases.pick_shapes(sources.manifest_items()), 2, 1024, 768
+    )  # resting cases as drawn
 
 
 def test_a_floating_box_s_lift_is_counted_from_its_lowest_pixel():
@@ -487,3 +518,33 @@ def test_the_product_given_the_true_pixel_heights_casts_the_renderer_s_shadow():
         )
         shadow = oracle.on_canvas(CanvasShadow(*given.tracer.shadow(u, v_, 0.53, given.framing)), (240, 320))
         assert metrics.region_zncc(shadow, truth, ground) > 0.9
+
+
+def test_the_product_given_a_floating_box_s_true_geometry_casts_the_renderer_s_shadow():
+    """A box floating half its height: the engine reads its image as the same box standing, scaled about the
+    camera's centre down to the ground (``standing_shape``, whose pixel heights a perfect surface model reads),
+    and floats that by the lift; given those heights and the true lift, the product's tracer casts the renderer's
+    shadow of the floating box, and without the lift it does not."""
+    mesh = _box_on_ground()
+    v = np.ascontiguousarray(meshes.yawed(mesh.vertices, 20.0))
+    v[:, 1] += 0.5
+    canvas = render.canvas_camera(v, 320, 240, 15.0)
+    standing = oracle.standing_shape(v, canvas.camera)
+    assert standing[:, 1].min() == pytest.approx(0.0, abs=1e-9)
+    assert np.allclose(canvas.camera.project(standing), canvas.camera.project(v))  # the same image
+    w = light_direction((150.0 + 180.0) / 360.0, 1.0 - 35.0 / 90.0)  # elevation 35, azimuth 150: behind the camera
+    truth = render.disk_shadow(v, mesh.faces, meshes.topology(mesh), canvas, w[None])
+    mask = render.canvas_mask(v, mesh.faces, meshes.topology(mesh), canvas)
+    alpha = np.round(mask * 255).astype(np.uint8)
+    session = ShadowSession(alpha, load_method("ssn").method, canvas.horizon, canvas.fov)
+    heights = oracle.true_heights(standing, mesh.faces, canvas.camera, (240, 320), session)
+    given = ShadowSession(alpha, cast(Any, oracle.GivenHeights(session.method, heights)), canvas.horizon, canvas.fov)
+    ground = metrics.ground_region(mask, canvas.horizon)
+    assert truth[ground].sum() > 500
+    u, v_ = (150.0 + 180.0) / 360.0, 1.0 - 35.0 / 90.0
+    scores = []
+    for lift in (true_lift(v, mesh.faces, canvas, mask), 0.0):
+        given.set_geometry(lift)
+        shadow = oracle.on_canvas(CanvasShadow(*given.tracer.shadow(u, v_, 0.53, given.framing)), (240, 320))
+        scores.append(metrics.region_zncc(shadow, truth, ground))
+    assert scores[0] > 0.85 and scores[1] < 0.5  # (0.90 and 0.00 here)

@@ -14,7 +14,7 @@ from __future__ import annotations
 
 import json
 import os
-from dataclasses import asdict, dataclass
+from dataclasses import asdict, dataclass, replace
 from pathlib import Path
 
 import numpy as np
@@ -28,6 +28,7 @@ from .disk import HAZY, SOFTBOX, SUN, light_map_file
 ANGLES = (SUN, HAZY, SOFTBOX)
 FLOATING_ANGLES = (SUN, HAZY)  # a floating set's sizes: the lights whose shadow detaches crisply
 LIFTS = (0.15, 0.8)  # a floating set's shapes float this share of their height above the ground, drawn uniformly
+SHADOW_ON_CANVAS = 0.5  # a floating case's light casts at least this share of its shape's vertices onto the canvas
 KIND_QUOTA = {"object": 7, "animal": 3, "human": 2}  # shapes per kind, 12 in all
 ELEVATIONS = (10.0, 70.0)  # light elevations are drawn uniformly in this range (degrees)
 CUTOUT_GREY = 128
@@ -112,6 +113,17 @@ def make_groups(
     return groups
 
 
+def relit(group: Group, attempt: int) -> Group:
+    """``group`` under its ``attempt``-th other light direction (attempt >= 1), drawn as :func:`make_groups` draws
+    one: for a floating case whose shadow that light casts off the canvas, where no prediction can be scored."""
+    rng = np.random.default_rng([group.seed, stable_hash(group.name), attempt, 2])
+    return replace(
+        group,
+        elevation=round(float(rng.uniform(*ELEVATIONS)), 2),
+        azimuth=round(float(rng.uniform(-180.0, 180.0)), 2),
+    )
+
+
 def angle_tag(angle: float) -> str:
     return f"{angle:g}"
 
@@ -186,6 +198,7 @@ __all__ = [
     "ANGLES",
     "FLOATING_ANGLES",
     "LIFTS",
+    "SHADOW_ON_CANVAS",
     "Group",
     "angle_tag",
     "cutout_path",
@@ -195,6 +208,7 @@ __all__ = [
     "read_groups",
     "read_mask",
     "read_truth",
+    "relit",
     "truth_path",
     "write_cutout",
     "write_groups",

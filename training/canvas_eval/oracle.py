@@ -16,9 +16,10 @@ score says how much of the error is in each guess:
 - ``column's surface, round depth``: one distance a column (the median of the true surface's), as a card a
   column standing at the truth's own place would be (the best the contact line's cards can do), as deep.
 
-And the product's own tracer (the shipped model, the true camera, the cutout as one object), each pixel's
-surface placed by pixel heights (how far below a pixel the image of the ground under its surface lies), traced
-as the product traces a 0.53-degree sun (:class:`ssn_engine.hard_light.ContactTracer`):
+And the product's own tracer (the shipped model, the true camera, the cutout as one object; a floating group's
+with its true lift, the true pixel heights then those of its shape standing, :func:`standing_shape`), each
+pixel's surface placed by pixel heights (how far below a pixel the image of the ground under its surface lies),
+traced as the product traces a 0.53-degree sun (:class:`ssn_engine.hard_light.ContactTracer`):
 
 - ``traced, model's heights``: the traced part alone, at the surface model's reading (what ships);
 - ``traced, true heights``: the traced part alone, at the mesh's visible surface's pixel heights;
@@ -242,19 +243,35 @@ def traced_shadows(
     data: Path, group: cases.Group, method: ShadowMethod, light: LightMap, angle: float
 ) -> dict[str, np.ndarray]:
     """The product tracer's shadows (H, W) of ``group``'s cutout under ``light`` (one disk of ``angle``
-    degrees), with the true camera: :data:`TRACED`."""
+    degrees), with the true camera (and a floating group's true lift): :data:`TRACED`."""
     cutout = load_image(str(cases.cutout_path(data, group)))[0][..., 3]
     session = ShadowSession(cutout, method, group.horizon, group.fov)
+    session.set_geometry(group.lift)
     u, v = light.lights[0].u, light.lights[0].v
     vertices, mesh, _, canvas = render_set.group_scene(group)
-    heights = true_heights(vertices, mesh.faces, canvas.camera, (group.height, group.width), session)
+    heights = true_heights(
+        standing_shape(vertices, canvas.camera), mesh.faces, canvas.camera, (group.height, group.width), session
+    )
     shown = {TRACED[0]: CanvasShadow(*session.tracer.shadow(u, v, angle, session.framing))}
     for given, (traced, product) in ((heights[:1], TRACED[1:3]), (heights, TRACED[3:5])):
         method_given = typing.cast(ShadowMethod, GivenHeights(method, given))
         standing = ShadowSession(cutout, method_given, group.horizon, group.fov)  # on the true surface
+        standing.set_geometry(group.lift)
         shown[traced] = CanvasShadow(*standing.tracer.shadow(u, v, angle, standing.framing))
         shown[product] = standing.render(light)
     return {k: on_canvas(v, (group.height, group.width)) for k, v in shown.items()}
+
+
+def standing_shape(vertices: np.ndarray, cam: Camera) -> np.ndarray:
+    """``vertices`` of a shape as the engine reads it from its image: standing on the ground. A floating shape
+    (its lowest point above the ground) shows the same image as itself scaled about the camera's centre until it
+    stands (conventions, "Lift and thickness"), whose pixel heights a surface model reads; the engine lifts that
+    by the artist's lift. A standing shape is returned as it is."""
+    c = np.asarray(cam.centre, np.float64)
+    low = float(vertices[:, 1].min())
+    if low <= 1e-9:
+        return vertices
+    return c + (vertices - c) * (c[1] / (c[1] - low))
 
 
 class GivenHeights:
@@ -340,6 +357,7 @@ __all__ = [
     "hard_shadows",
     "on_canvas",
     "run_oracle",
+    "standing_shape",
     "surface_depths",
     "traced_shadows",
     "true_heights",

@@ -29,7 +29,32 @@ def planned_groups(
             f"the meshes' manifest ({meshes.SHARED_MESHES}) has no shapes of the split {split!r}"
             + (" (prepare-outsource writes them; point SSN_MESHES at its folder)" if every else "")
         )
-    return cases.make_groups(items[:shapes], lights, width, height, seed, floating)
+    return [_shadow_on_canvas(g) for g in cases.make_groups(items[:shapes], lights, width, height, seed, floating)]
+
+
+def _shadow_on_canvas(group: cases.Group, attempts: int = 50) -> cases.Group:
+    """A floating ``group``, under its next light direction (:func:`cases.relit`) while its light casts less than
+    ``cases.SHADOW_ON_CANVAS`` of it onto the canvas (a low light from the front throws a lifted shape's shadow
+    below the canvas: a case no prediction can score); a resting group as it is (its shadow starts at it)."""
+    if group.lift_share <= 0:
+        return group
+    vertices, _, _, canvas = group_scene(group)
+    for attempt in range(attempts):
+        lit = cases.relit(group, attempt) if attempt else group
+        if shadow_share(vertices, canvas, lit.elevation, lit.azimuth) >= cases.SHADOW_ON_CANVAS:
+            return lit
+    raise ValueError(f"{group.name}: no light of {attempts} drawn casts its shadow onto the canvas")
+
+
+def shadow_share(vertices: np.ndarray, canvas: render.CanvasCamera, elevation: float, azimuth: float) -> float:
+    """The share of ``vertices`` whose shadow, cast along the light at ``elevation`` and ``azimuth`` (degrees, the
+    conventions' camera-relative directions) onto the ground, lands on ``canvas``."""
+    cam = canvas.camera
+    d = cam.to_world(disk.disk_directions(elevation, azimuth, 1.0, 1))[0]  # the disk's centre, towards the light
+    ground = vertices - vertices[:, 1:2] / d[1] * d
+    col, row = cam.project(ground).T
+    ahead = (ground - cam.centre) @ cam.view > 0
+    return float(np.mean(ahead & (col >= 0) & (col < canvas.width) & (row >= 0) & (row < canvas.height)))
 
 
 def _same_plan(a: cases.Group, b: cases.Group) -> bool:
@@ -134,4 +159,12 @@ def render_set(
     return groups
 
 
-__all__ = ["group_scene", "planned_groups", "render_group", "render_set", "true_lift", "truth_directions"]
+__all__ = [
+    "group_scene",
+    "planned_groups",
+    "render_group",
+    "render_set",
+    "shadow_share",
+    "true_lift",
+    "truth_directions",
+]
