@@ -1278,6 +1278,12 @@ def _band_lifts(
     return [max(0, int(round(m))) for m in moved]
 
 
+def coverage_level(peak: float) -> float:
+    """The coverage a cutout's lowest pixel (:func:`lowest_pixel`) has at least, ``peak`` its highest: 0.5, or half
+    the peak where the cutout is nowhere so opaque."""
+    return min(0.5, 0.5 * peak)
+
+
 def lowest_pixel(alpha: np.ndarray) -> tuple[int, int]:
     """The pixel (row, col) of ``alpha`` a lift is counted from (conventions, "Lift and thickness"): its lowest row
     with coverage >= 0.5, at that row's coverage-weighted mean column, or the row's nearest pixel of coverage
@@ -1285,7 +1291,7 @@ def lowest_pixel(alpha: np.ndarray) -> tuple[int, int]:
     peak = float(alpha.max())
     if peak <= 0:
         raise ValueError("the cutout is empty")
-    covered = alpha >= min(0.5, 0.5 * peak)
+    covered = alpha >= coverage_level(peak)
     row = int(np.flatnonzero(covered.any(axis=1))[-1])
     weights = alpha[row].astype(np.float64)
     col = int(np.sum(weights * np.arange(len(weights))) / weights.sum() + 0.5)

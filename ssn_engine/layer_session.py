@@ -246,6 +246,12 @@ class LayerSession:
         return self.parts[0].lift
 
     @property
+    def lift_row(self) -> int:
+        """The canvas row a lift counts from for the object standing highest (its lowest pixel's): the lift whose
+        ground lies below the horizon from there does from every object's (:meth:`set_geometry`)."""
+        return min(part.lift_row for part in self.parts)
+
+    @property
     def thickness(self) -> float | None:
         return self.parts[0].thickness
 

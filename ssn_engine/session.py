@@ -31,7 +31,7 @@ from .framing import (
     placed_sum,
     shadow_to_canvas,
 )
-from .hard_light import BandKey, ContactReading, ContactTracer, Kept
+from .hard_light import BandKey, ContactReading, ContactTracer, Kept, coverage_level
 from .hemisphere import network_elm, render_light_map
 from .host_kit.camera_rules import DEFAULT_FOV, FOV_RANGE
 from .host_kit.geometry_rules import check_lift, check_thickness, ground_above_horizon
@@ -52,6 +52,7 @@ GIVEN_CAMERA_HEDGE = 0.5
 # A lift of this share of the object's height floats it wholly for the network (docs/engine.md, "Lift and
 # thickness"): its frames show objects standing on the ground, so from there every light is traced.
 LIFT_FADE = 0.05
+LOWEST_BAND = 64  # rows of the cutout converted at a time while looking for its lowest pixel, from the bottom up
 
 
 def camera_input(
@@ -126,6 +127,9 @@ class ShadowSession:
         if 0.0 < self.body_opacity < 1.0:
             self.mask = np.minimum(self.mask / np.float32(self.body_opacity), 1.0)
         self.opacity = self.body_opacity * check_layer_opacity(layer_opacity)
+        # the canvas row a lift counts from (conventions, "Lift and thickness"): the cutout's lowest pixel, below
+        # which a soft or feathered edge may reach many rows farther (its bounding box's)
+        self.lift_row = y0 + self._lowest_row()
         self.edits: list[dict[str, Any]] = []
         self._card: GeometricCard | None = None  # traces long shadows for methods without a card of their own
         # the network's last inputs (which lights, their ELMs, the camera), the AO it took and its frames
@@ -186,7 +190,7 @@ class ShadowSession:
         if cameras is None:
             return
         horizon = self.framing.canvas_camera(*cameras[0])[0]
-        lowest = self.framing.bbox[3] - 1
+        lowest = self.lift_row
         if ground_above_horizon(lowest, lift, horizon):
             raise ValueError(
                 f"lift: {lift:g} puts the ground beneath the cutout at row {lowest + lift:.0f}, at or above the "
@@ -234,6 +238,26 @@ class ShadowSession:
             self._tracer = self.make_tracer()
         return self._tracer
 
+    def _tracer_alpha(self, rows: slice = slice(None)) -> np.ndarray:
+        """The cutout (``rows`` of its crop) as the tracer reads it: float coverage, divided by its body's opacity
+        (:attr:`body_opacity`: a half-transparent cutout casts the shadow of its opaque shape)."""
+        cutout = as_unit_float(self._cutout[rows])
+        if 0.0 < self.body_opacity < 1.0:
+            np.minimum(cutout / np.float32(self.body_opacity), 1.0, out=cutout)
+        return cutout
+
+    def _lowest_row(self) -> int:
+        """The row of the cutout's crop a lift counts from: :func:`~ssn_engine.hard_light.lowest_pixel`'s, read
+        a band of rows at a time from the bottom up (a canvas-sized crop is not converted whole for it)."""
+        top = float(as_unit_float(np.asarray([np.nanmax(self._cutout)]))[0])  # (framing found it not empty)
+        level = coverage_level(min(1.0, top / self.body_opacity) if 0.0 < self.body_opacity < 1.0 else top)
+        for stop in range(len(self._cutout), 0, -LOWEST_BAND):
+            start = max(0, stop - LOWEST_BAND)
+            rows = np.flatnonzero((self._tracer_alpha(slice(start, stop)) >= level).any(axis=1))
+            if rows.size:
+                return start + int(rows[-1])
+        return len(self._cutout) - 1
+
     def make_tracer(self, reuse_reading: bool = True) -> ContactTracer:
         """A new tracer of this cutout. The cutout's reading (where each pixel's surface lies, for a model that
         reads pixel heights, its depth and its contact line: :class:`ContactReading`) is made once per camera and
@@ -242,9 +266,7 @@ class ShadowSession:
         if self._reading is None or not reuse_reading:
             read = getattr(self.method, "pixel_heights", None)
             heights = read(self.mask[None], self.used_cameras) if read is not None else None
-            cutout = as_unit_float(self._cutout)
-            if 0.0 < self.body_opacity < 1.0:
-                np.minimum(cutout / np.float32(self.body_opacity), 1.0, out=cutout)
+            cutout = self._tracer_alpha()
             self._reading = ContactReading.of(cutout, self.framing, camera, None if heights is None else heights[0])
             self._kept = None
         tracer = ContactTracer.of_reading(self._reading, self.framing, camera, self.lift, self.thickness, self._kept)

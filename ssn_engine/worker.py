@@ -108,9 +108,9 @@ def _camera(camera: Any) -> tuple[float, float]:
 
 
 def _cutout_reply(key: str, session: Session) -> dict:
-    """``set_cutout``'s and ``set_camera``'s reply: the cutout's id, its bounding box and, without a camera of
-    the image's own, the camera the model read from its outline."""
-    reply: dict[str, Any] = {"cutout": key, "bbox": list(session.framing.bbox)}
+    """``set_cutout``'s and ``set_camera``'s reply: the cutout's id, its bounding box, the row its lift counts
+    from and, without a camera of the image's own, the camera the model read from its outline."""
+    reply: dict[str, Any] = {"cutout": key, "bbox": list(session.framing.bbox), "lift_row": int(session.lift_row)}
     if session.camera_read is not None:
         reply["camera_read"] = session.camera_read
     return reply

@@ -35,7 +35,6 @@ from ssn_preview import (  # noqa: E402
     draw_ground_mark,
     in_lift_handle,
     lift_from_preview,
-    lowest_row,
     render_preview,
 )
 from ssn_progress import EngineWait  # noqa: E402
@@ -90,6 +89,7 @@ class ShadowPreview:
         self._press: tuple[float, float, bool] | None = None  # a press being held: where, and on the lift handle
         self._dragged = False
         self.bbox: list[int] | None = None  # the cutout's bounds on the canvas (x0, y0, x1, y1)
+        self.lift_row = 0  # the canvas row its lift counts from (its lowest pixel's, above a soft edge's rows)
         self.engine_geometry: tuple[float, float | None] = (0.0, None)  # the lift and thickness the worker has
         self.thickness_read: float | None = None  # what the outline reads as (the worker's set_geometry reply)
         self.geometry_note = ""  # why the dialog clamped the lift or thickness last, shown under the preview
@@ -111,6 +111,9 @@ class ShadowPreview:
             self.cutout_id = str(reply["cutout"])
             bbox = reply.get("bbox")  # where a worker sends none, the preview has no lift handle
             self.bbox = [int(v) for v in bbox] if isinstance(bbox, list) and len(bbox) == 4 else None
+            row = reply.get("lift_row")
+            if self.bbox is not None:
+                self.lift_row = int(row) if isinstance(row, int) and not isinstance(row, bool) else self.bbox[3] - 1
             self._analysed(reply.get("camera_read"))
         except (ShadowError, engine_client.EngineError) as exc:
             self.status.set_text(str(exc))
@@ -172,7 +175,7 @@ class ShadowPreview:
                 self._set_geometry(cutout_id, *self.engine_geometry)
             if self.bbox is not None:
                 size = (self.thumbnail.width, self.thumbnail.height)
-                rgb = draw_ground_mark(rgb, size, self.scale, self.bbox, settings.lift)
+                rgb = draw_ground_mark(rgb, size, self.scale, self.bbox, self.lift_row, settings.lift)
         except engine_client.Cancelled as exc:  # the dialog closed while the engine worked: it was stopped
             self.cutout_id = None
             self.status.set_text(str(exc))
@@ -214,7 +217,7 @@ class ShadowPreview:
         point (the lift)."""
         if event.button != 1 or event.type != Gdk.EventType.BUTTON_PRESS or self.cutout_id is None:
             return False
-        handle = self.bbox is not None and in_lift_handle(event.x, event.y, self.scale, self.bbox)
+        handle = self.bbox is not None and in_lift_handle(event.x, event.y, self.scale, self.bbox, self.lift_row)
         self._press, self._dragged = (event.x, event.y, handle), False
         return True
 
@@ -227,7 +230,7 @@ class ShadowPreview:
             return True
         self._dragged = True
         if self.on_lift_dragged is not None:
-            self.on_lift_dragged(lift_from_preview(event.y, self.scale, self.bbox))
+            self.on_lift_dragged(lift_from_preview(event.y, self.scale, self.lift_row))
         return True
 
     def _on_release(self, _widget, event) -> bool:
@@ -517,7 +520,7 @@ class GeometryRow:
             return
         preview = self.preview
         lift = self.config.get_property("lift")
-        lowest = lowest_row(preview.bbox) if preview.bbox is not None else None
+        lowest = preview.lift_row if preview.bbox is not None else None
         values = {name: self.config.get_property(name) for name in ("use-horizon", "horizon")}
         clamped, why = geometry_clamp.clamp_lift(lift, preview.image_height, lowest, preview.horizon_in_use(values))
         if clamped != lift:

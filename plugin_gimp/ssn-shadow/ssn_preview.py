@@ -61,35 +61,32 @@ HANDLE_SLACK = 8  # thumbnail pixels: how far beside the cutout's columns (and a
 GROUND_MARK = (230, 0, 180)  # the ground point's mark: a colour the horizon lines (orange, blue) do not use
 
 
-def lowest_row(bbox: tuple[int, int, int, int] | list[int]) -> int:
-    """The cutout's lowest canvas row, from its ``bbox`` (x0, y0, x1, y1; x1 and y1 exclusive)."""
-    return int(bbox[3]) - 1
-
-
-def in_lift_handle(x: float, y: float, scale: float, bbox: tuple[int, int, int, int] | list[int]) -> bool:
-    """Whether a press at thumbnail point (``x``, ``y``) grabs the lift handle: under the cutout (at or below its
-    lowest row, less :data:`HANDLE_SLACK`) and within its columns (:data:`HANDLE_SLACK` wider each side)."""
+def in_lift_handle(x: float, y: float, scale: float, bbox: tuple[int, int, int, int] | list[int], row: int) -> bool:
+    """Whether a press at thumbnail point (``x``, ``y``) grabs the lift handle: under the cutout (at or below the
+    canvas row ``row`` its lift counts from, the worker's ``lift_row``, less :data:`HANDLE_SLACK`) and within its
+    columns (its ``bbox``'s, :data:`HANDLE_SLACK` wider each side)."""
     x0, x1 = bbox[0] * scale - HANDLE_SLACK, bbox[2] * scale + HANDLE_SLACK
-    return x0 <= x <= x1 and y >= lowest_row(bbox) * scale - HANDLE_SLACK
+    return x0 <= x <= x1 and y >= row * scale - HANDLE_SLACK
 
 
-def lift_from_preview(y: float, scale: float, bbox: tuple[int, int, int, int] | list[int]) -> float:
+def lift_from_preview(y: float, scale: float, row: int) -> float:
     """The lift (whole canvas rows) that puts the ground point beneath the cutout at thumbnail row ``y`` of a
-    preview drawn at ``scale``: canvas rows = preview rows / scale, less the cutout's lowest row, at least 0."""
-    return float(max(0, round(y / scale) - lowest_row(bbox)))
+    preview drawn at ``scale``: canvas rows = preview rows / scale, less the row ``row`` its lift counts from, at
+    least 0."""
+    return float(max(0, round(y / scale) - row))
 
 
 def draw_ground_mark(
-    rgb: bytes, size: tuple[int, int], scale: float, bbox: tuple[int, int, int, int] | list[int], lift: float
+    rgb: bytes, size: tuple[int, int], scale: float, bbox: tuple[int, int, int, int] | list[int], row: int, lift: float
 ) -> bytes:
     """``rgb`` (packed RGB, ``size`` = (width, height)) with the lift handle drawn: a short bar across the cutout's
-    middle column at the ground point (its lowest row plus ``lift``, at ``scale``), and, lifted, a dotted line up
-    from it to the cutout's lowest row; what lies off the thumbnail is not drawn."""
+    middle column (of its ``bbox``) at the ground point (the row ``row`` its lift counts from plus ``lift``, at
+    ``scale``), and, lifted, a dotted line up from it to that row; what lies off the thumbnail is not drawn."""
     w, h = size
     out = bytearray(rgb)
     centre = round((bbox[0] + bbox[2]) / 2 * scale)
-    top = round(lowest_row(bbox) * scale)
-    ground = round((lowest_row(bbox) + lift) * scale)
+    top = round(row * scale)
+    ground = round((row + lift) * scale)
 
     def put(x: int, y: int) -> None:
         if 0 <= x < w and 0 <= y < h:

@@ -414,7 +414,7 @@ class ShadowController(QObject):
         self.model.report_camera_read(reply.get("camera_read"))
         source = self.source
         if source is not None and reply.get("bbox"):
-            self.model.report_ground(reply["bbox"], (source.width, source.height))
+            self.model.report_ground(reply["bbox"], (source.width, source.height), reply.get("lift_row"))
         self.engine.request("get_ao", cutout=self.cutout, on_reply=self._on_ao)
 
     def _ensure_geometry(self, then: Any, on_error: Any) -> None:

@@ -93,8 +93,9 @@ class ShadowModel(QObject):
     status: Property[tuple[str, str]] = Property(("info", READY), readonly=True)  # (level, text for people)
     camera_read: Property[dict | None] = Property(None, readonly=True)  # {"horizon", "fov"} the engine read
     thickness_read: Property[float | None] = Property(None, readonly=True)  # what the outline reads as
-    # the analysed cutout's bbox [x0, y0, x1, y1] and its canvas's (width, height): where its ground point is
-    ground: Property[tuple[tuple[int, int, int, int], tuple[int, int]] | None] = Property(None, readonly=True)
+    # the analysed cutout's bbox [x0, y0, x1, y1], its canvas's (width, height) and the row its lift counts from
+    # (its lowest pixel's, above a soft edge's last rows): where its ground point is
+    ground: Property[tuple[tuple[int, int, int, int], tuple[int, int], int] | None] = Property(None, readonly=True)
 
     def __init__(self, parent: QObject | None = None) -> None:
         super().__init__(parent)
@@ -216,7 +217,7 @@ class ShadowModel(QObject):
         if ground is None:
             return 1 << 30, None, None  # no cutout yet: only the sign is known
         camera = self.camera or self.camera_read
-        return ground[1][1], ground[0][3] - 1, None if camera is None else float(camera["horizon"])
+        return ground[1][1], ground[2], None if camera is None else float(camera["horizon"])
 
     def _edit_geometry(self, lift: float, thickness: float | None, new_step: bool, dragging: bool) -> None:
         ending = self.geometry_dragging and not dragging
@@ -288,10 +289,12 @@ class ShadowModel(QObject):
         read = reply.get("thickness_read")
         type(self).thickness_read.set(self, float(read) if isinstance(read, (int, float)) else None)
 
-    def report_ground(self, bbox: list | tuple, canvas: tuple[int, int]) -> None:
-        """The analysed cutout's bbox on its canvas of ``canvas`` (width, height): the lift handle's place."""
+    def report_ground(self, bbox: list | tuple, canvas: tuple[int, int], lift_row: object = None) -> None:
+        """The analysed cutout's bbox on its canvas of ``canvas`` (width, height) and the canvas row its lift counts
+        from (the worker's ``lift_row``; its bbox's lowest row where the reply has none): the lift handle's place."""
         x0, y0, x1, y1 = (int(v) for v in bbox)
-        type(self).ground.set(self, ((x0, y0, x1, y1), (int(canvas[0]), int(canvas[1]))))
+        row = int(lift_row) if isinstance(lift_row, (int, float)) and not isinstance(lift_row, bool) else y1 - 1
+        type(self).ground.set(self, ((x0, y0, x1, y1), (int(canvas[0]), int(canvas[1])), row))
 
     def record_shadow(self, layer_id: str, settings: Settings) -> None:
         """The shadow layer ``layer_id`` now shows a shadow rendered from ``settings`` (saved with the document,

@@ -15,7 +15,7 @@ from scipy import ndimage
 
 from ssn_engine.camera import FORWARD, camera_for_span
 from ssn_engine.cli import main
-from ssn_engine.hard_light import ground_ahead, ground_rows, rigid_lifts
+from ssn_engine.hard_light import ground_ahead, ground_rows, lowest_pixel, rigid_lifts
 from ssn_engine.host_kit.light_map import GaussianLight, LightMap, preset
 from ssn_engine.layer_session import LayerSession, open_session
 from ssn_engine.methods import LoadedMethod, load_method
@@ -230,6 +230,30 @@ def test_a_lift_whose_ground_lies_above_the_horizon_is_refused(method):
         session.set_geometry(10.0)
     session.set_geometry(60.0)
     assert session.lift == 60.0
+
+
+def test_a_feathered_cutouts_lift_counts_from_its_lowest_pixel_not_from_its_feathers_last_row(method):
+    """A ball above the horizon (row 200), its edge feathered 18 rows further down: its lift counts from its lowest
+    pixel (conventions, "Lift and thickness"), so a lift whose ground lies at or above the horizon from there is
+    refused, though the feather's last row plus that lift lies below it; the worker tells the hosts that row (their
+    lift handle and their clamp count from it). Several objects: the highest's row, whose ground rises first."""
+    ball = ndimage.gaussian_filter(disc(W, H, 450, 120, 40).astype(np.float32), 6.0).round().astype(np.uint8)
+    last = int(np.flatnonzero(ball.any(axis=1))[-1])
+    session = open_session(ball, method, *CAMERA)
+    assert session.lift_row == lowest_pixel(ball / 255.0)[0] and last - session.lift_row >= 15
+    lift = CAMERA[0] - session.lift_row - 2  # its ground 2 rows above the horizon; the feather's last row's below
+    assert last + lift > CAMERA[0]
+    with pytest.raises(ValueError, match=r"at or above the horizon \(row 200\)"):
+        session.set_geometry(lift)
+    session.set_geometry(CAMERA[0] - session.lift_row + 1)
+
+    two = np.maximum(ball, disc(W, H, 200, 500, 60))
+    layer = open_session(two, method, *CAMERA)
+    assert isinstance(layer, LayerSession) and layer.lift_row == session.lift_row
+    entry = {"name": "alpha", "dtype": "uint8", "shape": list(two.shape), "nbytes": two.size}
+    header = {"id": 1, "cmd": "set_cutout", "camera": {"horizon": 200, "fov": 45}, "buffers": [entry]}
+    reply = converse(Worker(LoadedMethod(method, "test")), json.dumps(header).encode() + b"\n" + two.tobytes())[0][0]
+    assert reply["lift_row"] == session.lift_row and reply["bbox"][3] - 1 > reply["lift_row"] + 100
 
 
 def test_a_camera_that_puts_a_lifted_objects_ground_above_the_horizon_is_refused_and_nothing_changes(method):

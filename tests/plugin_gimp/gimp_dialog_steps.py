@@ -264,6 +264,7 @@ def geometry_shown():
         "note": parts.preview.status.get_text(),
         "read": parts.preview.thickness_read,
         "bbox": parts.preview.bbox,
+        "lift_row": parts.preview.lift_row,
         "scale": parts.preview.scale,
         "size": snapshot()["size"],
     }
@@ -278,9 +279,10 @@ def type_lift(text):
 
 
 def drag_ground(down):
-    """Drag from just under the cutout's foot ``down`` preview rows further down, in the cutout's middle column."""
+    """Drag from just under the cutout's foot (the row its lift counts from) ``down`` preview rows further down, in
+    the cutout's middle column."""
     bbox, scale = parts.preview.bbox, parts.preview.scale
-    x, foot = (bbox[0] + bbox[2]) / 2 * scale, (bbox[3] - 1) * scale
+    x, foot = (bbox[0] + bbox[2]) / 2 * scale, parts.preview.lift_row * scale
     drag(parts.preview.widget, (x, foot + 4), (x, foot + 4 + down))
     return foot + 4 + down  # the preview row the ground point was dragged to
 

@@ -221,22 +221,23 @@ def test_a_bad_lift_in_a_script_is_refused_clearly_and_changes_nothing():
 
 
 def test_the_preview_s_lift_handle():
-    """Dragging in the preview below the cutout sets the lift: canvas rows = preview rows / scale, less the cutout's
-    lowest row; the handle is a mark at the ground point, with a dotted line up to the cutout when lifted."""
+    """Dragging in the preview below the cutout sets the lift: canvas rows = preview rows / scale, less the row the
+    lift counts from (the cutout's lowest pixel's, the worker's ``lift_row``); the handle is a mark at the ground
+    point, with a dotted line up to the cutout when lifted."""
     from ssn_preview import GROUND_MARK, draw_ground_mark, in_lift_handle, lift_from_preview
 
-    bbox = [70, 20, 90, 100]  # the pawn: its lowest row 99
-    assert lift_from_preview(100, 0.5, bbox) == 101.0 and lift_from_preview(10, 0.5, bbox) == 0.0
-    assert in_lift_handle(40, 60, 0.5, bbox) and in_lift_handle(40, 47, 0.5, bbox)
-    assert not in_lift_handle(40, 30, 0.5, bbox) and not in_lift_handle(5, 60, 0.5, bbox)
+    bbox, row = [70, 20, 90, 100], 91  # the pawn, its edge feathered: its lift counts from row 91, not 99
+    assert lift_from_preview(100, 0.5, row) == 109.0 and lift_from_preview(10, 0.5, row) == 0.0
+    assert in_lift_handle(40, 60, 0.5, bbox, row) and in_lift_handle(40, 43, 0.5, bbox, row)
+    assert not in_lift_handle(40, 30, 0.5, bbox, row) and not in_lift_handle(5, 60, 0.5, bbox, row)
     w, h = 80, 80
-    rgb = draw_ground_mark(bytes(3 * w * h), (w, h), 0.5, bbox, 20.0)
+    rgb = draw_ground_mark(bytes(3 * w * h), (w, h), 0.5, bbox, row, 20.0)
     marked = np.all(np.frombuffer(rgb, np.uint8).reshape(h, w, 3) == GROUND_MARK, axis=-1)
     rows = np.nonzero(marked.any(axis=1))[0]
-    ground = round((99 + 20) * 0.5)  # the ground point's row on the thumbnail: a bar two rows deep
+    ground = round((row + 20) * 0.5)  # the ground point's row on the thumbnail: a bar two rows deep
     assert rows.max() == ground + 1 and marked[ground, 40 - 8 : 40 + 9].all() and not marked[ground, 30]
-    assert rows.min() == round(99 * 0.5) + 3  # the dotted line up to the cutout's foot
-    assert draw_ground_mark(bytes(3 * w * h), (w, h), 0.5, bbox, 999.0) != bytes(3 * w * h)  # the dotted line
+    assert rows.min() == round(row * 0.5) + 3  # the dotted line up to the cutout's foot
+    assert draw_ground_mark(bytes(3 * w * h), (w, h), 0.5, bbox, row, 999.0) != bytes(3 * w * h)  # the dotted line
 
 
 def test_settings_from_arguments_defaults():

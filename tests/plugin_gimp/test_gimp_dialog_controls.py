@@ -208,7 +208,7 @@ def test_the_dialog_fits_a_768_pixel_wide_screen_with_ok_on_it(narrow_session):
 def test_lift_and_thickness_are_set_kept_with_the_image_and_reset(session):
     """The issue's lift and thickness controls: a lift typed past 20 canvas heights is clamped to 4800 on the 240-row
     image and the note says why; dragging the ground point under the object in the preview sets the lift (canvas
-    rows = preview rows / scale, less the cutout's lowest row), live; the slider sets the thickness (From outline
+    rows = preview rows / scale, less the row its lift counts from), live; the slider sets the thickness (From outline
     unticks, the value and the reading show); OK keeps both with the image (a parasite), the next dialog on it
     opens with them, Reset to Initial Values brings them back after a drag and Reset to Factory Defaults rests the
     object and reads its thickness; another image opens with neither."""
@@ -219,8 +219,9 @@ def test_lift_and_thickness_are_set_kept_with_the_image_and_reset(session):
     assert initial["read"] is not None and initial["value"] == f"read {initial['read']:.2f}", initial
     assert typed["lift"] == 4800.0, typed
     assert "more than 20 canvas heights (4800 px" in typed["note"], typed["note"]
-    bbox, scale = dragged["bbox"], dragged["scale"]
-    assert dragged["lift"] == round(run["dragged_to"] / scale) - (bbox[3] - 1) > 0, (dragged, run["dragged_to"])
+    row, scale = dragged["lift_row"], dragged["scale"]
+    assert dragged["bbox"][1] < row < dragged["bbox"][3], dragged  # the cutout's lowest pixel's row, within its box
+    assert dragged["lift"] == round(run["dragged_to"] / scale) - row > 0, (dragged, run["dragged_to"])
     assert "canvas heights" not in dragged["note"], dragged["note"]  # the note is about the last change only
     assert slid["thickness"] == 1.0 and not slid["from_outline"] and slid["value"].startswith("1.00 (read ")
     width, height = slid["size"]

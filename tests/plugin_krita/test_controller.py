@@ -441,7 +441,7 @@ def test_a_lift_moves_the_shadow_down_through_set_geometry_without_sending_the_a
         assert wait_until(lambda: not c.busy and len(host.writes) == 1), messages
         assert [s[0] for s in sent][:3] == ["set_cutout", "get_ao", "set_geometry"]
         assert isinstance(c.model.thickness_read, float) and c.model.thickness_read > 0  # shown by the slider
-        assert c.model.ground == ((160, 60, 240, 220), (400, 400))
+        assert c.model.ground == ((160, 60, 240, 220), (400, 400), 219)  # the lift counts from its lowest row
         resting = _top_shadow_row(host)
 
         sent.clear()

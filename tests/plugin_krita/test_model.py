@@ -217,12 +217,12 @@ def test_lift_and_thickness_are_clamped_with_the_reason_and_a_drag_is_one_edit(q
         and "set to 0 (it rests on the ground)" in m.status[1]
         and edits == []
     )
-    m.report_ground([120, 60, 200, 180], (320, 240))  # its lowest row 179
+    m.report_ground([120, 60, 200, 180], (320, 240), 170)  # its lift counts from row 170 (a soft edge below it)
     m.edit_lift(10_000)
     assert m.lift == 4800.0 and "(4800 px, the most the engine takes); set to 4800" in m.status[1]  # 20 canvas heights
     m.horizon, m.use_horizon = 300.0, True  # a horizon below the object: its ground lies lower still
     m.edit_lift(40)
-    assert m.lift == 122.0 and "at or above the horizon (row 300)" in m.status[1], m.status
+    assert m.lift == 131.0 and "at or above the horizon (row 300)" in m.status[1], m.status
     m.edit_lift(0)  # resting on the ground is always taken
     assert m.lift == 0.0
     edits.clear()
@@ -251,7 +251,7 @@ def test_lift_and_thickness_are_clamped_with_the_reason_and_a_drag_is_one_edit(q
     m.use_horizon = False  # the camera read: the lift is clamped to its horizon when the cutout is analysed
     m.report_camera_read({"horizon": 200.0, "fov": 40.0})
     edits.clear()
-    assert m.clamp_geometry() and m.lift == 22.0 and edits == [] and saved[-1] == "geometry"
+    assert m.clamp_geometry() and m.lift == 31.0 and edits == [] and saved[-1] == "geometry"
     assert not m.clamp_geometry()
 
 

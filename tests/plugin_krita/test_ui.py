@@ -569,7 +569,7 @@ def test_the_geometry_section_sets_the_lift_and_thickness_and_the_previews_handl
     m = c.model
     assert "geometry" in panel.sections and panel.sections["geometry"].is_open()
     assert panel.thickness_label.text() == "Thickness: read from the outline"
-    m.report_ground([160, 60, 240, 220], (400, 400))
+    m.report_ground([160, 60, 240, 220], (400, 400), 210)  # its lift counts from row 210: a soft edge below
     m.report_geometry({"lift": 0.0, "thickness": None, "thickness_read": 0.29})
     assert panel.thickness_label.text() == "Thickness: read 0.29" and panel.thickness.value() == 29
     assert panel.lift_box.maximum() == 8000 and panel.lift_slider.maximum() == 400  # 20 canvas heights; one
@@ -589,13 +589,13 @@ def test_the_geometry_section_sets_the_lift_and_thickness_and_the_previews_handl
     preview = panel.preview
     rect, handle = preview.image_rect(), preview.handle_pos()
     scale = rect.height() / 400  # preview pixels a canvas row
-    assert handle.y() == pytest.approx(rect.top() + handle_row((160, 60, 240, 220), 0) * scale)
+    assert handle.y() == pytest.approx(rect.top() + handle_row(210, 0) * scale)
     engine.sent.clear()
     start = QPoint(round(handle.x()), round(handle.y()))
     QTest.mousePress(preview, Qt.LeftButton, Qt.NoModifier, start)
     for dy in (10, 20, 30):
         drag_move(preview, start + QPoint(0, dy))
-    assert m.dragging("geometry") and m.lift == pytest.approx(round((start.y() + 30 - rect.top()) / scale - 220))
+    assert m.dragging("geometry") and m.lift == pytest.approx(round((start.y() + 30 - rect.top()) / scale - 211))
     assert m.lift > 30 / scale - 2 and engine.sent[:2] == ["set_geometry", "preview"]  # previewed, no layer
     QTest.mouseRelease(preview, Qt.LeftButton, Qt.NoModifier, start + QPoint(0, 30))
     assert not m.dragging("geometry") and engine.sent[-1] == "render"  # the layer's, at the release
@@ -605,8 +605,8 @@ def test_the_geometry_section_sets_the_lift_and_thickness_and_the_previews_handl
 def test_the_lift_handle_is_where_its_drag_puts_it():
     from plugin_krita.ssn_shadow.ui.shadow_preview import handle_row, lift_at
 
-    bbox = (160, 60, 240, 220)
+    row = 210  # the row the lift counts from
     for lift in (0.0, 12.0, 130.0):
-        y = 5 + handle_row(bbox, lift) / 2.0  # drawn from row 5 of the widget at half size
-        assert lift_at(y, 5, 2.0, bbox) == lift
-    assert lift_at(0, 5, 2.0, bbox) == 0.0  # above the object's foot: on the ground
+        y = 5 + handle_row(row, lift) / 2.0  # drawn from row 5 of the widget at half size
+        assert lift_at(y, 5, 2.0, row) == lift
+    assert lift_at(0, 5, 2.0, row) == 0.0  # above the object's foot: on the ground

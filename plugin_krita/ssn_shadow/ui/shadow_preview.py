@@ -26,15 +26,17 @@ GRAB = 8  # pixels: a press this close to the lift handle drags it
 HANDLE = 9  # pixels: half the handle's width
 
 
-def handle_row(bbox: tuple[int, int, int, int], lift: float) -> float:
-    """The canvas row (an edge between rows) of the ground beneath a cutout of ``bbox`` lifted ``lift`` rows."""
-    return bbox[3] + lift
+def handle_row(lift_row: int, lift: float) -> float:
+    """The canvas row (an edge between rows) of the ground beneath a cutout whose lift counts from canvas row
+    ``lift_row`` (its lowest pixel's), lifted ``lift`` rows."""
+    return lift_row + 1 + lift
 
 
-def lift_at(y: float, top: float, rows_per_pixel: float, bbox: tuple[int, int, int, int]) -> float:
+def lift_at(y: float, top: float, rows_per_pixel: float, lift_row: int) -> float:
     """The lift (whole canvas rows, at least 0) whose ground lies at the preview's pixel row ``y``, the canvas drawn
-    from ``top`` at ``rows_per_pixel`` canvas rows a pixel (the preview's scale's inverse)."""
-    return float(max(0, round((y - top) * rows_per_pixel - bbox[3])))
+    from ``top`` at ``rows_per_pixel`` canvas rows a pixel (the preview's scale's inverse), counted from canvas row
+    ``lift_row``."""
+    return float(max(0, round((y - top) * rows_per_pixel - (lift_row + 1))))
 
 
 class ShadowPreview(QWidget):
@@ -47,7 +49,8 @@ class ShadowPreview(QWidget):
     def __init__(self, parent: QWidget | None = None) -> None:
         super().__init__(parent)
         self.image: QImage | None = None
-        self.ground: tuple[tuple[int, int, int, int], tuple[int, int]] | None = None  # the cutout's bbox, canvas
+        # the cutout's bbox, canvas size and the row its lift counts from
+        self.ground: tuple[tuple[int, int, int, int], tuple[int, int], int] | None = None
         self.lift = 0.0
         self._dragging = False
         self.setMouseTracking(True)
@@ -66,8 +69,8 @@ class ShadowPreview(QWidget):
         self.image = QImage(rgb, width, height, 3 * width, QImage.Format.Format_RGB888).copy()
         self.update()
 
-    def set_ground(self, ground: tuple[tuple[int, int, int, int], tuple[int, int]] | None, lift: float) -> None:
-        """The analysed cutout's bbox and canvas size (None: no handle), and its lift in canvas rows."""
+    def set_ground(self, ground: tuple[tuple[int, int, int, int], tuple[int, int], int] | None, lift: float) -> None:
+        """The analysed cutout's bbox, canvas size and lift row (None: no handle), and its lift in canvas rows."""
         if not self._dragging:  # the drag's own position, not the model's echo of it
             self.ground, self.lift = ground, float(lift)
         self.update()
@@ -85,16 +88,16 @@ class ShadowPreview(QWidget):
         rect, ground = self.image_rect(), self.ground
         if rect is None or ground is None:
             return None
-        bbox, (width, height) = ground
+        bbox, (width, height), row = ground
         return QPointF(
             rect.left() + (bbox[0] + bbox[2]) / 2 * rect.width() / width,
-            rect.top() + handle_row(bbox, self.lift) * rect.height() / height,
+            rect.top() + handle_row(row, self.lift) * rect.height() / height,
         )
 
     def _lift_at(self, y: float) -> float:
         rect, ground = self.image_rect(), self.ground
         assert rect is not None and ground is not None, "a drag has a handle"
-        return lift_at(y, rect.top(), ground[1][1] / rect.height(), ground[0])
+        return lift_at(y, rect.top(), ground[1][1] / rect.height(), ground[2])
 
     def mousePressEvent(self, event) -> None:  # noqa: N802 (Qt's API)
         pos = self.handle_pos()
