@@ -9,6 +9,7 @@ from pathlib import Path
 import numpy as np
 
 from ssn_engine.hard_light import lowest_pixel
+from ssn_engine.hemisphere import direction
 from training.data import meshes, sources
 from training.data.items import stable_hash
 from training.data.raycast import ray_distances
@@ -50,7 +51,7 @@ def shadow_share(vertices: np.ndarray, canvas: render.CanvasCamera, elevation: f
     """The share of ``vertices`` whose shadow, cast along the light at ``elevation`` and ``azimuth`` (degrees, the
     conventions' camera-relative directions) onto the ground, lands on ``canvas``."""
     cam = canvas.camera
-    d = cam.to_world(disk.disk_directions(elevation, azimuth, 1.0, 1))[0]  # the disk's centre, towards the light
+    d = cam.to_world(direction(np.radians(elevation), np.radians(azimuth)))  # the disk's centre, towards the light
     ground = vertices - vertices[:, 1:2] / d[1] * d
     col, row = cam.project(ground).T
     ahead = (ground - cam.centre) @ cam.view > 0
